@@ -1,0 +1,237 @@
+"""The one interface every journal-bearing model implements.
+
+Frames and units (the contract shared by every bearing model and FMU)
+-------------------------------------------------------------------
+* Local frame (x, y) of the bearing, origin at the bearing centre O, journal centre O'.
+  The journal rotates about +z at ``omega`` [rad/s] (counter-clockwise seen from +z,
+  x towards y), Baguet & Jacquenot (2010) Fig. 3.
+* State: journal-centre displacement ``x, y`` [m] and velocity ``xdot, ydot`` [m/s].
+* Output: film force on the journal ``F = (Fx, Fy)`` [N], stiffness ``Kb = -dF/dX`` [N/m] and
+  damping ``Cb = -dF/dXdot`` [N s/m] (2x2, row = force component, column = state component),
+  paper Eq. (18).
+
+Dimensionless core (paper Eq. 2-5 and Nomenclature)
+---------------------------------------------------
+``xbar = x/C``, ``xbar_dot = xdot/(C omega)``, ``Fbar = F / (6 mu omega R^2 (R/C)^2)``,
+``xi = z/R``, ``lambda_ = L/D``.  Film models (hybrid, short, finite difference) implement
+:meth:`FilmBearingModel.film_force` on these variables; the SI scaling lives here, once.
+"""
+
+from __future__ import annotations
+
+import math
+from abc import ABC, abstractmethod
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = [
+    "BearingData",
+    "BearingError",
+    "BearingModel",
+    "BearingResult",
+    "EccentricityError",
+    "FilmBearingModel",
+    "FilmForce",
+]
+
+
+class BearingError(ValueError):
+    """Invalid bearing input (geometry, fluid, state)."""
+
+
+class EccentricityError(BearingError):
+    """The journal touches or leaves the clearance circle (eccentricity ratio >= 1)."""
+
+
+def _require_positive_finite(name: str, value: float, unit: str) -> float:
+    value = float(value)
+    if not math.isfinite(value) or value <= 0.0:
+        raise BearingError(f"{name} = {value!r} {unit}: must be finite and > 0")
+    return value
+
+
+@dataclass(frozen=True)
+class BearingData:
+    """Geometry and lubricant of one plain journal bearing (paper Table 3).
+
+    Parameters
+    ----------
+    diameter : float
+        Bearing diameter D = 2R [m].
+    length : float
+        Bearing length L [m].
+    clearance : float
+        Radial clearance C [m].
+    viscosity : float
+        Dynamic viscosity mu [Pa s].
+
+    Examples
+    --------
+    >>> b = BearingData(diameter=0.070, length=0.050, clearance=150e-6, viscosity=0.0288)
+    >>> round(b.lambda_, 4)
+    0.7143
+    """
+
+    diameter: float
+    length: float
+    clearance: float
+    viscosity: float
+
+    def __post_init__(self) -> None:
+        _require_positive_finite("diameter", self.diameter, "m")
+        _require_positive_finite("length", self.length, "m")
+        _require_positive_finite("clearance", self.clearance, "m")
+        _require_positive_finite("viscosity", self.viscosity, "Pa s")
+        if self.clearance >= 0.5 * self.diameter:
+            raise BearingError(
+                f"clearance = {self.clearance!r} m must be smaller than the radius "
+                f"{0.5 * self.diameter!r} m"
+            )
+
+    @property
+    def radius(self) -> float:
+        """Bearing radius R = D/2 [m]."""
+        return 0.5 * self.diameter
+
+    @property
+    def lambda_(self) -> float:
+        """Slenderness lambda = L/D [-] (half-length in units of R: xi in [-lambda, lambda])."""
+        return self.length / self.diameter
+
+    def force_scale(self, omega: float) -> float:
+        """Force scale 6 mu omega R^2 (R/C)^2 [N] (paper Nomenclature)."""
+        r = self.radius
+        return 6.0 * self.viscosity * omega * r * r * (r / self.clearance) ** 2
+
+    def pressure_scale(self, omega: float) -> float:
+        """Pressure scale 6 mu omega (R/C)^2 [Pa] (paper Nomenclature)."""
+        return 6.0 * self.viscosity * omega * (self.radius / self.clearance) ** 2
+
+    def sommerfeld(self, omega: float, load: float) -> float:
+        """Sommerfeld number S = (R/C)^2 mu N / P, N = omega/2pi [rev/s], P = W/(L D) [Pa]."""
+        n = omega / (2.0 * math.pi)
+        p = load / (self.length * self.diameter)
+        return (self.radius / self.clearance) ** 2 * self.viscosity * n / p
+
+
+@dataclass(frozen=True)
+class FilmForce:
+    """Dimensionless film force and its derivatives (paper Eq. 5).
+
+    ``force`` = (Fbar_x, Fbar_y); ``d_position[i, j] = dFbar_i / dxbar_j``;
+    ``d_velocity[i, j] = dFbar_i / dxbar_dot_j``. Derivatives are None when not requested.
+    """
+
+    force: np.ndarray
+    d_position: np.ndarray | None = None
+    d_velocity: np.ndarray | None = None
+
+
+@dataclass(frozen=True)
+class BearingResult:
+    """Film force [N] and its linearisation in SI units, local frame."""
+
+    force: np.ndarray  # (2,) N
+    stiffness: np.ndarray  # (2, 2) N/m, Kb = -dF/dX
+    damping: np.ndarray  # (2, 2) N s/m, Cb = -dF/dXdot
+    extra: dict = field(default_factory=dict)
+
+
+def check_state(xbar: float, ybar: float, xbar_dot: float, ybar_dot: float) -> float:
+    """Validate a dimensionless journal state and return its eccentricity ratio.
+
+    Raises
+    ------
+    EccentricityError
+        If the eccentricity ratio sqrt(xbar^2 + ybar^2) >= 1 (journal on or outside the
+        clearance circle), with the value and the limit in the message.
+    BearingError
+        For non-finite components.
+    """
+    for name, v in (("xbar", xbar), ("ybar", ybar), ("xbar_dot", xbar_dot), ("ybar_dot", ybar_dot)):
+        if not math.isfinite(v):
+            raise BearingError(f"journal state {name} = {v!r} is not finite")
+    eps = math.hypot(xbar, ybar)
+    if eps >= 1.0:
+        raise EccentricityError(
+            f"eccentricity ratio {eps:.6g} (xbar = {xbar:.6g}, ybar = {ybar:.6g}) "
+            f"must be < 1: the journal touches the bearing"
+        )
+    return eps
+
+
+class BearingModel(ABC):
+    """A bearing law: journal state in the local frame -> force, Kb, Cb (SI).
+
+    Subclasses: :class:`FilmBearingModel` (Reynolds-equation models) and the constant-
+    coefficient laws (linearised 8-coefficient, lumped spring).
+    """
+
+    #: key of the model in :data:`bearing_fmu.MODELS` and on the command line
+    name: str = ""
+
+    def __init__(self, bearing: BearingData) -> None:
+        if not isinstance(bearing, BearingData):
+            raise TypeError(f"bearing must be BearingData, got {type(bearing).__name__}")
+        self.bearing = bearing
+
+    @abstractmethod
+    def evaluate(
+        self, x: float, y: float, xdot: float, ydot: float, omega: float
+    ) -> BearingResult:
+        """Film force [N], Kb [N/m] and Cb [N s/m] at a journal state [m, m/s], speed [rad/s]."""
+
+
+def _check_omega(omega: float) -> float:
+    omega = float(omega)
+    if not math.isfinite(omega) or omega <= 0.0:
+        raise BearingError(f"shaft speed omega = {omega!r} rad/s: must be finite and > 0")
+    return omega
+
+
+class FilmBearingModel(BearingModel):
+    """A model that solves the dimensionless Reynolds problem (Eq. 2-4).
+
+    Subclasses implement :meth:`film_force`; the SI scaling and the input checks are done
+    here once for all of them.
+    """
+
+    @abstractmethod
+    def film_force(
+        self,
+        xbar: float,
+        ybar: float,
+        xbar_dot: float = 0.0,
+        ybar_dot: float = 0.0,
+        jacobian: bool = True,
+    ) -> FilmForce:
+        """Dimensionless force (Eq. 5) and its derivatives at a dimensionless state (Eq. 3).
+
+        The caller has validated the state (:func:`check_state`).
+        """
+
+    def dimensionless(
+        self,
+        xbar: float,
+        ybar: float,
+        xbar_dot: float = 0.0,
+        ybar_dot: float = 0.0,
+        jacobian: bool = True,
+    ) -> FilmForce:
+        """Validated :meth:`film_force`."""
+        check_state(xbar, ybar, xbar_dot, ybar_dot)
+        return self.film_force(float(xbar), float(ybar), float(xbar_dot), float(ybar_dot), jacobian)
+
+    def evaluate(
+        self, x: float, y: float, xdot: float, ydot: float, omega: float
+    ) -> BearingResult:
+        omega = _check_omega(omega)
+        c = self.bearing.clearance
+        ff = self.dimensionless(x / c, y / c, xdot / (c * omega), ydot / (c * omega), True)
+        fs = self.bearing.force_scale(omega)
+        return BearingResult(
+            force=fs * ff.force,
+            stiffness=-(fs / c) * ff.d_position,
+            damping=-(fs / (c * omega)) * ff.d_velocity,
+        )

@@ -1,0 +1,1 @@
+"""Gear-shaft structural model: Timoshenko shafts, gear mesh element, Newmark step."""

@@ -1,0 +1,1 @@
+"""Master algorithm coupling the gear-shaft and bearing slaves; CLI."""
