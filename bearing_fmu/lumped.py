@@ -1,0 +1,49 @@
+"""Lumped-spring bearing: constant isotropic stiffness, optional constant damping.
+
+The crude model of the paper's Fig. 16: ``F = -k X - c Xdot`` [N], no film, no speed dependence.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from bearing_fmu.base import BearingData, BearingError, BearingModel, BearingResult
+
+__all__ = ["LumpedSpringBearing"]
+
+
+class LumpedSpringBearing(BearingModel):
+    """Isotropic spring (and dashpot) at the bearing node.
+
+    Parameters
+    ----------
+    bearing : BearingData
+        Kept for a uniform interface (the FMUs share one variable list); not used by the law.
+    stiffness : float
+        k [N/m], > 0.
+    damping : float
+        c [N s/m], >= 0 (default 0: no damping).
+
+    Examples
+    --------
+    >>> b = BearingData(0.07, 0.05, 150e-6, 0.0288)
+    >>> LumpedSpringBearing(b, 1e8).evaluate(1e-6, 0.0, 0.0, 0.0, 325.0).force
+    array([-100.,   -0.])
+    """
+
+    name = "lumped"
+
+    def __init__(self, bearing: BearingData, stiffness: float, damping: float = 0.0):
+        super().__init__(bearing)
+        if not math.isfinite(stiffness) or stiffness <= 0.0:
+            raise BearingError(f"lumped stiffness = {stiffness!r} N/m: must be finite and > 0")
+        if not math.isfinite(damping) or damping < 0.0:
+            raise BearingError(f"lumped damping = {damping!r} N s/m: must be finite and >= 0")
+        self.k = float(stiffness)
+        self.c = float(damping)
+
+    def evaluate(self, x, y, xdot, ydot, omega) -> BearingResult:
+        force = -self.k * np.array([x, y], float) - self.c * np.array([xdot, ydot], float)
+        return BearingResult(force=force, stiffness=self.k * np.eye(2), damping=self.c * np.eye(2))

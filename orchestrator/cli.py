@@ -1,0 +1,33 @@
+"""The ``gsb`` command line."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from bearing_fmu.base import BearingError
+
+
+def make_parser() -> argparse.ArgumentParser:
+    from orchestrator import bearing_calc
+
+    parser = argparse.ArgumentParser(
+        prog="gsb",
+        description="Gear-shaft-bearing nonlinear dynamics (Baguet & Jacquenot 2010).",
+    )
+    sub = parser.add_subparsers(dest="command", required=True)
+    bearing_calc.add_parser(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = make_parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except BearingError as exc:
+        print(f"gsb {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,70 @@
+"""Static equilibrium (Eq. 8), the linearised 8-coefficient law (Eq. 17) and the lumped spring."""
+
+import math
+
+import numpy as np
+import pytest
+
+from bearing_fmu import BearingData, EccentricityError
+from bearing_fmu.linear import LinearBearing
+from bearing_fmu.lumped import LumpedSpringBearing
+from bearing_fmu.short_bearing import ShortBearing, ocvirk_static_force
+from bearing_fmu.static import static_equilibrium
+
+BEARING = BearingData(diameter=0.070, length=0.050, clearance=150e-6, viscosity=0.0288)
+OMEGA = 325.0
+
+
+@pytest.mark.parametrize("load", [(0.0, -2251.0), (1500.0, 400.0), (-10.0, 5.0)])
+def test_static_equilibrium_balances_the_load(load):
+    sol = static_equilibrium(ShortBearing(BEARING), load, OMEGA)
+    np.testing.assert_allclose(sol.result.force, -np.asarray(load), rtol=0, atol=1e-9 * 2251)
+
+
+def test_static_eccentricity_and_attitude_match_ocvirk_closed_form():
+    """Ocvirk: |Fbar(eps)| from the closed form, attitude tan(phi) = pi sqrt(1-eps^2) / (4 eps)."""
+    sol = static_equilibrium(ShortBearing(BEARING), (0.0, -2000.0), OMEGA)
+    fx, fy = ocvirk_static_force(BEARING.lambda_, sol.eccentricity)
+    assert math.hypot(fx, fy) * BEARING.force_scale(OMEGA) == pytest.approx(2000.0, rel=1e-10)
+    eps = sol.eccentricity
+    phi = math.degrees(math.atan(math.pi * math.sqrt(1 - eps**2) / (4 * eps)))
+    assert sol.attitude_deg == pytest.approx(phi, abs=1e-8)
+
+
+def test_overload_is_a_clear_error():
+    with pytest.raises(EccentricityError, match="cannot carry"):
+        static_equilibrium(ShortBearing(BEARING), (0.0, -1e9), OMEGA)
+
+
+def test_linear_bearing_reproduces_linearisation_and_converges_in_one_step():
+    short = ShortBearing(BEARING)
+    sol = static_equilibrium(short, (0.0, -2251.0), OMEGA)
+    lin = LinearBearing.linearise(short, sol.x0, sol.y0, OMEGA)
+    # at X0: the same force and coefficients
+    r0 = lin.evaluate(sol.x0, sol.y0, 0.0, 0.0, OMEGA)
+    np.testing.assert_allclose(r0.force, sol.result.force, rtol=1e-13)
+    # Eq. (17) is the first-order expansion: the gap to the nonlinear law is second order
+    gaps = []
+    for scale in (1.0, 0.5, 0.25):
+        dx, dv = 2e-6 * scale, 2e-4 * scale
+        rl = lin.evaluate(sol.x0 + dx, sol.y0 - dx, dv, -dv, OMEGA)
+        rn = short.evaluate(sol.x0 + dx, sol.y0 - dx, dv, -dv, OMEGA)
+        gaps.append(np.abs(rl.force - rn.force).max())
+    ratios = np.array(gaps[:-1]) / np.array(gaps[1:])
+    np.testing.assert_allclose(ratios, 4.0, rtol=0.1)
+    # affine law: Newton converges in one step (the second evaluation only confirms)
+    s2 = static_equilibrium(lin, (0.0, -2251.0), OMEGA)
+    assert s2.iterations == 2
+    assert s2.x0 == pytest.approx(sol.x0, rel=1e-10)
+    with pytest.raises(ValueError, match="omega"):
+        lin.evaluate(sol.x0, sol.y0, 0.0, 0.0, 2 * OMEGA)
+
+
+def test_lumped_spring():
+    model = LumpedSpringBearing(BEARING, stiffness=2e8, damping=1e3)
+    r = model.evaluate(1e-6, -2e-6, 1e-3, 0.0, OMEGA)
+    np.testing.assert_allclose(r.force, [-200.0 - 1.0, 400.0])
+    sol = static_equilibrium(model, (0.0, -1000.0), OMEGA)
+    assert sol.y0 == pytest.approx(-5e-6, rel=1e-12)
+    with pytest.raises(ValueError, match="stiffness"):
+        LumpedSpringBearing(BEARING, stiffness=-1.0)
