@@ -43,6 +43,14 @@ _GAUSS_X, _GAUSS_W = np.polynomial.legendre.leggauss(40)
 
 
 @njit(cache=True)
+def _sommerfeld_angle(phi, eps, s):
+    """Sommerfeld angle psi, h = (1 - eps^2)/(1 + eps cos psi), of the film angle phi."""
+    cphi = math.cos(phi)
+    den = 1.0 - eps * cphi
+    return math.atan2(s * math.sin(phi) / den, (cphi - eps) / den)
+
+
+@njit(cache=True)
 def _short_bearing_kernel(lam, x, y, xd, yd, gx, gw, out_f, out_dx, out_dv):
     """Eq. (5) with the short-bearing pressure; see the module docstring."""
     a_coef = y + 2.0 * xd
@@ -59,15 +67,8 @@ def _short_bearing_kernel(lam, x, y, xd, yd, gx, gw, out_f, out_dx, out_dv):
     gamma = math.atan2(y, x)
     s = math.sqrt(1.0 - eps * eps)
     # Sommerfeld angle psi of the two ends phi = theta - gamma (monotone map, unwrapped).
-    psi_ends = np.empty(2)
-    for k in range(2):
-        phi = theta1 + k * math.pi - gamma
-        cphi = math.cos(phi)
-        sphi = math.sin(phi)
-        den = 1.0 - eps * cphi
-        psi_ends[k] = math.atan2(s * sphi / den, (cphi - eps) / den)
-    psi_a = psi_ends[0]
-    psi_b = psi_ends[1]
+    psi_a = _sommerfeld_angle(theta1 - gamma, eps, s)
+    psi_b = _sommerfeld_angle(theta1 + math.pi - gamma, eps, s)
     if psi_b <= psi_a:
         psi_b += 2.0 * math.pi
     half = 0.5 * (psi_b - psi_a)
