@@ -1,0 +1,204 @@
+"""The master algorithm: Newton on the coupled structure-bearing system through the slaves.
+
+The structure slave owns (X, Xdot, Xddot) and advances one Newmark step for given affine
+bearing laws ``F = F0 - Kb X - Cb Xdot`` (global frame, one per bearing). The bearing slaves
+are algebraic: journal state -> film force, Kb, Cb. One coupled step (DESIGN.md section 4):
+
+1. save the structure state;
+2. set the affine laws linearised at the last iterate; ``do_step``;
+3. read the journal states, evaluate the bearings there;
+4. if the film forces differ from the affine laws by more than ``tol`` (relative to the force
+   norm), re-linearise at the new iterate, restore the saved state and repeat; else accept.
+
+The structure's own Newton/contact loop converges the rest of the system exactly for each law,
+and the law is the exact linearisation of the bearings at the current iterate (Eq. 14, 16), so
+the outer loop is Newton-Raphson on the bearing nonlinearity: a converged co-simulated step is
+the monolithic step to ``tol``, and an affine bearing (linear, lumped) converges in one pass.
+
+The static solution X0 is the same iteration with the structure's static solve and the
+velocities zero. Its first linearisation point comes from a per-bearing static equilibrium
+under the loads a stiff support would carry (so no iterate starts outside the clearance).
+"""
+
+from __future__ import annotations
+
+import math
+from abc import ABC, abstractmethod
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = [
+    "AffineLaws",
+    "BearingSet",
+    "CouplingError",
+    "Master",
+    "StepReport",
+    "StructureSlave",
+]
+
+
+class CouplingError(RuntimeError):
+    """The coupled iteration did not converge (step, time and mismatch in the message)."""
+
+
+@dataclass
+class AffineLaws:
+    """Affine bearing laws ``F = f0 - kb X - cb Xdot`` for nb bearings, global frame, SI."""
+
+    f0: np.ndarray  # (nb, 2) N
+    kb: np.ndarray  # (nb, 2, 2) N/m
+    cb: np.ndarray  # (nb, 2, 2) N s/m
+
+    @classmethod
+    def linearise(cls, states, force, kb, cb) -> AffineLaws:
+        """The tangent law at journal states (nb, 4) = [s, t, s_dot, t_dot]."""
+        x = states[:, :2]
+        v = states[:, 2:]
+        f0 = force + np.einsum("bij,bj->bi", kb, x) + np.einsum("bij,bj->bi", cb, v)
+        return cls(f0, kb.copy(), cb.copy())
+
+    def force(self, states) -> np.ndarray:
+        x = states[:, :2]
+        v = states[:, 2:]
+        return self.f0 - np.einsum("bij,bj->bi", self.kb, x) - np.einsum("bij,bj->bi", self.cb, v)
+
+
+class StructureSlave(ABC):
+    """What the master needs from the gear-shaft slave (in-process or FMU)."""
+
+    n_bearings: int
+
+    @abstractmethod
+    def get_state(self):
+        """An opaque copy of everything a step changes."""
+
+    @abstractmethod
+    def set_state(self, state) -> None:
+        """Restore a state from :meth:`get_state`."""
+
+    @abstractmethod
+    def set_bearing_laws(self, laws: AffineLaws) -> None:
+        """The affine laws used by the next step or static solve."""
+
+    @abstractmethod
+    def do_step(self, t: float, dt: float) -> None:
+        """One Newmark step from t to t + dt; raises on non-convergence."""
+
+    @abstractmethod
+    def solve_static(self) -> None:
+        """Static solution with the current laws (velocities and accelerations zero)."""
+
+    @abstractmethod
+    def journal_states(self) -> np.ndarray:
+        """(nb, 4) journal displacement and velocity at the bearing nodes, global frame."""
+
+    def support_loads(self) -> np.ndarray:
+        """(nb, 2) static loads on the journals with a stiff support [N] (first guess)."""
+        raise NotImplementedError
+
+
+class BearingSet(ABC):
+    """What the master needs from the bearing slaves (in-process or FMUs)."""
+
+    @abstractmethod
+    def evaluate(self, states: np.ndarray):
+        """Film force (nb, 2), Kb (nb, 2, 2), Cb (nb, 2, 2) at journal states (nb, 4)."""
+
+    def static_position(self, loads: np.ndarray) -> np.ndarray:
+        """(nb, 2) journal positions balancing static loads (nb, 2) [N] (first guess)."""
+        raise NotImplementedError
+
+
+@dataclass
+class StepReport:
+    """Outcome of one coupled step (or of the static solution)."""
+
+    iterations: int
+    mismatch: float  # relative force mismatch at acceptance
+    bearing_force: np.ndarray  # (nb, 2) N
+    laws: AffineLaws = field(repr=False)
+
+
+@dataclass
+class Master:
+    """Couple a structure slave with a bearing set.
+
+    Parameters
+    ----------
+    structure : StructureSlave
+    bearings : BearingSet
+    tol : float
+        Convergence limit l on ``||F_bearing(X) - F_law(X)|| / ||F_bearing(X)||`` (paper 1e-5).
+    max_iterations : int
+        Outer iterations per step before :class:`CouplingError`.
+    """
+
+    structure: StructureSlave
+    bearings: BearingSet
+    tol: float = 1e-5
+    max_iterations: int = 30
+    laws: AffineLaws | None = None
+    total_iterations: int = 0
+    total_bearing_evaluations: int = 0
+
+    def _mismatch(self, force, states, laws) -> float:
+        scale = max(float(np.linalg.norm(force)), 1e-300)
+        return float(np.linalg.norm(force - laws.force(states))) / scale
+
+    def _evaluate(self, states):
+        self.total_bearing_evaluations += 1
+        return self.bearings.evaluate(states)
+
+    def solve_static(self, initial_states: np.ndarray | None = None) -> StepReport:
+        """X0: iterate structure static solves and bearing linearisations (Sec. 2.2.3)."""
+        if initial_states is None:
+            loads = self.structure.support_loads()
+            positions = self.bearings.static_position(loads)
+            initial_states = np.hstack([positions, np.zeros_like(positions)])
+        states = np.array(initial_states, dtype=float)
+        states[:, 2:] = 0.0
+        force, kb, cb = self._evaluate(states)
+        laws = AffineLaws.linearise(states, force, kb, cb)
+        for it in range(1, self.max_iterations + 1):
+            self.structure.set_bearing_laws(laws)
+            self.structure.solve_static()
+            states = self.structure.journal_states().copy()
+            states[:, 2:] = 0.0
+            force, kb, cb = self._evaluate(states)
+            mismatch = self._mismatch(force, states, laws)
+            laws = AffineLaws.linearise(states, force, kb, cb)
+            if mismatch <= self.tol:
+                # leave the structure on the converged solution with the final laws
+                self.structure.set_bearing_laws(laws)
+                self.laws = laws
+                return StepReport(it, mismatch, force, laws)
+        raise CouplingError(
+            f"static solution did not converge in {self.max_iterations} iterations: "
+            f"relative bearing-force mismatch {mismatch:.3e} > tol {self.tol:.1e}"
+        )
+
+    def step(self, t: float, dt: float) -> StepReport:
+        """One coupled Newmark step from t to t + dt."""
+        if self.laws is None:
+            raise CouplingError("call solve_static() (or set laws) before the first step")
+        saved = self.structure.get_state()
+        laws = self.laws
+        mismatch = math.inf
+        for it in range(1, self.max_iterations + 1):
+            self.structure.set_bearing_laws(laws)
+            self.structure.do_step(t, dt)
+            states = self.structure.journal_states()
+            force, kb, cb = self._evaluate(states)
+            mismatch = self._mismatch(force, states, laws)
+            laws = AffineLaws.linearise(states, force, kb, cb)
+            self.total_iterations += 1
+            if mismatch <= self.tol:
+                self.laws = laws
+                return StepReport(it, mismatch, force, laws)
+            self.structure.set_state(saved)
+        raise CouplingError(
+            f"step at t = {t:.6e} s (dt = {dt:.3e} s) did not converge in "
+            f"{self.max_iterations} iterations: relative bearing-force mismatch "
+            f"{mismatch:.3e} > tol {self.tol:.1e}"
+        )

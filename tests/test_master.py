@@ -1,0 +1,222 @@
+"""The master's coupled Newton iteration against a monolithic Newton-Raphson.
+
+A two-journal rotor (each journal a lumped mass, coupled by a spring, loaded by a static force
+and a rotating unbalance) stands in for the structure so that the monolithic reference can be
+written independently here; the bearings are the real models of bearing_fmu.
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+from bearing_fmu import BearingData
+from bearing_fmu.frames import LocalFrame
+from bearing_fmu.linear import LinearBearing
+from bearing_fmu.lumped import LumpedSpringBearing
+from bearing_fmu.short_bearing import ShortBearing
+from bearing_fmu.static import static_equilibrium
+from orchestrator.inprocess import ModelBearings
+from orchestrator.master import AffineLaws, CouplingError, Master, StructureSlave
+
+OMEGA = 325.0
+BEARING = BearingData(diameter=0.070, length=0.050, clearance=150e-6, viscosity=0.0288)
+MASS = 10.0  # kg per journal
+K_COUPLING = 5e7  # N/m between the journals
+ZETA_C = 200.0  # N s/m dashpot to ground
+LOADS = np.array([[0.0, -2000.0], [300.0, -1500.0]])  # static loads per journal [N]
+E_MU = 20e-6  # unbalance eccentricity [m]
+
+
+def external_force(t):
+    rot = MASS * E_MU * OMEGA**2 * np.array([math.cos(OMEGA * t), math.sin(OMEGA * t)])
+    return LOADS + rot
+
+
+class TwoJournals(StructureSlave):
+    """Linear structure, Newmark (gamma 1/2, beta 1/4), affine bearing laws at both nodes."""
+
+    n_bearings = 2
+
+    def __init__(self, dt):
+        self.dt = dt
+        self.m = MASS * np.eye(4)
+        k = np.zeros((4, 4))
+        for i in range(2):
+            k[i, i] = k[i + 2, i + 2] = K_COUPLING
+            k[i, i + 2] = k[i + 2, i] = -K_COUPLING
+        self.k = k
+        self.c = ZETA_C * np.eye(4)
+        self.x = np.zeros(4)
+        self.v = np.zeros(4)
+        self.a = np.zeros(4)
+        self.laws = None
+
+    def get_state(self):
+        return (self.x.copy(), self.v.copy(), self.a.copy())
+
+    def set_state(self, state):
+        self.x, self.v, self.a = (s.copy() for s in state)
+
+    def set_bearing_laws(self, laws):
+        self.laws = laws
+
+    def _law_matrices(self):
+        kb = np.zeros((4, 4))
+        cb = np.zeros((4, 4))
+        f0 = np.zeros(4)
+        for b in range(2):
+            s = slice(2 * b, 2 * b + 2)
+            kb[s, s] = self.laws.kb[b]
+            cb[s, s] = self.laws.cb[b]
+            f0[s] = self.laws.f0[b]
+        return kb, cb, f0
+
+    def do_step(self, t, dt):
+        kb, cb, f0 = self._law_matrices()
+        f = external_force(t + dt).ravel() + f0
+        a0, a1 = 4 / dt**2, 2 / dt
+        lhs = a0 * self.m + a1 * (self.c + cb) + self.k + kb
+        rhs = (f + self.m @ (a0 * self.x + 4 / dt * self.v + self.a)
+               + (self.c + cb) @ (a1 * self.x + self.v))
+        x = np.linalg.solve(lhs, rhs)
+        v = a1 * (x - self.x) - self.v
+        self.a = a0 * (x - self.x) - 4 / dt * self.v - self.a
+        self.x, self.v = x, v
+
+    def solve_static(self):
+        kb, _, f0 = self._law_matrices()
+        self.x = np.linalg.solve(self.k + kb, LOADS.ravel() + f0)
+        self.v[:] = 0.0
+        self.a[:] = 0.0
+
+    def journal_states(self):
+        return np.hstack([self.x.reshape(2, 2), self.v.reshape(2, 2)])
+
+    def support_loads(self):
+        return LOADS.copy()
+
+
+def monolithic(models, dt, n_steps, x0):
+    """Newmark + Newton-Raphson on the assembled residual (Eq. 11-16), bearings inside."""
+    s = TwoJournals(dt)
+    x, v, a = x0.copy(), np.zeros(4), np.zeros(4)
+
+    def bearing(xx, vv):
+        f = np.zeros(4)
+        jx = np.zeros((4, 4))
+        jv = np.zeros((4, 4))
+        for b, model in enumerate(models):
+            sl = slice(2 * b, 2 * b + 2)
+            r = model.evaluate(*xx[sl], *vv[sl], OMEGA)
+            f[sl], jx[sl, sl], jv[sl, sl] = r.force, -r.stiffness, -r.damping
+        return f, jx, jv
+
+    # the static residual first (K X = W + Fb(X))
+    for _ in range(50):
+        fb, jx, _ = bearing(x, np.zeros(4))
+        g = s.k @ x - LOADS.ravel() - fb
+        if np.linalg.norm(g) < 1e-9:
+            break
+        x = x - np.linalg.solve(s.k - jx, g)
+    traj = []
+    a0, a1 = 4 / dt**2, 2 / dt
+    for n in range(n_steps):
+        t1 = (n + 1) * dt
+        xn = x.copy()
+        for _ in range(50):
+            vn = a1 * (xn - x) - v
+            an = a0 * (xn - x) - 4 / dt * v - a
+            fb, jx, jv = bearing(xn, vn)
+            g = s.m @ an + s.c @ vn + s.k @ xn - external_force(t1).ravel() - fb
+            if np.linalg.norm(g) < 1e-8:
+                break
+            jac = a0 * s.m + a1 * s.c + s.k - jx - a1 * jv  # Eq. (14), (16)
+            xn = xn - np.linalg.solve(jac, g)
+        v, a, x = a1 * (xn - x) - v, a0 * (xn - x) - 4 / dt * v - a, xn
+        traj.append(x.copy())
+    return np.array(traj)
+
+
+def run_master(bearings, dt, n_steps, tol=1e-10):
+    master = Master(TwoJournals(dt), bearings, tol=tol)
+    static = master.solve_static()
+    traj, iters = [], []
+    for n in range(n_steps):
+        rep = master.step(n * dt, dt)
+        traj.append(master.structure.x.copy())
+        iters.append(rep.iterations)
+    return master, static, np.array(traj), np.array(iters)
+
+
+def frames():
+    return [LocalFrame(0.0, 1), LocalFrame(0.0, 1)]
+
+
+DT = 2 * math.pi / OMEGA / 64
+
+
+def test_cosimulation_equals_monolithic_newton():
+    models = [ShortBearing(BEARING), ShortBearing(BEARING)]
+    bearings = ModelBearings(models, frames(), [OMEGA, OMEGA])
+    _, _, traj, iters = run_master(bearings, DT, 200)
+    ref = monolithic(models, DT, 200, static_guess(models))
+    amplitude = np.abs(ref - ref.mean(axis=0)).max()
+    assert np.abs(traj - ref).max() <= 1e-6 * amplitude
+    print(f"\nmean iterations per step (short bearings): {iters.mean():.2f}")
+    assert 1.5 <= iters.mean() <= 4.0
+
+
+def static_guess(models):
+    """Start of the monolithic static Newton: each journal balancing its own load alone."""
+    return np.concatenate([
+        [sol.x0, sol.y0]
+        for sol in (static_equilibrium(m, LOADS[b], OMEGA) for b, m in enumerate(models))
+    ])
+
+
+def test_static_solution_balances_the_loads():
+    models = [ShortBearing(BEARING), ShortBearing(BEARING)]
+    bearings = ModelBearings(models, frames(), [OMEGA, OMEGA])
+    master = Master(TwoJournals(DT), bearings, tol=1e-12)
+    rep = master.solve_static()
+    # total force balance: bearing forces carry the total static load
+    np.testing.assert_allclose(rep.bearing_force.sum(axis=0), -LOADS.sum(axis=0), rtol=1e-9)
+
+
+@pytest.mark.parametrize("kind", ["lumped", "linear"])
+def test_affine_bearings_converge_in_one_iteration(kind):
+    if kind == "lumped":
+        models = [LumpedSpringBearing(BEARING, 2e8, 1e3) for _ in range(2)]
+    else:
+        models = []
+        for b in range(2):
+            sol = static_equilibrium(ShortBearing(BEARING), LOADS[b], OMEGA)
+            models.append(LinearBearing.linearise(ShortBearing(BEARING), sol.x0, sol.y0, OMEGA))
+    bearings = ModelBearings(models, frames(), [OMEGA, OMEGA])
+    _, _, _, iters = run_master(bearings, DT, 50)
+    assert np.all(iters == 1)
+
+
+def test_mirrored_frame_gives_mirrored_orbit():
+    """A shaft turning about -z seen in a mirrored local frame: the orbit mirrors in t."""
+    models = [ShortBearing(BEARING), ShortBearing(BEARING)]
+    loads_mirror = LOADS * np.array([1.0, -1.0])
+    fr = [LocalFrame(0.0, -1), LocalFrame(0.0, -1)]
+    b_plus = ModelBearings(models, frames(), [OMEGA, OMEGA])
+    b_minus = ModelBearings(models, fr, [OMEGA, OMEGA])
+    p_plus = b_plus.static_position(LOADS)
+    p_minus = b_minus.static_position(loads_mirror)
+    np.testing.assert_allclose(p_minus, p_plus * np.array([1.0, -1.0]), rtol=1e-9, atol=1e-15)
+
+
+def test_non_convergence_names_step_time_and_mismatch():
+    models = [ShortBearing(BEARING), ShortBearing(BEARING)]
+    bearings = ModelBearings(models, frames(), [OMEGA, OMEGA])
+    master = Master(TwoJournals(DT), bearings, tol=1e-30, max_iterations=2)
+    master.laws = AffineLaws(np.zeros((2, 2)), np.tile(np.eye(2) * 1e8, (2, 1, 1)),
+                             np.zeros((2, 2, 2)))
+    master.structure.set_bearing_laws(master.laws)
+    master.structure.solve_static()
+    with pytest.raises(CouplingError, match=r"t = .* s .*mismatch"):
+        master.step(0.0, DT)
