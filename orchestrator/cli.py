@@ -17,7 +17,19 @@ def make_parser() -> argparse.ArgumentParser:
     )
     sub = parser.add_subparsers(dest="command", required=True)
     bearing_calc.add_parser(sub)
+    p = sub.add_parser("build-fmus", help="build the FMUs (pythonfmu) into a folder")
+    p.add_argument("--dest", default="build/fmus", help="output folder (default build/fmus)")
+    p.add_argument("names", nargs="*", help="FMU names (default: all)")
+    p.set_defaults(func=_build_fmus)
     return parser
+
+
+def _build_fmus(args) -> int:
+    from fmu_src.build import build_fmus
+
+    for path in build_fmus(args.dest, args.names or None):
+        print(path)
+    return 0
 
 
 def main(argv: list[str] | None = None) -> int:

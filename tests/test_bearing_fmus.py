@@ -1,0 +1,157 @@
+"""Bearing FMUs: built by pythonfmu, valid for fmpy, equal to the in-process models.
+
+Every test that loads an FMU runs in a fresh interpreter that exits normally: that is how a
+user's host runs them, and it checks the pythonfmu 0.7.0 workarounds of fmu_src.bearing_slave
+(``pin_namespace``, ``release_python_state_at_exit``) — without them a second instance of the
+same FMU fails and the host often aborts at exit.
+"""
+
+import json
+import subprocess
+import sys
+import textwrap
+
+import pytest
+
+from fmu_src.build import FMUS, build_fmus
+
+BEARING_FMUS = [n for n in FMUS if n.startswith("Bearing")]
+
+
+@pytest.fixture(scope="module")
+def fmu_dir(tmp_path_factory):
+    dest = tmp_path_factory.mktemp("fmus")
+    build_fmus(dest, BEARING_FMUS)
+    return dest
+
+
+@pytest.mark.parametrize("name", BEARING_FMUS)
+def test_fmu_passes_fmpy_validation(fmu_dir, name):
+    from fmpy.validation import validate_fmu
+
+    problems = validate_fmu(str(fmu_dir / f"{name}.fmu"))
+    assert problems == []
+
+
+def test_all_bearing_fmus_share_one_variable_list(fmu_dir):
+    from fmpy import read_model_description
+
+    lists = {}
+    for name in BEARING_FMUS:
+        md = read_model_description(str(fmu_dir / f"{name}.fmu"))
+        lists[name] = [(v.name, v.causality, v.type, v.unit) for v in md.modelVariables]
+        assert all(v.description for v in md.modelVariables)
+    first = lists[BEARING_FMUS[0]]
+    assert all(vl == first for vl in lists.values())
+    units = {n: u for n, _, _, u in first}
+    assert units["F_s"] == "N" and units["K_st"] == "N/m" and units["C_tt"] == "N.s/m"
+
+
+def run_isolated(code: str) -> dict:
+    """Run ``code`` in a fresh interpreter; it prints one JSON line and exits normally."""
+    script = textwrap.dedent(code)
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          timeout=300)
+    assert proc.returncode == 0, f"exit code {proc.returncode}: {proc.stderr[-3000:]}"
+    return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
+@pytest.mark.parametrize("name,model", [("BearingShort", "short"), ("BearingHybrid", "hybrid"),
+                                        ("BearingLumped", "lumped")])
+def test_fmu_equals_in_process_model_in_global_frame(fmu_dir, name, model):
+    out = run_isolated(f"""
+        import json, numpy as np
+        from bearing_fmu import BearingData, model_class
+        from bearing_fmu.frames import LocalFrame
+        from orchestrator.fmi import FmuBearings
+        from orchestrator.inprocess import ModelBearings
+        b = BearingData(0.09, 0.065, 110e-6, 0.0288)
+        params = dict(D=0.09, L=0.065, C=110e-6, mu=0.0288, frame_angle=0.3, rotation_sign=-1,
+                      k_lumped=3e8, c_lumped=2e3)
+        kw = dict(hybrid=dict(n=192), lumped=dict(stiffness=3e8, damping=2e3)).get("{model}", {{}})
+        ref = ModelBearings([model_class("{model}")(b, **kw)], [LocalFrame(0.3, -1)], [54.0])
+        fmu = FmuBearings([r"{fmu_dir / (name + '.fmu')}"], [params], [54.0])
+        states = np.array([[40e-6, -30e-6, 1e-3, -2e-3]])
+        f1, k1, c1 = ref.evaluate(states)
+        f2, k2, c2 = fmu.evaluate(states)
+        err = max(np.abs(f1 - f2).max() / np.abs(f1).max(),
+                  np.abs(k1 - k2).max() / np.abs(k1).max(),
+                  np.abs(c1 - c2).max() / max(np.abs(c1).max(), 1e-300))
+        print(json.dumps(dict(err=float(err))))
+    """)
+    assert out["err"] < 1e-12
+
+
+def test_fmu_error_is_reported_not_fatal_and_state_round_trips(fmu_dir):
+    out = run_isolated(f"""
+        import json, numpy as np
+        from orchestrator.fmi import FmuBearings, FmuError
+        fmu = FmuBearings([r"{fmu_dir / 'BearingShort.fmu'}"], [dict()], [325.0])
+        good = np.array([[6e-5, -6e-5, 0.0, 0.0]])
+        f_good = fmu.evaluate(good)[0]
+        s = fmu.slaves[0].fmu
+        st = s.getFMUstate()
+        try:
+            fmu.evaluate(np.array([[2e-4, 0.0, 0.0, 0.0]]))  # eccentricity 1.33
+            msg = None
+        except FmuError as exc:
+            msg = str(exc)
+        s.setFMUstate(st)
+        f_back = fmu.evaluate(good)[0]
+        print(json.dumps(dict(msg=msg, same=bool(np.array_equal(f_good, f_back)))))
+    """)
+    assert out["msg"] is not None and "eccentricity ratio 1.33333" in out["msg"]
+    assert out["same"]
+
+
+def test_linear_fmu_freezes_at_initialisation_exit(fmu_dir):
+    out = run_isolated(f"""
+        import json, numpy as np
+        from orchestrator.fmi import FmuBearings
+        fmu = FmuBearings([r"{fmu_dir / 'BearingLinear.fmu'}"], [dict()], [325.0])
+        x0 = np.array([[6e-5, -6e-5, 0.0, 0.0]])
+        f0, k0, c0 = fmu.evaluate(x0)
+        fmu.exit_initialization()
+        x1 = x0 + np.array([[5e-6, 2e-6, 1e-4, -1e-4]])
+        f1, k1, c1 = fmu.evaluate(x1)
+        pred = f0[0] - k0[0] @ (x1[0, :2] - x0[0, :2]) - c0[0] @ x1[0, 2:]
+        print(json.dumps(dict(err=float(np.abs(f1[0] - pred).max() / np.abs(f0).max()),
+                              same_k=bool(np.array_equal(k0, k1)))))
+    """)
+    assert out["err"] < 1e-12
+    assert out["same_k"]
+
+
+def test_fmpy_simulate_from_a_fresh_process(fmu_dir, tmp_path):
+    """``fmpy simulate`` (the command a system engineer would run) exits cleanly, twice over."""
+    out = tmp_path / "out.csv"
+    for _ in range(3):
+        proc = subprocess.run(
+            [sys.executable, "-m", "fmpy", "simulate", str(fmu_dir / "BearingShort.fmu"),
+             "--stop-time", "0.01", "--output-interval", "0.005", "--output-file", str(out)],
+            capture_output=True, text=True, timeout=300)
+        assert proc.returncode == 0, f"exit code {proc.returncode}: {proc.stderr[-2000:]}"
+    header = out.read_text().splitlines()[0]
+    assert "F_s" in header and "K_tt" in header
+
+
+def test_many_instances_of_one_fmu_in_one_process(fmu_dir):
+    out = run_isolated(f"""
+        import json, numpy as np
+        from orchestrator.fmi import FmuBearings
+        path = r"{fmu_dir / 'BearingShort.fmu'}"
+        sets = [FmuBearings([path] * 4, [dict()] * 4, [325.0] * 4) for _ in range(5)]
+        st = np.tile([6e-5, -6e-5, 0.0, 0.0], (4, 1))
+        f = [s.evaluate(st)[0] for s in sets]
+        print(json.dumps(dict(same=bool(all(np.array_equal(f[0], g) for g in f)))))
+    """)
+    assert out["same"]
+
+
+def test_variable_docs_are_generated_from_the_contract():
+    from pathlib import Path
+
+    from fmu_src.contract import document
+
+    doc = Path(__file__).parents[1] / "docs" / "fmu-variables.md"
+    assert doc.read_text() == document(), "run: python -m fmu_src.contract > docs/fmu-variables.md"
