@@ -157,7 +157,11 @@ class FmuBearings(BearingSet):
         self.in_init = False
 
     def close(self) -> None:
+        """Terminate and free every instance, remove the extracted FMU folders."""
+        import shutil
+
         for s in self.slaves:
             s.fmu.terminate()
             s.fmu.freeInstance()
+            shutil.rmtree(s._dir, ignore_errors=True)
         self.slaves = []

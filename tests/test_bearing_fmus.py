@@ -77,6 +77,7 @@ def test_fmu_equals_in_process_model_in_global_frame(fmu_dir, name, model):
         err = max(np.abs(f1 - f2).max() / np.abs(f1).max(),
                   np.abs(k1 - k2).max() / np.abs(k1).max(),
                   np.abs(c1 - c2).max() / max(np.abs(c1).max(), 1e-300))
+        fmu.close()
         print(json.dumps(dict(err=float(err))))
     """)
     assert out["err"] < 1e-12
@@ -98,6 +99,7 @@ def test_fmu_error_is_reported_not_fatal_and_state_round_trips(fmu_dir):
             msg = str(exc)
         s.setFMUstate(st)
         f_back = fmu.evaluate(good)[0]
+        fmu.close()
         print(json.dumps(dict(msg=msg, same=bool(np.array_equal(f_good, f_back)))))
     """)
     assert out["msg"] is not None and "eccentricity ratio 1.33333" in out["msg"]
@@ -115,6 +117,7 @@ def test_linear_fmu_freezes_at_initialisation_exit(fmu_dir):
         x1 = x0 + np.array([[5e-6, 2e-6, 1e-4, -1e-4]])
         f1, k1, c1 = fmu.evaluate(x1)
         pred = f0[0] - k0[0] @ (x1[0, :2] - x0[0, :2]) - c0[0] @ x1[0, 2:]
+        fmu.close()
         print(json.dumps(dict(err=float(np.abs(f1[0] - pred).max() / np.abs(f0).max()),
                               same_k=bool(np.array_equal(k0, k1)))))
     """)
@@ -143,6 +146,8 @@ def test_many_instances_of_one_fmu_in_one_process(fmu_dir):
         sets = [FmuBearings([path] * 4, [dict()] * 4, [325.0] * 4) for _ in range(5)]
         st = np.tile([6e-5, -6e-5, 0.0, 0.0], (4, 1))
         f = [s.evaluate(st)[0] for s in sets]
+        for s in sets:
+            s.close()
         print(json.dumps(dict(same=bool(all(np.array_equal(f[0], g) for g in f)))))
     """)
     assert out["same"]
