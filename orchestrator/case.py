@@ -1,0 +1,278 @@
+"""Case files (TOML): the schema, in one table, and the loader that checks it.
+
+Every field is listed once in :data:`FIELDS` with its dimension, shape, default and bounds; the
+loader converts quantities to SI (:mod:`orchestrator.units`), rejects unknown sections and keys,
+and names the field in every error. ``docs/case-files.md`` is rendered from the same table.
+
+A quantity is a number in SI units or a string ``"value unit"`` (``"4 mm"``, ``"20 deg"``).
+"""
+
+from __future__ import annotations
+
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from bearing_fmu import MODELS as _BEARING_TABLE
+from orchestrator.units import SI_UNIT, UnitError, parse_quantity
+
+__all__ = ["BEARING_MODELS", "FIELDS", "Case", "CaseError", "Field", "load_case", "schema_markdown"]
+
+BEARING_MODELS = tuple(_BEARING_TABLE)
+
+
+class CaseError(ValueError):
+    """A case file that cannot be run; the message names the field."""
+
+
+@dataclass(frozen=True)
+class Field:
+    """One entry of the schema.
+
+    ``kind`` is a dimension of :data:`orchestrator.units.SI_UNIT`, or ``"count"`` (positive
+    integer), ``"text"``, ``"choice"`` or ``"flag"``. ``shape`` is None for a scalar or the
+    length of a list (a scalar is broadcast to the list).
+    """
+
+    key: str
+    kind: str
+    doc: str
+    shape: int | None = None
+    default: Any = None
+    required: bool = True
+    minimum: float | None = None
+    maximum: float | None = None
+    exclusive_minimum: bool = False
+    choices: tuple = ()
+
+
+def _f(key, kind, doc, **kw):
+    if "default" in kw and "required" not in kw:
+        kw["required"] = False
+    return Field(key, kind, doc, **kw)
+
+
+_POS = dict(minimum=0.0, exclusive_minimum=True)
+
+FIELDS: tuple[Field, ...] = (
+    _f("case.name", "text", "identifier of the case (results are named after it)"),
+    _f("case.description", "text", "free text", default=""),
+    # gear pair, paper Table 1 (coefficients of the wheels: Table 1's 1.4 / 1.0 are the rack
+    # cutter's, so each wheel has addendum 1.0 m and dedendum 1.4 m)
+    _f("gear_pair.teeth", "count", "numbers of teeth [pinion, gear]", shape=2, minimum=5),
+    _f("gear_pair.module", "length", "normal module m_n", **_POS),
+    _f("gear_pair.pressure_angle", "angle", "normal pressure angle alpha_n", **_POS,
+       maximum=0.7),
+    _f("gear_pair.helix_angle", "angle", "helix angle beta (0 = spur)", default=0.0,
+       minimum=0.0, maximum=0.7),
+    _f("gear_pair.profile_shift", "dimensionless", "profile shift coefficients [x1, x2]",
+       shape=2, default=[0.0, 0.0], minimum=-1.0, maximum=1.0),
+    _f("gear_pair.addendum_coefficient", "dimensionless", "addendum of the wheels / m_n",
+       default=1.0, **_POS),
+    _f("gear_pair.dedendum_coefficient", "dimensionless", "dedendum of the wheels / m_n",
+       default=1.25, **_POS),
+    _f("gear_pair.face_width", "length", "face widths [pinion, gear]", shape=2, **_POS),
+    _f("gear_pair.centre_distance", "length", "operating centre distance", **_POS),
+    _f("gear_pair.mass", "mass", "gear body masses [pinion, gear] (Table 1)", shape=2, **_POS),
+    # shafts, Table 2
+    _f("shafts.outer_diameter", "length", "outer diameters [pinion shaft, gear shaft]",
+       shape=2, **_POS),
+    _f("shafts.inner_diameter", "length", "bore diameters [pinion shaft, gear shaft]",
+       shape=2, minimum=0.0),
+    _f("shafts.length", "length", "length of both shafts (bearing to bearing)", **_POS),
+    _f("shafts.young_modulus", "pressure", "Young's modulus E", **_POS),
+    _f("shafts.poisson_ratio", "dimensionless", "Poisson's ratio nu", minimum=0.0,
+       maximum=0.5),
+    _f("shafts.density", "density", "density rho", **_POS),
+    _f("shafts.elements", "count", "Timoshenko elements per shaft (even)", default=8,
+       minimum=2),
+    # bearings, Table 3: order 1, 2 (pinion shaft), 3, 4 (gear shaft)
+    _f("bearings.model", "choice", "bearing model (the FMU BearingHybrid, ... by that name)",
+       default="hybrid", choices=BEARING_MODELS),
+    _f("bearings.diameter", "length", "bearing diameters D [1, 2, 3, 4]", shape=4, **_POS),
+    _f("bearings.length", "length", "bearing lengths L [1, 2, 3, 4]", shape=4, **_POS),
+    _f("bearings.clearance", "length", "radial clearances C [1, 2, 3, 4]", shape=4, **_POS),
+    _f("bearings.viscosity", "viscosity", "lubricant dynamic viscosity mu", shape=4, **_POS),
+    _f("bearings.nodes", "count", "circumferential nodes (hybrid n, fd n_theta)",
+       default=192, minimum=16),
+    _f("bearings.axial_intervals", "count", "axial intervals (fd model)", default=32,
+       minimum=4),
+    _f("bearings.lumped_stiffness", "stiffness", "isotropic stiffness (lumped model)",
+       default=1e8, **_POS),
+    _f("bearings.lumped_damping", "damping", "isotropic damping (lumped model)",
+       default=0.0, minimum=0.0),
+    # operating point, Sec. 4.1
+    _f("operation.speed", "angular_speed", "pinion (input) speed omega", **_POS),
+    _f("operation.torque", "torque", "input torque T on the pinion shaft", minimum=0.0),
+    _f("operation.unbalance", "length", "unbalance eccentricity e_mu [pinion shaft, gear "
+       "shaft] (Eq. 10)", shape=2, default=[0.0, 0.0], minimum=0.0),
+    _f("operation.gravity", "flag", "include gravity (along -t)", default=False),
+    # numerics, Sec. 4
+    _f("simulation.damping_ratio", "dimensionless", "modal damping factor", default=0.03,
+       minimum=0.0, maximum=1.0),
+    _f("simulation.steps_per_mesh_period", "count", "time steps per mesh period",
+       default=32, minimum=4),
+    _f("simulation.mesh_periods", "count", "mesh periods simulated", default=2048, minimum=1),
+    _f("simulation.tolerance", "dimensionless", "convergence limit l of the coupled Newton",
+       default=1e-5, **_POS, maximum=0.1),
+    _f("simulation.max_iterations", "count", "coupled iterations per step before failing",
+       default=30, minimum=1),
+)
+
+_BY_KEY = {f.key: f for f in FIELDS}
+_SECTIONS = {f.key.split(".")[0] for f in FIELDS}
+
+
+@dataclass(frozen=True)
+class Case:
+    """A checked case: ``values[key]`` in SI units, keyed as in :data:`FIELDS`."""
+
+    values: dict
+    source: str
+
+    def __getitem__(self, key: str):
+        return self.values[key]
+
+    def with_overrides(self, overrides: dict) -> Case:
+        """A copy with some fields replaced (values as in a case file), checked again."""
+        raw = dict(self.values)
+        for key, value in overrides.items():
+            if key not in _BY_KEY:
+                raise CaseError(f"unknown field {key!r}")
+            raw[key] = _convert(_BY_KEY[key], value)
+        return Case(raw, self.source)
+
+
+def _scalar(field: Field, value, name: str):
+    kind = field.kind
+    if kind == "text":
+        if not isinstance(value, str):
+            raise CaseError(f"{name}: expected text, got {value!r}")
+        return value
+    if kind == "choice":
+        if value not in field.choices:
+            raise CaseError(f"{name}: {value!r} is not one of {', '.join(field.choices)}")
+        return value
+    if kind == "flag":
+        if not isinstance(value, bool):
+            raise CaseError(f"{name}: expected true or false, got {value!r}")
+        return value
+    if kind == "count":
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise CaseError(f"{name}: expected an integer, got {value!r}")
+        out = value
+    else:
+        try:
+            out = parse_quantity(value, kind, name)
+        except UnitError as exc:
+            raise CaseError(str(exc)) from None
+    unit = "" if kind == "count" else f" {SI_UNIT[kind]}"
+    if field.minimum is not None:
+        if out < field.minimum or (field.exclusive_minimum and out == field.minimum):
+            rel = ">" if field.exclusive_minimum else ">="
+            raise CaseError(f"{name} = {value!r}: must be {rel} {field.minimum}{unit}")
+    if field.maximum is not None and out > field.maximum:
+        raise CaseError(f"{name} = {value!r}: must be <= {field.maximum}{unit}")
+    return out
+
+
+def _convert(field: Field, value):
+    if field.shape is None:
+        if isinstance(value, list):
+            raise CaseError(f"{field.key}: expected one value, got a list")
+        return _scalar(field, value, field.key)
+    if not isinstance(value, list):
+        value = [value] * field.shape
+    if len(value) != field.shape:
+        raise CaseError(f"{field.key}: expected {field.shape} values, got {len(value)}")
+    return [_scalar(field, v, f"{field.key}[{i}]") for i, v in enumerate(value)]
+
+
+def parse_case(data: dict, source: str = "<case>") -> Case:
+    """Check a parsed TOML document against :data:`FIELDS`."""
+    for section, content in data.items():
+        if section not in _SECTIONS:
+            raise CaseError(f"{source}: unknown section [{section}]; known: "
+                            f"{', '.join(sorted(_SECTIONS))}")
+        if not isinstance(content, dict):
+            raise CaseError(f"{source}: [{section}] must be a table")
+        for key in content:
+            if f"{section}.{key}" not in _BY_KEY:
+                known = [f.key.split(".")[1] for f in FIELDS if f.key.startswith(section + ".")]
+                raise CaseError(f"{source}: unknown field {section}.{key}; [{section}] takes "
+                                f"{', '.join(known)}")
+    values = {}
+    for field in FIELDS:
+        section, key = field.key.split(".")
+        if key in data.get(section, {}):
+            values[field.key] = _convert(field, data[section][key])
+        elif field.required:
+            raise CaseError(f"{source}: missing field {field.key} ({field.doc})")
+        else:
+            values[field.key] = field.default
+    _check_consistency(values, source)
+    return Case(values, source)
+
+
+def _check_consistency(v: dict, source: str) -> None:
+    for i in range(2):
+        if v["shafts.inner_diameter"][i] >= v["shafts.outer_diameter"][i]:
+            raise CaseError(f"{source}: shafts.inner_diameter[{i}] = "
+                            f"{v['shafts.inner_diameter'][i]} m must be smaller than "
+                            f"shafts.outer_diameter[{i}] = {v['shafts.outer_diameter'][i]} m")
+    for i in range(4):
+        if v["bearings.clearance"][i] >= 0.5 * v["bearings.diameter"][i]:
+            raise CaseError(f"{source}: bearings.clearance[{i}] must be smaller than the "
+                            f"bearing radius")
+    if v["shafts.elements"] % 2:
+        raise CaseError(f"{source}: shafts.elements = {v['shafts.elements']} must be even "
+                        f"(the gear sits at mid-span)")
+
+
+def load_case(path: str | Path, overrides: dict | None = None) -> Case:
+    """Read and check a case file; ``overrides`` replace fields before the checks."""
+    path = Path(path)
+    if not path.is_file():
+        raise CaseError(f"case file not found: {path}")
+    try:
+        data = tomllib.loads(path.read_text())
+    except tomllib.TOMLDecodeError as exc:
+        raise CaseError(f"{path}: not valid TOML: {exc}") from None
+    for key, value in (overrides or {}).items():
+        section, name = key.split(".")
+        data.setdefault(section, {})[name] = value
+    return parse_case(data, str(path))
+
+
+def schema_markdown() -> str:
+    """The schema as a Markdown table (docs/case-files.md)."""
+    rows = ["| field | kind | shape | default | meaning |", "| --- | --- | --- | --- | --- |"]
+    for f in FIELDS:
+        kind = f.kind if f.kind in ("text", "count", "flag", "choice") else \
+            f"{f.kind} [{SI_UNIT[f.kind]}]"
+        if f.choices:
+            kind += ": " + " / ".join(f.choices)
+        default = "required" if f.required else repr(f.default)
+        rows.append(f"| `{f.key}` | {kind} | {f.shape or 1} | {default} | {f.doc} |")
+    return "\n".join(rows)
+
+
+def document() -> str:
+    """The text of docs/case-files.md."""
+    return (
+        "# Case files\n\n"
+        "Generated from `orchestrator/case.py` (`python -m orchestrator.case > "
+        "docs/case-files.md`); a test keeps the two in sync.\n\n"
+        "A case is a TOML file with the sections below. A quantity is a number in the SI unit "
+        "shown, or a string `\"value unit\"` (`\"4 mm\"`, `\"20 deg\"`, `\"150 um\"`, "
+        "`\"325 rad/s\"`, `\"3000 rpm\"`); a unit of the wrong kind, an unknown section or "
+        "key, a missing field or a value out of bounds stops the run before it starts, with "
+        "the field named. A single value given for a list field applies to every entry. "
+        "`gsb run` options override fields without editing the file. Example: "
+        "`models/baguet2010_spur.toml`.\n\n" + schema_markdown() + "\n"
+    )
+
+
+if __name__ == "__main__":
+    print(document(), end="")
