@@ -22,6 +22,7 @@ from __future__ import annotations
 import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 
@@ -115,12 +116,12 @@ class BearingData:
         return (self.radius / self.clearance) ** 2 * self.viscosity * n / p
 
 
-@dataclass(frozen=True)
-class FilmForce:
+class FilmForce(NamedTuple):
     """Dimensionless film force and its derivatives (paper Eq. 5).
 
     ``force`` = (Fbar_x, Fbar_y); ``d_position[i, j] = dFbar_i / dxbar_j``;
     ``d_velocity[i, j] = dFbar_i / dxbar_dot_j``. Derivatives are None when not requested.
+    (A named tuple: built on every call of the hot path.)
     """
 
     force: np.ndarray

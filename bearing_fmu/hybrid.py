@@ -52,7 +52,7 @@ def _axial_coefficients(nt=_NT):
 _E, _P0, _P1, _P2 = _axial_coefficients()
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy", fastmath=True)
 def _series(c, t):
     """Value, first and second derivative of sum c_k t^k (Horner), terms as |t| needs."""
     at = abs(t)
@@ -67,7 +67,7 @@ def _series(c, t):
     return v, d1, d2
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy", fastmath=True)
 def axial_integrals(t, lam, e, p0, p1, p2, out):
     """out[0:3] = G0, G1, G2; out[3:6] = d/dt; out[6:9] = d2/dt2 (G0 = lam I0, G1 = I1/lam,
     G2 = lam I2; I0 = P0/E, I1 = P1/E^2, I2 = P2/E^2)."""
@@ -104,293 +104,286 @@ _GT = np.array([0.5 - math.sqrt(15.0) / 10.0, 0.5, 0.5 + math.sqrt(15.0) / 10.0]
 _GW = np.array([5.0 / 18.0, 8.0 / 18.0, 5.0 / 18.0])
 
 
-@njit(cache=True)
-def _solve_segments(d, lo, active, rhs, out, inact0):
-    """Solve A_PP out_P = rhs_P, out = 0 off P (A: cyclic tridiagonal with diag d, coupling
-    lo[i] between i and i+1), by Thomas sweeps over the runs of active nodes; the ring is
-    walked once starting after the inactive node inact0."""
+@njit(cache=True, error_model="numpy", fastmath=True)
+def _factor(d, lo, active, order, cp, piv, runs):
+    """Thomas factorisation of A_PP over the runs of active nodes (walked from the node after
+    the first inactive one, so no run wraps). Returns the number of runs; run r covers
+    positions runs[r, 0] <= k < runs[r, 1] of ``order``."""
     n = d.shape[0]
-    cp = np.empty(n)
-    dp = np.empty(n)
-    order = np.empty(n, dtype=np.int64)
+    inact0 = 0
+    for i in range(n):
+        if not active[i]:
+            inact0 = i
+            break
     idx = inact0
     for k in range(n):
         idx += 1
         if idx == n:
             idx = 0
         order[k] = idx
-        out[idx] = 0.0
+    nr = 0
     k = 0
     while k < n:
         if not active[order[k]]:
             k += 1
             continue
         start = k
-        prev = -1
+        i = order[k]
+        piv[k] = d[i]
+        cp[k] = lo[i] / piv[k]
+        k += 1
         while k < n and active[order[k]]:
             i = order[k]
-            if prev < 0:
-                cp[k] = lo[i] / d[i]
-                dp[k] = rhs[i] / d[i]
-            else:
-                den = d[i] - lo[prev] * cp[k - 1]
-                cp[k] = lo[i] / den
-                dp[k] = (rhs[i] - lo[prev] * dp[k - 1]) / den
-            prev = i
+            piv[k] = d[i] - lo[order[k - 1]] * cp[k - 1]
+            cp[k] = lo[i] / piv[k]
             k += 1
-        out[order[k - 1]] = dp[k - 1]
-        for j in range(k - 2, start - 1, -1):
-            out[order[j]] = dp[j] - cp[j] * out[order[j + 1]]
+        runs[nr, 0] = start
+        runs[nr, 1] = k
+        nr += 1
+    return nr
 
 
-@njit(cache=True)
-def _matvec(d, lo, a, out):
-    n = d.shape[0]
-    out[0] = d[0] * a[0] + lo[0] * a[1] + lo[n - 1] * a[n - 1]
-    for i in range(1, n - 1):
-        out[i] = d[i] * a[i] + lo[i] * a[i + 1] + lo[i - 1] * a[i - 1]
-    out[n - 1] = d[n - 1] * a[n - 1] + lo[n - 1] * a[0] + lo[n - 2] * a[n - 2]
+@njit(cache=True, error_model="numpy", fastmath=True)
+def _substitute(lo, active, order, cp, piv, runs, nr, rhs, out):
+    """Solve A_PP out_P = rhs_P with the factors of :func:`_factor`; out = 0 off P."""
+    for i in range(out.shape[0]):
+        if not active[i]:
+            out[i] = 0.0
+    for r in range(nr):
+        k0 = runs[r, 0]
+        k1 = runs[r, 1]
+        i = order[k0]
+        prev = out[i] = rhs[i] / piv[k0]
+        for k in range(k0 + 1, k1):
+            i = order[k]
+            prev = out[i] = (rhs[i] - lo[order[k - 1]] * prev) / piv[k]
+        nxt = prev
+        for k in range(k1 - 2, k0 - 1, -1):
+            i = order[k]
+            nxt = out[i] = out[i] - cp[k] * nxt
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy", fastmath=True)
+def _elements(x, y, c0, s0, trig_q, gt, gw, delta, jac, ke, m11, m12, m22):
+    """Element stiffness k_e and mass moments, 3-point Gauss (docs/hybrid-method.md sec. 3),
+    for the weight h^3 (row 0) and, with ``jac``, for -3 h^2 cos and -3 h^2 sin (rows 1, 2)."""
+    n = ke.shape[1]
+    wa0 = gw[0] * (1.0 - gt[0]) ** 2
+    wa1 = gw[1] * (1.0 - gt[1]) ** 2
+    wa2 = gw[2] * (1.0 - gt[2]) ** 2
+    wb0 = gw[0] * gt[0] * (1.0 - gt[0])
+    wb1 = gw[1] * gt[1] * (1.0 - gt[1])
+    wb2 = gw[2] * gt[2] * (1.0 - gt[2])
+    wc0 = gw[0] * gt[0] ** 2
+    wc1 = gw[1] * gt[1] ** 2
+    wc2 = gw[2] * gt[2] ** 2
+    inv = 1.0 / delta
+    for i in range(n):
+        c_0 = c0 * trig_q[0, i, 0] - s0 * trig_q[1, i, 0]
+        c_1 = c0 * trig_q[0, i, 1] - s0 * trig_q[1, i, 1]
+        c_2 = c0 * trig_q[0, i, 2] - s0 * trig_q[1, i, 2]
+        s_0 = s0 * trig_q[0, i, 0] + c0 * trig_q[1, i, 0]
+        s_1 = s0 * trig_q[0, i, 1] + c0 * trig_q[1, i, 1]
+        s_2 = s0 * trig_q[0, i, 2] + c0 * trig_q[1, i, 2]
+        h0 = 1.0 - x * c_0 - y * s_0
+        h1 = 1.0 - x * c_1 - y * s_1
+        h2 = 1.0 - x * c_2 - y * s_2
+        for r in range(3 if jac else 1):
+            if r == 0:
+                w0 = h0 * h0 * h0
+                w1 = h1 * h1 * h1
+                w2 = h2 * h2 * h2
+            elif r == 1:
+                w0 = -3.0 * h0 * h0 * c_0
+                w1 = -3.0 * h1 * h1 * c_1
+                w2 = -3.0 * h2 * h2 * c_2
+            else:
+                w0 = -3.0 * h0 * h0 * s_0
+                w1 = -3.0 * h1 * h1 * s_1
+                w2 = -3.0 * h2 * h2 * s_2
+            ke[r, i] = (gw[0] * w0 + gw[1] * w1 + gw[2] * w2) * inv
+            m11[r, i] = (wa0 * w0 + wa1 * w1 + wa2 * w2) * delta
+            m12[r, i] = (wb0 * w0 + wb1 * w1 + wb2 * w2) * delta
+            m22[r, i] = (wc0 * w0 + wc1 * w1 + wc2 * w2) * delta
+
+
+@njit(cache=True, error_model="numpy", fastmath=True)
+def _km_apply(r, ke, m11, m12, m22, a, ka, ma):
+    """ka = K_r a, ma = M_r a; returns (a.K_r a, a.M_r a)."""
+    n = a.shape[0]
+    qk = 0.0
+    qm = 0.0
+    for i in range(n):
+        im = i - 1 if i > 0 else n - 1
+        ip = i + 1 if i < n - 1 else 0
+        ka[i] = (ke[r, im] + ke[r, i]) * a[i] - ke[r, i] * a[ip] - ke[r, im] * a[im]
+        ma[i] = (m22[r, im] + m11[r, i]) * a[i] + m12[r, i] * a[ip] + m12[r, im] * a[im]
+        qk += a[i] * ka[i]
+        qm += a[i] * ma[i]
+    return qk, qm
+
+
+@njit(cache=True, error_model="numpy", fastmath=True)
 def _hybrid_kernel(lam, x, y, xd, yd, theta0, pinned, t_init, active, e, p0, p1, p2,
                    gt, gw, trig_q, trig_n, tol, maxit, want_jac, force, dfx, dfv, info):
     n = active.shape[0]
+    delta = 2.0 * math.pi / n
+    dsig = delta * (math.sin(0.5 * delta) / (0.5 * delta)) ** 2  # Delta * sinc^2(Delta/2)
     c0 = math.cos(theta0)
     s0 = math.sin(theta0)
-    delta = 2.0 * math.pi / n
-    sig = (math.sin(0.5 * delta) / (0.5 * delta)) ** 2
-    # element integrals: k_e (stiffness), m11, m12, m22 (mass) for w = h^3, w_x, w_y
     ke = np.empty((3, n))
     m11 = np.empty((3, n))
     m12 = np.empty((3, n))
     m22 = np.empty((3, n))
-    for i in range(n):
-        for r in range(3):
-            ke[r, i] = 0.0
-            m11[r, i] = 0.0
-            m12[r, i] = 0.0
-            m22[r, i] = 0.0
-        for q in range(3):
-            cq = trig_q[0, i, q]
-            sq_ = trig_q[1, i, q]
-            c = c0 * cq - s0 * sq_
-            s = s0 * cq + c0 * sq_
-            h = 1.0 - x * c - y * s
-            ws = (h * h * h, -3.0 * h * h * c, -3.0 * h * h * s)
-            tau = gt[q]
-            for r in range(3):
-                w = gw[q] * ws[r]
-                ke[r, i] += w / delta
-                m11[r, i] += delta * w * (1.0 - tau) * (1.0 - tau)
-                m12[r, i] += delta * w * tau * (1.0 - tau)
-                m22[r, i] += delta * w * tau * tau
-    # nodal loads (exact): F = D sig f(theta_i), derivatives in x, y, xd, yd
+    _elements(x, y, c0, s0, trig_q, gt, gw, delta, want_jac, ke, m11, m12, m22)
     cth = np.empty(n)
     sth = np.empty(n)
     fb = np.empty(n)
+    kd = np.empty(n)
+    kl = np.empty(n)
+    md = np.empty(n)
     for i in range(n):
         cth[i] = c0 * trig_n[0, i] - s0 * trig_n[1, i]
         sth[i] = s0 * trig_n[0, i] + c0 * trig_n[1, i]
-        fb[i] = delta * sig * ((y + 2.0 * xd) * cth[i] + (2.0 * yd - x) * sth[i])
+        fb[i] = dsig * ((y + 2.0 * xd) * cth[i] + (2.0 * yd - x) * sth[i])  # F_i, exact
+        im = i - 1 if i > 0 else n - 1
+        kd[i] = ke[0, im] + ke[0, i]
+        kl[i] = -ke[0, i]
+        md[i] = m22[0, im] + m11[0, i]
     if pinned:
         active[0] = False
-    # diagonals of K and M (r = 0: the operator itself)
-    kd = np.empty((3, n))
-    kl = np.empty((3, n))
-    md = np.empty((3, n))
-    ml = np.empty((3, n))
-    for r in range(3):
-        for i in range(n):
-            im = i - 1 if i > 0 else n - 1
-            kd[r, i] = ke[r, im] + ke[r, i]
-            kl[r, i] = -ke[r, i]
-            md[r, i] = m22[r, im] + m11[r, i]
-            ml[r, i] = m12[r, i]
     g = np.empty(9)
     d = np.empty(n)
     lo = np.empty(n)
     a = np.zeros(n)
-    w = np.empty(n)
     b = np.empty(n)
     cvec = np.empty(n)
     z = np.empty(n)
-    tmp = np.empty(n)
+    ka = np.empty(n)
+    ma = np.empty(n)
+    order = np.empty(n, dtype=np.int64)
+    cp = np.empty(n)
+    piv = np.empty(n)
+    runs = np.empty((n, 2), dtype=np.int64)
+    nr = 0
     t = t_init
     lcp_total = 0
-    jss = 0.0
     n_t_iter = 0
+    jss = 1.0
     for _ in range(maxit):
         n_t_iter += 1
         axial_integrals(t, lam, e, p0, p1, p2, g)
         for i in range(n):
-            d[i] = g[2] * kd[0, i] + g[1] * md[0, i]
-            lo[i] = g[2] * kl[0, i] + g[1] * ml[0, i]
+            d[i] = g[2] * kd[i] + g[1] * md[i]
+            lo[i] = g[2] * kl[i] + g[1] * m12[0, i]
             b[i] = g[0] * fb[i]
-        # primal-dual active set on the LCP a >= 0, Aa - b >= 0, a (Aa - b) = 0
+        # primal-dual active set: a >= 0, w = A a - b >= 0, a w = 0 (section 4)
         for _ in range(4 * n):
             lcp_total += 1
-            inact0 = -1
+            any_inactive = False
             for i in range(n):
                 if not active[i]:
-                    inact0 = i
+                    any_inactive = True
                     break
-            if inact0 < 0:  # the whole ring pressurised cannot be a solution: drop min b
-                inact0 = 0
+            if not any_inactive:  # the whole ring pressurised cannot be the solution
+                imin = 0
                 for i in range(n):
-                    if b[i] < b[inact0]:
-                        inact0 = i
-                active[inact0] = False
-            _solve_segments(d, lo, active, b, a, inact0)
-            _matvec(d, lo, a, w)
+                    if b[i] < b[imin]:
+                        imin = i
+                active[imin] = False
+            nr = _factor(d, lo, active, order, cp, piv, runs)
+            _substitute(lo, active, order, cp, piv, runs, nr, b, a)
             changed = False
             for i in range(n):
+                im = i - 1 if i > 0 else n - 1
+                ip = i + 1 if i < n - 1 else 0
                 if active[i]:
                     if a[i] <= 0.0:
                         active[i] = False
                         changed = True
-                elif w[i] - b[i] < 0.0 and not (pinned and i == 0):
-                    active[i] = True
-                    changed = True
+                elif not (pinned and i == 0):
+                    w = d[i] * a[i] + lo[i] * a[ip] + lo[im] * a[im] - b[i]
+                    if w < 0.0:
+                        active[i] = True
+                        changed = True
             if not changed:
                 break
+        # Newton on J*(t) (section 5)
+        qk, qm = _km_apply(0, ke, m11, m12, m22, a, ka, ma)
+        af = 0.0
         for i in range(n):
-            if not active[i]:
-                a[i] = 0.0
-        # t-Newton: J*' = 1/2 a A_t a - b_t a ; J*'' = 1/2 a A_tt a - b_tt a - c.z
-        for i in range(n):
-            d[i] = g[5] * kd[0, i] + g[4] * md[0, i]
-            lo[i] = g[5] * kl[0, i] + g[4] * ml[0, i]
-        _matvec(d, lo, a, tmp)
-        js = 0.0
-        for i in range(n):
-            cvec[i] = (tmp[i] - g[3] * fb[i]) if active[i] else 0.0
-            js += 0.5 * a[i] * tmp[i] - g[3] * fb[i] * a[i]
-        for i in range(n):
-            d[i] = g[8] * kd[0, i] + g[7] * md[0, i]
-            lo[i] = g[8] * kl[0, i] + g[7] * ml[0, i]
-        _matvec(d, lo, a, tmp)
-        jss = 0.0
-        for i in range(n):
-            jss += 0.5 * a[i] * tmp[i] - g[6] * fb[i] * a[i]
-        for i in range(n):
-            d[i] = g[2] * kd[0, i] + g[1] * md[0, i]
-            lo[i] = g[2] * kl[0, i] + g[1] * ml[0, i]
-        inact0 = 0
-        for i in range(n):
-            if not active[i]:
-                inact0 = i
-                break
-        _solve_segments(d, lo, active, cvec, z, inact0)
+            af += a[i] * fb[i]
+            cvec[i] = (g[5] * ka[i] + g[4] * ma[i] - g[3] * fb[i]) if active[i] else 0.0
+        js = 0.5 * (g[5] * qk + g[4] * qm) - g[3] * af
+        jss = 0.5 * (g[8] * qk + g[7] * qm) - g[6] * af
+        _substitute(lo, active, order, cp, piv, runs, nr, cvec, z)
         for i in range(n):
             jss -= cvec[i] * z[i]
         if jss > 0.0:
             dt = -js / jss
         else:
             dt = -2.0 if js > 0.0 else 2.0
+        if abs(dt) <= tol * (1.0 + abs(t)):
+            break  # (a, t) is the converged pair; c, z, J*'' belong to it
+        if abs(dt) <= math.sqrt(tol) * (1.0 + abs(t)):
+            # one Newton corrector without a new solve: a(t + dt) = a - z dt + O(dt^2)
+            ok = True
+            for i in range(n):
+                if active[i] and a[i] - z[i] * dt <= 0.0:
+                    ok = False
+                    break
+            if ok:
+                for i in range(n):
+                    a[i] -= z[i] * dt
+                t += dt
+                axial_integrals(t, lam, e, p0, p1, p2, g)
+                break
         lim = max(2.0, 0.5 * abs(t))
-        if dt > lim:
-            dt = lim
-        elif dt < -lim:
-            dt = -lim
-        t_new = min(max(t + dt, -9.0), 60.0)
-        converged = abs(t_new - t) <= tol * (1.0 + abs(t))
-        t = t_new
-        if converged:
-            break
-    # final solve at the converged t (same active set, Newton step was tiny)
-    axial_integrals(t, lam, e, p0, p1, p2, g)
-    for i in range(n):
-        d[i] = g[2] * kd[0, i] + g[1] * md[0, i]
-        lo[i] = g[2] * kl[0, i] + g[1] * ml[0, i]
-        b[i] = g[0] * fb[i]
-    inact0 = 0
-    for i in range(n):
-        if not active[i]:
-            inact0 = i
-            break
-    _solve_segments(d, lo, active, b, a, inact0)
+        dt = min(max(dt, -lim), lim)
+        t = min(max(t + dt, -9.0), 60.0)
     sa_c = 0.0
     sa_s = 0.0
     for i in range(n):
         sa_c += a[i] * cth[i]
         sa_s += a[i] * sth[i]
-    force[0] = -g[0] * delta * sig * sa_c
-    force[1] = -g[0] * delta * sig * sa_s
+    force[0] = -g[0] * dsig * sa_c
+    force[1] = -g[0] * dsig * sa_s
     info[0] = t
     info[1] = n_t_iter
     info[2] = lcp_total
     if not want_jac:
         return
-    # c, z, J*'' at the final point
-    for i in range(n):
-        d[i] = g[5] * kd[0, i] + g[4] * md[0, i]
-        lo[i] = g[5] * kl[0, i] + g[4] * ml[0, i]
-    _matvec(d, lo, a, tmp)
-    for i in range(n):
-        cvec[i] = (tmp[i] - g[3] * fb[i]) if active[i] else 0.0
-    for i in range(n):
-        d[i] = g[8] * kd[0, i] + g[7] * md[0, i]
-        lo[i] = g[8] * kl[0, i] + g[7] * ml[0, i]
-    _matvec(d, lo, a, tmp)
-    jss = 0.0
-    for i in range(n):
-        jss += 0.5 * a[i] * tmp[i] - g[6] * fb[i] * a[i]
-    for i in range(n):
-        d[i] = g[2] * kd[0, i] + g[1] * md[0, i]
-        lo[i] = g[2] * kl[0, i] + g[1] * ml[0, i]
-    _solve_segments(d, lo, active, cvec, z, inact0)
-    for i in range(n):
-        jss -= cvec[i] * z[i]
-    r = np.empty(n)
+    # Jacobians with the active set frozen, through t (section 6)
+    rq = np.empty(n)
     da = np.empty(n)
-    fq = np.empty(n)
-    dq_d = np.empty(n)
-    dq_l = np.empty(n)
     for q in range(4):
-        # load derivative F_q and operator derivative A_q (position only)
-        for i in range(n):
-            if q == 0:
-                fq[i] = -delta * sig * sth[i]
-            elif q == 1:
-                fq[i] = delta * sig * cth[i]
-            elif q == 2:
-                fq[i] = 2.0 * delta * sig * cth[i]
-            else:
-                fq[i] = 2.0 * delta * sig * sth[i]
         sq = 0.0
         if q < 2:
-            rr = q + 1
+            qk, qm = _km_apply(q + 1, ke, m11, m12, m22, a, ka, ma)
             for i in range(n):
-                dq_d[i] = g[2] * kd[rr, i] + g[1] * md[rr, i]
-                dq_l[i] = g[2] * kl[rr, i] + g[1] * ml[rr, i]
-            _matvec(dq_d, dq_l, a, tmp)
-            for i in range(n):
-                r[i] = (tmp[i] - g[0] * fq[i]) if active[i] else 0.0
-            for i in range(n):
-                dq_d[i] = g[5] * kd[rr, i] + g[4] * md[rr, i]
-                dq_l[i] = g[5] * kl[rr, i] + g[4] * ml[rr, i]
-            _matvec(dq_d, dq_l, a, tmp)
-            for i in range(n):
-                sq += 0.5 * a[i] * tmp[i] - g[3] * fq[i] * a[i]
+                fq = -dsig * sth[i] if q == 0 else dsig * cth[i]
+                rq[i] = (g[2] * ka[i] + g[1] * ma[i] - g[0] * fq) if active[i] else 0.0
+                sq -= g[3] * fq * a[i]
+            sq += 0.5 * (g[5] * qk + g[4] * qm)
         else:
             for i in range(n):
-                r[i] = -g[0] * fq[i] if active[i] else 0.0
-                sq -= g[3] * fq[i] * a[i]
-        _solve_segments(d, lo, active, r, da, inact0)
+                fq = 2.0 * dsig * (cth[i] if q == 2 else sth[i])
+                rq[i] = -g[0] * fq if active[i] else 0.0
+                sq -= g[3] * fq * a[i]
+        _substitute(lo, active, order, cp, piv, runs, nr, rq, da)
         cda = 0.0
         for i in range(n):
-            da[i] = -da[i]
-            cda += cvec[i] * da[i]
+            cda -= cvec[i] * da[i]
         dtq = -(sq + cda) / jss
+        info[3 + q] = dtq  # dt/dq: the next call predicts t from it
         sc = 0.0
         ss = 0.0
         for i in range(n):
-            dai = da[i] - z[i] * dtq
+            dai = -da[i] - z[i] * dtq
             sc += dai * cth[i]
             ss += dai * sth[i]
-        col0 = -delta * sig * (g[0] * sc + g[3] * dtq * sa_c)
-        col1 = -delta * sig * (g[0] * ss + g[3] * dtq * sa_s)
+        col0 = -dsig * (g[0] * sc + g[3] * dtq * sa_c)
+        col1 = -dsig * (g[0] * ss + g[3] * dtq * sa_s)
         if q < 2:
             dfx[0, q] = col0
             dfx[1, q] = col1
@@ -426,7 +419,7 @@ class HybridBearing(FilmBearingModel):
 
     name = "hybrid"
 
-    def __init__(self, bearing, n=192, pinned_start=False, tol=1e-10, maxit=30):
+    def __init__(self, bearing, n=192, pinned_start=False, tol=1e-9, maxit=30):
         super().__init__(bearing)
         if n < 16:
             raise ValueError(f"n = {n} circumferential nodes: need at least 16")
@@ -436,15 +429,28 @@ class HybridBearing(FilmBearingModel):
         self.maxit = maxit
         self._t = 1.0
         self._active = None
-        self.last_info = None
+        self._info = np.zeros(7)
+        self._last_state = None  # (state, dt/dstate) of the last call with a Jacobian
         delta = 2 * math.pi / self.n
         thq = (np.arange(self.n)[:, None] + _GT[None, :]) * delta
         self._trig_q = np.stack([np.cos(thq), np.sin(thq)])
         thn = np.arange(self.n) * delta
         self._trig_n = np.stack([np.cos(thn), np.sin(thn)])
 
+    @property
+    def last_info(self) -> dict:
+        """Diagnostics of the last call: t = (k lambda)^2, k, Newton and active-set passes."""
+        t = float(self._info[0])
+        return dict(t=t, k=math.sqrt(abs(t)) / self.bearing.lambda_,
+                    t_iterations=int(self._info[1]), lcp_iterations=int(self._info[2]))
+
     def film_force(self, xbar, ybar, xbar_dot=0.0, ybar_dot=0.0, jacobian=True):
-        """Dimensionless force (Eq. 5) and its analytic derivatives; warm-started."""
+        """Dimensionless force (Eq. 5) and its analytic derivatives; warm-started.
+
+        Convergence: Newton on t stops when the step is below ``tol (1 + |t|)``, or, when it
+        is below ``sqrt(tol) (1 + |t|)``, after one corrector ``a - z dt`` without a new solve
+        (force error O(dt^2), Jacobian error O(dt)).
+        """
         n = self.n
         if self.pinned_start:
             theta0 = math.atan2(ybar, xbar) + math.pi  # h_max
@@ -456,17 +462,22 @@ class HybridBearing(FilmBearingModel):
                 f = (ybar + 2 * xbar_dot) * np.cos(th) + (2 * ybar_dot - xbar) * np.sin(th)
                 self._active = f > 0
             active = self._active
-        force = np.zeros(2)
-        dfx = np.zeros((2, 2))
-        dfv = np.zeros((2, 2))
-        info = np.zeros(3)
+        force = np.empty(2)
+        dfx = np.empty((2, 2))
+        dfv = np.empty((2, 2))
+        info = self._info
+        t_init = self._t
+        if self._last_state is not None:  # first-order predictor with the exact dt/dq
+            s0, dtq = self._last_state
+            t_init += (dtq[0] * (xbar - s0[0]) + dtq[1] * (ybar - s0[1])
+                       + dtq[2] * (xbar_dot - s0[2]) + dtq[3] * (ybar_dot - s0[3]))
         _hybrid_kernel(self.bearing.lambda_, xbar, ybar, xbar_dot, ybar_dot, theta0,
-                       self.pinned_start, self._t, active, _E, _P0, _P1, _P2, _GT, _GW,
+                       self.pinned_start, t_init, active, _E, _P0, _P1, _P2, _GT, _GW,
                        self._trig_q, self._trig_n, self.tol, self.maxit, jacobian, force, dfx,
                        dfv, info)
         self._t = info[0]
-        self.last_info = dict(t=info[0], k=math.sqrt(abs(info[0])) / self.bearing.lambda_,
-                              t_iterations=int(info[1]), lcp_iterations=int(info[2]))
+        self._last_state = ((xbar, ybar, xbar_dot, ybar_dot), info[3:7].copy()) if jacobian \
+            else None
         if not jacobian:
             return FilmForce(force)
         return FilmForce(force, dfx, dfv)
