@@ -107,6 +107,7 @@ def test_fmu_error_is_reported_not_fatal_and_state_round_trips(fmu_dir):
 
 
 def test_linear_fmu_freezes_at_initialisation_exit(fmu_dir):
+    """Hybrid until initialisation ends, then exactly affine with the coefficients at X0."""
     out = run_isolated(f"""
         import json, numpy as np
         from orchestrator.fmi import FmuBearings
@@ -114,14 +115,19 @@ def test_linear_fmu_freezes_at_initialisation_exit(fmu_dir):
         x0 = np.array([[6e-5, -6e-5, 0.0, 0.0]])
         f0, k0, c0 = fmu.evaluate(x0)
         fmu.exit_initialization()
+        fa, ka, ca = fmu.evaluate(x0)
         x1 = x0 + np.array([[5e-6, 2e-6, 1e-4, -1e-4]])
         f1, k1, c1 = fmu.evaluate(x1)
-        pred = f0[0] - k0[0] @ (x1[0, :2] - x0[0, :2]) - c0[0] @ x1[0, 2:]
+        pred = fa[0] - ka[0] @ (x1[0, :2] - x0[0, :2]) - ca[0] @ x1[0, 2:]
         fmu.close()
-        print(json.dumps(dict(err=float(np.abs(f1[0] - pred).max() / np.abs(f0).max()),
-                              same_k=bool(np.array_equal(k0, k1)))))
+        scale = np.abs(f0).max()
+        print(json.dumps(dict(affine=float(np.abs(f1[0] - pred).max() / scale),
+                              at_x0=float(np.abs(fa - f0).max() / scale),
+                              k=float(np.abs(ka - k0).max() / np.abs(k0).max()),
+                              same_k=bool(np.array_equal(ka, k1)))))
     """)
-    assert out["err"] < 1e-12
+    assert out["affine"] < 1e-13  # an affine law, to round-off
+    assert out["at_x0"] < 1e-7 and out["k"] < 1e-4  # the hybrid's own tolerance at X0
     assert out["same_k"]
 
 
