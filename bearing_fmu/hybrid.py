@@ -267,6 +267,10 @@ def _hybrid_kernel(lam, x, y, xd, yd, theta0, pinned, t_init, active, e, p0, p1,
     runs = np.empty((n, 2), dtype=np.int64)
     nr = 0
     t = t_init
+    if info[11] > 0.0:  # first-order predictor with the exact dt/dq of the previous call
+        t += (info[3] * (x - info[7]) + info[4] * (y - info[8]) + info[5] * (xd - info[9])
+              + info[6] * (yd - info[10]))
+    info[11] = 0.0
     lcp_total = 0
     n_t_iter = 0
     jss = 1.0
@@ -353,6 +357,11 @@ def _hybrid_kernel(lam, x, y, xd, yd, theta0, pinned, t_init, active, e, p0, p1,
     info[2] = lcp_total
     if not want_jac:
         return
+    info[7] = x
+    info[8] = y
+    info[9] = xd
+    info[10] = yd
+    info[11] = 1.0
     # Jacobians with the active set frozen, through t (section 6)
     rq = np.empty(n)
     da = np.empty(n)
@@ -429,8 +438,9 @@ class HybridBearing(FilmBearingModel):
         self.maxit = maxit
         self._t = 1.0
         self._active = None
-        self._info = np.zeros(7)
-        self._last_state = None  # (state, dt/dstate) of the last call with a Jacobian
+        # t, Newton passes, active-set passes, dt/dq (4), state of the last Jacobian call (4),
+        # predictor valid flag
+        self._info = np.zeros(12)
         delta = 2 * math.pi / self.n
         thq = (np.arange(self.n)[:, None] + _GT[None, :]) * delta
         self._trig_q = np.stack([np.cos(thq), np.sin(thq)])
@@ -466,18 +476,11 @@ class HybridBearing(FilmBearingModel):
         dfx = np.empty((2, 2))
         dfv = np.empty((2, 2))
         info = self._info
-        t_init = self._t
-        if self._last_state is not None:  # first-order predictor with the exact dt/dq
-            s0, dtq = self._last_state
-            t_init += (dtq[0] * (xbar - s0[0]) + dtq[1] * (ybar - s0[1])
-                       + dtq[2] * (xbar_dot - s0[2]) + dtq[3] * (ybar_dot - s0[3]))
         _hybrid_kernel(self.bearing.lambda_, xbar, ybar, xbar_dot, ybar_dot, theta0,
-                       self.pinned_start, t_init, active, _E, _P0, _P1, _P2, _GT, _GW,
+                       self.pinned_start, self._t, active, _E, _P0, _P1, _P2, _GT, _GW,
                        self._trig_q, self._trig_n, self.tol, self.maxit, jacobian, force, dfx,
                        dfv, info)
         self._t = info[0]
-        self._last_state = ((xbar, ybar, xbar_dot, ybar_dot), info[3:7].copy()) if jacobian \
-            else None
         if not jacobian:
             return FilmForce(force)
         return FilmForce(force, dfx, dfv)

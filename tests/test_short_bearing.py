@@ -30,7 +30,7 @@ def quad_force(lam, x, y, xd, yd):
         return 1 - x * math.cos(t) - y * math.sin(t)
 
     k = -2 * lam**3 / 3
-    kw = dict(limit=400, epsabs=1e-15, epsrel=1e-12)
+    kw = dict(limit=400, epsabs=1e-13, epsrel=1e-12)
     return np.array([
         k * quad(lambda t: f(t) * math.cos(t) / h(t) ** 3, 0, 2 * math.pi, **kw)[0],
         k * quad(lambda t: f(t) * math.sin(t) / h(t) ** 3, 0, 2 * math.pi, **kw)[0],
