@@ -8,6 +8,7 @@ from scipy.integrate import quad
 
 from bearing_fmu import BearingData, EccentricityError
 from bearing_fmu.hybrid import _E, _P0, _P1, _P2, HybridBearing, axial_integrals
+from tests.jacobian_check import numeric_jacobian
 
 
 def unit(lam):
@@ -30,14 +31,7 @@ def test_jacobians_match_central_differences_of_the_full_solver(lam, state):
     model = HybridBearing(unit(lam), tol=1e-13)
     ff = model.dimensionless(*state)
     analytic = np.hstack([ff.d_position, ff.d_velocity])
-    numeric = np.zeros((2, 4))
-    h = 1e-6
-    for j in range(4):
-        sp, sm = list(state), list(state)
-        sp[j] += h
-        sm[j] -= h
-        numeric[:, j] = (model.dimensionless(*sp, jacobian=False).force
-                         - model.dimensionless(*sm, jacobian=False).force) / (2 * h)
+    numeric = numeric_jacobian(model, state)
     err = np.abs(analytic - numeric).max() / np.abs(analytic).max()
     assert err < 1e-4
     # the damping block is the Hessian of one functional: symmetric

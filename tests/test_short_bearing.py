@@ -8,6 +8,7 @@ from scipy.integrate import quad
 
 from bearing_fmu import BearingData, BearingError, EccentricityError
 from bearing_fmu.short_bearing import ShortBearing, ocvirk_static_force
+from tests.jacobian_check import numeric_jacobian
 
 BEARING = BearingData(diameter=0.070, length=0.050, clearance=150e-6, viscosity=0.0288)
 STATES = [
@@ -55,16 +56,7 @@ def test_jacobians_match_central_differences(state):
     model = ShortBearing(BEARING)
     ff = model.dimensionless(*state)
     analytic = np.hstack([ff.d_position, ff.d_velocity])
-    numeric = np.zeros((2, 4))
-    d = 1e-6
-    for j in range(4):
-        sp, sm = list(state), list(state)
-        sp[j] += d
-        sm[j] -= d
-        numeric[:, j] = (
-            model.dimensionless(*sp, jacobian=False).force
-            - model.dimensionless(*sm, jacobian=False).force
-        ) / (2 * d)
+    numeric = numeric_jacobian(model, state)
     assert np.abs(analytic - numeric).max() <= 1e-4 * np.abs(analytic).max()
 
 
