@@ -1,0 +1,180 @@
+"""Natural modes of the gear-shaft system and the modal damping matrix (paper Sec. 4).
+
+Reference configuration for the damping (choice, documented)
+-------------------------------------------------------------
+The paper uses one modal damping factor (0.03) for all modes without saying on which modes. Here
+``C = M Phi diag(2 zeta omega_i) Phi^T M`` (Phi mass-normalised, so that ``Phi^T C Phi =
+diag(2 zeta omega_i)``) is built on the modes of
+
+    K_ref = K_shaft + K_mesh,mean + sum_j B_j^T sym(Kb_ref_j) B_j
+
+with ``K_mesh,mean`` the mesh stiffness matrix averaged over one mesh period at the static load
+(:meth:`gear_fmu.structure.Structure.mean_mesh_stiffness`) and ``Kb_ref`` a reference bearing
+stiffness supplied by the caller (the symmetric part of the bearings' static stiffness when it is
+known, otherwise an isotropic spring). C is constant during a run.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg
+
+from .system import GearShaftSystem
+
+__all__ = [
+    "Modes",
+    "bearing_stiffness_matrix",
+    "mesh_stiffness_matrix",
+    "modal_damping_matrix",
+    "mode_table",
+    "natural_modes",
+]
+
+KINDS = ("bending", "torsion", "axial")
+
+
+def bearing_stiffness_matrix(system: GearShaftSystem, kb) -> np.ndarray:
+    """Full (n_dof, n_dof) matrix of the bearing springs (symmetric part of each 2x2 Kb).
+
+    Parameters
+    ----------
+    system : GearShaftSystem
+    kb : float or array_like (4, 2, 2)
+        Isotropic stiffness [N/m] for every bearing, or one 2x2 Kb per bearing (global s, t).
+    """
+    kb = np.asarray(kb, dtype=float)
+    if kb.ndim == 0:
+        kb = np.broadcast_to(kb * np.eye(2), (4, 2, 2))
+    if kb.shape != (4, 2, 2):
+        raise ValueError(f"bearing stiffness shape {kb.shape} must be () or (4, 2, 2)")
+    if not np.all(np.isfinite(kb)):
+        raise ValueError("bearing stiffness has non-finite entries")
+    out = np.zeros((system.n_dof, system.n_dof))
+    for j in range(4):
+        idx = system.bearing_dofs[j]
+        out[np.ix_(idx, idx)] += 0.5 * (kb[j] + kb[j].T)
+    return out
+
+
+def mesh_stiffness_matrix(system: GearShaftSystem, k12) -> np.ndarray:
+    """Full (n_dof, n_dof) matrix of a (12, 12) mesh stiffness on the gear-node DOFs."""
+    k12 = np.asarray(k12, dtype=float)
+    if k12.shape != (12, 12):
+        raise ValueError(f"mesh stiffness shape {k12.shape} must be (12, 12)")
+    out = np.zeros((system.n_dof, system.n_dof))
+    out[np.ix_(system.gear_dofs, system.gear_dofs)] = 0.5 * (k12 + k12.T)
+    return out
+
+
+@dataclass
+class Modes:
+    """Natural modes, ascending.
+
+    Attributes
+    ----------
+    omega : (n,) angular frequencies [rad/s] (negative round-off eigenvalues clipped to 0)
+    shapes : (n_dof, n) full mode shapes, mass-normalised (zero on the clamped DOF)
+    kinetic_fraction : (n, 3) share of the modal kinetic energy in bending / torsion / axial DOFs
+        (exact partition: M has no coupling between DOF kinds)
+    mesh_strain_fraction : (n,) share of the strain energy stored in the mesh
+    kinds : list of str, type of each mode (see :func:`classify`)
+    """
+
+    omega: np.ndarray
+    shapes: np.ndarray
+    kinetic_fraction: np.ndarray
+    mesh_strain_fraction: np.ndarray
+    kinds: list
+
+    @property
+    def frequency_hz(self) -> np.ndarray:
+        return self.omega / (2.0 * np.pi)
+
+
+def classify(fractions: np.ndarray, dominant: float = 0.75) -> str:
+    """Name a mode by its kinetic energy fractions (bending, torsion, axial).
+
+    A single kind when its share is >= ``dominant``, else the two largest joined by '-'
+    (largest first), e.g. ``'torsion-bending'`` for a coupled mesh mode.
+    """
+    order = np.argsort(fractions)[::-1]
+    if fractions[order[0]] >= dominant:
+        return KINDS[order[0]]
+    return f"{KINDS[order[0]]}-{KINDS[order[1]]}"
+
+
+def natural_modes(
+    system: GearShaftSystem, bearing_stiffness, mesh_stiffness=None, stiffness_extra=None
+) -> Modes:
+    """Undamped natural modes of ``K_shaft + K_mesh + K_bearings`` with mass M.
+
+    Parameters
+    ----------
+    system : GearShaftSystem
+    bearing_stiffness : float or (4, 2, 2)
+        See :func:`bearing_stiffness_matrix` (symmetric part used).
+    mesh_stiffness : (12, 12) array, optional
+        Mesh stiffness on the gear-node DOFs (e.g. the mean mesh stiffness); symmetric part used.
+    stiffness_extra : (n_dof, n_dof) array, optional
+        Any further stiffness (full DOF numbering).
+    """
+    kfull = system.stiffness + bearing_stiffness_matrix(system, bearing_stiffness)
+    kmesh = np.zeros_like(kfull)
+    if mesh_stiffness is not None:
+        kmesh = mesh_stiffness_matrix(system, mesh_stiffness)
+    kfull = kfull + kmesh
+    if stiffness_extra is not None:
+        kfull = kfull + np.asarray(stiffness_extra, dtype=float)
+    mr = system.reduce(system.mass)
+    kr = system.reduce(kfull)
+    lam, phi_r = scipy.linalg.eigh(kr, mr)
+    omega = np.sqrt(np.clip(lam, 0.0, None))
+    shapes = np.zeros((system.n_dof, lam.size))
+    shapes[system.free] = phi_r
+    kind = system.dof_kind()
+    kin = np.empty((lam.size, 3))
+    mphi = system.mass @ shapes
+    for c in range(3):
+        sel = kind == c
+        kin[:, c] = np.einsum("ij,ij->j", shapes[sel], mphi[sel])
+    kin /= kin.sum(axis=1, keepdims=True)
+    strain = np.einsum("ij,ij->j", shapes, kfull @ shapes)
+    smesh = np.einsum("ij,ij->j", shapes, kmesh @ shapes)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mesh_frac = np.where(strain > 0.0, smesh / strain, 0.0)
+    kinds = [classify(f) for f in kin]
+    return Modes(omega, shapes, kin, mesh_frac, kinds)
+
+
+def modal_damping_matrix(system: GearShaftSystem, modes: Modes, zeta: float) -> np.ndarray:
+    """Modal damping ``C = M Phi diag(2 zeta omega_i) Phi^T M`` (full numbering) [N s/m].
+
+    Parameters
+    ----------
+    system : GearShaftSystem
+    modes : Modes
+        Modes of the reference configuration (module docstring), all of them.
+    zeta : float
+        Modal damping factor [-] (paper: 0.03), in [0, 1).
+    """
+    if not 0.0 <= zeta < 1.0:
+        raise ValueError(f"modal damping factor zeta = {zeta!r} must lie in [0, 1)")
+    mphi = system.mass @ modes.shapes
+    c = (mphi * (2.0 * zeta * modes.omega)) @ mphi.T
+    return 0.5 * (c + c.T)
+
+
+def mode_table(modes: Modes, n_modes: int | None = None) -> str:
+    """Text table of the modes: index, frequency [Hz], type, energy shares (for ``gsb modal``)."""
+    n = modes.omega.size if n_modes is None else min(n_modes, modes.omega.size)
+    lines = [f"{'mode':>4}  {'f [Hz]':>11}  {'type':<17} {'bend':>5} {'tors':>5} {'axial':>5} "
+             f"{'mesh':>5}"]
+    for i in range(n):
+        b, t, a = modes.kinetic_fraction[i]
+        lines.append(
+            f"{i + 1:>4}  {modes.frequency_hz[i]:>11.2f}  {modes.kinds[i]:<17} {b:>5.2f} {t:>5.2f} "
+            f"{a:>5.2f} {modes.mesh_strain_fraction[i]:>5.2f}"
+        )
+    return "\n".join(lines)
