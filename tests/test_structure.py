@@ -1,0 +1,297 @@
+"""The gear-shaft Structure: statics, condensed Newmark step, rollback, master emulation.
+
+``LineMesh`` stands in for the distributed mesh element (same ``evaluate`` API): unilateral
+springs spread over the face width on the line of action through the pitch point of the paper's
+spur pair, with an optional stiffness modulation at the mesh frequency and a lead deviation.
+"""
+
+import math
+import types
+
+import numpy as np
+import pytest
+
+from gear_fmu.newmark import NewmarkConvergenceError, NonlinearForce, newmark_step
+from gear_fmu.structure import Structure, StructureLoads
+from gear_fmu.system import paper_system_example
+
+T_IN = 220.0  # N m
+OMEGA = 325.0  # rad/s
+ALPHA = math.radians(20.0)
+R1, R2 = 0.052, 0.314  # pitch radii (x1 + x2 = 0: operating = standard)
+RB1 = R1 * math.cos(ALPHA)
+
+
+class LineMesh:
+    """Stand-in mesh element: ``evaluate(pinion_angle, q12)`` as gear_fmu.mesh.MeshElement."""
+
+    def __init__(self, width=0.040, n_slices=10, k_per_length=1.4e10, deviation=None,
+                 modulation=0.0, teeth=26):
+        n = np.array([math.sin(ALPHA), math.cos(ALPHA), 0.0])
+        o2 = np.array([R1 + R2, 0.0, 0.0])
+        zs = ((np.arange(n_slices) + 0.5) / n_slices - 0.5) * width
+        self.v = np.array([
+            np.concatenate([n, np.cross([R1, 0.0, z], n), -n, -np.cross(np.array([R1, 0.0, z]) - o2,
+                                                                         n)])
+            for z in zs
+        ])
+        self.kdl = k_per_length * width / n_slices
+        self.e = np.zeros(n_slices) if deviation is None else np.asarray(deviation, float)
+        self.modulation = modulation
+        self.teeth = teeth
+
+    def evaluate(self, pinion_angle, q12):
+        k = self.kdl * (1.0 + self.modulation * math.cos(self.teeth * pinion_angle))
+        delta = self.v @ q12 - self.e
+        active = delta > 0.0
+        load = np.where(active, k * delta, 0.0)
+        va = self.v[active]
+        return types.SimpleNamespace(
+            force=-(self.v.T @ load), stiffness=k * va.T @ va, delta=delta, load=load,
+            active=active, total_load=float(load.sum()), transmission_error=0.0)
+
+
+def iso(value, n=4):
+    return np.broadcast_to(value * np.eye(2), (n, 2, 2)).copy()
+
+
+def make(mesh=None, loads=None, **kw):
+    return Structure(paper_system_example(), LineMesh() if mesh is None else mesh,
+                     StructureLoads() if loads is None else loads, **kw)
+
+
+def test_static_reactions_balance_the_mesh_force_and_are_symmetric():
+    st = make(zeta=0.0)
+    kb = iso(1e9)
+    info = st.static(np.zeros((4, 2)), kb)
+    assert info.residual < 1e-10
+    reac = -np.einsum("bij,bj->bi", kb, st.journal_states()[:, :2])
+    # the bearings carry no torque: the mesh load balances the input torque alone
+    w = T_IN / RB1
+    assert st.mesh_state.total_load == pytest.approx(w, rel=1e-9)
+    n = np.array([math.sin(ALPHA), math.cos(ALPHA)])
+    np.testing.assert_allclose(reac[0] + reac[1], w * n, rtol=1e-9)  # pinion shaft
+    np.testing.assert_allclose(reac[2] + reac[3], -w * n, rtol=1e-9)  # gear shaft
+    np.testing.assert_allclose(reac[0], reac[1], rtol=1e-9)  # symmetric spur system
+    np.testing.assert_allclose(reac[2], reac[3], rtol=1e-9)
+    # resisting torque = reaction of the clamped output: T z2 / z1 about +z on the structure
+    sys_ = st.system
+    moment = (sys_.stiffness @ st.full_vector("x"))[sys_.output_dof]
+    assert -moment == pytest.approx(-T_IN * R2 / R1, rel=1e-9)
+    # loads on stiff supports (first guess for the master)
+    np.testing.assert_allclose(st.support_loads(), -reac, rtol=1e-3)
+
+
+def test_gravity_is_carried_by_the_bearings():
+    """The mesh force is internal to the pair of shafts: the four reactions sum to the weight."""
+    g = np.array([0.0, -9.81])
+    st = make(loads=StructureLoads(gravity=tuple(g)), zeta=0.0)
+    kb = iso(1e9)
+    st.static(np.zeros((4, 2)), kb)
+    reac = -np.einsum("bij,bj->bi", kb, st.journal_states()[:, :2])
+    total_mass = st.system.shaft_masses.sum()
+    np.testing.assert_allclose(reac.sum(axis=0), -total_mass * g, rtol=1e-9, atol=1e-9)
+    # the pinion shaft's bearings carry its weight plus the mesh force
+    n = np.array([math.sin(ALPHA), math.cos(ALPHA)])
+    w_mesh = st.mesh_state.total_load
+    np.testing.assert_allclose(reac[0] + reac[1], w_mesh * n - st.system.shaft_masses[0] * g,
+                               rtol=1e-9)
+
+
+def monolithic_structure(st, bearing_law):
+    """Full (reduced) M, C, K, load and nonlinear callback for the generic Newmark step."""
+    sys_ = st.system
+    red = sys_.reduced_index
+    m, c, k = (sys_.reduce(a) for a in (sys_.mass, st.damping_full, sys_.stiffness))
+    gear = red[sys_.gear_dofs]
+    brg = red[sys_.bearing_dofs]
+    n = m.shape[0]
+    z1, z2 = sys_.teeth
+    masses = sys_.shaft_masses
+    e = st.loads.unbalance
+    w1, w2 = OMEGA, OMEGA * z1 / z2
+
+    def force(t):  # Eq. (10) written out here independently
+        f = np.zeros(n)
+        f[red[sys_.input_dof]] = st.loads.torque
+        f[gear[0]] += masses[0] * e[0] * w1**2 * math.cos(w1 * t)
+        f[gear[1]] += masses[0] * e[0] * w1**2 * math.sin(w1 * t)
+        f[gear[6]] += masses[1] * e[1] * w2**2 * math.cos(-w2 * t)
+        f[gear[7]] += masses[1] * e[1] * w2**2 * math.sin(-w2 * t)
+        return f
+
+    def nonlinear_at(t):
+        def nl(x, v):
+            ms = st.mesh.evaluate(st.pinion_angle(t), x[gear])
+            f = np.zeros(n)
+            dx = np.zeros((n, n))
+            dv = np.zeros((n, n))
+            f[gear] += ms.force
+            dx[np.ix_(gear, gear)] -= ms.stiffness
+            for j in range(4):
+                fb, kb, cb = bearing_law(j, x[brg[j]], v[brg[j]])
+                f[brg[j]] += fb
+                dx[np.ix_(brg[j], brg[j])] -= kb
+                dv[np.ix_(brg[j], brg[j])] -= cb
+            return NonlinearForce(f, dx, dv, ms.active)
+        return nl
+
+    return m, c, k, force, nonlinear_at
+
+
+def affine(f0, kb, cb):
+    def law(j, x, v):
+        return f0[j] - kb[j] @ x - cb[j] @ v, kb[j], cb[j]
+    return law
+
+
+def test_condensed_step_equals_generic_newmark_on_the_full_system():
+    """Time-varying, partially open mesh (lead slope), unbalance, anisotropic bearing laws."""
+    mesh = LineMesh(deviation=np.linspace(0.0, 40e-6, 10), modulation=0.3)
+    st = make(mesh, StructureLoads(T_IN, OMEGA, (0.6e-3, 0.6e-3)))
+    rng = np.random.default_rng(1)
+    kb = iso(1e8) + 2e7 * rng.standard_normal((4, 2, 2))
+    cb = iso(1e5) + 2e4 * rng.standard_normal((4, 2, 2))
+    f0 = 100.0 * rng.standard_normal((4, 2))
+    st.static(f0, kb, cb)
+    assert 0 < np.count_nonzero(st.mesh_state.active) < 10  # partial contact
+    m, c, k, force, nl_at = monolithic_structure(st, affine(f0, kb, cb))
+    sys_ = st.system
+    x = sys_.reduce(st.full_vector("x"))
+    v = np.zeros_like(x)
+    a = np.zeros_like(x)
+    act = st.mesh_state.active
+    dt = st.mesh_period / 32
+    changes = 0
+    for i in range(96):
+        info = st.step(dt, f0, kb, cb)
+        x, v, a, ref = newmark_step(m, c, k, dt, (i + 1) * dt, x, v, a, force, nl_at((i + 1) * dt),
+                                    active0=act, tol=1e-9)
+        changes += not np.array_equal(ref.active, act)
+        act = ref.active
+        np.testing.assert_array_equal(st.mesh_state.active, act)
+        assert info.residual <= st.tol
+        np.testing.assert_allclose(sys_.reduce(st.full_vector("x")), x, rtol=0,
+                                   atol=1e-8 * np.abs(x).max())
+        np.testing.assert_allclose(sys_.reduce(st.full_vector("v")), v, rtol=0,
+                                   atol=1e-7 * np.abs(v).max())
+    assert changes > 0  # the contact set did change during the run
+
+
+def test_state_rollback_is_exact():
+    st = make(loads=StructureLoads(T_IN, OMEGA, (0.6e-3, 0.3e-3)))
+    kb, cb, f0 = iso(1e8), iso(1e5), np.zeros((4, 2))
+    st.static(f0, kb, cb)
+    dt = st.mesh_period / 32
+    for _ in range(5):
+        st.step(dt, f0, kb, cb)
+    saved = st.get_state()
+    st.step(dt, f0, kb, cb)
+    first = (st.x.copy(), st.v.copy(), st.a.copy(), st.t)
+    st.set_state(saved)
+    st.step(dt, f0 + 500.0, 2 * kb, cb)  # a different law moves the structure elsewhere
+    assert np.abs(st.x - first[0]).max() > 1e-9
+    st.set_state(saved)
+    st.step(dt, f0, kb, cb)
+    for got, ref in zip((st.x, st.v, st.a, st.t), first, strict=True):
+        np.testing.assert_array_equal(got, ref)
+
+
+# ---------------------------------------------------------------- master emulation
+K1, K3, CB = 1e8, 4e17, 1e5  # cubic bearing: F = -(K1 + K3 |X|^2) X - CB Xdot
+
+
+def cubic_bearing(j, x, v):
+    r2 = x @ x
+    f = -(K1 + K3 * r2) * x - CB * v
+    kb = (K1 + K3 * r2) * np.eye(2) + 2 * K3 * np.outer(x, x)  # -dF/dX, exact
+    return f, kb, CB * np.eye(2)
+
+
+def linearise(states):
+    f0 = np.zeros((4, 2))
+    kb = np.zeros((4, 2, 2))
+    cb = np.zeros((4, 2, 2))
+    for j in range(4):
+        f, kb[j], cb[j] = cubic_bearing(j, states[j, :2], states[j, 2:])
+        f0[j] = f + kb[j] @ states[j, :2] + cb[j] @ states[j, 2:]
+    return f0, kb, cb
+
+
+def mismatch(states, laws):
+    f0, kb, cb = laws
+    err = 0.0
+    ref = 0.0
+    for j in range(4):
+        f = cubic_bearing(j, states[j, :2], states[j, 2:])[0]
+        fa = f0[j] - kb[j] @ states[j, :2] - cb[j] @ states[j, 2:]
+        err = max(err, np.abs(f - fa).max())
+        ref = max(ref, np.abs(f).max())
+    return err / ref
+
+
+def test_master_emulation_converges_to_the_monolithic_newton_solution():
+    """Save -> affine law at last iterate -> step -> re-linearise -> restore, against Newton with
+    the cubic bearings inside the residual (Eq. 14, 16)."""
+    loads = StructureLoads(T_IN, OMEGA, (0.6e-3, 0.6e-3))
+    mesh = LineMesh(modulation=0.3)
+    st = make(mesh, loads)
+    # static: iterate laws (what the master does for X0)
+    states = np.zeros((4, 4))
+    for _ in range(30):
+        laws = linearise(states)
+        st.static(*laws)
+        states = st.journal_states().copy()
+        if mismatch(states, laws) < 1e-12:
+            break
+    else:
+        raise AssertionError("static coupling did not converge")
+    assert np.abs(states[:, :2]).max() > 5e-6  # the cubic term matters (K3 r^2 ~ K1 at 16 um)
+    m, c, k, force, nl_at = monolithic_structure(st, cubic_bearing)
+    sys_ = st.system
+    x = sys_.reduce(st.full_vector("x"))
+    v, a = np.zeros_like(x), np.zeros_like(x)
+    act = st.mesh_state.active
+    dt = st.mesh_period / 32
+    iters = []
+    for i in range(64):
+        saved = st.get_state()
+        it = 0
+        while it < 30:
+            it += 1
+            st.step(dt, *laws)
+            states = st.journal_states().copy()
+            mis = mismatch(states, laws)
+            laws = linearise(states)
+            if mis < 1e-11:
+                break
+            st.set_state(saved)
+        else:
+            raise AssertionError(f"coupling did not converge at step {i}")
+        iters.append(it)
+        x, v, a, ref = newmark_step(m, c, k, dt, (i + 1) * dt, x, v, a, force, nl_at((i + 1) * dt),
+                                    active0=act, tol=1e-10)
+        act = ref.active
+        np.testing.assert_allclose(sys_.reduce(st.full_vector("x")), x, rtol=0,
+                                   atol=1e-7 * np.abs(x).max())
+    print(f"\nmaster emulation: mean {np.mean(iters):.2f} coupling iterations per step")
+    assert 1 < np.mean(iters) < 6
+
+
+def test_no_contact_is_a_clear_error():
+    st = make(loads=StructureLoads(torque=-220.0), zeta=0.0)
+    with pytest.raises(NewmarkConvergenceError, match="torque sign"):
+        st.static(np.zeros((4, 2)), iso(1e9))
+
+
+def test_bad_laws_are_rejected():
+    st = make(zeta=0.0)
+    st.static(np.zeros((4, 2)), iso(1e9))
+    with pytest.raises(ValueError, match="shapes"):
+        st.step(1e-5, np.zeros((3, 2)), iso(1e8), iso(1e5))
+    bad = iso(1e8)
+    bad[0, 0, 0] = np.nan
+    with pytest.raises(ValueError, match="non-finite"):
+        st.step(1e-5, np.zeros((4, 2)), bad, iso(1e5))
+    with pytest.raises(ValueError, match="dt"):
+        st.step(-1.0, np.zeros((4, 2)), iso(1e8), iso(1e5))
