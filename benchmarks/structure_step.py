@@ -29,7 +29,9 @@ def make_mesh(standin: bool):
             from gear_fmu.geometry import paper_gear_pair
             from gear_fmu.mesh import MeshElement
 
-            return MeshElement(paper_gear_pair()), "gear_fmu.mesh.MeshElement"
+            pair = paper_gear_pair()
+            mesh = MeshElement(pair, pair.nominal_line_load(220.0))
+            return mesh, f"gear_fmu.mesh.MeshElement ({mesh.n_lines} x {mesh.n_slices} slices)"
         except ImportError as err:
             print(f"(gear_fmu.mesh not usable: {err}; using the stand-in)")
     sys.path.insert(0, str(Path(__file__).resolve().parents[1]))

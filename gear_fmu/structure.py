@@ -649,6 +649,40 @@ class Structure:
             self.set_state(saved)
         return acc / n_angles
 
+    def quasi_static(self, angles, bearing_stiffness=1e8) -> dict:
+        """Static solutions under the constant loads at given pinion angles (no dynamics).
+
+        Parameters
+        ----------
+        angles : array_like
+            Pinion angles [rad].
+        bearing_stiffness : float or (4, 2, 2)
+            Isotropic [N/m] or per-bearing stiffness of the supports (global frame).
+
+        Returns
+        -------
+        dict of arrays over the angles: ``transmission_error`` [m] (r_b1 theta1 + r_b2 theta2),
+        ``mesh_load`` [N], ``slice_load`` (n, n_slices_total) [N], ``journal`` (n, 4, 2) [m].
+        The state is restored afterwards.
+        """
+        kb = np.asarray(bearing_stiffness, dtype=float)
+        if kb.ndim == 0:
+            kb = np.broadcast_to(kb * np.eye(2), (4, 2, 2)).copy()
+        f0, kb, _ = self._check_laws(np.zeros((4, 2)), kb, np.zeros((4, 2, 2)))
+        saved = self.get_state()
+        out = {"transmission_error": [], "mesh_load": [], "slice_load": [], "journal": []}
+        try:
+            for angle in np.asarray(angles, dtype=float):
+                self._static_at(f0, kb, float(angle))
+                ms = self.mesh_state
+                out["transmission_error"].append(ms.transmission_error)
+                out["mesh_load"].append(ms.total_load)
+                out["slice_load"].append(np.array(ms.load, copy=True))
+                out["journal"].append(self.journal_states()[:, :2].copy())
+        finally:
+            self.set_state(saved)
+        return {k: np.array(v) for k, v in out.items()}
+
     def modes(self, bearing_stiffness=1e8, n_angles: int = 16):
         """Natural modes with the mean mesh stiffness at the static load (for ``gsb modal``).
 

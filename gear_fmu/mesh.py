@@ -1,0 +1,338 @@
+"""Distributed nonlinear gear mesh element (paper Sec. 2.1, Eq. 9; Velex & Maatar 1996).
+
+The pinion and gear nodes (6 DOFs each, :mod:`gear_fmu.dofs`) are joined by elemental springs
+spread along the contact lines in the base plane (:mod:`gear_fmu.geometry` for the frames).
+
+Contact lines (rigid-body kinematics)
+-------------------------------------
+At pinion angle Theta1 the contact lines in the base plane are
+
+    xi_j(z) = xi_A + p_bt (frac(w) + j),   w = (r_b1 Theta1 - z tan(beta_b)) / p_bt,
+
+j = 0, 1, ..., kept where ``xi_A <= xi_j < xi_E``; the face width ``[-b/2, b/2]`` (common width,
+centred on the gear nodes) is cut into ``n_slices`` slices of width dz, each carrying a piece of
+contact line of length ``dl = dz / cos(beta_b)`` at its centre. Tooth pair ``j - floor(w)``
+(the number of the pair in the order of engagement) selects the pitch errors.
+
+Normal approach and structure vector
+------------------------------------
+The flank normal in the base plane is ``n = cos(beta_b) u + sin(beta_b) e_z`` (u along the line
+of action). At a contact point M the normal approach is
+
+    delta(M) = V(M) . (q + q_err) - e(M),   V = [n; O1M x n; -n; -(O2M x n)]  (12)
+
+(q the 12 gear-node DOFs, pinion first), so that the pinion rotation enters as
+``r_b1 cos(beta_b) theta1`` and the gear rotation as ``r_b2 cos(beta_b) theta2``: a positive input
+torque closes the mesh. ``q_err`` are the mounting errors expressed as rigid displacements of the
+gear bodies (static offsets and tilts, plus the rotating runout of each wheel), ``e(M) >= 0`` the
+tooth deviations (tip relief, crowning, lead slope, pitch errors), which open the gap.
+
+Contact condition and outputs (Eq. 9)
+-------------------------------------
+A slice carries ``k(xi) dl delta`` when ``delta > 0`` and nothing otherwise (unilateral; k from
+:mod:`gear_fmu.tooth_stiffness`, per unit contact length). For the current contact set::
+
+    K_gear = sum k dl V V^T,   force on q = -sum k dl delta V = -(K_gear (q + q_err) - F_dev)
+
+with ``F_dev = sum k dl e V`` the forcing of the deviations. :meth:`MeshElement.evaluate` returns
+the force, its tangent ``-d force / d q = K_gear`` and the contact set; the structure's contact
+loop (:class:`gear_fmu.structure.Structure`) iterates until the set is stable.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from numba import njit
+
+from .geometry import GearPair
+from .tooth_stiffness import mesh_stiffness_table
+
+__all__ = ["MeshElement", "MeshState", "ToothDeviations"]
+
+
+@dataclass(frozen=True)
+class ToothDeviations:
+    """Tooth shape deviations and mounting errors (positive deviations open the mesh) [m, rad].
+
+    Parameters
+    ----------
+    tip_relief : (float, float)
+        Tip relief amplitude at the tip of the pinion and of the gear [m].
+    relief_length : (float, float)
+        Extent of each relief along the line of action, measured from the tip contact point
+        (xi_E for the pinion, xi_A for the gear) [m].
+    relief_exponent : float
+        1 linear, 2 parabolic relief.
+    crowning : float
+        Lead crowning of the pair: ``e = crowning (2 z / b)^2`` [m].
+    lead_slope : float
+        Helix slope deviation of the pair across the face width: ``e = lead_slope z / b`` [m].
+    pitch_errors : (array, array)
+        Pitch deviation of each tooth along the base normal [m], pinion (z1 values) and gear
+        (z2 values), indexed by the order of engagement from Theta1 = 0 (empty = none).
+    mounting : (12,) array
+        Static rigid error of the gear bodies on the 12 gear-node DOFs (translations [m],
+        tilts [rad]) added to q: e.g. a misalignment of the gear axis in the plane of action.
+    runout : (float, float)
+        Eccentricity of the pinion and of the gear on their shafts [m], turning with them.
+    runout_phase : (float, float)
+        Angular position of each eccentricity at t = 0 [rad].
+    """
+
+    tip_relief: tuple[float, float] = (0.0, 0.0)
+    relief_length: tuple[float, float] = (0.0, 0.0)
+    relief_exponent: float = 2.0
+    crowning: float = 0.0
+    lead_slope: float = 0.0
+    pitch_errors: tuple = ((), ())
+    mounting: tuple = (0.0,) * 12
+    runout: tuple[float, float] = (0.0, 0.0)
+    runout_phase: tuple[float, float] = (0.0, 0.0)
+
+    def __post_init__(self) -> None:
+        for name in ("tip_relief", "relief_length", "runout"):
+            v = getattr(self, name)
+            if len(v) != 2 or not all(math.isfinite(x) and x >= 0.0 for x in v):
+                raise ValueError(f"{name} = {v!r}: two finite values >= 0")
+        for i in range(2):
+            if self.tip_relief[i] > 0.0 and self.relief_length[i] <= 0.0:
+                raise ValueError(f"tip_relief[{i}] = {self.tip_relief[i]!r} m needs "
+                                 f"relief_length[{i}] > 0")
+        if self.relief_exponent not in (1.0, 2.0):
+            raise ValueError(f"relief_exponent = {self.relief_exponent!r}: 1 (linear) or 2 "
+                             "(parabolic)")
+        if len(self.mounting) != 12:
+            raise ValueError(f"mounting has {len(self.mounting)} entries, expected 12")
+
+
+@dataclass
+class MeshState:
+    """Result of :meth:`MeshElement.evaluate` (arrays per slice are (n_lines * n_slices,))."""
+
+    force: np.ndarray  # (12,) generalised mesh force on the gear-node DOFs [N, N m]
+    stiffness: np.ndarray  # (12, 12) K_gear = -d force / d q [N/m, N, N m]
+    active: np.ndarray  # bool, slice in contact
+    delta: np.ndarray  # normal approach [m] (meaningful where inside)
+    load: np.ndarray  # slice load [N]
+    inside: np.ndarray  # bool, slice on the path of contact
+    xi: np.ndarray  # abscissa on the line of action [m]
+    z: np.ndarray  # axial position [m]
+    total_load: float  # sum of slice loads (normal mesh force) [N]
+    transmission_error: float  # r_b1 theta1 + r_b2 theta2 [m], elastic torsion of the nodes
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def contact_length(self) -> float:
+        """Total length of contact line in contact [m] (set by evaluate in ``extra``)."""
+        return self.extra.get("contact_length", float("nan"))
+
+
+@njit(cache=True)
+def _mesh_kernel(angle, q, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1, pitch2,
+                 force, stiff, active, inside, delta, load, xis, zout):
+    """Slices of all contact lines at pinion angle ``angle`` (module docstring)."""
+    xi_a, xi_e, pbt, tanb = geo[0], geo[1], geo[2], geo[3]
+    rb1 = geo[4]
+    ns = zs.size
+    n_tab = xi_tab.size
+    t1s, t1t = geo[5], geo[6]
+    us, ut = geo[7], geo[8]
+    ns_u, nz = geo[9], geo[10]  # n = ns_u * u + nz * e_z
+    a = geo[11]
+    zg1, zg2 = geo[12], geo[13]
+    z1n, z2n = pitch1.size, pitch2.size
+    ca1, ca2, l1, l2, pexp, crown, slope, width = (dev[0], dev[1], dev[2], dev[3], dev[4],
+                                                   dev[5], dev[6], dev[7])
+    nvec = np.empty(3)
+    nvec[0] = ns_u * us
+    nvec[1] = ns_u * ut
+    nvec[2] = nz
+    for i in range(12):
+        force[i] = 0.0
+        for j in range(12):
+            stiff[i, j] = 0.0
+    total = 0.0
+    length = 0.0
+    v = np.empty(12)
+    for s in range(ns):
+        z = zs[s]
+        w = (rb1 * angle - z * tanb) / pbt
+        fl = math.floor(w)
+        fr = w - fl
+        for j in range(n_lines):
+            m = j * ns + s
+            xi = xi_a + pbt * (fr + j)
+            xis[m] = xi
+            zout[m] = z
+            ins = (xi >= xi_a) and (xi < xi_e)
+            inside[m] = ins
+            active[m] = False
+            load[m] = 0.0
+            delta[m] = 0.0
+            if not ins:
+                continue
+            # stiffness per unit contact length: linear interpolation in the table
+            pos = (xi - xi_tab[0]) / (xi_tab[n_tab - 1] - xi_tab[0]) * (n_tab - 1)
+            i0 = int(pos)
+            if i0 >= n_tab - 1:
+                i0 = n_tab - 2
+            if i0 < 0:
+                i0 = 0
+            f = pos - i0
+            kdl = ((1.0 - f) * k_tab[i0] + f * k_tab[i0 + 1]) * dl
+            # contact point and structure vector V = [n; O1M x n; -n; -(O2M x n)]
+            ms_ = t1s + xi * us
+            mt_ = t1t + xi * ut
+            r1 = (ms_, mt_, z - zg1)
+            r2 = (ms_ - a, mt_, z - zg2)
+            for c in range(3):
+                v[c] = nvec[c]
+                v[6 + c] = -nvec[c]
+            v[3] = r1[1] * nvec[2] - r1[2] * nvec[1]
+            v[4] = r1[2] * nvec[0] - r1[0] * nvec[2]
+            v[5] = r1[0] * nvec[1] - r1[1] * nvec[0]
+            v[9] = -(r2[1] * nvec[2] - r2[2] * nvec[1])
+            v[10] = -(r2[2] * nvec[0] - r2[0] * nvec[2])
+            v[11] = -(r2[0] * nvec[1] - r2[1] * nvec[0])
+            # deviations (open the gap when > 0)
+            e = 0.0
+            if ca1 > 0.0 and xi > xi_e - l1:
+                e += ca1 * ((xi - (xi_e - l1)) / l1) ** pexp
+            if ca2 > 0.0 and xi < xi_a + l2:
+                e += ca2 * (((xi_a + l2) - xi) / l2) ** pexp
+            zr = 2.0 * z / width
+            e += crown * zr * zr + slope * z / width
+            pair = j - int(fl)
+            if z1n > 0:
+                e += pitch1[pair % z1n]
+            if z2n > 0:
+                e += pitch2[pair % z2n]
+            d = -e
+            for c in range(12):
+                d += v[c] * q[c]
+            delta[m] = d
+            if d > 0.0:
+                active[m] = True
+                fm = kdl * d
+                load[m] = fm
+                total += fm
+                length += dl
+                for c in range(12):
+                    force[c] -= v[c] * fm
+                    for c2 in range(12):
+                        stiff[c, c2] += kdl * v[c] * v[c2]
+    return total, length
+
+
+class MeshElement:
+    """The distributed mesh element of a gear pair (module docstring).
+
+    Parameters
+    ----------
+    pair : GearPair
+    line_load : float
+        Reference load per unit contact length for the contact compliance [N/m]
+        (``pair.nominal_line_load(torque)``).
+    n_slices : int
+        Slices across the face width (per contact line).
+    deviations : ToothDeviations, optional
+    gear_node_z : (float, float)
+        Axial positions of the pinion and gear nodes relative to the face-width centre [m].
+    n_table : int
+        Samples of the stiffness per unit length along the path of contact.
+
+    Examples
+    --------
+    >>> from gear_fmu.geometry import paper_gear_pair
+    >>> mesh = MeshElement(paper_gear_pair(), line_load=6.5e4)
+    >>> q = np.zeros(12); q[5] = 1e-4  # pinion twisted ahead by 0.1 mrad
+    >>> st = mesh.evaluate(0.0, q)
+    >>> int(st.active.sum()), st.total_load > 0
+    (40, True)
+    """
+
+    def __init__(self, pair: GearPair, line_load: float, n_slices: int = 20,
+                 deviations: ToothDeviations | None = None, gear_node_z=(0.0, 0.0),
+                 n_table: int = 129):
+        if int(n_slices) != n_slices or n_slices < 1:
+            raise ValueError(f"n_slices = {n_slices!r}: need an integer >= 1")
+        self.pair = pair
+        self.deviations = ToothDeviations() if deviations is None else deviations
+        self.n_slices = int(n_slices)
+        self.xi_table, self.k_table = mesh_stiffness_table(pair, line_load, n_table)
+        self.line_load = float(line_load)
+        b = pair.contact_width
+        dz = b / self.n_slices
+        self.z_slices = -0.5 * b + (np.arange(self.n_slices) + 0.5) * dz
+        cb = math.cos(pair.base_helix_angle)
+        self.dl = dz / cb
+        xi_a, xi_e = pair.path_of_contact
+        pbt = pair.base_pitch
+        tanb = math.tan(pair.base_helix_angle)
+        self.n_lines = math.ceil((xi_e - xi_a) / pbt) + 1
+        ap = pair.operating_pressure_angle
+        rb1 = pair.base_radius[0]
+        self._geo = np.array([
+            xi_a, xi_e, pbt, tanb, rb1,
+            rb1 * math.cos(ap), -rb1 * math.sin(ap),  # T1
+            math.sin(ap), math.cos(ap),  # u
+            cb, math.sin(pair.base_helix_angle),  # n = cb u + sb e_z
+            pair.centre_distance, float(gear_node_z[0]), float(gear_node_z[1]),
+        ])
+        d = self.deviations
+        self._dev = np.array([d.tip_relief[0], d.tip_relief[1], d.relief_length[0],
+                              d.relief_length[1], d.relief_exponent, d.crowning, d.lead_slope,
+                              b])
+        self._pitch = tuple(np.ascontiguousarray(p, dtype=float) for p in d.pitch_errors)
+        for p, z, name in zip(self._pitch, pair.teeth, ("pinion", "gear"), strict=True):
+            if p.size not in (0, z):
+                raise ValueError(f"{name} pitch errors: {p.size} values for {z} teeth")
+        self._mounting = np.asarray(d.mounting, dtype=float)
+        self._runout = d.runout != (0.0, 0.0)
+        n = self.n_lines * self.n_slices
+        self._n = n
+
+    @property
+    def mesh_stiffness_per_width(self) -> float:
+        """Mean stiffness per unit face width of one tooth pair over the path [N/m^2]."""
+        return float(np.mean(self.k_table)) / math.cos(self.pair.base_helix_angle)
+
+    def error_displacement(self, pinion_angle: float) -> np.ndarray:
+        """q_err: mounting errors and runouts as rigid gear-node displacements (12,)."""
+        q = self._mounting.copy()
+        if self._runout:
+            d = self.deviations
+            th2 = pinion_angle * self.pair.teeth[0] / self.pair.teeth[1]
+            q[0] += d.runout[0] * math.cos(pinion_angle + d.runout_phase[0])
+            q[1] += d.runout[0] * math.sin(pinion_angle + d.runout_phase[0])
+            q[6] += d.runout[1] * math.cos(-th2 + d.runout_phase[1])
+            q[7] += d.runout[1] * math.sin(-th2 + d.runout_phase[1])
+        return q
+
+    def evaluate(self, pinion_angle: float, q12) -> MeshState:
+        """Mesh force, tangent and contact set at a pinion angle [rad] and gear-node DOFs (12,)."""
+        q = np.asarray(q12, dtype=float)
+        if q.shape != (12,):
+            raise ValueError(f"q12 shape {q.shape}: expected (12,)")
+        qe = q + self.error_displacement(pinion_angle) if (
+            self._runout or self._mounting.any()) else q
+        n = self._n
+        force = np.empty(12)
+        stiff = np.empty((12, 12))
+        active = np.empty(n, dtype=np.bool_)
+        inside = np.empty(n, dtype=np.bool_)
+        delta = np.empty(n)
+        load = np.empty(n)
+        xi = np.empty(n)
+        z = np.empty(n)
+        total, length = _mesh_kernel(
+            float(pinion_angle), qe, self._geo, self.xi_table, self.k_table, self.z_slices,
+            self.dl, self.n_lines, self._dev, self._pitch[0], self._pitch[1], force, stiff,
+            active, inside, delta, load, xi, z)
+        rb1, rb2 = self.pair.base_radius
+        te = rb1 * q[5] + rb2 * q[11]
+        return MeshState(force, stiff, active, delta, load, inside, xi, z, total, te,
+                         {"contact_length": length})
