@@ -279,13 +279,15 @@ class GearPair:
         _ = self.operating_pressure_angle  # raises below the sum of the base radii
         (c1, c2) = self.tip_clearance
         for name, c, other in (("pinion", c1, "gear"), ("gear", c2, "pinion")):
-            if c < 0.0:
+            if c <= 1e-9 * self.module:
+                what = (f"cut {-c * 1e3:.3f} mm into" if c < -1e-9 * self.module
+                        else "touch")
                 raise GearGeometryError(
-                    f"the {name} tips cut {-c * 1e3:.3f} mm into the {other}'s root circle "
+                    f"the {name} tips {what} the {other}'s root circle "
                     f"(centre distance {self.centre_distance * 1e3:.3f} mm, tip radius "
                     f"{self.tip_radius[0 if name == 'pinion' else 1] * 1e3:.3f} mm, root radius "
-                    f"{self.root_radius[1 if name == 'pinion' else 0] * 1e3:.3f} mm): negative "
-                    f"tip clearance (are addendum and dedendum coefficients swapped?)")
+                    f"{self.root_radius[1 if name == 'pinion' else 0] * 1e3:.3f} mm): no bottom "
+                    f"clearance (are addendum and dedendum coefficients swapped?)")
         if self.backlash < -1e-9 * self.module:
             raise GearGeometryError(
                 f"the teeth overlap by {-self.backlash * 1e6:.2f} um along the line of action at "

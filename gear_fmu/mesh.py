@@ -9,10 +9,12 @@ At pinion angle Theta1 the contact lines in the base plane are
 
     xi_j(z) = xi_A + p_bt (frac(w) + j),   w = (r_b1 Theta1 - z tan(beta_b)) / p_bt,
 
-j = 0, 1, ..., kept where ``xi_A <= xi_j < xi_E``; the face width ``[-b/2, b/2]`` (common width,
-centred on the gear nodes) is cut into ``n_slices`` slices of width dz, each carrying a piece of
-contact line of length ``dl = dz / cos(beta_b)`` at its centre. Tooth pair ``j - floor(w)``
-(the number of the pair in the order of engagement) selects the pitch errors.
+j = 0, 1, ..., kept where ``xi_A <= xi_j < xi_E`` (a line within 1e-9 p_bt of xi_A counts as
+entered, so that an entry at a step time does not depend on the round-off of t); the face width
+``[-b/2, b/2]`` (common width, centred on the gear nodes) is cut into ``n_slices`` slices of
+width dz, each carrying a piece of contact line of length ``dl = dz / cos(beta_b)`` at its
+centre. Tooth pair ``j - floor(w)`` (the number of the pair in the order of engagement) selects
+the pitch errors.
 
 Normal approach and structure vector
 ------------------------------------
@@ -130,6 +132,12 @@ class MeshState:
         return self.extra.get("contact_length", float("nan"))
 
 
+#: contact lines closer than this fraction of a base pitch to xi_A count as entered: a line
+#: enters exactly at a step time when dt divides the mesh period (paper: 1/32), and the side of
+#: that tie must not depend on the round-off of t (co-simulation vs monolithic runs)
+_SNAP = 1e-9
+
+
 @njit(cache=True)
 def _mesh_kernel(angle, q, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1, pitch2,
                  force, stiff, active, inside, delta, load, xis, zout):
@@ -160,8 +168,8 @@ def _mesh_kernel(angle, q, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1, pit
     for s in range(ns):
         z = zs[s]
         w = (rb1 * angle - z * tanb) / pbt
-        fl = math.floor(w)
-        fr = w - fl
+        fl = math.floor(w + _SNAP)  # a line within _SNAP pitch of xi_A has entered
+        fr = max(w - fl, 0.0)
         for j in range(n_lines):
             m = j * ns + s
             xi = xi_a + pbt * (fr + j)

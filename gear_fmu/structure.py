@@ -331,6 +331,7 @@ class Structure:
         self.mesh_state = None
         self._laws = None
         self._dyn_cache: dict[float, tuple] = {}
+        self.zeta = float(zeta)
         if damping is not None:
             self.damping_full = np.asarray(damping, dtype=float)
             if self.damping_full.shape != (system.n_dof, system.n_dof):
@@ -338,14 +339,28 @@ class Structure:
                     f"damping shape {self.damping_full.shape} must be "
                     f"({system.n_dof}, {system.n_dof})"
                 )
-        elif zeta == 0.0:
+            self._c = self._permute(self.damping_full)
+        else:
+            self.set_damping_reference(damping_bearing_stiffness)
+
+    def set_damping_reference(self, bearing_stiffness) -> None:
+        """(Re)build the modal damping C on the modes of the reference configuration.
+
+        ``bearing_stiffness``: isotropic [N/m] or (4, 2, 2) bearing stiffness (symmetric part
+        used) of the reference configuration, :mod:`gear_fmu.modal`; the mean mesh stiffness is
+        taken at the static load with these bearings. The master calls this with the bearings'
+        stiffness at the static solution X0 before the transient.
+        """
+        system = self.system
+        if self.zeta == 0.0:
             self.damping_full = np.zeros((system.n_dof, system.n_dof))
         else:
-            k_mesh = self.mean_mesh_stiffness(damping_bearing_stiffness)
-            self.reference_modes = natural_modes(system, damping_bearing_stiffness, k_mesh)
-            self.damping_full = modal_damping_matrix(system, self.reference_modes, zeta)
+            k_mesh = self.mean_mesh_stiffness(bearing_stiffness)
+            self.reference_modes = natural_modes(system, bearing_stiffness, k_mesh)
+            self.damping_full = modal_damping_matrix(system, self.reference_modes, self.zeta)
             self.reference_mesh_stiffness = k_mesh
         self._c = self._permute(self.damping_full)
+        self._dyn_cache.clear()
 
     # ------------------------------------------------------------------ set-up
     def _ordering(self) -> None:
@@ -613,6 +628,14 @@ class Structure:
     def gear_displacements(self) -> np.ndarray:
         """(2, 6) DOFs (u, v, w, phi, psi, theta) of the pinion and gear nodes."""
         return self.x[:N_GEAR].reshape(2, 6).copy()
+
+    def mesh_force(self) -> float:
+        """Total normal mesh force of the current state [N]."""
+        return float(self.mesh_state.total_load)
+
+    def transmission_error(self) -> float:
+        """r_b1 theta1 + r_b2 theta2 of the current state [m] (:class:`gear_fmu.mesh.MeshState`)."""
+        return float(self.mesh_state.transmission_error)
 
     def full_vector(self, which: str = "x") -> np.ndarray:
         """Displacement / velocity / acceleration in the full numbering of the system."""
