@@ -6,10 +6,13 @@ import argparse
 import sys
 
 from bearing_fmu.base import BearingError
+from gear_fmu.geometry import GearGeometryError
+from orchestrator.case import CaseError
+from orchestrator.run import RunError
 
 
 def make_parser() -> argparse.ArgumentParser:
-    from orchestrator import bearing_calc
+    from orchestrator import bearing_calc, run_cli
 
     parser = argparse.ArgumentParser(
         prog="gsb",
@@ -17,6 +20,7 @@ def make_parser() -> argparse.ArgumentParser:
     )
     sub = parser.add_subparsers(dest="command", required=True)
     bearing_calc.add_parser(sub)
+    run_cli.add_parsers(sub)
     p = sub.add_parser("build-fmus", help="build the FMUs (pythonfmu) into a folder")
     p.add_argument("--dest", default="build/fmus", help="output folder (default build/fmus)")
     p.add_argument("names", nargs="*", help="FMU names (default: all)")
@@ -36,9 +40,12 @@ def main(argv: list[str] | None = None) -> int:
     args = make_parser().parse_args(argv)
     try:
         return args.func(args)
-    except BearingError as exc:
+    except (BearingError, CaseError, GearGeometryError, RunError) as exc:
         print(f"gsb {args.command}: error: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        print(f"gsb {args.command}: interrupted", file=sys.stderr)
+        return 130
 
 
 if __name__ == "__main__":

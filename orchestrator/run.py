@@ -1,0 +1,252 @@
+"""``gsb run``: static solution X0 and the nonlinear (or linear) transient of a case.
+
+1. Build the structure slave and the bearing set, through FMUs (default; fmpy) or in-process.
+2. Static solution X0 (paper Sec. 2.2.3): the master iterates structure static solves and
+   bearing linearisations with velocities zero (:meth:`orchestrator.master.Master.solve_static`).
+3. Linear analysis (Sec. 3.3, Table 4 case 0): the bearings' 8 coefficients are frozen at X0.
+4. Modal damping on the modes with the bearings' static stiffness (Structure docs).
+5. Transient (Sec. 3.2): ``steps_per_mesh_period x mesh_periods`` coupled Newmark steps, each
+   converged to the case tolerance; every step's channels go to the results file as the run
+   goes (HDF5, flushed in blocks: an interrupted or failed run keeps what it computed).
+
+Channels: ``journal`` (4, 4) [s, t, s_dot, t_dot] in m and m/s, ``bearing_force`` (4, 2) N,
+``mesh_force`` N, ``transmission_error`` m, ``gear_nodes`` (2, 2) m (u, v of the pinion and gear
+nodes), ``iterations`` (coupled iterations of the step).
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from orchestrator import system
+from orchestrator.case import Case
+from orchestrator.inprocess import ModelBearings
+from orchestrator.master import Master
+from orchestrator.results import ResultsWriter
+
+__all__ = ["CHANNELS", "Progress", "RunError", "RunSummary", "build_master", "run_case"]
+
+CHANNELS = {
+    "journal": ((4, 4), "m, m/s", "journal centre [s, t, s_dot, t_dot] at bearings 1-4, "
+                                  "global frame"),
+    "bearing_force": ((4, 2), "N", "film force on the journal [F_s, F_t] at bearings 1-4"),
+    "mesh_force": ((), "N", "total normal mesh force (sum of slice loads)"),
+    "transmission_error": ((), "m", "r_b1 theta1 + r_b2 theta2 (elastic torsion at the gears)"),
+    "gear_nodes": ((2, 2), "m", "[u, v] of the pinion and gear nodes"),
+    "iterations": ((), "1", "coupled master iterations of the step"),
+}
+
+
+class RunError(RuntimeError):
+    """A run that stopped; the message says where and which file keeps the computed steps."""
+
+
+@dataclass
+class RunSummary:
+    """What a run did (figures for the README and the benchmark)."""
+
+    results: Path
+    steps: int
+    wall_time: float  # s, transient only
+    static_time: float  # s
+    iterations: int  # coupled iterations of the transient
+    bearing_evaluations: int  # calls of the bearing set (4 bearings each)
+    static_iterations: int
+    static_positions: np.ndarray  # (4, 2) m
+    figures: list = field(default_factory=list)
+
+    @property
+    def iterations_per_step(self) -> float:
+        return self.iterations / max(self.steps, 1)
+
+    @property
+    def steps_per_second(self) -> float:
+        return self.steps / self.wall_time if self.wall_time > 0 else math.inf
+
+    def describe(self) -> str:
+        return (f"{self.steps} steps in {self.wall_time:.1f} s ({self.steps_per_second:.0f} "
+                f"steps/s), {self.iterations_per_step:.2f} coupled iterations per step, "
+                f"{4 * self.bearing_evaluations} bearing evaluations; static solution in "
+                f"{self.static_iterations} iterations ({self.static_time:.2f} s)")
+
+
+class Progress:
+    """A one-line progress display on stderr, refreshed at most every ``every`` seconds."""
+
+    def __init__(self, total: int, label: str = "", every: float = 0.5, stream=None,
+                 enabled: bool = True):
+        self.total = total
+        self.label = label
+        self.every = every
+        self.stream = sys.stderr if stream is None else stream
+        self.enabled = enabled
+        self.start = time.perf_counter()
+        self._last = -math.inf
+
+    def update(self, done: int, extra: str = "") -> None:
+        if not self.enabled:
+            return
+        now = time.perf_counter()
+        if now - self._last < self.every and done < self.total:
+            return
+        self._last = now
+        elapsed = now - self.start
+        frac = done / self.total if self.total else 1.0
+        eta = elapsed / frac - elapsed if frac > 0 else math.inf
+        bar = "#" * int(30 * frac)
+        self.stream.write(f"\r{self.label} [{bar:<30}] {done}/{self.total} {100 * frac:5.1f} % "
+                          f"{elapsed:6.1f} s, {eta:6.1f} s left {extra}   ")
+        if done >= self.total:
+            self.stream.write("\n")
+        self.stream.flush()
+
+
+def _clearances(case: Case) -> list[float]:
+    return [float(c) for c in case["bearings.clearance"]]
+
+
+def build_master(case: Case, bearing: str | None = None, in_process: bool = False,
+                 fmu_dir: Path | str | None = None):
+    """(master, structure slave, bearing set, closer) for a case.
+
+    ``bearing`` overrides ``bearings.model``. Through FMUs the bearing FMU of that model and the
+    gear-shaft FMU are taken from ``fmu_dir`` (built with ``gsb build-fmus`` if missing).
+    """
+    model = case["bearings.model"] if bearing is None else bearing
+    tol = case["simulation.tolerance"]
+    max_it = case["simulation.max_iterations"]
+    if in_process:
+        structure = system.structure(case)
+        bearings = ModelBearings(system.bearing_models(case, model), system.BEARING_FRAMES,
+                                 system.bearing_speeds(case))
+        return Master(structure, bearings, tol, max_it), structure, bearings, lambda: None
+    from orchestrator import fmi
+
+    structure, bearings = fmi.system_from_case(case, model, fmu_dir)
+
+    def close():
+        bearings.close()
+        structure.close()
+
+    return Master(structure, bearings, tol, max_it), structure, bearings, close
+
+
+def run_case(case: Case, bearing: str | None = None, periods: int | None = None,
+             in_process: bool = False, out_dir: Path | str = "results",
+             fmu_dir: Path | str | None = None, progress: bool = True, figures: bool = True,
+             block: int = 4096) -> RunSummary:
+    """Run a case (module docstring); returns a :class:`RunSummary`.
+
+    Raises :class:`RunError` (with the results file that keeps the steps computed) if the static
+    solution or a step fails.
+    """
+    model = case["bearings.model"] if bearing is None else bearing
+    periods = case["simulation.mesh_periods"] if periods is None else int(periods)
+    if periods < 1:
+        raise ValueError(f"periods = {periods!r}: need at least one mesh period")
+    steps_per_period = case["simulation.steps_per_mesh_period"]
+    z1, _ = case["gear_pair.teeth"]
+    omega = case["operation.speed"]
+    dt = 2.0 * math.pi / (omega * z1) / steps_per_period
+    n_steps = periods * steps_per_period
+    out_dir = Path(out_dir)
+    name = f"{case['case.name']}_{model}{'_inprocess' if in_process else ''}"
+    path = out_dir / f"{name}.h5"
+
+    master, structure, bearings, close = build_master(case, model, in_process, fmu_dir)
+    try:
+        t0 = time.perf_counter()
+        try:
+            static = master.solve_static()
+        except Exception as exc:
+            raise RunError(f"{case.source}: static solution failed: {exc}") from exc
+        x0 = structure.journal_states()[:, :2].copy()
+        if model == "linear":
+            if in_process:
+                bearings.models = system.linearised(bearings.models, structure.journal_states(),
+                                                    system.bearing_speeds(case))
+        # leave initialisation: linear FMUs freeze, the structure builds its modal damping on
+        # the modes with the bearings' static stiffness
+        kb0 = master.laws.kb
+        kb_sym = 0.5 * (kb0 + np.transpose(kb0, (0, 2, 1)))
+        if in_process:
+            structure.set_damping_reference(kb_sym)
+        else:
+            bearings.exit_initialization()
+            structure.exit_initialization()
+        static_time = time.perf_counter() - t0
+
+        attrs = {
+            "case": case["case.name"], "case_file": str(case.source), "bearing_model": model,
+            "mode": "in-process" if in_process else "fmu", "dt": dt,
+            "steps_per_mesh_period": steps_per_period, "mesh_periods": periods,
+            "speed": omega, "speeds": system.bearing_speeds(case), "teeth": list(
+                case["gear_pair.teeth"]), "torque": case["operation.torque"],
+            "unbalance": list(case["operation.unbalance"]), "clearance": _clearances(case),
+            "tolerance": case["simulation.tolerance"], "static_journal": x0.tolist(),
+            "static_bearing_force": static.bearing_force.tolist(),
+            "static_iterations": static.iterations, "case_values": _jsonable(case.values),
+        }
+        bar = Progress(n_steps, f"{name}", enabled=progress)
+        start_iterations = master.total_iterations
+        start_evals = master.total_bearing_evaluations
+        t_start = time.perf_counter()
+        with ResultsWriter(path, CHANNELS, attrs, block=block) as writer:
+            t = 0.0
+            for i in range(n_steps):
+                try:
+                    report = master.step(t, dt)
+                except Exception as exc:
+                    raise RunError(
+                        f"step {i + 1} of {n_steps} (t = {t + dt:.6e} s) failed: {exc}; the "
+                        f"{i} steps computed are in {path}") from exc
+                t = (i + 1) * dt
+                writer.append(time=t, journal=structure.journal_states(),
+                              bearing_force=report.bearing_force,
+                              mesh_force=structure.mesh_force(),
+                              transmission_error=structure.transmission_error(),
+                              gear_nodes=np.asarray(structure.gear_displacements())[:, :2],
+                              iterations=report.iterations)
+                if progress and (i & 63) == 0:
+                    its = (master.total_iterations - start_iterations) / (i + 1)
+                    bar.update(i + 1, f"{its:.2f} it/step")
+            wall = time.perf_counter() - t_start
+            bar.update(n_steps, f"{(master.total_iterations - start_iterations) / n_steps:.2f}"
+                                " it/step")
+            writer.close(complete=True, wall_time=wall)
+    finally:
+        close()
+    summary = RunSummary(path, n_steps, wall, static_time,
+                         master.total_iterations - start_iterations,
+                         master.total_bearing_evaluations - start_evals, static.iterations, x0)
+    if figures:
+        from orchestrator.plots import basic_figures
+
+        gear_rev = 2.0 * math.pi / system.bearing_speeds(case)[2]
+        summary.figures = basic_figures(path, out_dir / name, last=min(gear_rev, n_steps * dt))
+    return summary
+
+
+def _jsonable(values: dict) -> dict:
+    def conv(v):
+        if isinstance(v, (list, tuple)):
+            return [conv(x) for x in v]
+        if isinstance(v, (np.floating, np.integer)):
+            return v.item()
+        return v
+    return {k: conv(v) for k, v in values.items()}
+
+
+def static_report(case: Case, positions: np.ndarray) -> str:
+    """Eccentricity ratio and position of each journal at X0 (clearance units)."""
+    lines = []
+    for b, (pos, c) in enumerate(zip(positions, _clearances(case), strict=True)):
+        lines.append(f"bearing {b + 1}: s/C = {pos[0] / c:+.4f}, t/C = {pos[1] / c:+.4f}, "
+                     f"eccentricity {math.hypot(*pos) / c:.4f}")
+    return "\n".join(lines)
