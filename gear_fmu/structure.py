@@ -729,7 +729,7 @@ class Structure:
     # ------------------------------------------------------------------ master interface
     def set_bearing_laws(self, laws) -> None:
         """Affine laws for the next step/static solve (object with f0, kb, cb; global frame)."""
-        self._laws = self._check_laws(laws.f0, laws.kb, laws.cb)
+        self._laws = self._check_laws_fast(laws.f0, laws.kb, laws.cb)
 
     def do_step(self, t: float, dt: float) -> None:
         """Master interface: one step from t (must equal the current time) with the set laws."""

@@ -53,15 +53,16 @@ class AffineLaws:
     @classmethod
     def linearise(cls, states, force, kb, cb) -> AffineLaws:
         """The tangent law at journal states (nb, 4) = [s, t, s_dot, t_dot]."""
-        x = states[:, :2]
-        v = states[:, 2:]
-        f0 = force + np.einsum("bij,bj->bi", kb, x) + np.einsum("bij,bj->bi", cb, v)
+        x = states[:, None, :2]
+        v = states[:, None, 2:]
+        f0 = force + (kb * x).sum(axis=2) + (cb * v).sum(axis=2)
         return cls(f0, kb.copy(), cb.copy())
 
     def force(self, states) -> np.ndarray:
-        x = states[:, :2]
-        v = states[:, 2:]
-        return self.f0 - np.einsum("bij,bj->bi", self.kb, x) - np.einsum("bij,bj->bi", self.cb, v)
+        """Force of the laws at journal states (nb, 4) [N]."""
+        x = states[:, None, :2]
+        v = states[:, None, 2:]
+        return self.f0 - (self.kb * x).sum(axis=2) - (self.cb * v).sum(axis=2)
 
 
 class StructureSlave(ABC):
@@ -143,8 +144,9 @@ class Master:
     total_bearing_evaluations: int = 0
 
     def _mismatch(self, force, states, laws) -> float:
-        scale = max(float(np.linalg.norm(force)), 1e-300)
-        return float(np.linalg.norm(force - laws.force(states))) / scale
+        diff = force - laws.force(states)
+        scale = max(math.sqrt(float(np.sum(force * force))), 1e-300)
+        return math.sqrt(float(np.sum(diff * diff))) / scale
 
     def _evaluate(self, states):
         self.total_bearing_evaluations += 1
