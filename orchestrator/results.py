@@ -49,7 +49,9 @@ class ResultsWriter:
         self.block = int(block)
         self.channels = {"time": ((), "s", "simulated time")} | dict(channels)
         self.rows = 0
-        self._buf = {name: [] for name in self.channels}
+        self._n = 0  # rows buffered
+        self._buf = {name: np.empty((self.block, *shape))
+                     for name, (shape, _, _) in self.channels.items()}
         for name, (shape, unit, desc) in self.channels.items():
             ds = self.file.create_dataset(name, shape=(0, *shape), maxshape=(None, *shape),
                                           dtype="f8", chunks=(max(self.block, 1), *shape))
@@ -64,20 +66,22 @@ class ResultsWriter:
         missing = set(self.channels) - set(row)
         if missing:
             raise ValueError(f"row lacks channels {sorted(missing)}")
-        for name in self.channels:
-            self._buf[name].append(np.asarray(row[name], dtype=float))
-        if len(self._buf["time"]) >= self.block:
+        i = self._n
+        for name, buf in self._buf.items():
+            buf[i] = row[name]
+        self._n = i + 1
+        if self._n >= self.block:
             self.flush()
 
     def flush(self) -> None:
-        n = len(self._buf["time"])
+        n = self._n
         if n:
-            for name, values in self._buf.items():
+            for name, buf in self._buf.items():
                 ds = self.file[name]
                 ds.resize(self.rows + n, axis=0)
-                ds[self.rows:self.rows + n] = np.stack(values)
-                values.clear()
+                ds[self.rows:self.rows + n] = buf[:n]
             self.rows += n
+            self._n = 0
         self.file.flush()
 
     def close(self, complete: bool = True, **attrs) -> None:
