@@ -1,0 +1,106 @@
+"""Post-processing of runs: steady-state window, dynamic tooth load factor, bearing-load
+peak-to-peak, orbit ellipse fit (paper Sec. 4, Figs. 7-11, 14).
+
+Pure functions on arrays from a results file (:func:`orchestrator.results.read_results`).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+
+__all__ = ["fit_ellipse", "run_metrics", "static_mesh_load", "steady_window"]
+
+
+def steady_window(time: np.ndarray, duration: float) -> np.ndarray:
+    """Boolean mask of the steps ending in the last ``duration`` seconds of a run (all of them
+    if the run is shorter): ``duration / dt`` samples."""
+    time = np.asarray(time)
+    return time > time[-1] - duration * (1 - 1e-9)
+
+
+def static_mesh_load(torque: float, base_radius: float, base_helix_angle: float = 0.0) -> float:
+    """Normal mesh load balancing the input torque, ``T / (r_b1 cos(beta_b))`` [N]."""
+    return abs(torque) / (base_radius * math.cos(base_helix_angle))
+
+
+def fit_ellipse(x, y) -> dict:
+    """Least-squares ellipse through points (Fitzgibbon, Pilu & Fisher 1999, direct method).
+
+    Returns ``centre`` (2,), semi-axes ``axes`` (major, minor) and the major axis ``angle`` [rad]
+    (Fig. 9: the orbit centre gives the mean eccentricity). Coordinates are centred and scaled
+    first for conditioning.
+
+    Examples
+    --------
+    >>> t = np.linspace(0, 2 * np.pi, 50)
+    >>> e = fit_ellipse(3 + 2 * np.cos(t), -1 + 0.5 * np.sin(t))
+    >>> np.round(e["centre"], 12).tolist(), np.round(e["axes"], 12).tolist()
+    ([3.0, -1.0], [2.0, 0.5])
+    """
+    x = np.asarray(x, dtype=float)
+    y = np.asarray(y, dtype=float)
+    if x.size < 6:
+        raise ValueError(f"an ellipse fit needs at least 6 points, got {x.size}")
+    mx, my = x.mean(), y.mean()
+    sc = max(np.ptp(x), np.ptp(y), 1e-300)
+    u, v = (x - mx) / sc, (y - my) / sc
+    d1 = np.column_stack([u * u, u * v, v * v])
+    d2 = np.column_stack([u, v, np.ones_like(u)])
+    s1, s2, s3 = d1.T @ d1, d1.T @ d2, d2.T @ d2
+    t = -np.linalg.solve(s3, s2.T)
+    m = s1 + s2 @ t
+    m = np.array([m[2] / 2, -m[1], m[0] / 2])
+    _, vec = np.linalg.eig(m)
+    vec = np.real(vec)
+    cond = 4 * vec[0] * vec[2] - vec[1] ** 2
+    ok = np.flatnonzero(cond > 0)
+    if ok.size == 0:
+        raise ValueError("the points do not lie on an ellipse")
+    a1 = vec[:, ok[0]]
+    a, b, c = a1
+    d, e, f = t @ a1
+    den = b * b - 4 * a * c
+    x0 = (2 * c * d - b * e) / den
+    y0 = (2 * a * e - b * d) / den
+    # semi-axes from the centred quadratic form
+    g = a * x0 * x0 + b * x0 * y0 + c * y0 * y0 + d * x0 + e * y0 + f
+    lam, rot = np.linalg.eigh(np.array([[a, b / 2], [b / 2, c]]))
+    axes = np.sqrt(-g / lam)
+    order = np.argsort(axes)[::-1]
+    major = rot[:, order[0]]
+    return {"centre": np.array([mx + sc * x0, my + sc * y0]), "axes": sc * axes[order],
+            "angle": math.atan2(major[1], major[0])}
+
+
+def run_metrics(results: dict, steady: float) -> dict:
+    """Figures of one run over its last ``steady`` seconds.
+
+    Returns ``R`` (max dynamic over static mesh load, Sec. 4.2.2), ``force_ptp`` (4,) the
+    peak-to-peak of ||F_b|| [N] (Fig. 8b-c), ``force_mean`` (4,) [N], ``orbit_centre`` (4, 2)
+    [m] (ellipse fit, Fig. 9, 14) and ``orbit_mean`` (4, 2) [m].
+    """
+    from orchestrator.case import Case
+    from orchestrator.system import gear_pair
+
+    win = steady_window(results["time"], steady)
+    values = json.loads(results["attrs"]["case_values"])
+    pair = gear_pair(Case(values, str(results["attrs"].get("case_file", "results"))))
+    w0 = static_mesh_load(values["operation.torque"], pair.base_radius[0], pair.base_helix_angle)
+    fb = np.hypot(results["bearing_force"][win, :, 0], results["bearing_force"][win, :, 1])
+    journal = results["journal"][win, :, :2]
+    centres = []
+    for b in range(journal.shape[1]):
+        try:
+            centres.append(fit_ellipse(journal[:, b, 0], journal[:, b, 1])["centre"])
+        except (ValueError, np.linalg.LinAlgError):
+            centres.append(journal[:, b].mean(axis=0))
+    return {
+        "R": float(results["mesh_force"][win].max() / w0),
+        "force_ptp": np.ptp(fb, axis=0),
+        "force_mean": fb.mean(axis=0),
+        "orbit_centre": np.array(centres),
+        "orbit_mean": journal.mean(axis=0),
+    }

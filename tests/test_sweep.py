@@ -1,0 +1,54 @@
+"""Sweeps on Dask and the post-processing they rely on."""
+
+import math
+
+import numpy as np
+import pytest
+
+from orchestrator.analysis import fit_ellipse, steady_window
+from orchestrator.sweep import SweepPoint, read_sweep, run_sweep
+
+SPUR = "models/baguet2010_spur.toml"
+
+
+def test_ellipse_fit_recovers_a_rotated_ellipse_from_a_noisy_orbit():
+    rng = np.random.default_rng(0)
+    t = np.linspace(0, 2 * np.pi, 400, endpoint=False)
+    a, b, phi, c = 3e-5, 1e-5, 0.7, np.array([4e-5, -9e-5])
+    x = a * np.cos(t) * math.cos(phi) - b * np.sin(t) * math.sin(phi) + c[0]
+    y = a * np.cos(t) * math.sin(phi) + b * np.sin(t) * math.cos(phi) + c[1]
+    e = fit_ellipse(x, y)
+    np.testing.assert_allclose(e["centre"], c, rtol=1e-10)
+    np.testing.assert_allclose(e["axes"], [a, b], rtol=1e-10)
+    assert e["angle"] % math.pi == pytest.approx(phi, abs=1e-10)
+    # 26 mesh oscillations on the orbit (Fig. 9) barely move the centre
+    e2 = fit_ellipse(x + 2e-6 * np.cos(26 * t) + 1e-7 * rng.standard_normal(t.size), y)
+    np.testing.assert_allclose(e2["centre"], c, atol=5e-7)
+    with pytest.raises(ValueError, match="6 points"):
+        fit_ellipse([0, 1], [1, 0])
+
+
+def test_steady_window():
+    t = np.arange(10) * 0.1
+    assert steady_window(t, 0.3).tolist() == [False] * 7 + [True] * 3
+    assert steady_window(t, 5.0).all()
+
+
+@pytest.mark.parametrize("scheduler", ["none", None], ids=["serial", "local-cluster"])
+def test_sweep_gathers_points_and_reports_a_failed_one(scheduler, tmp_path):
+    """Two speeds and a bad point; serial in this process or on a 2-worker LocalCluster. The
+    failed point is reported with its reason, the others are kept, in point order."""
+    points = [SweepPoint({"operation.speed": 200.0}, "linear", "a"),
+              SweepPoint({"operation.speed": -5.0}, "linear", "bad"),
+              SweepPoint({"operation.speed": 400.0}, "linear", "b")]
+    res = run_sweep(SPUR, points, tmp_path / "s.h5", periods=4, steady_periods=2,
+                    scheduler=scheduler, progress=False)
+    assert [i for i, _ in res.failed] == [1]
+    assert "operation.speed" in res.failed[0][1]
+    data = read_sweep(res.path)
+    assert [d["label"] for d in data] == ["a", "bad", "b"]
+    assert data[1]["error"] and "R" not in data[1]
+    for d in (data[0], data[2]):
+        assert d["error"] is None
+        assert d["R"] > 1.0 and d["force_ptp"].shape == (4,)
+        assert d["orbit"].shape[1:] == (4, 2)
