@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Integer, Real
+from pythonfmu import Fmi2Slave
 from pythonfmu.enums import Fmi2Status
 
 from bearing_fmu import BearingData, model_class
@@ -27,55 +27,14 @@ from fmu_src.contract import (
     FORCE_NAMES,
     STIFFNESS_NAMES,
 )
+from fmu_src.slave_support import (
+    describe_exception,
+    pin_namespace,
+    register_contract_variable,
+    release_python_state_at_exit,
+)
 
-_PINNED: list = []
-
-
-def pin_namespace(namespace: dict, count: int = 10_000) -> None:
-    """Hold ``count`` extra references to a slave script's module namespace.
-
-    pythonfmu 0.7.0 drops one reference to the slave module's ``__dict__`` each time an
-    instance is created (seen with ``sys.getrefcount``: the second instantiation of the same FMU
-    in one process frees the namespace, then fails with "module has no attribute" or corrupts
-    the heap). Every slave script calls this once at import; 10,000 instances per process are
-    then safe.
-    """
-    _PINNED.extend([namespace] * count)
-
-
-_EXIT_FIXED: set = set()
-
-
-def release_python_state_at_exit(resources: str | None, model_identifier: str) -> None:
-    """Let pythonfmu 0.7.0's library drop its Python state before the C exit handlers run.
-
-    Its shared library keeps a static ``shared_ptr`` that the C++ exit handlers destroy before
-    the library's destructor ``finalizePythonInterpreter`` resets it again: a use-after-free
-    (valgrind) that corrupts the heap and often aborts a Python host at exit, after all results
-    ("corrupted double-linked list"). In a Python host, calling ``finalizePythonInterpreter``
-    from a Python ``atexit`` handler (which runs before the C exit handlers) resets the pointer
-    while it is alive, and the late call becomes a no-op. Not done when pythonfmu itself
-    started the interpreter (a C host): there Python's exit runs on pythonfmu's own thread.
-    """
-    import atexit
-    import ctypes
-    import sys
-    from pathlib import Path
-
-    if not sys.platform.startswith("linux") or resources is None:
-        return
-    if not sys.argv or not sys.argv[0] or Path(sys.executable).name == "PythonFMU":
-        return  # embedded by pythonfmu (C host), or an interactive session: leave it alone
-    lib = Path(resources).parent / "binaries" / "linux64" / f"{model_identifier}.so"
-    if not lib.is_file() or str(lib) in _EXIT_FIXED:
-        return
-    _EXIT_FIXED.add(str(lib))
-    handle = ctypes.CDLL(str(lib))
-    atexit.register(handle.finalizePythonInterpreter)
-
-
-_CAUSALITY = {"parameter": Fmi2Causality.parameter, "input": Fmi2Causality.input,
-              "output": Fmi2Causality.output}
+__all__ = ["BearingSlave", "pin_namespace"]
 
 
 class BearingSlave(Fmi2Slave):
@@ -104,19 +63,10 @@ class BearingSlave(Fmi2Slave):
 
     # --- FMI plumbing ------------------------------------------------------------------------
     def _register(self, v):
-        cls = Real if v.type == "Real" else Integer
-        kw = dict(causality=_CAUSALITY[v.causality], description=v.description,
-                  getter=self._getter(v.name))
-        if v.causality == "parameter":
-            kw["variability"] = Fmi2Variability.fixed
-            kw["setter"] = self._setter(v.name, model=True)
-        elif v.causality == "input":
-            kw["variability"] = Fmi2Variability.continuous
-            kw["setter"] = self._setter(v.name, model=False)
-        else:
-            kw["variability"] = (Fmi2Variability.continuous if v.type == "Real"
-                                 else Fmi2Variability.discrete)
-        self.register_variable(cls(v.name, **kw))
+        setter = None
+        if v.causality in ("parameter", "input"):
+            setter = self._setter(v.name, model=v.causality == "parameter")
+        register_contract_variable(self, v, self._getter(v.name), setter)
 
     def _getter(self, name):
         if any(name == v.name and v.causality == "output" for v in BEARING_VARIABLES):
@@ -174,7 +124,7 @@ class BearingSlave(Fmi2Slave):
             self._failed = False
         except Exception as exc:  # anything raised here would be fatal for the host
             self._failed = True
-            self.log(f"{self.instance_name}: {type(exc).__name__}: {exc}", Fmi2Status.error)
+            self.log(f"{self.instance_name}: {describe_exception(exc)}", Fmi2Status.error)
             for name in FORCE_NAMES + STIFFNESS_NAMES + DAMPING_NAMES:
                 self._values[name] = math.nan
         self._dirty_outputs = False
@@ -210,7 +160,7 @@ class BearingSlave(Fmi2Slave):
             self._frozen = LinearBearing.linearise(self._model, x, y, self._values["omega"])
         except Exception as exc:  # anything raised here would be fatal for the host
             self._failed = True
-            self.log(f"{self.instance_name}: cannot linearise: {type(exc).__name__}: {exc}",
+            self.log(f"{self.instance_name}: cannot linearise: {describe_exception(exc)}",
                      Fmi2Status.error)
         self._dirty_outputs = True
 
