@@ -1,19 +1,25 @@
-"""The FMI variable contract of the bearing FMUs (one source of truth).
+"""The FMI variable contracts of the FMUs (one source of truth).
 
-Every bearing FMU (hybrid, short, fd, linear, lumped) exposes exactly these variables, so a system
-swaps one for another by file name alone. The FMU works in the GLOBAL frame (s, t) of the gear
-system; its parameters ``frame_angle`` and ``rotation_sign`` place the bearing's local frame
-(:class:`bearing_fmu.frames.LocalFrame`) in which the film model runs. Units are SI.
+:data:`BEARING_VARIABLES`: every bearing FMU (hybrid, short, fd, linear, lumped) exposes
+exactly these variables, so a system swaps one for another by file name alone. The FMU works
+in the GLOBAL frame (s, t) of the gear system; its parameters ``frame_angle`` and
+``rotation_sign`` place the bearing's local frame (:class:`bearing_fmu.frames.LocalFrame`) in
+which the film model runs. Units are SI.
 
-The table is rendered into ``docs/fmu-variables.md`` by :func:`markdown_table` and into each
-FMU's modelDescription.xml (units, descriptions, start values) by :mod:`fmu_src.build`.
+:data:`GEAR_VARIABLES`: the gear-shaft FMU (``GearShaft``): per bearing j = 1..4 an affine
+bearing law ``F_j = F0_j - Kb_j X_j - Cb_j Xdot_j`` in (inputs), the journal state X_j, Xdot_j
+out, plus mesh and gear outputs (DESIGN.md section 4).
+
+The tables are rendered into ``docs/fmu-variables.md`` by :func:`document` and into each FMU's
+modelDescription.xml (units, descriptions, start values) by :mod:`fmu_src.build`.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["BEARING_VARIABLES", "UNITS", "FmiVar", "markdown_table"]
+__all__ = ["BEARING_VARIABLES", "GEAR_DEFAULT_CASE", "GEAR_VARIABLES", "UNITS", "FmiVar",
+           "document", "markdown_table"]
 
 
 @dataclass(frozen=True)
@@ -21,10 +27,10 @@ class FmiVar:
     """One FMI 2.0 scalar variable."""
 
     name: str
-    causality: str  # parameter | input | output
-    type: str  # Real | Integer
+    causality: str  # parameter | calculatedParameter | input | output
+    type: str  # Real | Integer | String
     unit: str  # "" for dimensionless
-    start: float
+    start: float | int | str
     description: str
 
 
@@ -41,7 +47,7 @@ UNITS = {
     "1": {},
 }
 
-_P, _I, _O = "parameter", "input", "output"
+_P, _CP, _I, _O = "parameter", "calculatedParameter", "input", "output"
 
 BEARING_VARIABLES: tuple[FmiVar, ...] = (
     # bearing data (paper Table 3: pinion bearings as start values)
@@ -87,32 +93,155 @@ DAMPING_NAMES = ("C_ss", "C_st", "C_ts", "C_tt")
 STATE_NAMES = ("s", "t", "s_dot", "t_dot")
 
 
+#: the case file shipped in the gear-shaft FMU's resources (``case_file`` empty)
+GEAR_DEFAULT_CASE = "baguet2010_spur.toml"
+#: the gear-shaft FMU's bearing numbering (1, 2 pinion shaft; 3, 4 gear shaft)
+BEARINGS = (1, 2, 3, 4)
+#: per-bearing affine-law inputs in the order of the FMU's variables (row-major matrices)
+LAW_NAMES = ("F0_s", "F0_t", *STIFFNESS_NAMES, *DAMPING_NAMES)
+#: start values of the law inputs: isotropic 1e8 N/m, 1e4 N s/m, F0 = 0 (stand-alone runs)
+LAW_START = {"F0_s": 0.0, "F0_t": 0.0, "K_ss": 1e8, "K_st": 0.0, "K_ts": 0.0, "K_tt": 1e8,
+             "C_ss": 1e4, "C_st": 0.0, "C_ts": 0.0, "C_tt": 1e4}
+_LAW_TEXT = {
+    "F0_s": ("N", "bearing {j}: affine-law force at X = 0, Xdot = 0, along s"),
+    "F0_t": ("N", "bearing {j}: affine-law force at X = 0, Xdot = 0, along t"),
+    "K_ss": ("N/m", "bearing {j}: affine-law stiffness -dF_s/ds"),
+    "K_st": ("N/m", "bearing {j}: affine-law stiffness -dF_s/dt"),
+    "K_ts": ("N/m", "bearing {j}: affine-law stiffness -dF_t/ds"),
+    "K_tt": ("N/m", "bearing {j}: affine-law stiffness -dF_t/dt"),
+    "C_ss": ("N.s/m", "bearing {j}: affine-law damping -dF_s/ds_dot"),
+    "C_st": ("N.s/m", "bearing {j}: affine-law damping -dF_s/dt_dot"),
+    "C_ts": ("N.s/m", "bearing {j}: affine-law damping -dF_t/ds_dot"),
+    "C_tt": ("N.s/m", "bearing {j}: affine-law damping -dF_t/dt_dot"),
+}
+_STATE_TEXT = {
+    "s": ("m", "bearing {j}: journal-centre displacement along s (global frame)"),
+    "t": ("m", "bearing {j}: journal-centre displacement along t (global frame)"),
+    "s_dot": ("m/s", "bearing {j}: journal-centre velocity along s"),
+    "t_dot": ("m/s", "bearing {j}: journal-centre velocity along t"),
+}
+
+
+def law_input_names() -> list[str]:
+    """The 40 law inputs of the gear-shaft FMU: bearing-major, :data:`LAW_NAMES` within."""
+    return [f"{n}_{j}" for j in BEARINGS for n in LAW_NAMES]
+
+
+def journal_output_names() -> list[str]:
+    """The 16 journal outputs: bearing-major, (s, t, s_dot, t_dot) within (journal_states)."""
+    return [f"{n}_{j}" for j in BEARINGS for n in STATE_NAMES]
+
+
+def support_load_names() -> list[str]:
+    """The 8 support loads: bearing-major, (s, t) within."""
+    return [f"support_load_{a}_{j}" for j in BEARINGS for a in ("s", "t")]
+
+
+#: outputs of the gear-shaft FMU after the journal states (name, unit, description)
+GEAR_OUTPUTS = (
+    ("mesh_force", "N", "total normal tooth load of the mesh (sum of the slice loads)"),
+    ("transmission_error", "m",
+     "transmission error r_b1 theta_1 + r_b2 theta_2 of the gear nodes' elastic torsion"),
+    ("u_pinion", "m", "pinion node displacement along s"),
+    ("v_pinion", "m", "pinion node displacement along t"),
+    ("u_gear", "m", "gear node displacement along s"),
+    ("v_gear", "m", "gear node displacement along t"),
+)
+
+GEAR_VARIABLES: tuple[FmiVar, ...] = (
+    FmiVar("case_file", _P, "String", "", "",
+           "TOML case file (orchestrator.case) describing the gear pair, shafts and operating "
+           "point; empty = the paper's spur case shipped in the FMU's resources"),
+    *(FmiVar(f"{n}_{j}", _I, "Real", _LAW_TEXT[n][0], LAW_START[n],
+             _LAW_TEXT[n][1].format(j=j)) for j in BEARINGS for n in LAW_NAMES),
+    *(FmiVar(f"{n}_{j}", _O, "Real", _STATE_TEXT[n][0], 0.0, _STATE_TEXT[n][1].format(j=j))
+      for j in BEARINGS for n in STATE_NAMES),
+    *(FmiVar(n, _O, "Real", u, 0.0, d) for n, u, d in GEAR_OUTPUTS),
+    FmiVar("iterations", _O, "Integer", "", 0,
+           "Newton/contact iterations (linear solves) of the last step or static solution"),
+    *(FmiVar(f"support_load_{a}_{j}", _CP, "Real", "N", 0.0,
+             f"bearing {j}: static load of the structure on the bearing along {a} with stiff "
+             "(1e12 N/m) supports (the master's first guess of the static solution)")
+      for j in BEARINGS for a in ("s", "t")),
+)
+
+
+def _start(v: FmiVar) -> str:
+    if v.causality in ("output", "calculatedParameter"):
+        return "-"
+    if v.type == "String":
+        return f'"{v.start}"'
+    return f"{v.start:g}"
+
+
 def markdown_table(variables=BEARING_VARIABLES) -> str:
-    """The contract as a Markdown table (for docs/fmu-variables.md)."""
+    """A contract as a Markdown table (for docs/fmu-variables.md)."""
     lines = ["| name | causality | type | unit | start | description |",
              "| --- | --- | --- | --- | --- | --- |"]
     for v in variables:
-        lines.append(f"| `{v.name}` | {v.causality} | {v.type} | {v.unit or '-'} | {v.start:g} | "
+        lines.append(f"| `{v.name}` | {v.causality} | {v.type} | {v.unit or '-'} | {_start(v)} | "
                      f"{v.description} |")
     return "\n".join(lines)
 
 
-_DOC_HEADER = """# Bearing FMU variables
+_DOC_HEADER = """# FMU variables
 
 Generated from `fmu_src/contract.py` (`python -m fmu_src.contract > docs/fmu-variables.md`);
-a test keeps the two in sync. Every bearing FMU (BearingHybrid, BearingShort, BearingFd,
-BearingLinear, BearingLumped) has exactly these variables. Global frame (s, t), SI units; the
-parameters `frame_angle` and `rotation_sign` place the bearing's local frame, in which the film
-model runs (`bearing_fmu/frames.py`). Outputs are computed when read, so they follow new inputs
-without a doStep. A failed evaluation (eccentricity >= 1, bad parameters) is logged with status
-error, gives NaN outputs, and the next doStep returns discard.
+a test keeps the two in sync. Global frame (s, t) of the gear system, SI units. Build the FMUs
+with `gsb build-fmus` (`fmu_src/build.py`); every built FMU passes `fmpy validate`.
+
+## Bearing FMUs
+
+Every bearing FMU (BearingHybrid, BearingShort, BearingFd, BearingLinear, BearingLumped) has
+exactly these variables. The parameters `frame_angle` and `rotation_sign` place the bearing's
+local frame, in which the film model runs (`bearing_fmu/frames.py`). Outputs are computed when
+read, so they follow new inputs without a doStep. A failed evaluation (eccentricity >= 1, bad
+parameters) is logged with status error, gives NaN outputs, and the next doStep returns discard.
+
+"""
+
+_GEAR_HEADER = """
+## Gear-shaft FMU (GearShaft)
+
+The structural slave (`fmu_src/gear_shaft.py` around `gear_fmu.structure.Structure`): Timoshenko
+shafts, the gear pair's distributed mesh element and the Newmark/Newton/contact step. It is built
+from the case file named by `case_file` through `orchestrator.case` and `orchestrator.system`:
+these two modules are the system description (case file -> physics objects, shared with the
+in-process runs), not the master; the FMU imports nothing else from `orchestrator`.
+
+Inputs: per bearing j = 1..4 the affine bearing law `F_j = F0_j - Kb_j X_j - Cb_j Xdot_j`
+(force of the bearing on the structure at the bearing node, global frame; `K_st_j` is the
+(s, t) entry of Kb_j, row-major). Outputs: the journal state of each bearing node, the mesh
+and gear-node outputs, the iteration count of the last solve. The start values (isotropic
+1e8 N/m and 1e4 N s/m, F0 = 0) make a stand-alone `fmpy simulate` run sensible.
+
+Behaviour:
+
+- Initialisation mode: outputs are the STATIC solution (velocities zero, constant loads) for
+  the current laws, solved when an output is read after an input changed. The master iterates
+  the static solution through the FMU this way. The support loads (calculated parameters) are
+  the loads on stiff supports, the master's first guess.
+- `fmi2ExitInitializationMode`: if no static solution was computed yet, it is computed for the
+  current laws (otherwise the last one read stays the initial state, as with the in-process
+  structure); the modal damping is rebuilt on the modes with the symmetric part of the current
+  Kb laws (`Structure.set_damping_reference`).
+- `fmi2DoStep(t, dt)`: one Newmark step from t (the FMU's time) to t + dt with the current
+  laws. The outputs do not depend directly on the inputs in step mode (no feedthrough): they
+  change at doStep.
+- Failures (Newton/contact not converged, non-finite laws, a bad case file) are logged with
+  status error and the call returns a non-OK status (doStep: discard, outputs in initialisation
+  mode: NaN); the instance and its host survive, and `fmi2SetFMUstate` returns to a saved state.
+- `fmi2GetFMUstate` / `fmi2SetFMUstate` save and restore the structural state (t, X, Xdot,
+  Xddot, contact set, mesh outputs), the laws and the outputs exactly (the modal damping
+  reference is not part of the state); states serialise with pickle.
 
 """
 
 
 def document() -> str:
     """The text of docs/fmu-variables.md."""
-    return _DOC_HEADER + markdown_table() + "\n"
+    return (_DOC_HEADER + markdown_table(BEARING_VARIABLES) + "\n" + _GEAR_HEADER
+            + markdown_table(GEAR_VARIABLES) + "\n")
 
 
 if __name__ == "__main__":
