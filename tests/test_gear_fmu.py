@@ -1,0 +1,303 @@
+"""Gear-shaft FMU: built by pythonfmu, valid for fmpy, equal to the in-process structure.
+
+As in test_bearing_fmus.py, everything that loads the FMU runs in a fresh interpreter that exits
+normally (how a user's host runs it; checks the pythonfmu 0.7.0 workarounds). The FMU is driven
+through :class:`orchestrator.fmi.FmuStructure` and compared with
+``orchestrator.system.structure(load_case(...))`` driven with the same laws: the FMU runs the
+same code on the same numbers, so the results agree bit for bit (asserted to 1e-12).
+"""
+
+import json
+import math
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+
+from fmu_src.build import build_fmus
+from fmu_src.contract import GEAR_VARIABLES
+
+CASE = Path(__file__).parents[1] / "models" / "baguet2010_spur.toml"
+
+# laws used by the comparisons: anisotropic, cross-coupled, non-zero F0 (numbers as text so the
+# fresh interpreters build exactly the same arrays)
+LAWS = """
+import numpy as np
+from orchestrator.master import AffineLaws
+rng = np.random.default_rng(7)
+kb = np.array([[2e8, 3e7], [-2e7, 1.5e8]]) * (1 + 0.1 * rng.random((4, 1, 1)))
+cb = np.array([[2e4, 1e3], [1e3, 3e4]]) * (1 + 0.1 * rng.random((4, 1, 1)))
+f0 = rng.normal(0.0, 300.0, (4, 2))
+LAW_A = AffineLaws(f0, kb, cb)
+LAW_B = AffineLaws(1.1 * f0, 0.9 * kb, 1.2 * cb)
+def rel(a, b):
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    return float(np.abs(a - b).max() / max(np.abs(b).max(), 1e-300))
+"""
+
+
+@pytest.fixture(scope="module")
+def gear_fmu(tmp_path_factory):
+    dest = tmp_path_factory.mktemp("fmus")
+    return build_fmus(dest, ["GearShaft"])[0]
+
+
+def run_isolated(code: str) -> dict:
+    """Run ``code`` in a fresh interpreter; it prints one JSON line and exits normally."""
+    script = textwrap.dedent(LAWS) + textwrap.dedent(code)
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          timeout=300, cwd=Path(__file__).parents[1])
+    assert proc.returncode == 0, f"exit code {proc.returncode}: {proc.stderr[-3000:]}"
+    return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
+def test_gear_fmu_passes_fmpy_validation_with_units_and_descriptions(gear_fmu):
+    from fmpy import read_model_description
+    from fmpy.validation import validate_fmu
+
+    assert validate_fmu(str(gear_fmu)) == []
+    md = read_model_description(str(gear_fmu))
+    variables = {v.name: v for v in md.modelVariables}
+    assert [v.name for v in md.modelVariables] == [v.name for v in GEAR_VARIABLES]
+    assert all(v.description for v in md.modelVariables)
+    for v in GEAR_VARIABLES:
+        if v.type == "Real":
+            assert variables[v.name].unit == v.unit, v.name
+    assert variables["case_file"].type == "String" and variables["case_file"].start == ""
+    assert variables["K_st_3"].unit == "N/m" and variables["C_tt_4"].unit == "N.s/m"
+    assert variables["s_dot_2"].unit == "m/s" and variables["mesh_force"].unit == "N"
+    assert variables["support_load_t_4"].causality == "calculatedParameter"
+    # no direct feedthrough: outputs change at doStep only
+    assert all(not u.dependencies for u in md.outputs)
+    assert md.coSimulation.canGetAndSetFMUstate
+    assert md.defaultExperiment.stepSize is not None
+
+
+def test_slave_registers_exactly_the_contract():
+    """The slave class (no FMI layer) exposes the contract's variables in its order."""
+    from fmu_src.gear_shaft_slave import GearShaftSlave
+
+    slave = GearShaftSlave(instance_name="t")
+    names = [(v.name, v.causality.name) for v in slave.vars.values()]
+    assert names == [(v.name, v.causality) for v in GEAR_VARIABLES]
+
+
+def test_bad_case_file_is_logged_not_raised():
+    """A getter never raises into pythonfmu: NaN outputs and an error in the log."""
+    from fmu_src.gear_shaft_slave import GearShaftSlave
+
+    slave = GearShaftSlave(instance_name="t")
+    vr = {v.name: v.value_reference for v in slave.vars.values()}
+    slave.set_string([vr["case_file"]], ["/nonexistent/case.toml"])
+    assert all(math.isnan(x) for x in slave.get_real([vr["s_1"], vr["mesh_force"]]))
+    assert math.isnan(slave.get_real([vr["support_load_s_1"]])[0])
+    slave.exit_initialization_mode()
+    assert slave.do_step(0.0, 1e-5) is False
+    text = " | ".join(m.msg for m in slave.log_queue)
+    assert "case file not found: /nonexistent/case.toml" in text
+    assert "not stepping after an earlier failure" in text
+
+
+@pytest.fixture(scope="module")
+def comparison(gear_fmu):
+    """One fresh interpreter: the FMU and the in-process structure driven side by side.
+
+    Static solutions, 50 Newmark steps with alternating laws, the outputs, a rollback, a
+    serialised state, then a second instance coupled by the master with short-bearing models.
+    """
+    return run_isolated(f"""
+        import json
+        from orchestrator import system
+        from orchestrator.case import load_case
+        from orchestrator.fmi import FmuStructure
+        from orchestrator.inprocess import ModelBearings
+        from orchestrator.master import Master
+        case = load_case(r"{CASE}")
+        ref = system.structure(case)
+        fmu = FmuStructure(r"{gear_fmu}")
+        r = {{}}
+        r["support"] = rel(fmu.support_loads(), ref.support_loads())
+        # static iterations as the master does them: two law sets in initialisation mode
+        for law in (LAW_B, LAW_A):
+            ref.set_bearing_laws(law); ref.solve_static()
+            fmu.set_bearing_laws(law); fmu.solve_static()
+        r["static"] = rel(fmu.journal_states(), ref.journal_states())
+        r["static_mesh"] = rel(fmu.mesh_force(), ref.mesh_state.total_load)
+        r["static_iterations"] = [fmu.iterations(), ref.static(LAW_A.f0, LAW_A.kb).iterations]
+        # the master's last laws (linearised at X0) set without a new solve, then the transient
+        ref.set_bearing_laws(LAW_B); fmu.set_bearing_laws(LAW_B)
+        ref.set_damping_reference(0.5 * (LAW_B.kb + LAW_B.kb.transpose(0, 2, 1)))
+        fmu.set_damping_reference(LAW_B.kb)
+        dt = ref.mesh_period / 32
+        t, worst = 0.0, 0.0
+        for k in range(50):
+            law = LAW_A if k % 2 else LAW_B
+            ref.set_bearing_laws(law); fmu.set_bearing_laws(law)
+            ref.do_step(t, dt); fmu.do_step(t, dt); t += dt
+            worst = max(worst, rel(fmu.journal_states(), ref.journal_states()))
+        r["steps"] = worst
+        g = ref.gear_displacements()
+        o = fmu.outputs()
+        r["outputs"] = max(rel(o["mesh_force"], ref.mesh_state.total_load),
+                           rel(o["transmission_error"], ref.mesh_state.transmission_error),
+                           rel([o["u_pinion"], o["v_pinion"], o["u_gear"], o["v_gear"]],
+                               [g[0, 0], g[0, 1], g[1, 0], g[1, 1]]),
+                           rel(fmu.transmission_error(), ref.mesh_state.transmission_error))
+        r["moved"] = float(abs(fmu.journal_states()[:, 2:]).max())
+        # rollback: save, 5 steps, restore, the same 5 steps again
+        saved, rsaved = fmu.get_state(), ref.get_state()
+        x50 = fmu.journal_states()
+        for k in range(5):
+            fmu.do_step(t + k * dt, dt); ref.do_step(t + k * dt, dt)
+        x55 = fmu.journal_states()
+        fmu.set_state(saved); ref.set_state(rsaved)
+        r["restored"] = bool((fmu.journal_states() == x50).all()) and fmu.n_steps == 50
+        for k in range(5):
+            fmu.do_step(t + k * dt, dt)
+        r["replayed"] = bool((fmu.journal_states() == x55).all())
+        # serialised states (pickle inside the FMU) restore exactly too
+        f = fmu.slave.fmu
+        blob = f.serializeFMUstate(saved._handle)
+        back = f.deSerializeFMUstate(blob)
+        f.setFMUstate(back)
+        r["deserialised"] = bool((fmu.journal_states() == x50).all())
+        f.freeFMUstate(back)
+        del saved
+        r["live_states"] = len(fmu._states)
+        fmu.close()
+        # the master's coupled static solution and steps, in process and through the FMU
+        states, its = [], []
+        for slave in (system.structure(case), FmuStructure(r"{gear_fmu}", case=case)):
+            bearings = ModelBearings(system.bearing_models(case, "short"),
+                                     system.BEARING_FRAMES, system.bearing_speeds(case))
+            m = Master(slave, bearings)
+            m.solve_static()
+            slave.set_damping_reference(0.5 * (m.laws.kb + m.laws.kb.transpose(0, 2, 1)))
+            its.append([m.step(k * dt, dt).iterations for k in range(8)])
+            states.append(slave.journal_states())
+        r["master"] = rel(states[1], states[0])
+        r["master_iterations"] = its
+        print(json.dumps(r))
+    """)
+
+
+def test_fmu_static_solution_equals_in_process(comparison):
+    assert comparison["support"] < 1e-12
+    assert comparison["static"] < 1e-12 and comparison["static_mesh"] < 1e-12
+    its = comparison["static_iterations"]
+    assert its[0] == its[1]
+
+
+def test_fmu_newmark_steps_equal_in_process(comparison):
+    assert comparison["steps"] < 1e-12 and comparison["outputs"] < 1e-12
+    assert comparison["moved"] > 1e-6  # the journals really move (unbalance): not trivial
+
+
+def test_fmu_state_round_trip_is_exact(comparison):
+    assert comparison["restored"] and comparison["replayed"] and comparison["deserialised"]
+    assert comparison["live_states"] == 0  # FmuState objects free their FMU copy
+
+
+def test_master_through_the_fmu_equals_master_in_process(comparison):
+    assert comparison["master"] < 1e-12
+    its = comparison["master_iterations"]
+    assert its[0] == its[1] and max(its[0]) >= 2  # rollbacks (set_state) happened
+
+
+def test_a_checked_case_reaches_the_fmu_unchanged(tmp_path):
+    """case_toml: a Case with overrides written as a case file reloads to the same values."""
+    from orchestrator.case import load_case
+    from orchestrator.fmi import case_toml
+
+    case = load_case(CASE).with_overrides({"operation.torque": "150 N.m",
+                                           "operation.gravity": True,
+                                           "case.description": 'quote " and backslash \\'})
+    path = tmp_path / "case.toml"
+    path.write_text(case_toml(case))
+    assert load_case(path).values == case.values
+
+
+def test_ensure_fmus_builds_missing_fmus_once(tmp_path):
+    from orchestrator.fmi import ensure_fmus
+
+    path = ensure_fmus(["GearShaft"], tmp_path)["GearShaft"]
+    stamp = path.stat().st_mtime_ns
+    assert ensure_fmus(["GearShaft"], tmp_path)["GearShaft"].stat().st_mtime_ns == stamp
+    with pytest.raises(ValueError, match="unknown FMU 'Nope'"):
+        ensure_fmus(["Nope"], tmp_path)
+
+
+def test_failures_are_reported_and_the_process_survives(gear_fmu):
+    out = run_isolated(f"""
+        import json
+        import numpy as np
+        from orchestrator.fmi import FmuError, FmuStructure
+        from orchestrator.master import AffineLaws
+        fmu = FmuStructure(r"{gear_fmu}")
+        msgs = {{}}
+        # static solution that does not converge (almost no bearing stiffness)
+        fmu.set_bearing_laws(AffineLaws(LAW_A.f0, 1e-12 * LAW_A.kb, LAW_A.cb))
+        try:
+            fmu.solve_static()
+        except FmuError as exc:
+            msgs["static"] = str(exc)
+        fmu.set_bearing_laws(LAW_A)
+        fmu.solve_static()  # the instance still works
+        fmu.exit_initialization()
+        dt = 2.3e-5
+        fmu.do_step(0.0, dt)
+        saved = fmu.get_state()
+        x1 = fmu.journal_states()
+        # absurd law: Newton diverges (non-finite residuals) -> NewmarkConvergenceError inside
+        fmu.set_bearing_laws(AffineLaws(np.full((4, 2), 1e300), LAW_A.kb, LAW_A.cb))
+        try:
+            fmu.do_step(dt, dt)
+        except FmuError as exc:
+            msgs["newton"] = str(exc)
+        # NaN input
+        bad = AffineLaws(LAW_A.f0, LAW_A.kb, LAW_A.cb.copy())
+        bad.cb[2, 0, 1] = float("nan")
+        fmu.set_bearing_laws(bad)
+        try:
+            fmu.do_step(dt, dt)
+        except FmuError as exc:
+            msgs["nan"] = str(exc)
+        # wrong time
+        fmu.set_bearing_laws(LAW_A)
+        try:
+            fmu.do_step(5 * dt, dt)
+        except FmuError as exc:
+            msgs["time"] = str(exc)
+        # back to the saved state: stepping works again
+        fmu.set_state(saved)
+        same = bool((fmu.journal_states() == x1).all())
+        fmu.do_step(dt, dt)
+        fmu.close()
+        print(json.dumps(dict(msgs=msgs, same=same, n=fmu.n_steps)))
+    """)
+    m = out["msgs"]
+    assert "static solution failed" in m["static"] and "did not converge" in m["static"]
+    assert "doStep 2 from t = 2.3e-05 s" in m["newton"] and "(status discard)" in m["newton"]
+    assert "NewmarkConvergenceError: Newmark step 2" in m["newton"]
+    assert "bearing laws contain non-finite values" in m["nan"]
+    assert "but the structure is at t = 2.3e-05 s" in m["time"]
+    assert out["same"] and out["n"] == 2
+
+
+def test_fmpy_simulate_from_a_fresh_process(gear_fmu, tmp_path):
+    """``fmpy simulate`` runs the FMU stand-alone (the shipped paper case, start values)."""
+    out = tmp_path / "out.csv"
+    proc = subprocess.run(
+        [sys.executable, "-m", "fmpy", "simulate", str(gear_fmu), "--stop-time", "2.4e-4",
+         "--output-interval", "2.4e-5", "--output-file", str(out)],
+        capture_output=True, text=True, timeout=300, cwd=tmp_path)
+    assert proc.returncode == 0, f"exit code {proc.returncode}: {proc.stderr[-2000:]}"
+    lines = out.read_text().splitlines()
+    header = lines[0].replace('"', "").split(",")
+    assert "s_1" in header and "mesh_force" in header and "transmission_error" in header
+    rows = [[float(x) for x in line.split(",")] for line in lines[1:]]
+    assert len(rows) == 11
+    force = [r[header.index("mesh_force")] for r in rows]
+    assert all(3000.0 < f < 6000.0 for f in force)  # T = 220 N m: ~4.5 kN tooth load
