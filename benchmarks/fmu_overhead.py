@@ -1,0 +1,117 @@
+"""Microseconds per master cycle through the gear-shaft FMU vs the in-process structure.
+
+Usage: ``python benchmarks/fmu_overhead.py [--steps N] [--fmu PATH]``
+
+Builds ``GearShaft.fmu`` into a temporary folder (unless ``--fmu`` names one) and drives the
+paper's spur case (``models/baguet2010_spur.toml``) two ways with the same affine bearing laws
+(Kb 1e8 N/m with a cross-coupled part, Cb 1e4 N s/m, dt = mesh period / 32):
+
+* ``FmuStructure`` (:mod:`orchestrator.fmi`): fmi2SetReal of the 40 law inputs, fmi2DoStep,
+  fmi2GetReal of the 16 journal outputs; fmi2GetFMUstate + fmi2SetFMUstate (+ free);
+* ``Structure`` in process: ``set_bearing_laws`` + ``do_step`` + ``journal_states``;
+  ``get_state`` + ``set_state``.
+
+Prints µs per cycle (best of 5 blocks, after warm-up), the per-call cost of the FMI layer alone
+(set + get with no step, state get/set), and the FMU's share of a cycle.
+"""
+
+from __future__ import annotations
+
+import argparse
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from orchestrator.case import load_case
+from orchestrator.fmi import FmuStructure
+from orchestrator.master import AffineLaws
+from orchestrator.system import structure
+
+CASE = Path(__file__).resolve().parents[1] / "models" / "baguet2010_spur.toml"
+
+
+def laws() -> AffineLaws:
+    kb = np.broadcast_to(1e8 * np.eye(2), (4, 2, 2)) + np.array([[0.0, 3e7], [-2e7, 0.0]])
+    cb = np.broadcast_to(1e4 * np.eye(2), (4, 2, 2)).copy()
+    return AffineLaws(np.zeros((4, 2)), kb.copy(), cb)
+
+
+def best_us(fn, n: int, blocks: int = 5) -> float:
+    best = float("inf")
+    for _ in range(blocks):
+        t0 = time.perf_counter()
+        fn(n)
+        best = min(best, (time.perf_counter() - t0) / n)
+    return best * 1e6
+
+
+def measure(slave, law, dt: float, n: int) -> dict:
+    slave.set_bearing_laws(law)
+    slave.solve_static()
+    if hasattr(slave, "exit_initialization"):
+        slave.exit_initialization()
+    else:
+        slave.set_damping_reference(0.5 * (law.kb + law.kb.transpose(0, 2, 1)))
+    clock = {"t": 0.0}
+    state0 = slave.get_state()
+
+    def cycle(k):
+        for _ in range(k):
+            slave.set_bearing_laws(law)
+            slave.do_step(clock["t"], dt)
+            slave.journal_states()
+            clock["t"] += dt
+
+    def io_only(k):
+        for _ in range(k):
+            slave.set_bearing_laws(law)
+            slave.journal_states()
+
+    def state(k):
+        for _ in range(k):
+            s = slave.get_state()
+            slave.set_state(s)
+
+    cycle(200)  # warm-up (numba, caches)
+    out = {"cycle": best_us(cycle, n)}
+    out["io"] = best_us(io_only, n)
+    out["state"] = best_us(state, n)
+    slave.set_state(state0)
+    return out
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--steps", type=int, default=1000, help="cycles per timed block")
+    parser.add_argument("--fmu", help="a built GearShaft.fmu (default: build one)")
+    args = parser.parse_args()
+    law = laws()
+    with tempfile.TemporaryDirectory(prefix="gsb_bench_") as tmp:
+        path = args.fmu
+        if path is None:
+            from fmu_src.build import build_fmus
+
+            path = build_fmus(tmp, ["GearShaft"])[0]
+        ref = structure(load_case(CASE))
+        dt = ref.mesh_period / 32
+        inproc = measure(ref, law, dt, args.steps)
+        fmu = FmuStructure(path)
+        try:
+            viafmu = measure(fmu, law, dt, args.steps)
+        finally:
+            fmu.close()
+    rows = [("setReal laws + doStep + getReal journal", "cycle"),
+            ("set laws + read journal, no step", "io"),
+            ("state get + set", "state")]
+    print(f"{'µs per call':44s} {'FMU':>9s} {'in-process':>11s} {'FMU - in-process':>17s}")
+    for label, key in rows:
+        a, b = viafmu[key], inproc[key]
+        print(f"{label:44s} {a:9.1f} {b:11.1f} {a - b:17.1f}")
+    share = (viafmu["cycle"] - inproc["cycle"]) / viafmu["cycle"]
+    print(f"FMI layer share of an FMU cycle: {100 * share:.1f} %")
+
+
+if __name__ == "__main__":
+    main()
