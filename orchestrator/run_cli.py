@@ -52,6 +52,20 @@ def add_parsers(sub) -> None:
     p.add_argument("--quiet", action="store_true", help="no progress display")
     p.set_defaults(func=run)
 
+    p = sub.add_parser("reproduce", help="regenerate the paper's section 4 (figures, Table 4, "
+                                         "report)",
+                       description="Fresh runs of the paper's spur and helical cases, the "
+                                   "parametric sweeps on Dask, every figure of section 4 and a "
+                                   "report putting each next to what the paper states.")
+    p.add_argument("--quick", action="store_true",
+                   help="fewer periods, speeds and parameter values: minutes, not hours")
+    p.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="Dask scheduler address (default: a LocalCluster; 'none': serial)")
+    p.add_argument("--workers", type=int, default=2, help="LocalCluster workers (default 2)")
+    p.add_argument("--out", default="results/reproduce", help="output folder")
+    p.add_argument("--quiet", action="store_true", help="no progress display")
+    p.set_defaults(func=reproduce)
+
     p = sub.add_parser("modal", help="natural frequencies and mode types of a case",
                        description="Natural modes of the gear-shaft system with the mean mesh "
                                    "stiffness at the static load and the bearings' stiffness "
@@ -111,4 +125,13 @@ def modal(args) -> int:
     print(f"{case['case.name']}: modes with the mean mesh stiffness at T = "
           f"{case['operation.torque']:g} N m; bearings: {source}")
     print(mode_table(modes, args.modes))
+    return 0
+
+
+def reproduce(args) -> int:
+    from orchestrator.reproduce import reproduce as run_all
+
+    report = run_all(args.out, quick=args.quick, scheduler=args.scheduler,
+                     workers=args.workers, progress=not args.quiet)
+    print(f"report: {report}")
     return 0
