@@ -77,14 +77,16 @@ class RunSummary:
 
 
 class Progress:
-    """A one-line progress display on stderr, refreshed at most every ``every`` seconds."""
+    """A one-line progress display on stderr, refreshed at most every ``every`` seconds; on a
+    stream that is not a terminal (a log file), one line every 10 s instead."""
 
     def __init__(self, total: int, label: str = "", every: float = 0.5, stream=None,
                  enabled: bool = True):
         self.total = total
         self.label = label
-        self.every = every
         self.stream = sys.stderr if stream is None else stream
+        self.tty = bool(getattr(self.stream, "isatty", lambda: False)())
+        self.every = every if self.tty else max(every, 10.0)
         self.enabled = enabled
         self.start = time.perf_counter()
         self._last = -math.inf
@@ -100,10 +102,12 @@ class Progress:
         frac = done / self.total if self.total else 1.0
         eta = elapsed / frac - elapsed if frac > 0 else math.inf
         bar = "#" * int(30 * frac)
-        self.stream.write(f"\r{self.label} [{bar:<30}] {done}/{self.total} {100 * frac:5.1f} % "
-                          f"{elapsed:6.1f} s, {eta:6.1f} s left {extra}   ")
-        if done >= self.total:
-            self.stream.write("\n")
+        line = (f"{self.label} [{bar:<30}] {done}/{self.total} {100 * frac:5.1f} % "
+                f"{elapsed:6.1f} s, {eta:6.1f} s left {extra}")
+        if self.tty:
+            self.stream.write(f"\r{line}   " + ("\n" if done >= self.total else ""))
+        else:
+            self.stream.write(line + "\n")
         self.stream.flush()
 
 
