@@ -202,6 +202,12 @@ def _has_line(f, a, target, prominence=10.0, band=12):
 
 
 # ---------------------------------------------------------------------------- figures
+def _save(fig, path: Path, plt) -> Path:
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
 def _fig_orbits(runs, fig_dir, plt) -> tuple[Path, dict]:
     """Figs. 5-6: steady orbits of bearing and gear nodes; transient in bearings 1 and 3."""
     r = runs["spur_hybrid"]["results"]
@@ -232,9 +238,7 @@ def _fig_orbits(runs, fig_dir, plt) -> tuple[Path, dict]:
         ax.set_aspect("equal")
         ax.set_title(f"Fig. 6{'ab'[k]}: bearing {b + 1} (s/C, t/C)")
         ax.legend(fontsize=7)
-    path = fig_dir / "fig05_06_orbits.png"
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    path = _save(fig, fig_dir / "fig05_06_orbits.png", plt)
     j = r["journal"][win]
     sym = max(np.abs(j[:, 0] - j[:, 1]).max(), np.abs(j[:, 2] - j[:, 3]).max()) / np.abs(j).max()
     bend = [np.ptp(r["gear_nodes"][win, 0, k]) / np.ptp(r["journal"][win, 0, k]) for k in (0, 1)]
@@ -280,9 +284,7 @@ def _fig_forces(runs, prefix, fig_dir, plt, name, title) -> tuple[Path, dict]:
         else:
             info["bearing3_lines"]["z2/z1"] = _has_line(f, amp, z2 / z1)
     fig.suptitle(title)
-    path = fig_dir / f"{name}.png"
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    path = _save(fig, fig_dir / f"{name}.png", plt)
     return path, info
 
 
@@ -307,9 +309,7 @@ def _fig_speed(points, fig_dir, plt, name, title, models=("hybrid", "linear"),
         ax.set_xlabel("input speed [rad/s]")
         ax.legend(fontsize=8)
     fig.suptitle(title)
-    path = fig_dir / f"{name}.png"
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    path = _save(fig, fig_dir / f"{name}.png", plt)
     return path, info
 
 
@@ -331,9 +331,7 @@ def _fig_torque(points, fig_dir, plt, clearance) -> tuple[Path, dict]:
     ax.set_aspect("equal")
     ax.set_title("Fig. 9: bearing 1, omega = 325 rad/s (s/C, t/C); + ellipse centres")
     ax.legend(fontsize=8)
-    path = fig_dir / "fig09_torque.png"
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    path = _save(fig, fig_dir / "fig09_torque.png", plt)
     ecc = {t: math.hypot(*c) for t, c in sorted(centres.items())}
     return path, {"centres": centres, "mean_eccentricity": ecc}
 
@@ -359,9 +357,7 @@ def _fig_unbalance(points, base, fig_dir, plt, plan) -> tuple[Path, dict]:
         ax.set_xlabel("input speed [rad/s]")
         ax.legend(fontsize=7)
     fig.suptitle("Fig. 10: influence of mass unbalance (spur, T = 220 N m)")
-    path = fig_dir / "fig10_unbalance.png"
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    path = _save(fig, fig_dir / "fig10_unbalance.png", plt)
     return path, info
 
 
@@ -404,9 +400,7 @@ def _fig_helix(points, base, spur_run, fig_dir, plt, plan, clearance) -> tuple[P
     axes[3].set_title("Fig. 14: bearing 1 at 325 rad/s (s/C, t/C)")
     axes[3].legend(fontsize=7)
     fig.suptitle("Fig. 11: influence of the helix angle (hybrid bearings)")
-    path = fig_dir / "fig11_14_helix.png"
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    path = _save(fig, fig_dir / "fig11_14_helix.png", plt)
     return path, info
 
 
@@ -440,9 +434,7 @@ def _fig_transients(runs, fig_dir, plt) -> tuple[Path, dict]:
         ax.set_aspect("equal")
         ax.set_title(f"Fig. 17: helical, bearing {b + 1}")
         ax.legend(fontsize=7)
-    path = fig_dir / "fig12_17_transients.png"
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    path = _save(fig, fig_dir / "fig12_17_transients.png", plt)
     for key in ("spur_hybrid", "helical_hybrid", "helical_linear"):
         r = runs[key]["results"]
         a = _attrs(r)
@@ -477,9 +469,7 @@ def _fig_face_load(fig_dir, plt) -> tuple[Path, dict]:
         ax.set_title(f"Fig. 13{'ab'[name == 'helical']}: {name}")
         ax.legend(fontsize=7)
         info[name] = spreads
-    p = fig_dir / "fig13_face_load.png"
-    fig.savefig(p, dpi=110)
-    plt.close(fig)
+    p = _save(fig, fig_dir / "fig13_face_load.png", plt)
     return p, info
 
 
