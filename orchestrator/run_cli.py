@@ -63,6 +63,8 @@ def add_parsers(sub) -> None:
                    help="Dask scheduler address (default: a LocalCluster; 'none': serial)")
     p.add_argument("--workers", type=int, default=2, help="LocalCluster workers (default 2)")
     p.add_argument("--out", default="results/reproduce", help="output folder")
+    p.add_argument("--redraw", action="store_true",
+                   help="only redraw the figures and the report from the runs kept in --out")
     p.add_argument("--quiet", action="store_true", help="no progress display")
     p.set_defaults(func=reproduce)
 
@@ -129,9 +131,13 @@ def modal(args) -> int:
 
 
 def reproduce(args) -> int:
+    from orchestrator.reproduce import draw
     from orchestrator.reproduce import reproduce as run_all
 
-    report = run_all(args.out, quick=args.quick, scheduler=args.scheduler,
-                     workers=args.workers, progress=not args.quiet)
+    if args.redraw:
+        report = draw(args.out)
+    else:
+        report = run_all(args.out, quick=args.quick, scheduler=args.scheduler,
+                         workers=args.workers, progress=not args.quiet)
     print(f"report: {report}")
     return 0
