@@ -11,6 +11,9 @@ import math
 
 import numpy as np
 
+from orchestrator.case import Case
+from orchestrator.system import gear_pair
+
 __all__ = ["fit_ellipse", "run_metrics", "static_mesh_load", "steady_window"]
 
 
@@ -82,9 +85,6 @@ def run_metrics(results: dict, steady: float) -> dict:
     peak-to-peak of ||F_b|| [N] (Fig. 8b-c), ``force_mean`` (4,) [N], ``orbit_centre`` (4, 2)
     [m] (ellipse fit, Fig. 9, 14) and ``orbit_mean`` (4, 2) [m].
     """
-    from orchestrator.case import Case
-    from orchestrator.system import gear_pair
-
     win = steady_window(results["time"], steady)
     values = json.loads(results["attrs"]["case_values"])
     pair = gear_pair(Case(values, str(results["attrs"].get("case_file", "results"))))
