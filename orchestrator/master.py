@@ -119,6 +119,7 @@ class StepReport:
     mismatch: float  # relative force mismatch at acceptance
     bearing_force: np.ndarray  # (nb, 2) N
     laws: AffineLaws = field(repr=False)
+    states: np.ndarray = field(default=None, repr=False)  # (nb, 4) accepted journal states
 
 
 @dataclass
@@ -174,7 +175,7 @@ class Master:
                 # leave the structure on the converged solution with the final laws
                 self.structure.set_bearing_laws(laws)
                 self.laws = laws
-                return StepReport(it, mismatch, force, laws)
+                return StepReport(it, mismatch, force, laws, states)
         raise CouplingError(
             f"static solution did not converge in {self.max_iterations} iterations: "
             f"relative bearing-force mismatch {mismatch:.3e} > tol {self.tol:.1e}"
@@ -197,7 +198,7 @@ class Master:
             self.total_iterations += 1
             if mismatch <= self.tol:
                 self.laws = laws
-                return StepReport(it, mismatch, force, laws)
+                return StepReport(it, mismatch, force, laws, states)
             self.structure.set_state(saved)
         raise CouplingError(
             f"step at t = {t:.6e} s (dt = {dt:.3e} s) did not converge in "

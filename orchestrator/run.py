@@ -170,11 +170,10 @@ def run_case(case: Case, bearing: str | None = None, periods: int | None = None,
             static = master.solve_static()
         except Exception as exc:
             raise RunError(f"{case.source}: static solution failed: {exc}") from exc
-        x0 = structure.journal_states()[:, :2].copy()
-        if model == "linear":
-            if in_process:
-                bearings.models = system.linearised(bearings.models, structure.journal_states(),
-                                                    system.bearing_speeds(case))
+        x0 = static.states[:, :2].copy()
+        if model == "linear" and in_process:
+            bearings.models = system.linearised(bearings.models, static.states,
+                                                system.bearing_speeds(case))
         # leave initialisation: linear FMUs freeze, the structure builds its modal damping on
         # the modes with the bearings' static stiffness
         kb0 = master.laws.kb
@@ -211,7 +210,7 @@ def run_case(case: Case, bearing: str | None = None, periods: int | None = None,
                         f"step {i + 1} of {n_steps} (t = {t + dt:.6e} s) failed: {exc}; the "
                         f"{i} steps computed are in {path}") from exc
                 t = (i + 1) * dt
-                writer.append(time=t, journal=structure.journal_states(),
+                writer.append(time=t, journal=report.states,
                               bearing_force=report.bearing_force,
                               mesh_force=structure.mesh_force(),
                               transmission_error=structure.transmission_error(),
