@@ -1,7 +1,10 @@
 """Journal-bearing physics: Reynolds-equation film models and constant-coefficient laws.
 
-See :mod:`bearing_fmu.base` for the interface and the frame/unit contract. Models are chosen by
-name from :data:`MODELS` (the way ``solve_ivp`` picks a method from a table).
+See :mod:`bearing_fmu.base` for the interface, the frame/unit contract and how to add a model;
+:mod:`bearing_fmu.reynolds` for the equations every film model shares (Eq. 2-5). Models are
+chosen by name from :data:`MODELS`, the one registry (the way ``solve_ivp`` picks a method):
+the bearing FMUs, the case schema's ``bearings.model`` choices and the command line derive
+from it.
 """
 
 from importlib import import_module
@@ -14,32 +17,42 @@ from bearing_fmu.base import (
     EccentricityError,
     FilmBearingModel,
     FilmForce,
+    ModelOption,
 )
 
-#: model name -> (module, class); film models solve the Reynolds equation (Eq. 2-5)
+#: model name -> "module:class"; film models solve the Reynolds equation (Eq. 2-5)
 MODELS = {
-    "hybrid": ("bearing_fmu.hybrid", "HybridBearing"),
-    "short": ("bearing_fmu.short_bearing", "ShortBearing"),
-    "fd": ("bearing_fmu.fd", "FiniteDifferenceBearing"),
-    "linear": ("bearing_fmu.linear", "LinearBearing"),
-    "lumped": ("bearing_fmu.lumped", "LumpedSpringBearing"),
+    "hybrid": "bearing_fmu.hybrid:HybridBearing",
+    "short": "bearing_fmu.short_bearing:ShortBearing",
+    "fd": "bearing_fmu.fd:FiniteDifferenceBearing",
+    "linear": "bearing_fmu.linear:LinearisedBearing",
+    "lumped": "bearing_fmu.lumped:LumpedSpringBearing",
 }
-FILM_MODELS = ("hybrid", "short", "fd")
 
 
 def model_class(name: str) -> type[BearingModel]:
     """The bearing-model class registered under ``name`` in :data:`MODELS`."""
     try:
-        module, cls = MODELS[name]
+        module, cls = MODELS[name].split(":")
     except KeyError:
-        raise ValueError(
+        raise BearingError(
             f"unknown bearing model {name!r}; available: {', '.join(MODELS)}"
         ) from None
     return getattr(import_module(module), cls)
 
 
+def fmu_name(name: str) -> str:
+    """File stem of the bearing FMU of model ``name`` (``hybrid`` -> ``BearingHybrid``)."""
+    model_class(name)  # an unknown name is an error here too
+    return "Bearing" + name.capitalize()
+
+
+def is_film_model(name: str) -> bool:
+    """True for the models that solve the Reynolds equation (their force has a scale)."""
+    return issubclass(model_class(name), FilmBearingModel)
+
+
 __all__ = [
-    "FILM_MODELS",
     "MODELS",
     "BearingData",
     "BearingError",
@@ -48,5 +61,8 @@ __all__ = [
     "EccentricityError",
     "FilmBearingModel",
     "FilmForce",
+    "ModelOption",
+    "fmu_name",
+    "is_film_model",
     "model_class",
 ]

@@ -24,6 +24,8 @@ import math
 import numpy as np
 from numba import njit
 
+from bearing_fmu.reynolds import film_thickness, nodal_force, source, source_coefficients
+
 # transfer types between level l and l + 1
 BOTH, THETA_ONLY, XI_ONLY = 0, 1, 2
 #: rounding floor of the natural residual relative to max a_ii p_i (a few ulp)
@@ -35,16 +37,15 @@ def level_coefficients(lam, x, y, xd, yd, theta0, nt, m, ct, cx, b):
     """Face/node coefficients and load of one level (Eq. 3), in place: ct, cx (nt,), b (nt, m+1)."""
     dth = 2.0 * math.pi / nt
     dxi = lam / m
-    a = y + 2.0 * xd
-    c = 2.0 * yd - x
+    a, c = source_coefficients(x, y, xd, yd)
     for i in range(nt):
         th = theta0 + i * dth
-        h = 1.0 - x * math.cos(th) - y * math.sin(th)
+        h = film_thickness(x, y, math.cos(th), math.sin(th))
         thf = th + 0.5 * dth
-        hf = 1.0 - x * math.cos(thf) - y * math.sin(thf)
+        hf = film_thickness(x, y, math.cos(thf), math.sin(thf))
         ct[i] = hf * hf * hf * dxi / dth
         cx[i] = h * h * h * dth / dxi
-        f = (a * math.cos(th) + c * math.sin(th)) * dth * dxi
+        f = source(a, c, math.cos(th), math.sin(th)) * dth * dxi
         b[i, 0] = 0.0
         for j in range(1, m + 1):
             b[i, j] = f
@@ -418,6 +419,11 @@ def solve_level(lv, nts, ms, offs, coffs, kinds, ct, cx, p, b, e, r, tmp, mask, 
             bmax = max(bmax, abs(bl[i, j]))
     if pin0:
         pl[0, :] = 0.0
+    if bmax == 0.0:  # no source (f = 0, e.g. a centred journal at rest): p = 0 exactly
+        pl[:, :] = 0.0
+        if history.shape[0] > 0:
+            history[0] = 0.0
+        return 0
     nat, big = natural_residual(pl, bl, ctl, cxl, nt, m, pin0, tl)
     res = nat / bmax
     if history.shape[0] > 0:
@@ -472,18 +478,22 @@ def full_multigrid(nts, ms, offs, coffs, kinds, ct, cx, p, b, e, r, tmp, mask, p
 
 @njit(cache=True)
 def film_force_of(p, nt, m, theta0, lam):
-    """(Fx, Fy) = -(integral of p (cos, sin) over the film), Eq. (5): periodic trapezoid in theta,
-    trapezoid in xi over the full length (mirror of the half, p = 0 at the edges)."""
+    """(Fx, Fy) of Eq. (5) (:func:`bearing_fmu.reynolds.nodal_force`): periodic trapezoid in
+    theta, trapezoid in xi over the full length (mirror of the half, p = 0 at the edges)."""
     dth = 2.0 * math.pi / nt
     dxi = lam / m
-    fx = 0.0
-    fy = 0.0
+    line = np.empty(nt)
+    cs = np.empty(nt)
+    sn = np.empty(nt)
     for i in range(nt):
         s = 0.0
         for j in range(1, m):
             s += 2.0 * p[i, j]
         s += p[i, m]
+        line[i] = s
         th = theta0 + i * dth
-        fx += s * math.cos(th)
-        fy += s * math.sin(th)
-    return -fx * dth * dxi, -fy * dth * dxi
+        cs[i] = math.cos(th)
+        sn[i] = math.sin(th)
+    out = np.empty(2)
+    nodal_force(line, cs, sn, dth * dxi, out)
+    return out[0], out[1]

@@ -19,12 +19,15 @@ Dimensionless core (paper Eq. 2-5 and Nomenclature)
 
 from __future__ import annotations
 
+import inspect
 import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
 import numpy as np
+
+from bearing_fmu.reynolds import force_scale, pressure_scale
 
 __all__ = [
     "BearingData",
@@ -34,6 +37,7 @@ __all__ = [
     "EccentricityError",
     "FilmBearingModel",
     "FilmForce",
+    "ModelOption",
 ]
 
 
@@ -101,13 +105,12 @@ class BearingData:
         return self.length / self.diameter
 
     def force_scale(self, omega: float) -> float:
-        """Force scale 6 mu omega R^2 (R/C)^2 [N] (paper Nomenclature)."""
-        r = self.radius
-        return 6.0 * self.viscosity * omega * r * r * (r / self.clearance) ** 2
+        """Force scale 6 mu omega R^2 (R/C)^2 [N] of Eq. (5) at speed omega [rad/s]."""
+        return force_scale(self.viscosity, omega, self.radius, self.clearance)
 
     def pressure_scale(self, omega: float) -> float:
-        """Pressure scale 6 mu omega (R/C)^2 [Pa] (paper Nomenclature)."""
-        return 6.0 * self.viscosity * omega * (self.radius / self.clearance) ** 2
+        """Pressure scale 6 mu omega (R/C)^2 [Pa] of Eq. (2) at speed omega [rad/s]."""
+        return pressure_scale(self.viscosity, omega, self.radius, self.clearance)
 
     def sommerfeld(self, omega: float, load: float) -> float:
         """Sommerfeld number S = (R/C)^2 mu N / P, N = omega/2pi [rev/s], P = W/(L D) [Pa]."""
@@ -162,26 +165,118 @@ def check_state(xbar: float, ybar: float, xbar_dot: float, ybar_dot: float) -> f
     return eps
 
 
+@dataclass(frozen=True)
+class ModelOption:
+    """One setting of a bearing model that a case file and an FMU parameter can carry.
+
+    The case field is ``bearings.<key>`` and the bearing FMU parameter is ``<key>``; both are
+    generated from these declarations (:mod:`fmu_src.case`, :mod:`fmu_src.contract`), so an
+    option added to a model class reaches the case files, the FMUs and their documentation
+    without further edits. The default is the constructor's.
+
+    Attributes
+    ----------
+    key : str
+        Name in the case file's ``[bearings]`` table and of the FMU parameter.
+    argument : str
+        Keyword of the model's constructor that receives the value.
+    kind : str
+        ``"count"`` (integer), ``"flag"`` or a dimension of :mod:`fmu_src.units`
+        (``"stiffness"`` [N/m], ``"damping"`` [N s/m], ...); values are SI.
+    doc : str
+        One line for the schema and the FMU description.
+    minimum, maximum : float or None
+        Bounds (checked by the case loader and the FMU setters).
+    exclusive_minimum : bool
+        The minimum itself is excluded.
+    """
+
+    key: str
+    argument: str
+    kind: str
+    doc: str
+    minimum: float | None = None
+    maximum: float | None = None
+    exclusive_minimum: bool = False
+
+
 class BearingModel(ABC):
     """A bearing law: journal state in the local frame -> force, Kb, Cb (SI).
 
     Subclasses: :class:`FilmBearingModel` (Reynolds-equation models) and the constant-
     coefficient laws (linearised 8-coefficient, lumped spring).
+
+    Adding a model (the pattern of ``scipy.integrate.solve_ivp``'s methods): write a subclass
+    in its own module with a unique :attr:`name`, declare its case/FMU settings in
+    :attr:`options`, implement :meth:`evaluate` (or :meth:`FilmBearingModel.film_force`), and
+    add one line to :data:`bearing_fmu.MODELS`. Its FMU (``Bearing<Name>``), its case fields
+    and its command-line name follow from that; ``tests/test_bearing_models.py`` checks every
+    registered model (finite force, Jacobians against central differences, a coupled step
+    through its FMU).
     """
 
     #: key of the model in :data:`bearing_fmu.MODELS` and on the command line
     name: str = ""
+    #: settings a case file or an FMU parameter can carry (:class:`ModelOption`)
+    options: tuple[ModelOption, ...] = ()
 
     def __init__(self, bearing: BearingData) -> None:
         if not isinstance(bearing, BearingData):
             raise TypeError(f"bearing must be BearingData, got {type(bearing).__name__}")
         self.bearing = bearing
 
+    @classmethod
+    def from_parameters(cls, bearing: BearingData, **options) -> BearingModel:
+        """The model of ``bearing`` with settings by option key (case field / FMU parameter).
+
+        Declared :attr:`options` are renamed to their constructor keywords; any other keyword
+        passes straight through to the constructor (e.g. ``tol`` of the hybrid model).
+
+        Raises
+        ------
+        BearingError
+            For a keyword the model does not take (the message lists the ones it does).
+        """
+        by_key = {o.key: o.argument for o in cls.options}
+        kwargs = {by_key.get(k, k): v for k, v in options.items()}
+        accepted = cls._keywords()
+        unknown = sorted(k for k in options if by_key.get(k, k) not in accepted)
+        if unknown:
+            raise BearingError(
+                f"{cls.name} bearing model: no option {', '.join(map(repr, unknown))}; it takes "
+                f"{', '.join(sorted(set(by_key) | (accepted - set(by_key.values())))) or 'none'}")
+        return cls(bearing, **kwargs)
+
+    @classmethod
+    def _keywords(cls) -> set[str]:
+        """Keyword arguments of the constructor after ``bearing``."""
+        params = list(inspect.signature(cls.__init__).parameters.values())[2:]
+        return {p.name for p in params if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)}
+
+    @classmethod
+    def option_defaults(cls) -> dict:
+        """``{option key: default}`` of :attr:`options` (the constructor's defaults)."""
+        params = inspect.signature(cls.__init__).parameters
+        return {o.key: params[o.argument].default for o in cls.options}
+
     @abstractmethod
     def evaluate(
         self, x: float, y: float, xdot: float, ydot: float, omega: float
     ) -> BearingResult:
         """Film force [N], Kb [N/m] and Cb [N s/m] at a journal state [m, m/s], speed [rad/s]."""
+
+    def end_initialization(self, x: float, y: float, omega: float) -> None:  # noqa: B027
+        """Called once the static solution X0 is known, with the journal position there [m]
+        and the speed [rad/s] (FMI: fmi2ExitInitializationMode). Nothing by default; the
+        linearised model freezes its 8 coefficients here (paper Sec. 3.3)."""
+
+    def get_state(self):
+        """What :meth:`set_state` needs to restore the model's behaviour (picklable; None for a
+        model without memory). Used for the FMU state (fmi2GetFMUstate)."""
+        return None
+
+    def set_state(self, state) -> None:  # noqa: B027 - a model without memory: nothing
+        """Restore a state of :meth:`get_state` (on a model built with the same parameters)."""
 
 
 def _check_omega(omega: float) -> float:

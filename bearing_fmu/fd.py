@@ -65,7 +65,15 @@ import numpy as np
 import scipy.sparse as sp
 
 from bearing_fmu import _fd_kernels as _k
-from bearing_fmu.base import BearingData, BearingError, FilmBearingModel, FilmForce, check_state
+from bearing_fmu.base import (
+    BearingData,
+    BearingError,
+    FilmBearingModel,
+    FilmForce,
+    ModelOption,
+    check_state,
+)
+from bearing_fmu.reynolds import film_thickness, nodal_force, source, source_coefficients
 
 __all__ = [
     "FiniteDifferenceBearing",
@@ -154,6 +162,11 @@ class FiniteDifferenceBearing(FilmBearingModel):
     """
 
     name = "fd"
+    options = (ModelOption("nodes", "n_theta", "count",
+                           "circumferential nodes (hybrid n: nodes of a(theta), paper 192; fd "
+                           "n_theta: grid intervals)", minimum=8),
+               ModelOption("axial_intervals", "n_xi", "count",
+                           "axial grid intervals over the length (fd model; even)", minimum=2))
 
     def __init__(self, bearing, n_theta=192, n_xi=32, tol=1e-10, pinned_start=False,
                  jacobian_scheme="central", jacobian_step=1e-5, jacobian_tol=1e-12,
@@ -274,8 +287,9 @@ class FiniteDifferenceBearing(FilmBearingModel):
             dth = 2.0 * math.pi / self.n_theta
             dxi = 2.0 * self.bearing.lambda_ / self.n_xi
             th = theta0 + np.arange(self.n_theta) * dth
-            pint = p.sum(axis=1) * dxi
-            return -dth * np.array([np.dot(pint, np.cos(th)), np.dot(pint, np.sin(th))])
+            out = np.empty(2)
+            nodal_force(p.sum(axis=1), np.cos(th), np.sin(th), dth * dxi, out)  # Eq. (5)
+            return out
         p, theta0, _ = self._solve_mg(x, y, xd, yd, tol)
         fx, fy = _k.film_force_of(p, self.n_theta, self.n_xi // 2, theta0, self.bearing.lambda_)
         return np.array([fx, fy])
@@ -374,10 +388,10 @@ def reynolds_operator(lam, x, y, xd, yd, n_theta, n_xi, theta0=0.0):
     dth = 2.0 * math.pi / n_theta
     dxi = 2.0 * lam / n_xi
     th = theta0 + np.arange(n_theta) * dth
-    h = 1.0 - x * np.cos(th) - y * np.sin(th)
+    h = film_thickness.py_func(x, y, np.cos(th), np.sin(th))  # Eq. (3)
     thf = th + 0.5 * dth
-    hf3 = (1.0 - x * np.cos(thf) - y * np.sin(thf)) ** 3  # face i+1/2
-    f = (y + 2.0 * xd) * np.cos(th) + (2.0 * yd - x) * np.sin(th)
+    hf3 = film_thickness.py_func(x, y, np.cos(thf), np.sin(thf)) ** 3  # face i+1/2
+    f = source.py_func(*source_coefficients.py_func(x, y, xd, yd), np.cos(th), np.sin(th))
     nj = n_xi - 1
     n = n_theta * nj
     idx = np.arange(n).reshape(n_theta, nj)

@@ -21,8 +21,15 @@ import math
 import numpy as np
 
 from bearing_fmu import _hybrid_kernels as _k
+from bearing_fmu import _hybrid_workspace as _ws
 from bearing_fmu.axial import AXIAL_COEF, axial_shape
-from bearing_fmu.base import BearingError, FilmBearingModel, FilmForce, check_state
+from bearing_fmu.base import (
+    BearingError,
+    FilmBearingModel,
+    FilmForce,
+    ModelOption,
+    check_state,
+)
 
 __all__ = ["HybridBearing", "HybridConvergenceError"]
 
@@ -73,6 +80,9 @@ class HybridBearing(FilmBearingModel):
     """
 
     name = "hybrid"
+    options = (ModelOption("nodes", "n", "count",
+                           "circumferential nodes (hybrid n: nodes of a(theta), paper 192; fd "
+                           "n_theta: grid intervals)", minimum=16),)
 
     def __init__(self, bearing, n=192, pinned_start=False, tol=1e-9, maxit=30):
         super().__init__(bearing)
@@ -86,54 +96,40 @@ class HybridBearing(FilmBearingModel):
         self.pinned_start = bool(pinned_start)
         self.tol = float(tol)
         self.maxit = int(maxit)
-        io = np.zeros(_k.IO_SIZE)
-        io[_k.IO_LAM] = bearing.lambda_
-        io[_k.IO_TOL] = self.tol
-        io[_k.IO_MAXIT] = self.maxit
-        io[_k.IO_PINNED] = float(self.pinned_start)
-        self._io = io
-        self._active = np.zeros(self.n, dtype=np.bool_)
-        self._ws = np.zeros((_k.WS_ROWS, self.n))
-        self._iws = np.zeros((2, 2 * self.n), dtype=np.int64)
-        self._trig = _k.make_trig(self.n)
-        self.reset()
+        (self._state, self._active, self._ws, self._iws,
+         self._trig) = _ws.new_workspace(self.n, bearing.lambda_, self.tol, self.maxit,
+                                          self.pinned_start)
 
     def reset(self) -> None:
         """Forget the warm start (active set, t, predictor): the next call starts cold."""
-        self._io[_k.IO_COLD] = 1.0
-        self._io[_k.IO_PRED] = 0.0
-        self._io[_k.IO_T] = 1.0
+        self._state["cold"] = True
+        self._state["predict"] = False
+        self._state["t"] = 1.0
 
     @property
     def last_info(self) -> dict:
         """Diagnostics of the last call (see the class docstring)."""
-        io = self._io
-        t = float(io[_k.IO_T])
+        st = self._state[0]
+        t = float(st["t"])
         return dict(t=t, k=math.sqrt(abs(t)) / self.bearing.lambda_,
-                    t_iterations=int(io[_k.IO_NT]), lcp_iterations=int(io[_k.IO_NLCP]),
-                    last_dt=float(io[_k.IO_DTLAST]))
+                    t_iterations=int(st["t_iterations"]),
+                    lcp_iterations=int(st["lcp_iterations"]), last_dt=float(st["last_dt"]))
 
     def film_force(self, xbar, ybar, xbar_dot=0.0, ybar_dot=0.0, jacobian=True):
         """Dimensionless force (Eq. 5) and its analytic derivatives; warm-started.
 
         One kernel call; see :mod:`bearing_fmu._hybrid_kernels`.
         """
-        io = self._io
-        io[24] = xbar  # _k.IO_STATE (literal indices: this is the hot path)
-        io[25] = ybar
-        io[26] = xbar_dot
-        io[27] = ybar_dot
-        io[31] = jacobian
         res = np.empty((5, 2))
-        _k.hybrid_kernel(io, self._active, self._ws, self._iws, self._trig, AXIAL_COEF, res)
-        if io[3] != 0.0:  # _k.IO_STATUS
+        if _k.hybrid_kernel(self._state, xbar, ybar, xbar_dot, ybar_dot, jacobian,
+                            self._active, self._ws, self._iws, self._trig, AXIAL_COEF, res):
             self._fail(xbar, ybar, xbar_dot, ybar_dot)
         if not jacobian:
             return FilmForce(res[0])
         return FilmForce(res[0], res[1:3], res[3:5])
 
     def _fail(self, *state):
-        code = int(self._io[_k.IO_STATUS])
+        code = int(self._state[0]["status"])
         self.reset()
         raise HybridConvergenceError(
             f"hybrid solver (n = {self.n}, L/D = {self.bearing.lambda_:.6g}) at state "
@@ -156,8 +152,8 @@ class HybridBearing(FilmBearingModel):
         if int(n_xi) != n_xi or n_xi < 2:
             raise ValueError(f"n_xi = {n_xi!r}: need an integer >= 2")
         self.film_force(float(xbar), float(ybar), float(xbar_dot), float(ybar_dot), False)
-        a = self._ws[_k._A].copy()
-        theta0 = float(self._io[_k.IO_THETA0])
+        a = self._ws[_ws.A].copy()
+        theta0 = float(self._state[0]["theta0"])
         th = np.mod(theta0 + np.arange(self.n) * 2 * math.pi / self.n, 2 * math.pi)
         start = int(np.argmin(th))
         th = np.roll(th, -start)
@@ -166,5 +162,5 @@ class HybridBearing(FilmBearingModel):
         a = np.append(a, a[0])
         lam = self.bearing.lambda_
         xi = np.linspace(-lam, lam, int(n_xi))
-        g = axial_shape(xi / lam, float(self._io[_k.IO_T]))
+        g = axial_shape(xi / lam, float(self._state[0]["t"]))
         return th, xi, np.outer(a, g)

@@ -1,15 +1,24 @@
-"""Linearised 8-coefficient bearing (paper Sec. 3.3.1, Eq. 17-18).
+"""Linearised 8-coefficient bearing (paper Sec. 3.3.1, Eq. 17-18; Table 4 case 0).
 
-``F(X, Xdot) = F0 - Kb (X - X0) - Cb Xdot``, with Kb, Cb frozen at the static position X0.
+``F(X, Xdot) = F0 - Kb (X - X0) - Cb Xdot``, with Kb, Cb of a film model frozen at the static
+position X0 (:class:`bearing_fmu.affine.AffineLaws`).
+
+* :class:`LinearBearing`: the frozen law itself (X0, F0, Kb, Cb, speed).
+* :class:`LinearisedBearing`: the registered ``linear`` model. It runs its film model (the
+  hybrid method) until :meth:`~bearing_fmu.base.BearingModel.end_initialization` gives it the
+  static position, then freezes the 8 coefficients there; in the FMU that call is
+  fmi2ExitInitializationMode, in-process the master's end of the static solution.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from bearing_fmu.affine import AffineLaws
 from bearing_fmu.base import BearingModel, BearingResult, _check_omega
+from bearing_fmu.hybrid import HybridBearing
 
-__all__ = ["LinearBearing"]
+__all__ = ["LinearBearing", "LinearisedBearing"]
 
 
 def _as_matrix(name: str, value) -> np.ndarray:
@@ -51,9 +60,20 @@ class LinearBearing(BearingModel):
         super().__init__(bearing)
         self.position0 = np.array(position0, dtype=float).reshape(2)
         self.force0 = np.array(force0, dtype=float).reshape(2)
-        self.stiffness = _as_matrix("stiffness", stiffness)
-        self.damping = _as_matrix("damping", damping)
         self.omega = _check_omega(omega)
+        self.law = AffineLaws.linearise(np.concatenate([self.position0, [0.0, 0.0]]),
+                                        self.force0, _as_matrix("stiffness", stiffness),
+                                        _as_matrix("damping", damping))
+
+    @property
+    def stiffness(self) -> np.ndarray:
+        """Kb [N/m] (Eq. 18)."""
+        return self.law.kb
+
+    @property
+    def damping(self) -> np.ndarray:
+        """Cb [N s/m] (Eq. 18)."""
+        return self.law.cb
 
     @classmethod
     def linearise(cls, model: BearingModel, x0: float, y0: float, omega: float) -> LinearBearing:
@@ -68,9 +88,63 @@ class LinearBearing(BearingModel):
                 f"linear bearing coefficients hold at omega = {self.omega} rad/s, "
                 f"evaluated at omega = {omega} rad/s"
             )
-        dx = np.array([x, y], dtype=float) - self.position0
-        v = np.array([xdot, ydot], dtype=float)
-        force = self.force0 - self.stiffness @ dx - self.damping @ v
-        return BearingResult(
-            force=force, stiffness=self.stiffness.copy(), damping=self.damping.copy()
-        )
+        force = self.law.force(np.array([x, y, xdot, ydot], dtype=float))
+        return BearingResult(force=force, stiffness=self.law.kb.copy(),
+                             damping=self.law.cb.copy())
+
+
+class LinearisedBearing(BearingModel):
+    """The registered ``linear`` model: a film model until X0 is known, then its linearisation.
+
+    Parameters
+    ----------
+    bearing : BearingData
+    film : BearingModel, optional
+        The model run during the static solution and linearised at X0 (default: the hybrid
+        method with its defaults; :meth:`from_parameters` passes the hybrid options on).
+
+    Attributes
+    ----------
+    frozen : LinearBearing or None
+        The frozen law once :meth:`end_initialization` has been called.
+    """
+
+    name = "linear"
+    options = HybridBearing.options
+
+    def __init__(self, bearing, film: BearingModel | None = None):
+        super().__init__(bearing)
+        self.film = HybridBearing(bearing) if film is None else film
+        self.frozen: LinearBearing | None = None
+
+    @classmethod
+    def from_parameters(cls, bearing, **options) -> LinearisedBearing:
+        """The hybrid film model with ``options`` (its options), to be linearised at X0."""
+        return cls(bearing, HybridBearing.from_parameters(bearing, **options))
+
+    @classmethod
+    def option_defaults(cls) -> dict:
+        return HybridBearing.option_defaults()
+
+    def end_initialization(self, x, y, omega) -> None:
+        """Freeze Eq. (18) at the static position (x, y) [m], speed omega [rad/s]."""
+        self.frozen = LinearBearing.linearise(self.film, x, y, omega)
+
+    def evaluate(self, x, y, xdot, ydot, omega) -> BearingResult:
+        law = self.film if self.frozen is None else self.frozen
+        return law.evaluate(x, y, xdot, ydot, omega)
+
+    def get_state(self):
+        """The frozen law (X0, F0, Kb, Cb, speed) as lists, or None before the freeze."""
+        fz = self.frozen
+        if fz is None:
+            return None
+        return [fz.position0.tolist(), fz.force0.tolist(), fz.stiffness.tolist(),
+                fz.damping.tolist(), fz.omega]
+
+    def set_state(self, state) -> None:
+        if state is None:
+            self.frozen = None
+            return
+        p0, f0, k, c, omega = state
+        self.frozen = LinearBearing(self.bearing, p0, f0, np.array(k), np.array(c), omega)

@@ -9,7 +9,13 @@ import math
 
 import numpy as np
 
-from bearing_fmu.base import BearingData, BearingError, BearingModel, BearingResult
+from bearing_fmu.base import (
+    BearingData,
+    BearingError,
+    BearingModel,
+    BearingResult,
+    ModelOption,
+)
 
 __all__ = ["LumpedSpringBearing"]
 
@@ -22,7 +28,7 @@ class LumpedSpringBearing(BearingModel):
     bearing : BearingData
         Kept for a uniform interface (the FMUs share one variable list); not used by the law.
     stiffness : float
-        k [N/m], > 0.
+        k [N/m], > 0 (default 1e8).
     damping : float
         c [N s/m], >= 0 (default 0: no damping).
 
@@ -34,8 +40,13 @@ class LumpedSpringBearing(BearingModel):
     """
 
     name = "lumped"
+    options = (ModelOption("lumped_stiffness", "stiffness", "stiffness",
+                           "isotropic stiffness k of the lumped-spring model", minimum=0.0,
+                           exclusive_minimum=True),
+               ModelOption("lumped_damping", "damping", "damping",
+                           "isotropic damping c of the lumped-spring model", minimum=0.0))
 
-    def __init__(self, bearing: BearingData, stiffness: float, damping: float = 0.0):
+    def __init__(self, bearing: BearingData, stiffness: float = 1e8, damping: float = 0.0):
         super().__init__(bearing)
         if not math.isfinite(stiffness) or stiffness <= 0.0:
             raise BearingError(f"lumped stiffness = {stiffness!r} N/m: must be finite and > 0")

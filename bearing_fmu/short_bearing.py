@@ -36,6 +36,7 @@ import numpy as np
 from numba import njit
 
 from bearing_fmu.base import FilmBearingModel, FilmForce
+from bearing_fmu.reynolds import film_thickness, source, source_coefficients
 
 __all__ = ["ShortBearing", "ocvirk_static_force"]
 
@@ -51,21 +52,62 @@ def _sommerfeld_angle(phi, eps, s):
 
 
 @njit(cache=True)
+def _degenerate_jacobian(lam, eps, gamma, s, gx, gw, out_dx, out_dv):
+    """Jacobians where the source vanishes (f = 0: a centred journal at rest, or the half-speed
+    whirl). F is positively homogeneous of degree 1 in the source coefficients (A, B) at fixed
+    h, so its one-sided derivatives differ by sign of the source; as the hybrid model does, the
+    Jacobian returned is their symmetric part (exact where F is differentiable, e.g. at the
+    centre):
+
+        dFbar/dA = -(lambda^3 / 3) int_0^2pi cos(theta) (cos, sin)(theta) / h^3 dtheta,
+
+    dFbar/dB likewise with sin; then ``A = y + 2 xdot``, ``B = 2 ydot - x`` (Eq. 3). The
+    integrands become trigonometric polynomials of degree 2 in Sommerfeld's angle, which the
+    Gauss rule integrates exactly over the full turn."""
+    cg = math.cos(gamma)
+    sg = math.sin(gamma)
+    half = math.pi
+    mid = math.pi
+    da = np.zeros(2)
+    db = np.zeros(2)
+    for q in range(gx.shape[0]):
+        psi = mid + half * gx[q]
+        cpsi = math.cos(psi)
+        spsi = math.sin(psi)
+        den = 1.0 + eps * cpsi
+        cphi = (eps + cpsi) / den
+        sphi = s * spsi / den
+        h = (1.0 - eps * eps) / den
+        w = -(lam**3 / 3.0) * s / den * half * gw[q] / (h * h * h)
+        c = cphi * cg - sphi * sg  # cos(theta)
+        sn = sphi * cg + cphi * sg  # sin(theta)
+        da[0] += w * c * c
+        da[1] += w * c * sn
+        db[0] += w * sn * c
+        db[1] += w * sn * sn
+    for r in range(2):
+        out_dx[r, 0] = -db[r]
+        out_dx[r, 1] = da[r]
+        out_dv[r, 0] = 2.0 * da[r]
+        out_dv[r, 1] = 2.0 * db[r]
+
+
+@njit(cache=True)
 def _short_bearing_kernel(lam, x, y, xd, yd, gx, gw, out_f, out_dx, out_dv):
     """Eq. (5) with the short-bearing pressure; see the module docstring."""
-    a_coef = y + 2.0 * xd
-    b_coef = 2.0 * yd - x
+    a_coef, b_coef = source_coefficients(x, y, xd, yd)  # f = A cos + B sin (Eq. 3)
     for i in range(2):
         out_f[i] = 0.0
         for j in range(2):
             out_dx[i, j] = 0.0
             out_dv[i, j] = 0.0
-    if a_coef == 0.0 and b_coef == 0.0:
-        return  # f == 0: no pressure anywhere
-    theta1 = math.atan2(-a_coef, b_coef)
     eps = math.hypot(x, y)
     gamma = math.atan2(y, x)
     s = math.sqrt(1.0 - eps * eps)
+    if a_coef == 0.0 and b_coef == 0.0:
+        _degenerate_jacobian(lam, eps, gamma, s, gx, gw, out_dx, out_dv)
+        return  # f == 0: no pressure anywhere, F = 0
+    theta1 = math.atan2(-a_coef, b_coef)
     # Sommerfeld angle psi of the two ends phi = theta - gamma (monotone map, unwrapped).
     psi_a = _sommerfeld_angle(theta1 - gamma, eps, s)
     psi_b = _sommerfeld_angle(theta1 + math.pi - gamma, eps, s)
@@ -87,7 +129,7 @@ def _short_bearing_kernel(lam, x, y, xd, yd, gx, gw, out_f, out_dx, out_dv):
         dphi = s / den * half * gw[q]  # dphi = sqrt(1-eps^2)/(1+eps cos psi) dpsi
         c = cphi * cg - sphi * sg  # cos(theta)
         sn = sphi * cg + cphi * sg  # sin(theta)
-        f = a_coef * c + b_coef * sn
+        f = source(a_coef, b_coef, c, sn)
         if f < 0.0:
             f = 0.0  # round-off at the ends only
         ih3 = 1.0 / (h * h * h)
@@ -170,7 +212,8 @@ def _short_pressure_field(lambda_, xbar, ybar, xbar_dot=0.0, ybar_dot=0.0, n_the
     """Short-bearing pressure p(theta, xi) on a grid (dimensionless, for plots)."""
     theta = np.linspace(0.0, 2.0 * np.pi, n_theta + 1)
     xi = np.linspace(-lambda_, lambda_, n_xi)
-    h = 1.0 - xbar * np.cos(theta) - ybar * np.sin(theta)
-    f = (ybar + 2.0 * xbar_dot) * np.cos(theta) + (2.0 * ybar_dot - xbar) * np.sin(theta)
+    c, s = np.cos(theta), np.sin(theta)
+    h = film_thickness.py_func(xbar, ybar, c, s)
+    f = source.py_func(*source_coefficients.py_func(xbar, ybar, xbar_dot, ybar_dot), c, s)
     p = np.maximum(f, 0.0)[:, None] / (2.0 * h[:, None] ** 3) * (lambda_**2 - xi[None, :] ** 2)
     return theta, xi, p

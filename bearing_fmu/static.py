@@ -23,7 +23,7 @@ from bearing_fmu.base import (
     _check_omega,
 )
 
-__all__ = ["StaticSolution", "static_equilibrium"]
+__all__ = ["StaticSolution", "newton_equilibrium", "static_equilibrium"]
 
 
 @dataclass(frozen=True)
@@ -54,6 +54,64 @@ def _film_ray_guess(model: FilmBearingModel, load_bar: float, direction: float, 
     fx, fy = model.dimensionless(eps, 0.0, jacobian=False).force
     rot = direction + math.pi - math.atan2(fy, fx)  # force must point against the load
     return eps * math.cos(rot), eps * math.sin(rot)
+
+
+def newton_equilibrium(law, load, x, radius_limit: float, *, tol: float, maxit: int,
+                       what: str = ""):
+    """Newton on ``F(X) + W = 0`` (Eq. 8) with the law's own stiffness ``Kb = -dF/dX``.
+
+    Parameters
+    ----------
+    law : callable
+        ``law(X) -> (force (2,) [N], Kb (2, 2) [N/m], anything)`` at the position X [m], zero
+        velocity; the third item is returned with the solution.
+    load : (2,) array
+        External static load W [N].
+    x : (2,) array
+        First iterate [m].
+    radius_limit : float
+        Every iterate stays inside the circle ``|X| < radius_limit`` [m] (step halving).
+    tol : float
+        Convergence on ``|F + W|`` relative to ``|W|``.
+    maxit : int
+        Newton iterations.
+    what : str
+        Appended to the error message (speed, bearing).
+
+    Returns
+    -------
+    (X, third item of ``law`` at X, iterations)
+
+    Raises
+    ------
+    BearingError
+        If Newton does not converge (iterations and residual in the message).
+    """
+    w = np.asarray(load, dtype=float)
+    wnorm = float(np.hypot(*w))
+    scale = max(wnorm, 1e-300)
+    x = np.array(x, dtype=float)
+    iterations = 0
+    res = np.full(2, np.inf)
+    out = None
+    while iterations < maxit:
+        iterations += 1
+        force, kb, out = law(x)
+        res = force + w
+        if np.hypot(*res) <= tol * scale:
+            break
+        step = np.linalg.solve(kb, res)  # F(x + dx) ~ F - Kb dx = -W
+        # keep the iterate inside the circle
+        alpha = 1.0
+        while math.hypot(*(x + alpha * step)) >= radius_limit and alpha > 1e-6:
+            alpha *= 0.5
+        x = x + alpha * step
+    if not np.hypot(*res) <= tol * scale:
+        raise BearingError(
+            f"static equilibrium did not converge in {maxit} iterations: residual "
+            f"{np.hypot(*res):.3e} N for load {wnorm:.6g} N {what}".rstrip()
+        )
+    return x, out, iterations
 
 
 def static_equilibrium(
@@ -102,25 +160,13 @@ def static_equilibrium(
         x = np.array([xb * c, yb * c])
     else:
         x = np.zeros(2)
-    scale = max(wnorm, 1e-300)
-    iterations = 0
-    while iterations < maxit:
-        iterations += 1
-        r = model.evaluate(x[0], x[1], 0.0, 0.0, omega)
-        res = r.force + w
-        if np.hypot(*res) <= tol * scale:
-            break
-        step = np.linalg.solve(r.stiffness, res)  # F(x + dx) ~ F - Kb dx = -W
-        # keep the iterate inside the clearance circle
-        alpha = 1.0
-        while math.hypot(*(x + alpha * step)) >= eps_max * c and alpha > 1e-6:
-            alpha *= 0.5
-        x = x + alpha * step
-    if np.hypot(*res) > tol * scale:
-        raise BearingError(
-            f"static equilibrium did not converge in {maxit} iterations: residual "
-            f"{np.hypot(*res):.3e} N for load {wnorm:.6g} N at omega = {omega} rad/s"
-        )
+
+    def law(pos):
+        r = model.evaluate(pos[0], pos[1], 0.0, 0.0, omega)
+        return r.force, r.stiffness, r
+
+    x, r, iterations = newton_equilibrium(law, w, x, eps_max * c, tol=tol, maxit=maxit,
+                                          what=f"at omega = {omega} rad/s")
     eps = math.hypot(x[0], x[1]) / c
     if eps >= eps_max:
         raise EccentricityError(f"static eccentricity ratio {eps:.6g} >= limit {eps_max}")

@@ -1,0 +1,93 @@
+"""Memory layout of the hybrid kernels (:mod:`bearing_fmu._hybrid_kernels`).
+
+Everything a call needs is allocated once per model instance (:func:`new_workspace`):
+
+* ``state``: a one-element record array of :data:`STATE` — the settings, the warm start kept
+  between calls and the diagnostics of the last call, addressed by field name;
+* ``active`` (bool, n): the pressurised set P of the LCP, kept between calls (warm start);
+* ``ws`` (float, (:data:`WS_ROWS`, n)): work space, one named row per nodal quantity;
+* ``iws`` (int, (2, 2n)): the node order of the Thomas factors and the runs of active nodes;
+* ``trig`` (float, (8, n)): cos/sin at the 3 Gauss points of each element and at the nodes.
+
+The axial integrals of Eq. (6) and their t-derivatives travel in a 9-vector ``g`` indexed by
+:data:`G0` ... :data:`G2_TT` (``_T`` = d/dt, ``_TT`` = d^2/dt^2, t = (k lambda)^2).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+# --- the state record --------------------------------------------------------------------------
+STATE = np.dtype([
+    # settings (set at construction)
+    ("lam", np.float64),  # lambda = L/D
+    ("tol", np.float64),  # Newton on t: relative step tolerance
+    ("maxit", np.int64),  # Newton passes on t
+    ("pinned", np.bool_),  # p = 0 on the line of maximum film thickness
+    # warm start (kept between calls)
+    ("t", np.float64),  # t = (k lambda)^2: warm start in, converged value out
+    ("cold", np.bool_),  # initialise P from f > 0 (set by the caller; cleared by the kernel)
+    ("predict", np.bool_),  # the predictor data below are valid
+    ("dtdq", np.float64, (4,)),  # dt/d(x, y, xdot, ydot) of the last Jacobian call
+    ("q_prev", np.float64, (4,)),  # the state of that call
+    # diagnostics of the last call
+    ("t_iterations", np.int64),  # Newton passes on t
+    ("lcp_iterations", np.int64),  # active-set passes, summed over the Newton passes
+    ("status", np.int64),  # 0 ok, 1 LCP not converged, 2 t not converged, 3 A not an M-matrix
+    ("theta0", np.float64),  # angle of node 0 (nonzero only for the pinned variant)
+    ("last_dt", np.float64),  # last Newton step on t
+], align=True)
+
+# --- work-space rows ---------------------------------------------------------------------------
+KE, M11, M12, M22 = 0, 1, 2, 3  # element integrals, weight h^3
+X0 = 4  # rows 4-7: the same for -3 h^2 cos(theta) (d/dx)
+Y0 = 8  # rows 8-11: the same for -3 h^2 sin(theta) (d/dy)
+KD, KL, MD, ML = 12, 13, 14, 15  # nodal K and M: diagonal and (i, i+1) entries
+FB = 16  # F_i = int f l_i
+D, LO, B = 17, 18, 19  # A = G2 K + G1 M (diagonal, (i, i+1)), b = G0 F
+A = 20  # the nodal amplitudes a_i
+CV, Z = 21, 22  # c = (A_t a - b_t)_P, z = A_PP^-1 c
+KA, MA = 23, 24  # K_r a, M_r a
+CP, PIV = 25, 26  # Thomas factors
+COS, SIN = 27, 28  # cos, sin at the nodes (solution frame)
+NEW = 29  # next active set (0/1) during a PDAS pass
+RQ = 30  # rows 30-33: Jacobian right-hand sides r_q
+DA = 34  # rows 34-37: A_PP^-1 r_q
+SCR = 38  # rows 38-41: small scratch arrays (views, no allocation in the hot path)
+WS_ROWS = 42
+
+# --- the axial-integral vector g ---------------------------------------------------------------
+G0, G1, G2 = 0, 1, 2  # G0 = lambda I0, G1 = I1 / lambda, G2 = lambda I2 (bearing_fmu.axial)
+G0_T, G1_T, G2_T = 3, 4, 5  # d/dt
+G0_TT, G1_TT, G2_TT = 6, 7, 8  # d^2/dt^2
+
+# Gauss rule on an element (3 points, exact to degree 5)
+GT0 = 0.5 - math.sqrt(15.0) / 10.0
+GT2 = 0.5 + math.sqrt(15.0) / 10.0
+GW0 = 5.0 / 18.0
+GW1 = 8.0 / 18.0
+
+
+def make_trig(n: int) -> np.ndarray:
+    """cos (rows 0-2) and sin (rows 3-5) at the Gauss points of element i = [theta_i,
+    theta_i+1], cos and sin (rows 6-7) at the nodes theta_i = i 2 pi / n."""
+    delta = 2.0 * math.pi / n
+    gt = np.array([GT0, 0.5, GT2])
+    thq = (np.arange(n)[None, :] + gt[:, None]) * delta
+    thn = np.arange(n) * delta
+    return np.vstack([np.cos(thq), np.sin(thq), np.cos(thn)[None], np.sin(thn)[None]])
+
+
+def new_workspace(n: int, lam: float, tol: float, maxit: int, pinned: bool):
+    """(state, active, ws, iws, trig) for n nodes, in the cold state."""
+    state = np.zeros(1, dtype=STATE)
+    state["lam"] = lam
+    state["tol"] = tol
+    state["maxit"] = maxit
+    state["pinned"] = pinned
+    state["cold"] = True
+    state["t"] = 1.0
+    return (state, np.zeros(n, dtype=np.bool_), np.zeros((WS_ROWS, n)),
+            np.zeros((2, 2 * n), dtype=np.int64), make_trig(n))
