@@ -33,7 +33,7 @@ import math
 from dataclasses import dataclass
 from functools import cached_property
 
-__all__ = ["GearGeometryError", "GearPair", "involute", "paper_gear_pair"]
+__all__ = ["GearGeometryError", "GearPair", "involute"]
 
 
 class GearGeometryError(ValueError):
@@ -82,9 +82,13 @@ class GearPair:
 
     Examples
     --------
-    >>> g = paper_gear_pair()
+    A standard 20/40 pair at its reference centre distance (by hand: contact ratio 1.635, tip
+    clearance 0.25 m_n = 0.75 mm; the paper's pair: :func:`fmu_src.examples.paper_gear_pair`):
+
+    >>> g = GearPair(teeth=(20, 40), module=3e-3, pressure_angle=math.radians(20.0),
+    ...              centre_distance=0.09, face_width=(0.03, 0.03))
     >>> round(g.transverse_contact_ratio, 3), round(g.tip_clearance[0] * 1e3, 2)
-    (1.721, 1.6)
+    (1.635, 0.75)
     """
 
     teeth: tuple[int, int]
@@ -348,31 +352,3 @@ class GearPair:
             f"contact ratios: transverse {self.transverse_contact_ratio:.4f}, overlap "
             f"{self.overlap_ratio:.4f}, total {self.total_contact_ratio:.4f}",
         ])
-
-
-def paper_gear_pair(helix_angle_deg: float = 0.0) -> GearPair:
-    """Table 1 of the paper; helical variants keep a = 366 mm and the transverse module 4 mm.
-
-    With beta > 0 the normal module is ``4 mm cos(beta)`` so that the pitch radii, the centre
-    distance and the profile shifts of the spur pair are kept (a normal module of 4 mm at
-    beta = 12.5 deg would need x1 + x2 = -2.3 to fit 366 mm); the normal pressure angle stays
-    the cutter's 20 deg.
-
-    Examples
-    --------
-    >>> g = paper_gear_pair(12.5)
-    >>> round(g.transverse_module * 1e3, 6), round(g.overlap_ratio, 3)
-    (4.0, 0.706)
-    """
-    beta = math.radians(helix_angle_deg)
-    return GearPair(
-        teeth=(26, 157),
-        module=4e-3 * math.cos(beta),
-        pressure_angle=math.radians(20.0),
-        centre_distance=0.366,
-        face_width=(0.050, 0.040),
-        helix_angle=beta,
-        profile_shift=(0.16, -0.16),
-        addendum_coefficient=1.0,
-        dedendum_coefficient=1.4,
-    )

@@ -254,8 +254,10 @@ class MeshElement:
 
     Examples
     --------
-    >>> from gear_fmu.geometry import paper_gear_pair
-    >>> mesh = MeshElement(paper_gear_pair(), line_load=6.5e4)
+    >>> from gear_fmu.geometry import GearPair
+    >>> pair = GearPair(teeth=(20, 40), module=3e-3, pressure_angle=math.radians(20.0),
+    ...                 centre_distance=0.09, face_width=(0.03, 0.03))
+    >>> mesh = MeshElement(pair, line_load=6.5e4)
     >>> q = np.zeros(12); q[5] = 1e-4  # pinion twisted ahead by 0.1 mrad
     >>> st = mesh.evaluate(0.0, q)
     >>> int(st.active.sum()), st.total_load > 0

@@ -4,10 +4,14 @@ Residual at t_{n+1} (Eq. 11), with the nonlinear forces (mesh contact, bearings)
 
     G(X) = M Xdd + C Xd + K X - F(t_{n+1}) - F_nl(X, Xd)
 
-Newmark with gamma = 1/2, beta = 1/4 (Eq. 12):
+Newmark with gamma = 1/2, beta = 1/4 (Eq. 12), with ``c0 = 4/dt^2``, ``c1 = 2/dt``,
+``c2 = 4/dt`` (:func:`newmark_coefficients`):
 
-    Xd_{n+1}  = 2/dt (X_{n+1} - X_n) - Xd_n
-    Xdd_{n+1} = 4/dt^2 (X_{n+1} - X_n) - 4/dt Xd_n - Xdd_n
+    Xd_{n+1}  = c1 (X_{n+1} - X_n) - Xd_n                       (:func:`newmark_kinematics`)
+    Xdd_{n+1} = c0 (X_{n+1} - X_n) - c2 Xd_n - Xdd_n
+
+so that ``M Xdd_{n+1} + C Xd_{n+1} = (c0 M + c1 C) X_{n+1} - M p - C q`` with the history terms
+``p = c0 X_n + c2 Xd_n + Xdd_n``, ``q = c1 X_n + Xd_n`` (:func:`newmark_history`).
 
 Newton-Raphson (Eq. 13-16): ``J dX = -G`` with
 
@@ -29,11 +33,14 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
+from numba import njit
 
 __all__ = [
     "NewmarkConvergenceError",
     "NewtonInfo",
     "NonlinearForce",
+    "newmark_coefficients",
+    "newmark_history",
     "newmark_kinematics",
     "newmark_step",
     "relative_residual",
@@ -77,12 +84,38 @@ class NewtonInfo:
     active: np.ndarray | None = None
 
 
-def newmark_kinematics(x1, x0, v0, a0, dt: float):
-    """Velocity and acceleration at t_{n+1} from the displacement (Eq. 12)."""
-    dx = x1 - x0
-    v1 = (2.0 / dt) * dx - v0
-    a1 = (4.0 / dt**2) * dx - (4.0 / dt) * v0 - a0
+@njit(cache=True)
+def newmark_coefficients(dt):
+    """``(c0, c1, c2) = (4/dt^2, 2/dt, 4/dt)`` of Eq. (12) (gamma = 1/2, beta = 1/4)."""
+    return 4.0 / dt**2, 2.0 / dt, 4.0 / dt
+
+
+@njit(cache=True)
+def newmark_kinematics(x1, x0, v0, a0, dt):
+    """Velocity and acceleration at t_{n+1} from the displacement (Eq. 12): ``(v1, a1)``."""
+    c0, c1, c2 = newmark_coefficients(dt)
+    n = x1.size
+    v1 = np.empty(n)
+    a1 = np.empty(n)
+    for i in range(n):
+        dx = x1[i] - x0[i]
+        v1[i] = c1 * dx - v0[i]
+        a1[i] = c0 * dx - c2 * v0[i] - a0[i]
     return v1, a1
+
+
+@njit(cache=True)
+def newmark_history(x0, v0, a0, dt):
+    """History terms of Eq. (12) at t_n, stacked: ``[c0 X_n + c2 Xd_n + Xdd_n;
+    c1 X_n + Xd_n]`` (2n,), so that ``M Xdd_{n+1} + C Xd_{n+1} = (c0 M + c1 C) X_{n+1} -
+    [M C] @ history``."""
+    c0, c1, c2 = newmark_coefficients(dt)
+    n = x0.size
+    out = np.empty(2 * n)
+    for i in range(n):
+        out[i] = c0 * x0[i] + c2 * v0[i] + a0[i]
+        out[n + i] = c1 * x0[i] + v0[i]
+    return out
 
 
 def relative_residual(g, terms) -> float:
@@ -156,7 +189,7 @@ def newmark_step(
     if not (dt > 0.0 and np.isfinite(dt)):
         raise ValueError(f"time step dt = {dt!r} s must be finite and > 0")
     f_ext = force(t1) if callable(force) else (np.zeros_like(x0) if force is None else force)
-    c0, c1 = 4.0 / dt**2, 2.0 / dt
+    c0, c1, _ = newmark_coefficients(dt)
     j_lin = c0 * mass + c1 * damping + stiffness
     x = x0.copy() if x_start is None else np.array(x_start, dtype=float)
     used = active0

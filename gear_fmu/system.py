@@ -55,19 +55,7 @@ __all__ = [
     "GearShaftSystem",
     "Shaft",
     "annulus_inertias",
-    "paper_system_example",
 ]
-
-#: Table 1 of the paper (common values).
-PAPER_MODULE = 4e-3  # m
-PAPER_TEETH = (26, 157)
-PAPER_FACE_WIDTH = (0.050, 0.040)  # m
-PAPER_GEAR_MASS = (2.0, 74.0)  # kg
-PAPER_CENTRE_DISTANCE = 0.366  # m
-#: Table 2.
-PAPER_SHAFT_DIAMETERS = ((0.070, 0.030), (0.090, 0.030))  # (outer, inner) m
-PAPER_SHAFT_LENGTH = 0.160  # m
-STEEL = {"young": 210e9, "poisson": 0.3, "density": 7800.0}
 
 
 @dataclass(frozen=True)
@@ -174,6 +162,18 @@ class GearShaftSystem:
         Pinion shaft torsion at z = -L/2; gear shaft torsion at z = +L/2 (clamped).
     shaft_masses : (2,) float
         Shaft + gear mass per shaft [kg] (the M of Eq. 10).
+
+    Examples
+    --------
+    Two solid steel shafts of 8 elements (the paper's system: :func:`fmu_src.examples.
+    paper_system`):
+
+    >>> steel = dict(young=210e9, poisson=0.3, density=7800.0)
+    >>> shaft = Shaft(HollowSection(0.05, 0.0, **steel), 0.2, 8)
+    >>> gears = (GearBody(1.0, 0.04, 0.03), GearBody(4.0, 0.08, 0.03))
+    >>> sys_ = GearShaftSystem((shaft, shaft), gears, centre_distance=0.12, teeth=(20, 40))
+    >>> sys_.n_dof, sys_.free.size, sys_.gear_nodes.tolist()
+    (108, 107, [4, 13])
     """
 
     shafts: tuple[Shaft, Shaft]
@@ -277,44 +277,3 @@ class GearShaftSystem:
             for z in shaft.node_z:
                 out.append((s0, 0.0, z))
         return np.array(out)
-
-
-def paper_system_example(
-    helix_angle_deg: float = 0.0, n_elements: int = 8, axial_stiffness: float = 1e9
-) -> GearShaftSystem:
-    """The system of the paper (Fig. 1, Tables 1 and 2), SI units.
-
-    Parameters
-    ----------
-    helix_angle_deg : float
-        Helix angle [deg]; changes the transverse pitch radii used for the disc inertias.
-    n_elements : int
-        Elements per shaft (even).
-    axial_stiffness : float
-        Thrust-bearing stiffness per shaft [N/m] (not in the paper).
-
-    Examples
-    --------
-    >>> sys_ = paper_system_example()
-    >>> sys_.n_dof, sys_.free.size
-    (108, 107)
-    """
-    if not 0.0 <= helix_angle_deg < 45.0:
-        raise ValueError(f"helix_angle_deg = {helix_angle_deg!r} must lie in [0, 45)")
-    cb = math.cos(math.radians(helix_angle_deg))
-    shafts = tuple(
-        Shaft(HollowSection(do, di, **STEEL), PAPER_SHAFT_LENGTH, n_elements)
-        for do, di in PAPER_SHAFT_DIAMETERS
-    )
-    gears = tuple(
-        GearBody(mg, PAPER_MODULE * z / (2.0 * cb), b, STEEL["density"])
-        for mg, z, b in zip(PAPER_GEAR_MASS, PAPER_TEETH, PAPER_FACE_WIDTH, strict=True)
-    )
-    return GearShaftSystem(
-        shafts=shafts,  # type: ignore[arg-type]
-        gears=gears,  # type: ignore[arg-type]
-        centre_distance=PAPER_CENTRE_DISTANCE,
-        teeth=PAPER_TEETH,
-        axial_stiffness=axial_stiffness,
-        helix_angle_deg=helix_angle_deg,
-    )

@@ -1,0 +1,86 @@
+"""Static condensation of the structure's constant matrices onto the nonlinear DOFs.
+
+Within a Newmark step only the mesh (12 gear-node DOFs) and the bearing laws (8 bearing DOFs)
+change the tangent of Eq. (14); the rest, ``A = c0 M + c1 C + K_shaft`` (Eq. 12, 14), is
+constant at fixed dt. With the free DOFs ordered ``[c; r]`` the r block is eliminated once per
+dt (:class:`Condensation`: ``W = A_rr^-1 A_rc``, Schur complement ``S0 = A_cc - A_cr W``), and
+each Newton/contact iteration solves a dense 20 x 20 system (:func:`gauss_solve`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.linalg
+from numba import njit
+
+__all__ = ["NC", "N_BEARING", "N_GEAR", "Condensation", "gauss_solve"]
+
+N_GEAR = 12  # gear-node DOFs in the condensed block (pinion node, gear node)
+N_BEARING = 4  # bearings, 2 DOFs (u, v) each
+NC = N_GEAR + 2 * N_BEARING  # condensed DOFs
+
+
+class Condensation:
+    """Static condensation of a constant symmetric matrix A (ordered [c; r]) onto c.
+
+    Attributes
+    ----------
+    w : (n_r, nc) array
+        ``A_rr^-1 A_rc``: the r DOFs follow c as ``X_r = A_rr^-1 b_r - W X_c``.
+    s0 : (nc, nc) array
+        Schur complement ``A_cc - A_cr W``.
+    g : (nc + n_r, n_r) array
+        ``(-W^T; A_rr^-1)``: applied to ``b_r`` it gives the correction of the condensed
+        right-hand side and ``A_rr^-1 b_r``.
+    """
+
+    def __init__(self, a: np.ndarray, nc: int = NC):
+        acc, acr, arr = a[:nc, :nc], a[:nc, nc:], a[nc:, nc:]
+        cho = scipy.linalg.cho_factor(arr)
+        arr_inv = scipy.linalg.cho_solve(cho, np.eye(arr.shape[0]))
+        self.w = arr_inv @ acr.T  # A_rr^-1 A_rc
+        self.s0 = acc - acr @ self.w
+        # rows: (-W^T, A_rr^-1) applied to b_r gives (z correction, y)
+        self.g = np.vstack([-self.w.T, arr_inv])
+
+
+@njit(cache=True)
+def gauss_solve(s, rhs):
+    """Solve ``s x = rhs`` in place by Gaussian elimination with partial pivoting (small dense
+    systems; ``s`` and ``rhs`` are overwritten, ``rhs`` returns x). Returns (x, ok): ok is False
+    for a zero pivot or a non-finite solution."""
+    nc = rhs.size
+    for k in range(nc):
+        p = k
+        big = abs(s[k, k])
+        for i in range(k + 1, nc):
+            if abs(s[i, k]) > big:
+                big = abs(s[i, k])
+                p = i
+        if big == 0.0:
+            return rhs, False
+        if p != k:
+            for j in range(nc):
+                tmp = s[k, j]
+                s[k, j] = s[p, j]
+                s[p, j] = tmp
+            tmp = rhs[k]
+            rhs[k] = rhs[p]
+            rhs[p] = tmp
+        piv = s[k, k]
+        for i in range(k + 1, nc):
+            f = s[i, k] / piv
+            if f != 0.0:
+                for j in range(k + 1, nc):
+                    s[i, j] -= f * s[k, j]
+                rhs[i] -= f * rhs[k]
+    for i in range(nc - 1, -1, -1):
+        acc = rhs[i]
+        for j in range(i + 1, nc):
+            acc -= s[i, j] * rhs[j]
+        rhs[i] = acc / s[i, i]
+    ok = True
+    for i in range(nc):
+        if not np.isfinite(rhs[i]):
+            ok = False
+    return rhs, ok
