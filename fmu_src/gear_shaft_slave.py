@@ -1,9 +1,9 @@
 """pythonfmu slave of the gear-shaft FMU: the contract's variables around one ``Structure``.
 
 Nothing physical happens here: the slave builds :class:`gear_fmu.structure.Structure` from a case
-file (through :mod:`orchestrator.case` and :mod:`orchestrator.system`, the system description
-shared with the in-process runs; nothing else of :mod:`orchestrator` is imported), keeps the 40
-affine-law inputs, and maps the FMI calls onto the master interface of the structure:
+file (through :mod:`fmu_src.case` and :mod:`fmu_src.description`, the system description
+shared with the in-process runs), keeps the 40 affine-law inputs (layout:
+:func:`fmu_src.contract.unpack_laws`), and maps the FMI calls onto the structure:
 
 * initialisation mode: outputs are the static solution for the current laws, solved in the
   getter when an input changed since the last solve (the master iterates X0 this way);
@@ -23,7 +23,6 @@ import math
 import pickle
 from pathlib import Path
 
-import numpy as np
 from pythonfmu import Fmi2Slave
 from pythonfmu.default_experiment import DefaultExperiment
 from pythonfmu.enums import Fmi2Status
@@ -35,6 +34,7 @@ from fmu_src.contract import (
     journal_output_names,
     law_input_names,
     support_load_names,
+    unpack_laws,
 )
 from fmu_src.slave_support import (
     describe_exception,
@@ -45,14 +45,22 @@ from fmu_src.slave_support import (
 __all__ = ["GearShaftSlave"]
 
 DEFAULT_CASE = GEAR_DEFAULT_CASE
-_REPO_CASE = Path(__file__).resolve().parents[1] / "models" / DEFAULT_CASE
 
 _LAWS = law_input_names()
 _OUTPUTS = [*journal_output_names(), *(name for name, _, _ in GEAR_OUTPUTS)]
 _SUPPORT = support_load_names()
 _NAN_OUTPUTS = [math.nan] * len(_OUTPUTS)
-#: the paper's time step for the shipped case: mesh period / 32 at 325 rad/s, 26 pinion teeth
-PAPER_STEP = 2.0 * math.pi / (325.0 * 26) / 32
+
+
+def _default_step() -> float:
+    """The time step of the shipped case (mesh period / steps per mesh period) [s]."""
+    from fmu_src.case import load_case
+    from fmu_src.description import time_step
+
+    return time_step(load_case(Path(DEFAULT_CASE).stem))
+
+
+PAPER_STEP = _default_step()
 
 
 class GearShaftSlave(Fmi2Slave):
@@ -182,35 +190,27 @@ class GearShaftSlave(Fmi2Slave):
         return msg
 
     # --- physics ------------------------------------------------------------------------------
-    def _case_path(self) -> Path:
+    def _case_path(self) -> str:
         if self._case_file:
-            return Path(self._case_file)
+            return self._case_file
         if self.resources is not None and (Path(self.resources) / DEFAULT_CASE).is_file():
-            return Path(self.resources) / DEFAULT_CASE
-        return _REPO_CASE
+            return str(Path(self.resources) / DEFAULT_CASE)
+        return Path(DEFAULT_CASE).stem  # the case shipped with the package, by name
 
     def _ensure_structure(self):
         if self._structure is None:
-            from orchestrator.case import load_case
-            from orchestrator.system import structure
+            from fmu_src.case import load_case
+            from fmu_src.description import structure
 
             st = structure(load_case(self._case_path()))
             st.t = self._start_time
             self._structure = st
         return self._structure
 
-    def law_arrays(self):
-        """The current laws as C-contiguous F0 (4, 2), Kb (4, 2, 2), Cb (4, 2, 2)."""
-        a = np.array(self._laws, dtype=float).reshape(4, 10)
-        f0 = np.ascontiguousarray(a[:, 0:2])
-        kb = np.ascontiguousarray(a[:, 2:6]).reshape(4, 2, 2)
-        cb = np.ascontiguousarray(a[:, 6:10]).reshape(4, 2, 2)
-        return f0, kb, cb
-
     def _solve_static(self) -> None:
         st = self._ensure_structure()
-        f0, kb, cb = self.law_arrays()
-        info = st.static(f0, kb, cb)
+        laws = unpack_laws(self._laws)
+        info = st.static(laws.f0, laws.kb, laws.cb)
         self._iterations = info.iterations
         self._need_static = False
         self._have_static = True
@@ -236,7 +236,9 @@ class GearShaftSlave(Fmi2Slave):
 
     def _compute_support(self) -> None:
         try:
-            self._support = self._ensure_structure().support_loads().ravel().tolist()
+            from gear_fmu.analyses import support_loads
+
+            self._support = support_loads(self._ensure_structure()).ravel().tolist()
         except Exception as exc:  # anything raised here would be fatal for the host
             self._log_error("support loads failed", exc)
             self._support = [math.nan] * len(_SUPPORT)
@@ -253,7 +255,7 @@ class GearShaftSlave(Fmi2Slave):
             st = self._ensure_structure()
             if not self._have_static:
                 self._solve_static()
-            _, kb, _ = self.law_arrays()
+            kb = unpack_laws(self._laws).kb
             st.set_damping_reference(0.5 * (kb + kb.transpose(0, 2, 1)))
             self._error = None
         except Exception as exc:  # anything raised here would be fatal for the host
@@ -271,8 +273,8 @@ class GearShaftSlave(Fmi2Slave):
             if abs(current_time - st.t) > 1e-9 * max(step_size, abs(current_time)):
                 raise ValueError(f"doStep from t = {current_time!r} s but the structure is at "
                                  f"t = {st.t!r} s")
-            f0, kb, cb = self.law_arrays()
-            info = st.step(step_size, f0, kb, cb)
+            laws = unpack_laws(self._laws)
+            info = st.step(step_size, laws.f0, laws.kb, laws.cb)
         except Exception as exc:  # anything raised here would be fatal for the host
             step = "?" if st is None else st.n_steps + 1
             self._log_error(f"doStep {step} from t = {current_time:.9g} s, dt = "

@@ -1,38 +1,43 @@
-"""The system description: a checked case (:mod:`orchestrator.case`) -> physics objects.
+"""The system description: a checked case (:mod:`fmu_src.case`) -> physics objects.
 
 One place turns case fields (SI values) into the gear pair, the two-shaft structure, the mesh
-element, the loads and the bearing models; the in-process master, ``gsb modal``, ``gsb run`` and
-the gear-shaft FMU all build their system here, so that they simulate the same thing.
+element, the loads and the bearing models; the in-process master, ``gsb modal``, ``gsb run``
+and the gear-shaft FMU all build their system here, so that they simulate the same thing. The
+bearing FMUs' parameters of a case come from here too (:func:`bearing_parameters`).
 
 Bearings: 1, 2 on the pinion shaft (turning about +z), 3, 4 on the gear shaft (turning about -z,
 mirrored local frame, :mod:`bearing_fmu.frames`); local x along s. Shaft speeds: omega and
-omega z1 / z2.
+omega z1 / z2 (:func:`gear_fmu.loads.shaft_speeds`).
 """
 
 from __future__ import annotations
 
 import math
 
-from bearing_fmu import BearingData, model_class
+from bearing_fmu import BearingData, BearingModel, model_class
 from bearing_fmu.frames import LocalFrame
+from fmu_src.case import Case
 from gear_fmu.geometry import GearPair
+from gear_fmu.loads import StructureLoads, shaft_speeds
 from gear_fmu.mesh import MeshElement
-from gear_fmu.structure import Structure, StructureLoads
+from gear_fmu.structure import Structure
 from gear_fmu.system import GearBody, GearShaftSystem, Shaft
 from gear_fmu.timoshenko import HollowSection
-from orchestrator.case import Case
 
 __all__ = [
     "BEARING_FRAMES",
     "bearing_data",
     "bearing_models",
+    "bearing_options",
+    "bearing_parameters",
     "bearing_speeds",
     "gear_pair",
     "gear_shaft_system",
-    "linearised",
     "mesh_element",
+    "mesh_period",
     "structure",
     "structure_loads",
+    "time_step",
 ]
 
 #: local frame of bearings 1-4 in the global (s, t) plane
@@ -74,7 +79,7 @@ def gear_shaft_system(case: Case, pair: GearPair | None = None) -> GearShaftSyst
 
 
 def structure_loads(case: Case) -> StructureLoads:
-    """Operating point (Sec. 4.1) -> :class:`gear_fmu.structure.StructureLoads`."""
+    """Operating point (Sec. 4.1) -> :class:`gear_fmu.loads.StructureLoads`."""
     return StructureLoads(
         torque=case["operation.torque"], input_speed=case["operation.speed"],
         unbalance=tuple(case["operation.unbalance"]),
@@ -101,6 +106,16 @@ def structure(case: Case, damping_bearing_stiffness=1e8) -> Structure:
                      tol=case["simulation.tolerance"])
 
 
+def mesh_period(case: Case) -> float:
+    """Mesh period 2 pi / (omega z1) of the case [s]."""
+    return 2.0 * math.pi / (case["operation.speed"] * case["gear_pair.teeth"][0])
+
+
+def time_step(case: Case) -> float:
+    """Time step of the case: the mesh period / ``simulation.steps_per_mesh_period`` [s]."""
+    return mesh_period(case) / case["simulation.steps_per_mesh_period"]
+
+
 def bearing_data(case: Case) -> list[BearingData]:
     """Table 3 -> one :class:`bearing_fmu.BearingData` per bearing."""
     return [BearingData(case["bearings.diameter"][i], case["bearings.length"][i],
@@ -110,46 +125,35 @@ def bearing_data(case: Case) -> list[BearingData]:
 
 def bearing_speeds(case: Case) -> list[float]:
     """Shaft speed magnitude at bearings 1-4 [rad/s]."""
-    z1, z2 = case["gear_pair.teeth"]
-    w = case["operation.speed"]
-    return [w, w, w * z1 / z2, w * z1 / z2]
+    w1, w2 = shaft_speeds(structure_loads(case), case["gear_pair.teeth"])
+    return [w1, w1, w2, w2]
 
 
-def bearing_models(case: Case, model: str | None = None) -> list:
-    """In-process bearing models of the case (``model`` overrides ``bearings.model``).
-
-    For ``linear`` the hybrid models are returned: the 8 coefficients are frozen from them at
-    the static solution X0 (paper Sec. 3.3.1, Table 4 case 0), see :func:`linearised`.
-    """
+def bearing_options(case: Case, model: str | None = None) -> dict:
+    """The case's settings of a bearing model: ``{option key: value}`` (its declared
+    :attr:`~bearing_fmu.base.BearingModel.options`; ``model`` overrides ``bearings.model``)."""
     name = case["bearings.model"] if model is None else model
-    out = []
-    for data in bearing_data(case):
-        if name in ("hybrid", "linear"):
-            out.append(model_class("hybrid")(data, n=case["bearings.nodes"]))
-        elif name == "fd":
-            out.append(model_class("fd")(data, n_theta=case["bearings.nodes"],
-                                         n_xi=case["bearings.axial_intervals"]))
-        elif name == "short":
-            out.append(model_class("short")(data))
-        elif name == "lumped":
-            out.append(model_class("lumped")(data, stiffness=case["bearings.lumped_stiffness"],
-                                             damping=case["bearings.lumped_damping"]))
-        else:
-            raise ValueError(f"unknown bearing model {name!r}")
-    return out
+    return {o.key: case[f"bearings.{o.key}"] for o in model_class(name).options}
 
 
-def linearised(models, journal_states, speeds) -> list:
-    """Linear 8-coefficient bearings (Eq. 17-18) frozen at the static journal positions.
+def bearing_models(case: Case, model: str | None = None) -> list[BearingModel]:
+    """In-process bearing models of the case (``model`` overrides ``bearings.model``), each
+    built by the registry's ``from_parameters`` with the case's options."""
+    name = case["bearings.model"] if model is None else model
+    cls = model_class(name)
+    options = bearing_options(case, name)
+    return [cls.from_parameters(data, **options) for data in bearing_data(case)]
 
-    ``journal_states`` (4, 4) global [s, t, s_dot, t_dot] at X0, ``speeds`` [rad/s]
-    (:func:`bearing_speeds`); frames :data:`BEARING_FRAMES`.
-    """
-    from bearing_fmu.linear import LinearBearing
+
+def bearing_parameters(case: Case) -> list[dict]:
+    """Parameters of the four bearing FMUs of a case (:data:`fmu_src.contract.BEARING_VARIABLES`:
+    geometry, lubricant, frame, and every model option, so one list serves every model)."""
+    from fmu_src.contract import bearing_option_keys
 
     out = []
-    for model, frame, state, omega in zip(models, BEARING_FRAMES, journal_states,
-                                          speeds, strict=True):
-        x0, y0 = frame.to_local(state[:2])
-        out.append(LinearBearing.linearise(model, x0, y0, omega))
+    for data, frame in zip(bearing_data(case), BEARING_FRAMES, strict=True):
+        params = dict(D=data.diameter, L=data.length, C=data.clearance, mu=data.viscosity,
+                      frame_angle=frame.angle, rotation_sign=frame.rotation_sign)
+        params.update({k: case[f"bearings.{k}"] for k in bearing_option_keys()})
+        out.append(params)
     return out

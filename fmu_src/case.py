@@ -1,25 +1,35 @@
-"""Case files (TOML): the schema, in one table, and the loader that checks it.
+"""Case files (TOML): the schema, in one table, the loader that checks it and the writer.
 
 Every field is listed once in :data:`FIELDS` with its dimension, shape, default and bounds; the
-loader converts quantities to SI (:mod:`orchestrator.units`), rejects unknown sections and keys,
-and names the field in every error. ``docs/case-files.md`` is rendered from the same table.
+bearing-model settings (``bearings.nodes``, ...) are generated from the options the registered
+models declare (:class:`bearing_fmu.base.ModelOption`). The loader converts quantities to SI
+(:mod:`fmu_src.units`), rejects unknown sections and keys, and names the field in every error.
+``docs/case-files.md`` is rendered from the same table.
 
 A quantity is a number in SI units or a string ``"value unit"`` (``"4 mm"``, ``"20 deg"``).
+The paper's cases ship with the package (``fmu_src/cases``) and load by name
+(:func:`load_case`, :func:`shipped_cases`), from any working directory.
 """
 
 from __future__ import annotations
 
+import json
+import math
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from bearing_fmu import MODELS as _BEARING_TABLE
-from orchestrator.units import SI_UNIT, UnitError, parse_quantity
+from bearing_fmu import model_class
+from fmu_src.units import UnitError, parse_quantity, symbol
 
-__all__ = ["BEARING_MODELS", "FIELDS", "Case", "CaseError", "Field", "load_case", "schema_markdown"]
+__all__ = ["BEARING_MODELS", "CASES_DIR", "FIELDS", "Case", "CaseError", "Field", "load_case",
+           "model_option_fields", "schema_markdown", "shipped_cases"]
 
 BEARING_MODELS = tuple(_BEARING_TABLE)
+#: the case files shipped with the package (the paper's spur and helical cases)
+CASES_DIR = Path(__file__).resolve().parent / "cases"
 
 
 class CaseError(ValueError):
@@ -30,7 +40,7 @@ class CaseError(ValueError):
 class Field:
     """One entry of the schema.
 
-    ``kind`` is a dimension of :data:`orchestrator.units.SI_UNIT`, or ``"count"`` (positive
+    ``kind`` is a dimension of :data:`fmu_src.units.DIMENSIONS`, or ``"count"`` (positive
     integer), ``"text"``, ``"choice"`` or ``"flag"``. ``shape`` is None for a scalar or the
     length of a list (a scalar is broadcast to the list).
     """
@@ -94,14 +104,6 @@ FIELDS: tuple[Field, ...] = (
     _f("bearings.length", "length", "bearing lengths L [1, 2, 3, 4]", shape=4, **_POS),
     _f("bearings.clearance", "length", "radial clearances C [1, 2, 3, 4]", shape=4, **_POS),
     _f("bearings.viscosity", "viscosity", "lubricant dynamic viscosity mu", shape=4, **_POS),
-    _f("bearings.nodes", "count", "circumferential nodes (hybrid n, fd n_theta)",
-       default=192, minimum=16),
-    _f("bearings.axial_intervals", "count", "axial intervals (fd model)", default=32,
-       minimum=4),
-    _f("bearings.lumped_stiffness", "stiffness", "isotropic stiffness (lumped model)",
-       default=1e8, **_POS),
-    _f("bearings.lumped_damping", "damping", "isotropic damping (lumped model)",
-       default=0.0, minimum=0.0),
     # operating point, Sec. 4.1
     _f("operation.speed", "angular_speed", "pinion (input) speed omega", **_POS),
     _f("operation.torque", "torque", "input torque T on the pinion shaft", minimum=0.0),
@@ -120,6 +122,40 @@ FIELDS: tuple[Field, ...] = (
        default=30, minimum=1),
 )
 
+
+
+def model_option_fields() -> tuple[Field, ...]:
+    """``bearings.<key>`` fields for the options of every registered bearing model.
+
+    An option declared by several models (``nodes``: hybrid, fd, linear) is one field; its
+    bounds are the widest of the declarations (the chosen model's own bounds are checked after
+    loading), its default the constructors' (which must agree).
+    """
+    merged: dict[str, list] = {}
+    for name in BEARING_MODELS:
+        cls = model_class(name)
+        defaults = cls.option_defaults()
+        for opt in cls.options:
+            merged.setdefault(opt.key, []).append((name, opt, defaults[opt.key]))
+    out = []
+    for key, decl in merged.items():
+        _, opt, default = decl[0]
+        if any(d != default or o.kind != opt.kind for _, o, d in decl):
+            raise RuntimeError(f"bearing option {key!r} is declared with different kinds or "
+                               f"defaults by {', '.join(n for n, _, _ in decl)}")
+        mins = [o.minimum for _, o, _ in decl]
+        maxs = [o.maximum for _, o, _ in decl]
+        models = ", ".join(n for n, _, _ in decl)
+        out.append(_f(f"bearings.{key}", opt.kind, f"{opt.doc} [models: {models}]",
+                      default=default,
+                      minimum=None if None in mins else min(mins),
+                      maximum=None if None in maxs else max(maxs),
+                      exclusive_minimum=all(o.exclusive_minimum for _, o, _ in decl)))
+    return tuple(out)
+
+
+_at = next(i for i, f in enumerate(FIELDS) if f.key == "operation.speed")
+FIELDS = FIELDS[:_at] + model_option_fields() + FIELDS[_at:]
 _BY_KEY = {f.key: f for f in FIELDS}
 _SECTIONS = {f.key.split(".")[0] for f in FIELDS}
 
@@ -141,7 +177,43 @@ class Case:
             if key not in _BY_KEY:
                 raise CaseError(f"unknown field {key!r}")
             raw[key] = _convert(_BY_KEY[key], value)
+        _check_consistency(raw, self.source)
         return Case(raw, self.source)
+
+    @property
+    def name(self) -> str:
+        """The case's name (``case.name``)."""
+        return self.values["case.name"]
+
+    def to_toml(self) -> str:
+        """The case as a case file (SI numbers): reloads to the same values, bit for bit."""
+        sections: dict[str, list[str]] = {}
+        for key, value in self.values.items():
+            if value is None:
+                continue
+            section, name = key.split(".")
+            sections.setdefault(section, []).append(f"{name} = {_toml_value(value)}")
+        parts = [f"# written by fmu_src.case from {self.source} (SI units)"]
+        for section, lines in sections.items():
+            parts.append(f"\n[{section}]")
+            parts.extend(lines)
+        return "\n".join(parts) + "\n"
+
+
+def _toml_value(value) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, float):
+        if not math.isfinite(value):
+            raise ValueError(f"cannot write the non-finite value {value!r} to a case file")
+        return repr(value)  # shortest round-trip form: the case reloads bit for bit
+    if isinstance(value, str):
+        return json.dumps(value)  # a valid TOML basic string
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
+    raise TypeError(f"cannot write {value!r} to a case file")
 
 
 def _scalar(field: Field, value, name: str):
@@ -167,7 +239,7 @@ def _scalar(field: Field, value, name: str):
             out = parse_quantity(value, kind, name)
         except UnitError as exc:
             raise CaseError(str(exc)) from None
-    unit = "" if kind == "count" else f" {SI_UNIT[kind]}"
+    unit = "" if kind == "count" else f" {symbol(kind)}"
     if field.minimum is not None:
         if out < field.minimum or (field.exclusive_minimum and out == field.minimum):
             rel = ">" if field.exclusive_minimum else ">="
@@ -228,21 +300,60 @@ def _check_consistency(v: dict, source: str) -> None:
     if v["shafts.elements"] % 2:
         raise CaseError(f"{source}: shafts.elements = {v['shafts.elements']} must be even "
                         f"(the gear sits at mid-span)")
+    # the chosen bearing model's own bounds on its options
+    for opt in model_class(v["bearings.model"]).options:
+        value, key = v[f"bearings.{opt.key}"], f"bearings.{opt.key}"
+        unit = "" if opt.kind == "count" else f" {symbol(opt.kind)}"
+        if opt.minimum is not None and (value < opt.minimum or (
+                opt.exclusive_minimum and value == opt.minimum)):
+            rel = ">" if opt.exclusive_minimum else ">="
+            raise CaseError(f"{source}: {key} = {value!r}: the {v['bearings.model']} model "
+                            f"needs {rel} {opt.minimum}{unit}")
+        if opt.maximum is not None and value > opt.maximum:
+            raise CaseError(f"{source}: {key} = {value!r}: the {v['bearings.model']} model "
+                            f"needs <= {opt.maximum}{unit}")
+
+
+def shipped_cases() -> dict[str, Path]:
+    """The case files shipped with the package: ``{name: path}``."""
+    return {p.stem: p for p in sorted(CASES_DIR.glob("*.toml"))}
+
+
+def resolve_case(path_or_name: str | Path) -> Path:
+    """A case file by path, or by the name of a shipped case (``"baguet2010_spur"``)."""
+    path = Path(path_or_name)
+    if path.is_file():
+        return path
+    shipped = shipped_cases()
+    stem = path.name[:-5] if path.name.endswith(".toml") else path.name
+    if str(path_or_name) in (stem, f"{stem}.toml") and stem in shipped:
+        return shipped[stem]
+    raise CaseError(f"case file not found: {path_or_name} (not a file; shipped cases: "
+                    f"{', '.join(shipped)})")
 
 
 def load_case(path: str | Path, overrides: dict | None = None) -> Case:
-    """Read and check a case file; ``overrides`` replace fields before the checks."""
-    path = Path(path)
-    if not path.is_file():
-        raise CaseError(f"case file not found: {path}")
+    """Read and check a case file (a path, or the name of a shipped case); ``overrides``
+    (``{"section.key": value}``, values as in a case file) replace fields before the checks."""
+    path = resolve_case(path)
     try:
         data = tomllib.loads(path.read_text())
     except tomllib.TOMLDecodeError as exc:
         raise CaseError(f"{path}: not valid TOML: {exc}") from None
-    for key, value in (overrides or {}).items():
-        section, name = key.split(".")
-        data.setdefault(section, {})[name] = value
-    return parse_case(data, str(path))
+    return parse_case(_apply_overrides(data, overrides or {}), str(path))
+
+
+def _apply_overrides(data: dict, overrides: dict) -> dict:
+    for key, value in overrides.items():
+        parts = str(key).split(".")
+        if len(parts) != 2 or not all(parts):
+            raise CaseError(f"override {key!r}: expected section.key (e.g. operation.speed)")
+        section, name = parts
+        table = data.setdefault(section, {})
+        if not isinstance(table, dict):
+            raise CaseError(f"override {key!r}: [{section}] is not a table")
+        table[name] = value
+    return data
 
 
 def schema_markdown() -> str:
@@ -250,7 +361,7 @@ def schema_markdown() -> str:
     rows = ["| field | kind | shape | default | meaning |", "| --- | --- | --- | --- | --- |"]
     for f in FIELDS:
         kind = f.kind if f.kind in ("text", "count", "flag", "choice") else \
-            f"{f.kind} [{SI_UNIT[f.kind]}]"
+            f"{f.kind} [{symbol(f.kind)}]"
         if f.choices:
             kind += ": " + " / ".join(f.choices)
         default = "required" if f.required else repr(f.default)
@@ -262,15 +373,18 @@ def document() -> str:
     """The text of docs/case-files.md."""
     return (
         "# Case files\n\n"
-        "Generated from `orchestrator/case.py` (`python -m orchestrator.case > "
+        "Generated from `fmu_src/case.py` (`python -m fmu_src.case > "
         "docs/case-files.md`); a test keeps the two in sync.\n\n"
         "A case is a TOML file with the sections below. A quantity is a number in the SI unit "
         "shown, or a string `\"value unit\"` (`\"4 mm\"`, `\"20 deg\"`, `\"150 um\"`, "
         "`\"325 rad/s\"`, `\"3000 rpm\"`); a unit of the wrong kind, an unknown section or "
         "key, a missing field or a value out of bounds stops the run before it starts, with "
         "the field named. A single value given for a list field applies to every entry. "
-        "`gsb run` options override fields without editing the file. Example: "
-        "`models/baguet2010_spur.toml`.\n\n" + schema_markdown() + "\n"
+        "`gsb run` options override fields without editing the file. The `bearings` fields "
+        "after `viscosity` are generated from the options the registered bearing models "
+        "declare (`bearing_fmu.base.ModelOption`). Examples: the shipped cases "
+        + ", ".join(f"`{n}`" for n in shipped_cases())
+        + " (`fmu_src/cases/`; `gsb run <name>` runs one by name).\n\n" + schema_markdown() + "\n"
     )
 
 

@@ -1,0 +1,120 @@
+"""The one unit table: case-file quantities, FMU unit definitions and results channels.
+
+Every physical quantity of the package has a *dimension* (``"length"``, ``"stiffness"``, ...)
+listed once in :data:`DIMENSIONS` with
+
+* its SI unit symbol, used for FMU variables, results-file attributes and messages;
+* its FMI 2.0 ``BaseUnit`` exponents (kg, m, s, rad; ``rad`` counts, as FMI 2.0 section 2.2.2
+  says, so ``rad/s`` is ``rad="1" s="-1"``);
+* the spellings a case file accepts, each with its factor to SI.
+
+A case-file quantity is a number in the SI unit or a string ``"value unit"``; a field accepts
+only units of its own dimension, so ``clearance = "150 N"`` is an error that names the field,
+the unit and what was expected.
+
+>>> parse_quantity("4 mm", "length", "gear_pair.module")
+0.004
+>>> parse_quantity(20, "angle", "gear_pair.pressure_angle")  # numbers are SI: rad
+20.0
+>>> round(parse_quantity("20 deg", "angle", "x"), 6)
+0.349066
+>>> DIMENSIONS["angular_speed"].base
+{'rad': 1, 's': -1}
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass, field
+
+__all__ = ["DIMENSIONS", "Dimension", "UnitError", "parse_quantity", "symbol"]
+
+
+class UnitError(ValueError):
+    """A quantity with a wrong, unknown or missing unit."""
+
+
+@dataclass(frozen=True)
+class Dimension:
+    """A physical dimension: SI symbol, FMI base-unit exponents, accepted spellings."""
+
+    name: str
+    symbol: str
+    base: dict = field(default_factory=dict)
+    aliases: dict = field(default_factory=dict)  # spelling -> factor to SI (symbol included)
+
+
+_PI = math.pi
+DIMENSIONS: dict[str, Dimension] = {d.name: d for d in (
+    Dimension("length", "m", {"m": 1}, {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6,
+                                        "cm": 1e-2}),
+    Dimension("angle", "rad", {"rad": 1}, {"rad": 1.0, "deg": _PI / 180.0}),
+    Dimension("mass", "kg", {"kg": 1}, {"kg": 1.0, "g": 1e-3}),
+    Dimension("pressure", "Pa", {"kg": 1, "m": -1, "s": -2},
+              {"Pa": 1.0, "kPa": 1e3, "MPa": 1e6, "GPa": 1e9}),
+    Dimension("viscosity", "Pa.s", {"kg": 1, "m": -1, "s": -1},
+              {"Pa.s": 1.0, "Pa s": 1.0, "mPa.s": 1e-3, "cP": 1e-3}),
+    Dimension("angular_speed", "rad/s", {"rad": 1, "s": -1},
+              {"rad/s": 1.0, "rpm": 2.0 * _PI / 60.0}),
+    Dimension("torque", "N.m", {"kg": 1, "m": 2, "s": -2}, {"N.m": 1.0, "N m": 1.0, "Nm": 1.0}),
+    Dimension("density", "kg/m^3", {"kg": 1, "m": -3}, {"kg/m^3": 1.0, "kg/m3": 1.0}),
+    Dimension("force", "N", {"kg": 1, "m": 1, "s": -2}, {"N": 1.0, "kN": 1e3}),
+    Dimension("stiffness", "N/m", {"kg": 1, "s": -2}, {"N/m": 1.0}),
+    Dimension("damping", "N.s/m", {"kg": 1, "s": -1}, {"N.s/m": 1.0, "N s/m": 1.0}),
+    Dimension("time", "s", {"s": 1}, {"s": 1.0, "ms": 1e-3}),
+    Dimension("velocity", "m/s", {"m": 1, "s": -1}, {"m/s": 1.0}),
+    Dimension("dimensionless", "1", {}, {"1": 1.0, "-": 1.0}),
+)}
+
+#: accepted spelling -> (factor to SI, dimension)
+_SPELLINGS: dict[str, tuple[float, str]] = {
+    spelling: (factor, d.name) for d in DIMENSIONS.values()
+    for spelling, factor in d.aliases.items()
+}
+
+_QUANTITY = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(.*?)\s*$")
+
+
+def symbol(dimension: str) -> str:
+    """The SI unit symbol of a dimension (``"stiffness"`` -> ``"N/m"``)."""
+    return DIMENSIONS[dimension].symbol
+
+
+def parse_quantity(value, dimension: str, field: str) -> float:
+    """A case-file value as a float in SI units.
+
+    Parameters
+    ----------
+    value : int, float or str
+        A number (taken in the SI unit of ``dimension``) or ``"number unit"``.
+    dimension : str
+        Expected dimension (a key of :data:`DIMENSIONS`).
+    field : str
+        Dotted name of the field, for error messages.
+    """
+    si = symbol(dimension)
+    if isinstance(value, bool):
+        raise UnitError(f"{field}: expected a {dimension} value, got {value!r}")
+    if isinstance(value, (int, float)):
+        out = float(value)
+    elif isinstance(value, str):
+        m = _QUANTITY.match(value)
+        if not m:
+            raise UnitError(f"{field}: cannot read {value!r} as 'number unit' (e.g. '4 {si}')")
+        number, unit = m.groups()
+        unit = unit or si
+        if unit not in _SPELLINGS:
+            raise UnitError(f"{field}: unknown unit {unit!r} in {value!r}; a {dimension} takes "
+                            f"one of {', '.join(DIMENSIONS[dimension].aliases)}")
+        factor, dim = _SPELLINGS[unit]
+        if dim != dimension:
+            raise UnitError(f"{field}: {value!r} is a {dim}, expected a {dimension} "
+                            f"(e.g. '{number} {si}')")
+        out = float(number) * factor
+    else:
+        raise UnitError(f"{field}: expected a {dimension} value, got {type(value).__name__} "
+                        f"{value!r}")
+    if not math.isfinite(out):
+        raise UnitError(f"{field}: {value!r} is not finite")
+    return out
