@@ -3,13 +3,13 @@
 Usage: ``python benchmarks/fmu_overhead.py [--steps N] [--fmu PATH]``
 
 Builds ``GearShaft.fmu`` into a temporary folder (unless ``--fmu`` names one) and drives the
-paper's spur case (``models/baguet2010_spur.toml``) two ways with the same affine bearing laws
+paper's spur case (the shipped ``baguet2010_spur``) two ways with the same affine bearing laws
 (Kb 1e8 N/m with a cross-coupled part, Cb 1e4 N s/m, dt = mesh period / 32):
 
 * ``FmuStructure`` (:mod:`orchestrator.fmi`): fmi2SetReal of the 40 law inputs, fmi2DoStep,
   fmi2GetReal of the 16 journal outputs; fmi2GetFMUstate + fmi2SetFMUstate (+ free);
-* ``Structure`` in process: ``set_bearing_laws`` + ``do_step`` + ``journal_states``;
-  ``get_state`` + ``set_state``.
+* ``InProcessStructure`` (the same master interface on the in-process structure):
+  ``set_bearing_laws`` + ``do_step`` + ``journal_states``; ``get_state`` + ``set_state``.
 
 Prints µs per cycle (best of 5 blocks, after warm-up), the per-call cost of the FMI layer alone
 (set + get with no step, state get/set), and the FMU's share of a cycle.
@@ -20,16 +20,13 @@ from __future__ import annotations
 import argparse
 import tempfile
 import time
-from pathlib import Path
 
 import numpy as np
 
-from orchestrator.case import load_case
+from bearing_fmu.affine import AffineLaws
+from fmu_src.examples import paper_structure
 from orchestrator.fmi import FmuStructure
-from orchestrator.master import AffineLaws
-from orchestrator.system import structure
-
-CASE = Path(__file__).resolve().parents[1] / "models" / "baguet2010_spur.toml"
+from orchestrator.inprocess import InProcessStructure
 
 
 def laws() -> AffineLaws:
@@ -50,10 +47,7 @@ def best_us(fn, n: int, blocks: int = 5) -> float:
 def measure(slave, law, dt: float, n: int) -> dict:
     slave.set_bearing_laws(law)
     slave.solve_static()
-    if hasattr(slave, "exit_initialization"):
-        slave.exit_initialization()
-    else:
-        slave.set_damping_reference(0.5 * (law.kb + law.kb.transpose(0, 2, 1)))
+    slave.exit_initialization()
     clock = {"t": 0.0}
     state0 = slave.get_state()
 
@@ -94,8 +88,8 @@ def main() -> None:
             from fmu_src.build import build_fmus
 
             path = build_fmus(tmp, ["GearShaft"])[0]
-        ref = structure(load_case(CASE))
-        dt = ref.mesh_period / 32
+        ref = InProcessStructure(paper_structure())
+        dt = ref.structure.mesh_period / 32
         inproc = measure(ref, law, dt, args.steps)
         fmu = FmuStructure(path)
         try:

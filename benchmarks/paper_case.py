@@ -15,10 +15,10 @@ import argparse
 import platform
 import tempfile
 
-from orchestrator.case import load_case
+from fmu_src.case import load_case
 from orchestrator.run import run_case
 
-CASE = "models/baguet2010_spur.toml"
+CASE = "baguet2010_spur"
 
 
 def main() -> None:

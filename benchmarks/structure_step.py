@@ -1,54 +1,33 @@
 """Microseconds per Newmark step of the paper's two-shaft model with four affine bearing laws.
 
-Usage: ``python benchmarks/structure_step.py [--standin] [--steps N]``
+Usage: ``python benchmarks/structure_step.py [--steps N]``
 
-Uses ``gear_fmu.mesh.MeshElement`` on ``paper_gear_pair()`` when it exists (else, or with
-``--standin``, the unilateral line-of-action stand-in of tests/test_structure.py). Bearings:
-Kb = 1e8 N/m, Cb = 1e5 N s/m isotropic plus a cross-coupled part; T = 220 N m, omega = 325 rad/s,
-e_mu = 0.6 mm, dt = mesh period / 32 (paper Sec. 4). Prints the total per step (no timers) and the
-split mesh update / assembly (right-hand side, bearing terms, back-substitution) / condensed
-solve (timers on).
+The paper's structure (:func:`fmu_src.examples.paper_structure`: two shafts, the distributed
+mesh element of the Table 1 pair) with bearings Kb = 1e8 N/m, Cb = 1e5 N s/m isotropic plus a
+cross-coupled part; T = 220 N m, omega = 325 rad/s, e_mu = 0.6 mm, dt = mesh period / 32 (paper
+Sec. 4). Prints the total per step (no timers) and the split mesh update / assembly (right-hand
+side, bearing terms, back-substitution) / condensed solve (timers on).
 """
 
 from __future__ import annotations
 
 import argparse
-import sys
 import time
-from pathlib import Path
 
 import numpy as np
 
-from gear_fmu.structure import Structure, StructureLoads
-from gear_fmu.system import paper_system_example
-
-
-def make_mesh(standin: bool):
-    if not standin:
-        try:
-            from gear_fmu.geometry import paper_gear_pair
-            from gear_fmu.mesh import MeshElement
-
-            pair = paper_gear_pair()
-            mesh = MeshElement(pair, pair.nominal_line_load(220.0))
-            return mesh, f"gear_fmu.mesh.MeshElement ({mesh.n_lines} x {mesh.n_slices} slices)"
-        except ImportError as err:
-            print(f"(gear_fmu.mesh not usable: {err}; using the stand-in)")
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-    from tests.test_structure import LineMesh
-
-    return LineMesh(modulation=0.3), "stand-in LineMesh (10 slices)"
+from fmu_src.examples import paper_structure
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--standin", action="store_true", help="use the stand-in mesh")
     parser.add_argument("--steps", type=int, default=5000)
     args = parser.parse_args()
-    mesh, name = make_mesh(args.standin)
     t0 = time.perf_counter()
-    st = Structure(paper_system_example(), mesh, StructureLoads(220.0, 325.0, (0.6e-3, 0.6e-3)))
+    st = paper_structure()
     t_build = time.perf_counter() - t0
+    mesh = st.mesh
+    name = f"gear_fmu.mesh.MeshElement ({mesh.n_lines} x {mesh.n_slices} slices)"
     kb = np.broadcast_to(1e8 * np.eye(2), (4, 2, 2)) + np.array([[0.0, 3e7], [-2e7, 0.0]])
     cb = np.broadcast_to(1e5 * np.eye(2), (4, 2, 2)) + np.array([[0.0, 1e4], [1e4, 0.0]])
     kb, cb = kb.copy(), cb.copy()
@@ -63,8 +42,7 @@ def main() -> None:
     for _ in range(n):
         iters += st.step(dt, f0, kb, cb).iterations
     total = (time.perf_counter() - t0) / n * 1e6
-    st.profile = True
-    st.timing = dict.fromkeys(st.timing, 0.0)
+    st.timing = {"mesh": 0.0, "assembly": 0.0, "solve": 0.0}
     for _ in range(n):
         st.step(dt, f0, kb, cb)
     split = {k: v / n * 1e6 for k, v in st.timing.items()}

@@ -19,7 +19,7 @@ import numpy as np
 
 from orchestrator.sweep import SweepPoint, run_sweep
 
-CASE = "models/baguet2010_spur.toml"
+CASE = "baguet2010_spur"
 
 
 def main() -> None:

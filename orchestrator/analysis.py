@@ -11,8 +11,8 @@ import math
 
 import numpy as np
 
-from orchestrator.case import Case
-from orchestrator.system import gear_pair
+from fmu_src.case import Case
+from fmu_src.description import gear_pair
 
 __all__ = ["fit_ellipse", "run_metrics", "static_mesh_load", "steady_window"]
 
@@ -90,7 +90,7 @@ def run_metrics(results: dict, steady: float) -> dict:
     pair = gear_pair(Case(values, str(results["attrs"].get("case_file", "results"))))
     w0 = static_mesh_load(values["operation.torque"], pair.base_radius[0], pair.base_helix_angle)
     fb = np.hypot(results["bearing_force"][win, :, 0], results["bearing_force"][win, :, 1])
-    journal = results["journal"][win, :, :2]
+    journal = results["journal_position"][win]
     centres = []
     for b in range(journal.shape[1]):
         try:

@@ -16,25 +16,22 @@ import math
 
 import numpy as np
 
-from bearing_fmu import FILM_MODELS, BearingData, model_class
+from bearing_fmu import MODELS, BearingData, is_film_model, model_class
 from bearing_fmu.static import static_equilibrium
+
+#: the models the calculator offers: those that solve the Reynolds equation
+FILM_MODELS = tuple(m for m in MODELS if is_film_model(m))
 
 
 def build_model(name: str, bearing: BearingData, nodes: int | None, pinned_start: bool):
-    """A film model from the table with the CLI's options."""
-    cls = model_class(name)
-    kw = {}
-    if name == "hybrid":
-        if nodes:
-            kw["n"] = nodes
-        kw["pinned_start"] = pinned_start
-    elif name == "fd":
-        if nodes:
-            kw["n_theta"] = nodes
-        kw["pinned_start"] = pinned_start
-    elif pinned_start:
-        raise SystemExit("--pinned-start applies to the hybrid and fd models only")
-    return cls(bearing, **kw)
+    """A film model from the registry with the CLI's options (passed straight through:
+    a model that does not take one says so)."""
+    options = {}
+    if nodes:
+        options["nodes"] = nodes
+    if pinned_start:
+        options["pinned_start"] = True
+    return model_class(name).from_parameters(bearing, **options)
 
 
 def dimensionless_report(model, eps: float) -> dict:

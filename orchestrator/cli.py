@@ -6,8 +6,8 @@ import argparse
 import sys
 
 from bearing_fmu.base import BearingError
+from fmu_src.case import CaseError
 from gear_fmu.geometry import GearGeometryError
-from orchestrator.case import CaseError
 from orchestrator.run import RunError
 
 

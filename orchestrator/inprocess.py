@@ -1,15 +1,84 @@
-"""In-process slaves: the physics objects behind the master's interface, no FMI layer."""
+"""In-process slaves: the physics objects behind the master's interface, no FMI layer.
+
+* :class:`InProcessStructure`: a :class:`gear_fmu.structure.Structure` as a
+  :class:`~orchestrator.master.StructureSlave`.
+* :class:`ModelBearings`: bearing models (:mod:`bearing_fmu`) as a
+  :class:`~orchestrator.master.BearingSet`, converting between their local frames and the
+  global (s, t) frame.
+"""
 
 from __future__ import annotations
 
 import numpy as np
 
-from bearing_fmu.base import BearingModel, FilmBearingModel
+from bearing_fmu.affine import AffineLaws
+from bearing_fmu.base import BearingModel
 from bearing_fmu.frames import LocalFrame
 from bearing_fmu.static import static_equilibrium
-from orchestrator.master import BearingSet
+from gear_fmu.analyses import support_loads
+from gear_fmu.structure import Structure
+from orchestrator.master import BearingSet, StructureSlave
 
-__all__ = ["ModelBearings"]
+__all__ = ["InProcessStructure", "ModelBearings"]
+
+
+class InProcessStructure(StructureSlave):
+    """The gear-shaft structure driven directly (what the gear-shaft FMU does through FMI).
+
+    Parameters
+    ----------
+    structure : gear_fmu.structure.Structure
+    """
+
+    n_bearings = Structure.n_bearings
+
+    def __init__(self, structure: Structure):
+        self.structure = structure
+        self._laws: AffineLaws | None = None
+
+    def _require_laws(self) -> AffineLaws:
+        if self._laws is None:
+            raise RuntimeError("set_bearing_laws() before a static solution or a step")
+        return self._laws
+
+    def get_state(self):
+        return self.structure.get_state()
+
+    def set_state(self, state) -> None:
+        self.structure.set_state(state)
+
+    def set_bearing_laws(self, laws: AffineLaws) -> None:
+        self._laws = laws
+
+    def do_step(self, t: float, dt: float) -> None:
+        st = self.structure
+        if abs(t - st.t) > 1e-9 * max(dt, abs(t)):
+            raise ValueError(f"do_step from t = {t!r} s but the structure is at t = {st.t!r} s")
+        laws = self._require_laws()
+        st.step(dt, laws.f0, laws.kb, laws.cb)
+
+    def solve_static(self) -> None:
+        laws = self._require_laws()
+        self.structure.static(laws.f0, laws.kb, laws.cb)
+
+    def exit_initialization(self) -> None:
+        kb = self._require_laws().kb
+        self.structure.set_damping_reference(0.5 * (kb + np.transpose(kb, (0, 2, 1))))
+
+    def journal_states(self) -> np.ndarray:
+        return self.structure.journal_states()
+
+    def support_loads(self) -> np.ndarray:
+        return support_loads(self.structure)
+
+    def mesh_force(self) -> float:
+        return self.structure.mesh_force()
+
+    def transmission_error(self) -> float:
+        return self.structure.transmission_error()
+
+    def gear_displacements(self) -> np.ndarray:
+        return self.structure.gear_displacements()[:, :2]
 
 
 class ModelBearings(BearingSet):
@@ -33,50 +102,30 @@ class ModelBearings(BearingSet):
         for w in self.omegas:
             if not (np.isfinite(w) and w > 0.0):
                 raise ValueError(f"shaft speed {w!r} rad/s must be finite and > 0")
+        for m in models:
+            if not isinstance(m, BearingModel):
+                raise TypeError(f"{m!r} is not a BearingModel")
+        self.models = list(models)
         self._q = np.array([f.q for f in self.frames])
-        self.models = models
+        self._local = None  # local states of the last evaluation
         self.evaluations = 0
 
     def evaluate(self, states):
         nb = len(self.models)
         q = self._q
         loc = np.einsum("bij,bkj->bki", q, np.asarray(states, dtype=float).reshape(nb, 2, 2))
+        self._local = loc
         force = np.empty((nb, 2))
         kb = np.empty((nb, 2, 2))
         cb = np.empty((nb, 2, 2))
         for b, (model, om) in enumerate(zip(self.models, self.omegas, strict=True)):
             (x, y), (xd, yd) = loc[b]
-            if self._film[b]:
-                # the dimensionless core once, the SI scaling of FilmBearingModel.evaluate here
-                c = model.bearing.clearance
-                ff = model.dimensionless(x / c, y / c, xd / (c * om), yd / (c * om), True)
-                fs = self._fscale[b]
-                force[b] = fs * ff.force
-                kb[b] = (-fs / c) * ff.d_position
-                cb[b] = (-fs / (c * om)) * ff.d_velocity
-            else:
-                r = model.evaluate(x, y, xd, yd, om)
-                force[b], kb[b], cb[b] = r.force, r.stiffness, r.damping
+            r = model.evaluate(x, y, xd, yd, om)
+            force[b], kb[b], cb[b] = r.force, r.stiffness, r.damping
         self.evaluations += nb
         # back to global components: f = Q^T f_loc, K = Q^T K_loc Q
         qt = np.transpose(q, (0, 2, 1))
         return (np.einsum("bij,bj->bi", qt, force), qt @ kb @ q, qt @ cb @ q)
-
-    @property
-    def models(self):
-        """The bearing models (replaceable, e.g. by their linearisation at X0)."""
-        return self._models
-
-    @models.setter
-    def models(self, models) -> None:
-        models = list(models)
-        for m in models:
-            if not isinstance(m, BearingModel):
-                raise TypeError(f"{m!r} is not a BearingModel")
-        self._models = models
-        self._film = [isinstance(m, FilmBearingModel) for m in models]
-        self._fscale = [m.bearing.force_scale(om) if f else 0.0
-                        for m, f, om in zip(models, self._film, self.omegas, strict=True)]
 
     def static_position(self, loads):
         pos = np.empty((len(self.models), 2))
@@ -85,3 +134,9 @@ class ModelBearings(BearingSet):
             sol = static_equilibrium(model, fr.to_local(loads[b]), om)
             pos[b] = fr.to_global((sol.x0, sol.y0))
         return pos
+
+    def exit_initialization(self) -> None:
+        if self._local is None:
+            raise RuntimeError("exit_initialization before any evaluation (no static state)")
+        for model, (pos, _), om in zip(self.models, self._local, self.omegas, strict=True):
+            model.end_initialization(float(pos[0]), float(pos[1]), om)

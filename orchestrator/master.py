@@ -18,6 +18,10 @@ the monolithic step to ``tol``, and an affine bearing (linear, lumped) converges
 The static solution X0 is the same iteration with the structure's static solve and the
 velocities zero. Its first linearisation point comes from a per-bearing static equilibrium
 under the loads a stiff support would carry (so no iterate starts outside the clearance).
+
+The slaves are reached only through :class:`StructureSlave` and :class:`BearingSet`, which
+declare everything the master and the runner use; :mod:`orchestrator.inprocess` (the physics
+objects directly) and :mod:`orchestrator.fmi` (the FMUs through fmpy) implement them.
 """
 
 from __future__ import annotations
@@ -28,8 +32,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from bearing_fmu.affine import AffineLaws
+
 __all__ = [
-    "AffineLaws",
     "BearingSet",
     "CouplingError",
     "Master",
@@ -42,31 +47,13 @@ class CouplingError(RuntimeError):
     """The coupled iteration did not converge (step, time and mismatch in the message)."""
 
 
-@dataclass
-class AffineLaws:
-    """Affine bearing laws ``F = f0 - kb X - cb Xdot`` for nb bearings, global frame, SI."""
-
-    f0: np.ndarray  # (nb, 2) N
-    kb: np.ndarray  # (nb, 2, 2) N/m
-    cb: np.ndarray  # (nb, 2, 2) N s/m
-
-    @classmethod
-    def linearise(cls, states, force, kb, cb) -> AffineLaws:
-        """The tangent law at journal states (nb, 4) = [s, t, s_dot, t_dot]."""
-        x = states[:, None, :2]
-        v = states[:, None, 2:]
-        f0 = force + (kb * x).sum(axis=2) + (cb * v).sum(axis=2)
-        return cls(f0, kb.copy(), cb.copy())
-
-    def force(self, states) -> np.ndarray:
-        """Force of the laws at journal states (nb, 4) [N]."""
-        x = states[:, None, :2]
-        v = states[:, None, 2:]
-        return self.f0 - (self.kb * x).sum(axis=2) - (self.cb * v).sum(axis=2)
-
-
 class StructureSlave(ABC):
-    """What the master needs from the gear-shaft slave (in-process or FMU)."""
+    """What the master and the runner need from the gear-shaft slave (in-process or FMU).
+
+    Life cycle: laws + :meth:`solve_static` (repeated: the static iteration), then
+    :meth:`exit_initialization` once, then :meth:`do_step` with :meth:`get_state` /
+    :meth:`set_state` around it (rollback), then :meth:`close`.
+    """
 
     n_bearings: int
 
@@ -80,7 +67,7 @@ class StructureSlave(ABC):
 
     @abstractmethod
     def set_bearing_laws(self, laws: AffineLaws) -> None:
-        """The affine laws used by the next step or static solve."""
+        """The affine laws (Eq. 17, global frame) used by the next step or static solve."""
 
     @abstractmethod
     def do_step(self, t: float, dt: float) -> None:
@@ -91,24 +78,52 @@ class StructureSlave(ABC):
         """Static solution with the current laws (velocities and accelerations zero)."""
 
     @abstractmethod
+    def exit_initialization(self) -> None:
+        """End of the static phase: the static solution becomes the initial state and the
+        modal damping is built on the modes with the symmetric part of the current Kb laws."""
+
+    @abstractmethod
     def journal_states(self) -> np.ndarray:
         """(nb, 4) journal displacement and velocity at the bearing nodes, global frame."""
 
+    @abstractmethod
     def support_loads(self) -> np.ndarray:
         """(nb, 2) static loads on the journals with a stiff support [N] (first guess)."""
-        raise NotImplementedError
+
+    @abstractmethod
+    def mesh_force(self) -> float:
+        """Total normal mesh force of the current state [N]."""
+
+    @abstractmethod
+    def transmission_error(self) -> float:
+        """Transmission error r_b1 theta_1 + r_b2 theta_2 of the current state [m]."""
+
+    @abstractmethod
+    def gear_displacements(self) -> np.ndarray:
+        """(2, 2) [u, v] of the pinion and gear nodes [m], global frame."""
+
+    def close(self) -> None:  # noqa: B027 - optional: nothing to release by default
+        """Release what the slave holds (FMU instances, files); idempotent."""
 
 
 class BearingSet(ABC):
-    """What the master needs from the bearing slaves (in-process or FMUs)."""
+    """What the master and the runner need from the bearing slaves (in-process or FMUs)."""
 
     @abstractmethod
     def evaluate(self, states: np.ndarray):
         """Film force (nb, 2), Kb (nb, 2, 2), Cb (nb, 2, 2) at journal states (nb, 4)."""
 
+    @abstractmethod
     def static_position(self, loads: np.ndarray) -> np.ndarray:
         """(nb, 2) journal positions balancing static loads (nb, 2) [N] (first guess)."""
-        raise NotImplementedError
+
+    @abstractmethod
+    def exit_initialization(self) -> None:
+        """End of the static phase (at the journal states of the last evaluation): the linear
+        model freezes its coefficients there."""
+
+    def close(self) -> None:  # noqa: B027 - optional: nothing to release by default
+        """Release what the set holds (FMU instances); idempotent."""
 
 
 @dataclass
@@ -180,6 +195,19 @@ class Master:
             f"static solution did not converge in {self.max_iterations} iterations: "
             f"relative bearing-force mismatch {mismatch:.3e} > tol {self.tol:.1e}"
         )
+
+    def exit_initialization(self) -> None:
+        """End the static phase of both slaves (linear bearings freeze, the structure builds
+        its modal damping with the bearings' static stiffness)."""
+        self.bearings.exit_initialization()
+        self.structure.exit_initialization()
+
+    def close(self) -> None:
+        """Release both slaves (FMU instances; nothing in-process); idempotent."""
+        try:
+            self.bearings.close()
+        finally:
+            self.structure.close()
 
     def step(self, t: float, dt: float) -> StepReport:
         """One coupled Newmark step from t to t + dt."""

@@ -1,8 +1,8 @@
 """Figures from a results file: orbits in the clearance circle, bearing force norm, mesh force.
 
-Channels read (written by the runner): ``time`` [s], ``journal`` (4, 4) [s, t, s_dot, t_dot]
-in m and m/s, ``bearing_force`` (4, 2) [N], ``mesh_force`` [N]; root attribute ``clearance``
-(4 values, m, JSON) for the clearance circles.
+Channels read (written by the runner, :data:`orchestrator.run.CHANNELS`): ``time`` [s],
+``journal_position`` (4, 2) [m], ``bearing_force`` (4, 2) [N], ``mesh_force`` [N]; root
+attribute ``clearance`` (4 values, m, JSON) for the clearance circles.
 """
 
 from __future__ import annotations
@@ -14,10 +14,11 @@ import numpy as np
 
 from orchestrator.results import read_results
 
-__all__ = ["basic_figures", "normalised_spectrum"]
+__all__ = ["basic_figures", "normalised_spectrum", "pyplot"]
 
 
-def _plt():
+def pyplot():
+    """matplotlib.pyplot on the file-only Agg backend (no display needed)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -44,7 +45,7 @@ def basic_figures(results_path, out_dir, last: float | None = None) -> list[Path
 
     ``last`` [s] limits the orbit and force plots to the end of the run (steady state).
     """
-    plt = _plt()
+    plt = pyplot()
     r = read_results(results_path)
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -57,7 +58,8 @@ def basic_figures(results_path, out_dir, last: float | None = None) -> list[Path
     circle = np.linspace(0.0, 2.0 * np.pi, 361)
     for b, ax in enumerate(axes):
         ax.plot(np.cos(circle), np.sin(circle), "k-", lw=0.8)
-        ax.plot(r["journal"][sel, b, 0] / clearance[b], r["journal"][sel, b, 1] / clearance[b],
+        ax.plot(r["journal_position"][sel, b, 0] / clearance[b],
+                r["journal_position"][sel, b, 1] / clearance[b],
                 lw=0.6)
         ax.set_aspect("equal")
         ax.set_xlim(-1.05, 1.05)

@@ -1,16 +1,19 @@
 """``gsb run``: static solution X0 and the nonlinear (or linear) transient of a case.
 
-1. Build the structure slave and the bearing set, through FMUs (default; fmpy) or in-process.
+1. Build the structure slave and the bearing set, through FMUs (default; fmpy) or in-process
+   (:func:`build_master`; the runner sees only the master's interfaces).
 2. Static solution X0 (paper Sec. 2.2.3): the master iterates structure static solves and
    bearing linearisations with velocities zero (:meth:`orchestrator.master.Master.solve_static`).
-3. Linear analysis (Sec. 3.3, Table 4 case 0): the bearings' 8 coefficients are frozen at X0.
-4. Modal damping on the modes with the bearings' static stiffness (Structure docs).
-5. Transient (Sec. 3.2): ``steps_per_mesh_period x mesh_periods`` coupled Newmark steps, each
+3. End of initialisation: the linear model (Sec. 3.3, Table 4 case 0) freezes the bearings' 8
+   coefficients at X0; the modal damping is built on the modes with the bearings' static
+   stiffness (Structure docs).
+4. Transient (Sec. 3.2): ``steps_per_mesh_period x mesh_periods`` coupled Newmark steps, each
    converged to the case tolerance; every step's channels go to the results file as the run
    goes (HDF5, flushed in blocks: an interrupted or failed run keeps what it computed).
 
-Channels: ``journal`` (4, 4) [s, t, s_dot, t_dot] in m and m/s, ``bearing_force`` (4, 2) N,
-``mesh_force`` N, ``transmission_error`` m, ``gear_nodes`` (2, 2) m (u, v of the pinion and gear
+Channels (:data:`CHANNELS`, units from :mod:`fmu_src.units`): ``journal_position`` (4, 2) [s, t]
+and ``journal_velocity`` (4, 2) of the journal centres, ``bearing_force`` (4, 2),
+``mesh_force``, ``transmission_error``, ``gear_nodes`` (2, 2) (u, v of the pinion and gear
 nodes), ``iterations`` (coupled iterations of the step).
 """
 
@@ -24,22 +27,28 @@ from pathlib import Path
 
 import numpy as np
 
-from orchestrator import system
-from orchestrator.case import Case
-from orchestrator.inprocess import ModelBearings
+from fmu_src import description
+from fmu_src.case import Case
+from fmu_src.units import symbol
+from orchestrator.inprocess import InProcessStructure, ModelBearings
 from orchestrator.master import Master
 from orchestrator.results import ResultsWriter
 
 __all__ = ["CHANNELS", "Progress", "RunError", "RunSummary", "build_master", "run_case"]
 
+#: results channels: name -> (shape per step, unit, description)
 CHANNELS = {
-    "journal": ((4, 4), "m, m/s", "journal centre [s, t, s_dot, t_dot] at bearings 1-4, "
-                                  "global frame"),
-    "bearing_force": ((4, 2), "N", "film force on the journal [F_s, F_t] at bearings 1-4"),
-    "mesh_force": ((), "N", "total normal mesh force (sum of slice loads)"),
-    "transmission_error": ((), "m", "r_b1 theta1 + r_b2 theta2 (elastic torsion at the gears)"),
-    "gear_nodes": ((2, 2), "m", "[u, v] of the pinion and gear nodes"),
-    "iterations": ((), "1", "coupled master iterations of the step"),
+    "journal_position": ((4, 2), symbol("length"),
+                         "journal-centre displacement [s, t] at bearings 1-4, global frame"),
+    "journal_velocity": ((4, 2), symbol("velocity"),
+                         "journal-centre velocity [s_dot, t_dot] at bearings 1-4, global frame"),
+    "bearing_force": ((4, 2), symbol("force"),
+                      "film force on the journal [F_s, F_t] at bearings 1-4"),
+    "mesh_force": ((), symbol("force"), "total normal mesh force (sum of slice loads)"),
+    "transmission_error": ((), symbol("length"),
+                           "r_b1 theta1 + r_b2 theta2 (elastic torsion at the gears)"),
+    "gear_nodes": ((2, 2), symbol("length"), "[u, v] of the pinion and gear nodes"),
+    "iterations": ((), symbol("dimensionless"), "coupled master iterations of the step"),
 }
 
 
@@ -116,29 +125,27 @@ def _clearances(case: Case) -> list[float]:
 
 
 def build_master(case: Case, bearing: str | None = None, in_process: bool = False,
-                 fmu_dir: Path | str | None = None):
-    """(master, structure slave, bearing set, closer) for a case.
+                 fmu_dir: Path | str | None = None) -> Master:
+    """The master of a case with its two slaves (``master.structure``, ``master.bearings``).
 
-    ``bearing`` overrides ``bearings.model``. Through FMUs the bearing FMU of that model and the
-    gear-shaft FMU are taken from ``fmu_dir`` (built with ``gsb build-fmus`` if missing).
+    ``bearing`` overrides ``bearings.model``. In-process the physics objects of
+    :mod:`fmu_src.description` are driven directly; through FMUs the bearing FMU of that model
+    and the gear-shaft FMU are taken from ``fmu_dir`` (built there if missing). Release the
+    slaves with :meth:`Master.close`.
     """
-    model = case["bearings.model"] if bearing is None else bearing
+    if bearing is not None:
+        case = case.with_overrides({"bearings.model": bearing})
     tol = case["simulation.tolerance"]
     max_it = case["simulation.max_iterations"]
     if in_process:
-        structure = system.structure(case)
-        bearings = ModelBearings(system.bearing_models(case, model), system.BEARING_FRAMES,
-                                 system.bearing_speeds(case))
-        return Master(structure, bearings, tol, max_it), structure, bearings, lambda: None
-    from orchestrator import fmi
+        structure = InProcessStructure(description.structure(case))
+        bearings = ModelBearings(description.bearing_models(case), description.BEARING_FRAMES,
+                                 description.bearing_speeds(case))
+    else:
+        from orchestrator import fmi
 
-    structure, bearings = fmi.system_from_case(case, model, fmu_dir)
-
-    def close():
-        bearings.close()
-        structure.close()
-
-    return Master(structure, bearings, tol, max_it), structure, bearings, close
+        structure, bearings = fmi.system_from_case(case, fmu_dir=fmu_dir)
+    return Master(structure, bearings, tol, max_it)
 
 
 def run_case(case: Case, bearing: str | None = None, periods: int | None = None,
@@ -155,15 +162,15 @@ def run_case(case: Case, bearing: str | None = None, periods: int | None = None,
     if periods < 1:
         raise ValueError(f"periods = {periods!r}: need at least one mesh period")
     steps_per_period = case["simulation.steps_per_mesh_period"]
-    z1, _ = case["gear_pair.teeth"]
     omega = case["operation.speed"]
-    dt = 2.0 * math.pi / (omega * z1) / steps_per_period
+    dt = description.time_step(case)
     n_steps = periods * steps_per_period
     out_dir = Path(out_dir)
     name = f"{case['case.name']}_{model}{'_inprocess' if in_process else ''}"
     path = out_dir / f"{name}.h5"
 
-    master, structure, bearings, close = build_master(case, model, in_process, fmu_dir)
+    master = build_master(case, model, in_process, fmu_dir)
+    structure = master.structure
     try:
         t0 = time.perf_counter()
         try:
@@ -171,25 +178,16 @@ def run_case(case: Case, bearing: str | None = None, periods: int | None = None,
         except Exception as exc:
             raise RunError(f"{case.source}: static solution failed: {exc}") from exc
         x0 = static.states[:, :2].copy()
-        if model == "linear" and in_process:
-            bearings.models = system.linearised(bearings.models, static.states,
-                                                system.bearing_speeds(case))
-        # leave initialisation: linear FMUs freeze, the structure builds its modal damping on
-        # the modes with the bearings' static stiffness
-        kb0 = master.laws.kb
-        kb_sym = 0.5 * (kb0 + np.transpose(kb0, (0, 2, 1)))
-        if in_process:
-            structure.set_damping_reference(kb_sym)
-        else:
-            bearings.exit_initialization()
-            structure.exit_initialization()
+        # leave initialisation: linear bearings freeze, the structure builds its modal damping
+        # on the modes with the bearings' static stiffness
+        master.exit_initialization()
         static_time = time.perf_counter() - t0
 
         attrs = {
             "case": case["case.name"], "case_file": str(case.source), "bearing_model": model,
             "mode": "in-process" if in_process else "fmu", "dt": dt,
             "steps_per_mesh_period": steps_per_period, "mesh_periods": periods,
-            "speed": omega, "speeds": system.bearing_speeds(case), "teeth": list(
+            "speed": omega, "speeds": description.bearing_speeds(case), "teeth": list(
                 case["gear_pair.teeth"]), "torque": case["operation.torque"],
             "unbalance": list(case["operation.unbalance"]), "clearance": _clearances(case),
             "tolerance": case["simulation.tolerance"], "static_journal": x0.tolist(),
@@ -210,11 +208,12 @@ def run_case(case: Case, bearing: str | None = None, periods: int | None = None,
                         f"step {i + 1} of {n_steps} (t = {t + dt:.6e} s) failed: {exc}; the "
                         f"{i} steps computed are in {path}") from exc
                 t = (i + 1) * dt
-                writer.append(time=t, journal=report.states,
+                writer.append(time=t, journal_position=report.states[:, :2],
+                              journal_velocity=report.states[:, 2:],
                               bearing_force=report.bearing_force,
                               mesh_force=structure.mesh_force(),
                               transmission_error=structure.transmission_error(),
-                              gear_nodes=np.asarray(structure.gear_displacements())[:, :2],
+                              gear_nodes=structure.gear_displacements(),
                               iterations=report.iterations)
                 if progress and (i & 63) == 0:
                     its = (master.total_iterations - start_iterations) / (i + 1)
@@ -224,14 +223,14 @@ def run_case(case: Case, bearing: str | None = None, periods: int | None = None,
                                 " it/step")
             writer.close(complete=True, wall_time=wall)
     finally:
-        close()
+        master.close()
     summary = RunSummary(path, n_steps, wall, static_time,
                          master.total_iterations - start_iterations,
                          master.total_bearing_evaluations - start_evals, static.iterations, x0)
     if figures:
         from orchestrator.plots import basic_figures
 
-        gear_rev = 2.0 * math.pi / system.bearing_speeds(case)[2]
+        gear_rev = 2.0 * math.pi / description.bearing_speeds(case)[2]
         summary.figures = basic_figures(path, out_dir / name, last=min(gear_rev, n_steps * dt))
     return summary
 

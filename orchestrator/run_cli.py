@@ -26,7 +26,8 @@ def _override(text: str):
 
 
 def _common(p) -> None:
-    p.add_argument("case", help="case file (TOML), e.g. models/baguet2010_spur.toml")
+    p.add_argument("case", help="case file (TOML) or the name of a shipped case, e.g. "
+                                "baguet2010_spur")
     p.add_argument("--speed", help="override operation.speed (e.g. '500 rad/s', '3000 rpm')")
     p.add_argument("--torque", help="override operation.torque (e.g. '300 N.m')")
     p.add_argument("--unbalance", help="override operation.unbalance of both shafts (e.g. "
@@ -81,11 +82,12 @@ def add_parsers(sub) -> None:
 
 def case_from_args(args):
     """The case file with the command line's overrides applied (checked again)."""
-    from orchestrator.case import load_case
+    from fmu_src.case import load_case
 
     overrides = dict(args.overrides)
     for key, value in (("operation.speed", args.speed), ("operation.torque", args.torque),
-                       ("operation.unbalance", args.unbalance)):
+                       ("operation.unbalance", args.unbalance),
+                       ("bearings.model", getattr(args, "bearing", None))):
         if value is not None:
             overrides[key] = value
     return load_case(args.case, overrides)
@@ -95,7 +97,7 @@ def run(args) -> int:
     from orchestrator.run import run_case, static_report
 
     case = case_from_args(args)
-    summary = run_case(case, bearing=args.bearing, periods=args.periods,
+    summary = run_case(case, periods=args.periods,
                        in_process=args.in_process, out_dir=args.out, fmu_dir=args.fmu_dir,
                        progress=not args.quiet, figures=not args.no_figures)
     print(f"static solution X0 ({case['case.name']}):")
@@ -108,11 +110,12 @@ def run(args) -> int:
 
 
 def modal(args) -> int:
+    from gear_fmu.analyses import modes
     from gear_fmu.modal import mode_table
     from orchestrator.run import build_master
 
     case = case_from_args(args)
-    master, structure, _, _ = build_master(case, in_process=True)
+    master = build_master(case, in_process=True)
     if args.bearing_stiffness is None:
         master.solve_static()
         kb = master.laws.kb
@@ -123,10 +126,10 @@ def modal(args) -> int:
             raise ValueError(f"--bearing-stiffness {args.bearing_stiffness!r} N/m must be > 0")
         kb = args.bearing_stiffness
         source = f"isotropic {args.bearing_stiffness:g} N/m"
-    modes = structure.modes(kb)
+    found = modes(master.structure.structure, kb)
     print(f"{case['case.name']}: modes with the mean mesh stiffness at T = "
           f"{case['operation.torque']:g} N m; bearings: {source}")
-    print(mode_table(modes, args.modes))
+    print(mode_table(found, args.modes))
     return 0
 
 

@@ -49,8 +49,8 @@ def run_point(case_path: str, point: SweepPoint, periods: int, steady_periods: i
               keep_steps: int = 4096) -> dict:
     """Run one point and reduce it (executed on a worker). Never raises: errors are returned."""
     try:
+        from fmu_src.case import load_case
         from orchestrator.analysis import run_metrics, steady_window
-        from orchestrator.case import load_case
         from orchestrator.results import read_results
         from orchestrator.run import run_case
 
@@ -68,7 +68,7 @@ def run_point(case_path: str, point: SweepPoint, periods: int, steady_periods: i
         stride = max(1, int(np.count_nonzero(win)) // keep_steps)
         out = {k: np.asarray(v) for k, v in metrics.items()}
         out["time"] = r["time"][win][::stride]
-        out["orbit"] = r["journal"][win][::stride, :, :2]
+        out["orbit"] = r["journal_position"][win][::stride]
         out["bearing_force"] = r["bearing_force"][win][::stride]
         out["mesh_force"] = r["mesh_force"][win][::stride]
         out["static_journal"] = np.asarray(s.static_positions)

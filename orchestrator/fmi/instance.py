@@ -1,0 +1,93 @@
+"""One FMI 2.0 co-simulation slave instantiated through fmpy, with its message log.
+
+Calls go through fmpy's low-level functions with preallocated ctypes arrays (a few µs each).
+A slave that fails (e.g. eccentricity >= 1, a Newmark step that does not converge) logs the
+reason with status error and returns NaN outputs or a non-OK status; the transports of
+:mod:`orchestrator.fmi` turn that into :class:`FmuError` with the slave's log.
+"""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+__all__ = ["FmuError", "FmuInstance", "status_name"]
+
+_STATUS = ("ok", "warning", "discard", "error", "fatal", "pending")
+
+
+def status_name(status: int) -> str:
+    return _STATUS[status] if 0 <= status < len(_STATUS) else f"illegal status {status}"
+
+
+class FmuError(RuntimeError):
+    """An FMU call failed; the message carries the slave's log."""
+
+
+class FmuInstance:
+    """One instantiated FMI 2.0 co-simulation slave with a message log."""
+
+    def __init__(self, path: Path | str, instance_name: str):
+        from fmpy import extract, read_model_description
+        from fmpy.fmi2 import FMU2Slave
+
+        path = Path(path)
+        if not path.is_file():
+            raise FmuError(f"FMU file not found: {path}")
+        self.path = path
+        self.md = read_model_description(str(path))
+        self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
+        self.types = {v.name: v.type for v in self.md.modelVariables}
+        self.messages: list[str] = []
+        self.errors = 0  # messages logged with status error or fatal
+        self._dir = extract(str(path))
+        self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=self._dir,
+                             modelIdentifier=self.md.coSimulation.modelIdentifier,
+                             instanceName=instance_name)
+
+        from fmpy.fmi2 import calloc as _calloc
+        from fmpy.fmi2 import (
+            fmi2CallbackAllocateMemoryTYPE,
+            fmi2CallbackFreeMemoryTYPE,
+            fmi2CallbackFunctions,
+            fmi2CallbackLoggerTYPE,
+        )
+        from fmpy.fmi2 import free as _free
+
+        def logger(env, name, status, category, message):
+            self.messages.append(f"[{status_name(status)}] {message.decode(errors='replace')}")
+            if status >= 3:
+                self.errors += 1
+
+        cb = fmi2CallbackFunctions()
+        cb.logger = fmi2CallbackLoggerTYPE(logger)
+        cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(_calloc)
+        cb.freeMemory = fmi2CallbackFreeMemoryTYPE(_free)
+        self._callbacks = cb  # keep the ctypes callbacks alive
+        self.fmu.instantiate(loggingOn=True, callbacks=cb)
+
+    def set(self, values: dict) -> None:
+        reals = {k: v for k, v in values.items() if self.types[k] == "Real"}
+        ints = {k: v for k, v in values.items() if self.types[k] == "Integer"}
+        if reals:
+            self.fmu.setReal([self.vr[k] for k in reals], [float(v) for v in reals.values()])
+        if ints:
+            self.fmu.setInteger([self.vr[k] for k in ints], [int(v) for v in ints.values()])
+
+    def log_tail(self, n: int = 3, since: int = 0) -> str:
+        """The last ``n`` log messages (from index ``since`` on), for error messages."""
+        tail = self.messages[since:][-n:]
+        return "; ".join(tail) if tail else "(no message in the FMU log)"
+
+    def close(self) -> None:
+        """Terminate and free the instance, remove the extracted folder (idempotent)."""
+        if self.fmu is None:
+            return
+        try:
+            self.fmu.terminate()
+        finally:
+            self.fmu.freeInstance()
+            self.fmu = None
+            shutil.rmtree(self._dir, ignore_errors=True)
+
+
