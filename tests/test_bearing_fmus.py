@@ -6,23 +6,15 @@ user's host runs them, and it checks the pythonfmu 0.7.0 workarounds of fmu_src.
 same FMU fails and the host often aborts at exit.
 """
 
-import json
 import subprocess
 import sys
-import textwrap
 
 import pytest
 
-from fmu_src.build import FMUS, build_fmus
+from bearing_fmu import MODELS, fmu_name
+from tests.helpers import ROOT, run_isolated
 
-BEARING_FMUS = [n for n in FMUS if n.startswith("Bearing")]
-
-
-@pytest.fixture(scope="module")
-def fmu_dir(tmp_path_factory):
-    dest = tmp_path_factory.mktemp("fmus")
-    build_fmus(dest, BEARING_FMUS)
-    return dest
+BEARING_FMUS = [fmu_name(m) for m in MODELS]
 
 
 @pytest.mark.parametrize("name", BEARING_FMUS)
@@ -47,18 +39,10 @@ def test_all_bearing_fmus_share_one_variable_list(fmu_dir):
     assert units["F_s"] == "N" and units["K_st"] == "N/m" and units["C_tt"] == "N.s/m"
 
 
-def run_isolated(code: str) -> dict:
-    """Run ``code`` in a fresh interpreter; it prints one JSON line and exits normally."""
-    script = textwrap.dedent(code)
-    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
-                          timeout=300)
-    assert proc.returncode == 0, f"exit code {proc.returncode}: {proc.stderr[-3000:]}"
-    return json.loads(proc.stdout.strip().splitlines()[-1])
-
-
-@pytest.mark.parametrize("name,model", [("BearingShort", "short"), ("BearingHybrid", "hybrid"),
-                                        ("BearingLumped", "lumped")])
-def test_fmu_equals_in_process_model_in_global_frame(fmu_dir, name, model):
+@pytest.mark.parametrize("model", list(MODELS))
+def test_fmu_equals_in_process_model_in_global_frame(fmu_dir, model):
+    """Every model, in a turned and mirrored frame, with non-default options: the FMU gives the
+    in-process model's force, Kb and Cb (the linear model before its freeze: its film)."""
     out = run_isolated(f"""
         import json, numpy as np
         from bearing_fmu import BearingData, model_class
@@ -66,11 +50,13 @@ def test_fmu_equals_in_process_model_in_global_frame(fmu_dir, name, model):
         from orchestrator.fmi import FmuBearings
         from orchestrator.inprocess import ModelBearings
         b = BearingData(0.09, 0.065, 110e-6, 0.0288)
+        options = dict(nodes=96, axial_intervals=16, lumped_stiffness=3e8, lumped_damping=2e3)
+        cls = model_class({model!r})
+        mine = {{o.key: options[o.key] for o in cls.options}}
         params = dict(D=0.09, L=0.065, C=110e-6, mu=0.0288, frame_angle=0.3, rotation_sign=-1,
-                      k_lumped=3e8, c_lumped=2e3)
-        kw = dict(hybrid=dict(n=192), lumped=dict(stiffness=3e8, damping=2e3)).get("{model}", {{}})
-        ref = ModelBearings([model_class("{model}")(b, **kw)], [LocalFrame(0.3, -1)], [54.0])
-        fmu = FmuBearings([r"{fmu_dir / (name + '.fmu')}"], [params], [54.0])
+                      **options)
+        ref = ModelBearings([cls.from_parameters(b, **mine)], [LocalFrame(0.3, -1)], [54.0])
+        fmu = FmuBearings([r"{fmu_dir / (fmu_name(model) + '.fmu')}"], [params], [54.0])
         states = np.array([[40e-6, -30e-6, 1e-3, -2e-3]])
         f1, k1, c1 = ref.evaluate(states)
         f2, k2, c2 = fmu.evaluate(states)
@@ -160,9 +146,7 @@ def test_many_instances_of_one_fmu_in_one_process(fmu_dir):
 
 
 def test_variable_docs_are_generated_from_the_contract():
-    from pathlib import Path
-
     from fmu_src.contract import document
 
-    doc = Path(__file__).parents[1] / "docs" / "fmu-variables.md"
+    doc = ROOT / "docs" / "fmu-variables.md"
     assert doc.read_text() == document(), "run: python -m fmu_src.contract > docs/fmu-variables.md"

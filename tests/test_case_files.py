@@ -1,14 +1,13 @@
 """Case files: the paper's case loads in SI; bad files fail early, naming the field."""
 
 import math
-from pathlib import Path
 
 import pytest
 
-from orchestrator.case import FIELDS, CaseError, load_case, schema_markdown
+from fmu_src.case import FIELDS, CaseError, load_case, schema_markdown, shipped_cases
+from tests.helpers import ROOT
 
-MODELS = Path(__file__).parents[1] / "models"
-SPUR = MODELS / "baguet2010_spur.toml"
+SPUR = shipped_cases()["baguet2010_spur"]
 
 
 def test_paper_spur_case_in_si_units():
@@ -69,7 +68,31 @@ def test_schema_table_lists_every_field():
 
 
 def test_case_docs_are_generated_from_the_schema():
-    from orchestrator.case import document
+    from fmu_src.case import document
 
-    doc = Path(__file__).parents[1] / "docs" / "case-files.md"
-    assert doc.read_text() == document(), "run: python -m orchestrator.case > docs/case-files.md"
+    doc = ROOT / "docs" / "case-files.md"
+    assert doc.read_text() == document(), "run: python -m fmu_src.case > docs/case-files.md"
+
+
+def test_shipped_cases_load_by_name_from_any_folder(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert set(shipped_cases()) >= {"baguet2010_spur", "baguet2010_helical"}
+    assert load_case("baguet2010_spur")["case.name"] == "baguet2010_spur"
+    assert load_case("baguet2010_helical.toml")["gear_pair.helix_angle"] == pytest.approx(
+        math.radians(12.5))
+    with pytest.raises(CaseError, match="shipped cases: baguet2010_helical, baguet2010_spur"):
+        load_case("baguet2010_nope")
+
+
+def test_model_options_come_from_the_registered_models():
+    """bearings.<option> fields exist for every option a registered model declares, and the
+    chosen model's own bounds apply (hybrid needs at least 16 nodes, fd 8)."""
+    from bearing_fmu import MODELS, model_class
+
+    keys = {f.key for f in FIELDS}
+    for name in MODELS:
+        for opt in model_class(name).options:
+            assert f"bearings.{opt.key}" in keys
+    assert load_case(SPUR, {"bearings.model": "fd", "bearings.nodes": 8})["bearings.nodes"] == 8
+    with pytest.raises(CaseError, match=r"bearings\.nodes = 8: the hybrid model needs >= 16"):
+        load_case(SPUR, {"bearings.nodes": 8})

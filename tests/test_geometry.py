@@ -4,7 +4,8 @@ import math
 
 import pytest
 
-from gear_fmu.geometry import GearGeometryError, GearPair, involute, paper_gear_pair
+from fmu_src.examples import paper_gear_pair
+from gear_fmu.geometry import GearGeometryError, GearPair, involute
 
 DEG = math.pi / 180
 

@@ -12,7 +12,7 @@ from scipy.integrate import quad
 from bearing_fmu import BearingData, EccentricityError
 from bearing_fmu.axial import AXIAL_COEF, T_SWITCH, axial_integrals, axial_shape
 from bearing_fmu.hybrid import HybridBearing, HybridConvergenceError
-from tests.jacobian_check import numeric_jacobian
+from tests.helpers import numeric_jacobian
 
 
 def unit(lam):

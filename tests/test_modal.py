@@ -6,15 +6,16 @@ import numpy as np
 import pytest
 import scipy.linalg
 
+from fmu_src.examples import paper_system
 from gear_fmu.modal import (
     bearing_stiffness_matrix,
     modal_damping_matrix,
     mode_table,
     natural_modes,
 )
-from gear_fmu.system import paper_system_example
+from gear_fmu.system import Shaft
 
-SYSTEM = paper_system_example(n_elements=8)
+SYSTEM = paper_system(n_elements=8)
 STIFF = 1e13  # N/m: practically rigid bearings
 
 
@@ -114,4 +115,4 @@ def test_bad_input():
     with pytest.raises(ValueError, match="zeta"):
         modal_damping_matrix(SYSTEM, natural_modes(SYSTEM, 1e8), 1.5)
     with pytest.raises(ValueError, match="n_elements"):
-        paper_system_example(n_elements=7)
+        Shaft(SYSTEM.shafts[0].section, 0.16, n_elements=7)

@@ -10,15 +10,13 @@ import math
 import numpy as np
 import pytest
 
+from fmu_src.case import load_case
+from fmu_src.examples import HELICAL, SPUR
 from orchestrator.analysis import fit_ellipse, run_metrics, steady_window
-from orchestrator.case import load_case
 from orchestrator.plots import normalised_spectrum
-from orchestrator.reproduce import _has_line
+from orchestrator.reproduce.figures import has_line
 from orchestrator.results import read_results
 from orchestrator.run import build_master, run_case
-
-SPUR = "models/baguet2010_spur.toml"
-HELICAL = "models/baguet2010_helical.toml"
 
 
 def short_run(tmp_path, path=SPUR, model="hybrid", periods=192, **overrides):
@@ -47,14 +45,14 @@ def test_bearing_force_spectra_have_the_papers_lines(spur):
     r, _ = spur
     f, a = spectrum(r, 0, revolutions=4.0)
     for line in (1.0, 26.0, 52.0, 78.0):
-        assert _has_line(f, a, line), line
+        assert has_line(f, a, line), line
     for none in (13.0, 30.5, 40.0):
-        assert not _has_line(f, a, none), none
+        assert not has_line(f, a, none), none
     f, a = spectrum(r, 2)
     for line in (1.0, 157 / 26, 157.0, 314.0):
-        assert _has_line(f, a, line), line
+        assert has_line(f, a, line), line
     for none in (3.3, 100.0):
-        assert not _has_line(f, a, none), none
+        assert not has_line(f, a, none), none
 
 
 def test_spur_orbits_are_centred_on_the_static_position(spur):
@@ -62,7 +60,7 @@ def test_spur_orbits_are_centred_on_the_static_position(spur):
     r, s = spur
     win = steady_window(r["time"], 2 * math.pi / 325.0 * 4)
     for b, c in enumerate((150e-6, 150e-6, 110e-6, 110e-6)):
-        o = r["journal"][win, b, :2]
+        o = r["journal_position"][win, b]
         centre = fit_ellipse(o[:, 0], o[:, 1])["centre"]
         assert np.hypot(*(centre - s.static_positions[b])) < 0.05 * c
 
@@ -70,9 +68,9 @@ def test_spur_orbits_are_centred_on_the_static_position(spur):
 def test_helical_orbits_shift_to_either_side(tmp_path):
     """Fig. 12: with the helical pair the mesh moment tilts the shafts: the static positions of
     bearings 1 and 2 (and 3 and 4) part, on opposite sides of their mean."""
-    master, st, _, _ = build_master(load_case(HELICAL), in_process=True)
+    master = build_master(load_case(HELICAL), in_process=True)
     master.solve_static()
-    x0 = st.journal_states()[:, :2]
+    x0 = master.structure.journal_states()[:, :2]
     for b1, b2, c in ((0, 1, 150e-6), (2, 3, 110e-6)):
         mid = 0.5 * (x0[b1] + x0[b2])
         d1, d2 = x0[b1] - mid, x0[b2] - mid
@@ -84,10 +82,9 @@ def test_mean_eccentricity_grows_with_torque():
     """Fig. 9: the static position (the centre of the orbits) moves out with the torque."""
     ecc = []
     for torque in (50.0, 100.0, 220.0, 400.0, 600.0):
-        master, st, _, _ = build_master(load_case(SPUR, {"operation.torque": torque}),
-                                        in_process=True)
+        master = build_master(load_case(SPUR, {"operation.torque": torque}), in_process=True)
         master.solve_static()
-        ecc.append(np.hypot(*st.journal_states()[0, :2]) / 150e-6)
+        ecc.append(np.hypot(*master.structure.journal_states()[0, :2]) / 150e-6)
     assert all(a < b for a, b in itertools.pairwise(ecc))
     print("\nbearing 1 eccentricity at T = 50 ... 600 N m: " + ", ".join(f"{e:.3f}" for e in ecc))
 

@@ -20,14 +20,14 @@ def test_spectrum_lines_at_rotation_and_mesh_orders():
 
 def test_basic_figures_are_written(tmp_path):
     path = tmp_path / "r.h5"
-    channels = {"journal": ((4, 4), "m", "journal states"),
+    channels = {"journal_position": ((4, 2), "m", "journal positions"),
                 "bearing_force": ((4, 2), "N", "film forces"),
                 "mesh_force": ((), "N", "total mesh force")}
     with ResultsWriter(path, channels, attrs={"clearance": json.dumps([1.5e-4] * 4)}) as w:
         for k in range(200):
             ph = 0.1 * k
-            j = np.tile([5e-5 * np.cos(ph), 5e-5 * np.sin(ph), 0, 0], (4, 1))
-            w.append(time=k * 1e-4, journal=j, bearing_force=np.full((4, 2), 10.0 + ph),
+            j = np.tile([5e-5 * np.cos(ph), 5e-5 * np.sin(ph)], (4, 1))
+            w.append(time=k * 1e-4, journal_position=j, bearing_force=np.full((4, 2), 10.0 + ph),
                      mesh_force=4500 + np.sin(ph))
     paths = basic_figures(path, tmp_path / "fig")
     assert [p.name for p in paths] == ["orbits.png", "bearing_force.png", "mesh_force.png"]

@@ -7,17 +7,17 @@ import math
 import numpy as np
 import pytest
 
+from fmu_src import description
+from fmu_src.case import CaseError, load_case, shipped_cases
 from gear_fmu.newmark import newmark_step
-from orchestrator import system
-from orchestrator.case import CaseError, load_case
 from orchestrator.cli import main
 from orchestrator.inprocess import ModelBearings
 from orchestrator.results import read_results
 from orchestrator.run import RunError, build_master, run_case
-from tests.test_structure import monolithic_structure
+from tests.helpers import monolithic_structure
 
-SPUR = "models/baguet2010_spur.toml"
-HELICAL = "models/baguet2010_helical.toml"
+SPUR = "baguet2010_spur"
+HELICAL = "baguet2010_helical"
 
 
 def paper_case(path=SPUR, **overrides):
@@ -30,16 +30,16 @@ def test_cosimulation_equals_the_monolithic_newton_solution():
     their analytic Jacobians inside the residual (Eq. 11-16), over 192 steps of the paper's case
     (spur, T 220 N m, e_mu 0.6 mm), both converged to 1e-10."""
     case = paper_case(**{"simulation.tolerance": 1e-10})
-    master, st, _, _ = build_master(case, in_process=True)
+    master = build_master(case, in_process=True)
     master.solve_static()
-    kb0 = master.laws.kb
-    st.set_damping_reference(0.5 * (kb0 + np.transpose(kb0, (0, 2, 1))))
+    master.exit_initialization()
+    st = master.structure.structure
 
-    models = system.bearing_models(case)  # a second, independent set for the reference
-    speeds = system.bearing_speeds(case)
+    models = description.bearing_models(case)  # a second, independent set for the reference
+    speeds = description.bearing_speeds(case)
 
     def film_law(j, x, v):
-        fr = system.BEARING_FRAMES[j]
+        fr = description.BEARING_FRAMES[j]
         r = models[j].evaluate(*fr.to_local(x), *fr.to_local(v), speeds[j])
         return fr.to_global(r.force), fr.matrix_to_global(r.stiffness), \
             fr.matrix_to_global(r.damping)
@@ -75,16 +75,16 @@ def test_iterations_per_step(model, low, high, tmp_path):
 def test_spur_orbits_identical_in_bearings_1_2_and_3_4(tmp_path):
     s = run_case(paper_case(), periods=16, in_process=True, out_dir=tmp_path, progress=False,
                  figures=False)
-    j = read_results(s.results)["journal"]
-    for part in (slice(0, 2), slice(2, 4)):  # positions, velocities
-        scale = np.abs(j[:, :, part]).max()
-        np.testing.assert_allclose(j[:, 0, part], j[:, 1, part], rtol=0, atol=1e-9 * scale)
-        np.testing.assert_allclose(j[:, 2, part], j[:, 3, part], rtol=0, atol=1e-9 * scale)
+    r = read_results(s.results)
+    for j in (r["journal_position"], r["journal_velocity"]):
+        scale = np.abs(j).max()
+        np.testing.assert_allclose(j[:, 0], j[:, 1], rtol=0, atol=1e-9 * scale)
+        np.testing.assert_allclose(j[:, 2], j[:, 3], rtol=0, atol=1e-9 * scale)
     # and the helical pair breaks the symmetry (Fig. 12)
     h = run_case(paper_case(HELICAL), periods=2, in_process=True, out_dir=tmp_path,
                  progress=False, figures=False)
-    jh = read_results(h.results)["journal"]
-    assert np.abs(jh[:, 0, :2] - jh[:, 1, :2]).max() > 0.05 * 150e-6
+    jh = read_results(h.results)["journal_position"]
+    assert np.abs(jh[:, 0] - jh[:, 1]).max() > 0.05 * 150e-6
 
 
 def test_results_file_is_self_describing_and_complete(tmp_path):
@@ -97,7 +97,7 @@ def test_results_file_is_self_describing_and_complete(tmp_path):
     assert math.isclose(r["attrs"]["dt"], 2 * math.pi / (325 * 26) / 32)
     # the static bearing forces carry half the tooth force each on the pinion shaft
     f0 = np.array(json.loads(r["attrs"]["static_bearing_force"]))
-    w = 220.0 / system.gear_pair(paper_case()).base_radius[0]
+    w = 220.0 / description.gear_pair(paper_case()).base_radius[0]
     assert np.hypot(*f0[0]) == pytest.approx(w / 2, rel=1e-4)
     assert [p.name for p in s.figures] == ["orbits.png", "bearing_force.png", "mesh_force.png"]
 
@@ -124,17 +124,53 @@ def test_a_failing_run_keeps_what_it_computed(tmp_path, monkeypatch):
     assert "forced failure" in r["attrs"]["stopped_by"]
 
 
-def test_swapping_the_bearing_model_is_a_name(tmp_path):
-    """Same case, another bearing model by name; the static positions differ as Table 4 says
-    (short-bearing theory ~12 % off in eccentricity, the linear model equal to the hybrid)."""
+def test_swapping_the_bearing_model_is_a_name():
+    """Same case, another bearing model by name. Table 4: short-bearing theory puts bearing
+    1's static eccentricity 12.40 % below the paper's reference; here 12.65 % below the hybrid
+    method (which is within 0.005 % of the FD reference, tests/test_bearing_references.py).
+    Asserted within 0.4 points of the paper's value (measured: 0.25)."""
     ecc = {}
-    for model in ("hybrid", "short", "linear"):
-        master, st, bearings, _ = build_master(paper_case(), model, in_process=True)
-        assert isinstance(bearings, ModelBearings)
+    for model in ("hybrid", "short"):
+        master = build_master(paper_case(), model, in_process=True)
+        assert isinstance(master.bearings, ModelBearings)
+        assert [m.name for m in master.bearings.models] == [model] * 4
         master.solve_static()
-        ecc[model] = np.hypot(*st.journal_states()[0, :2]) / 150e-6
-    assert ecc["linear"] == ecc["hybrid"]
-    assert -0.2 < ecc["short"] / ecc["hybrid"] - 1 < -0.05
+        ecc[model] = np.hypot(*master.structure.journal_states()[0, :2]) / 150e-6
+    error = ecc["short"] / ecc["hybrid"] - 1
+    print(f"\nshort vs hybrid, static eccentricity of bearing 1: {100 * error:+.3f} % "
+          "(paper: -12.40 %)")
+    assert abs(error - (-0.1240)) < 0.004
+
+
+def test_linear_model_freezes_the_hybrid_law_at_the_static_position():
+    """Table 4 case 0 (Eq. 17-18): after the static solution the linear model is the affine law
+    F0 - Kb dX - Cb dXdot of the hybrid film at X0, computed here by an independent hybrid
+    model; the nonlinear film differs from it at a finite displacement."""
+    case = paper_case()
+    master = build_master(case, "linear", in_process=True)
+    static = master.solve_static()
+    master.exit_initialization()
+    models = master.bearings.models
+    speeds = description.bearing_speeds(case)
+    worst = worst_nonlinear = 0.0
+    for b, (model, frame, data) in enumerate(zip(models, description.BEARING_FRAMES,
+                                                 description.bearing_data(case), strict=True)):
+        x0 = frame.to_local(static.states[b, :2])
+        ref = type(model.film)(data).evaluate(*x0, 0.0, 0.0, speeds[b])
+        dx = 0.05 * data.clearance * np.array([0.6, -0.8])
+        v = np.array([1e-4, 2e-4])  # m/s
+        frozen = model.evaluate(*(x0 + dx), *v, speeds[b]).force
+        expected = ref.force - ref.stiffness @ dx - ref.damping @ v
+        worst = max(worst, np.abs(frozen - expected).max() / np.abs(expected).max())
+        film = model.film.evaluate(*(x0 + dx), *v, speeds[b]).force
+        worst_nonlinear = max(worst_nonlinear,
+                              np.abs(film - expected).max() / np.abs(expected).max())
+    print(f"\nlinear model vs Eq. 17 at X0 + 0.05 C: {worst:.1e}; nonlinear film vs Eq. 17: "
+          f"{worst_nonlinear:.1e}")
+    # the two hybrid evaluations at X0 differ by their warm starts (Jacobians to ~1e-7):
+    # measured 6.5e-9, asserted with a margin of 3; the second-order film term: measured 4e-2
+    assert worst < 2e-8
+    assert worst_nonlinear > 1e-2
 
 
 @pytest.mark.parametrize("text,message", [
@@ -144,7 +180,7 @@ def test_swapping_the_bearing_model_is_a_name(tmp_path):
     ("[bogus]\nx = 1", "unknown section"),
 ])
 def test_bad_case_files_fail_before_the_run_naming_the_field(text, message, tmp_path, capsys):
-    base = open(SPUR).read()
+    base = shipped_cases()[SPUR].read_text()
     if text.startswith("[gear_pair]\nmodule"):
         bad = base.replace('module = "4 mm"', 'module = "4 kg"')
     elif text.startswith("[bearings]"):

@@ -8,7 +8,7 @@ from scipy.integrate import quad
 
 from bearing_fmu import BearingData, BearingError, EccentricityError
 from bearing_fmu.short_bearing import ShortBearing, ocvirk_static_force
-from tests.jacobian_check import numeric_jacobian
+from tests.helpers import numeric_jacobian
 
 BEARING = BearingData(diameter=0.070, length=0.050, clearance=150e-6, viscosity=0.0288)
 STATES = [

@@ -1,54 +1,21 @@
 """The gear-shaft Structure: statics, condensed Newmark step, rollback, master emulation.
 
-``LineMesh`` stands in for the distributed mesh element (same ``evaluate`` API): unilateral
-springs spread over the face width on the line of action through the pitch point of the paper's
-spur pair, with an optional stiffness modulation at the mesh frequency and a lead deviation.
+``tests.helpers.LineMesh`` stands in for the distributed mesh element (same ``evaluate`` API):
+unilateral springs spread over the face width on the line of action through the pitch point of
+the paper's spur pair, with an optional stiffness modulation at the mesh frequency and a lead
+deviation.
 """
 
 import math
-import types
 
 import numpy as np
 import pytest
 
-from gear_fmu.newmark import NewmarkConvergenceError, NonlinearForce, newmark_step
+from fmu_src.examples import paper_system
+from gear_fmu.analyses import support_loads
+from gear_fmu.newmark import NewmarkConvergenceError, newmark_step
 from gear_fmu.structure import Structure, StructureLoads
-from gear_fmu.system import paper_system_example
-
-T_IN = 220.0  # N m
-OMEGA = 325.0  # rad/s
-ALPHA = math.radians(20.0)
-R1, R2 = 0.052, 0.314  # pitch radii (x1 + x2 = 0: operating = standard)
-RB1 = R1 * math.cos(ALPHA)
-
-
-class LineMesh:
-    """Stand-in mesh element: ``evaluate(pinion_angle, q12)`` as gear_fmu.mesh.MeshElement."""
-
-    def __init__(self, width=0.040, n_slices=10, k_per_length=1.4e10, deviation=None,
-                 modulation=0.0, teeth=26):
-        n = np.array([math.sin(ALPHA), math.cos(ALPHA), 0.0])
-        o2 = np.array([R1 + R2, 0.0, 0.0])
-        zs = ((np.arange(n_slices) + 0.5) / n_slices - 0.5) * width
-        self.v = np.array([
-            np.concatenate([n, np.cross([R1, 0.0, z], n), -n, -np.cross(np.array([R1, 0.0, z]) - o2,
-                                                                         n)])
-            for z in zs
-        ])
-        self.kdl = k_per_length * width / n_slices
-        self.e = np.zeros(n_slices) if deviation is None else np.asarray(deviation, float)
-        self.modulation = modulation
-        self.teeth = teeth
-
-    def evaluate(self, pinion_angle, q12):
-        k = self.kdl * (1.0 + self.modulation * math.cos(self.teeth * pinion_angle))
-        delta = self.v @ q12 - self.e
-        active = delta > 0.0
-        load = np.where(active, k * delta, 0.0)
-        va = self.v[active]
-        return types.SimpleNamespace(
-            force=-(self.v.T @ load), stiffness=k * va.T @ va, delta=delta, load=load,
-            active=active, total_load=float(load.sum()), transmission_error=0.0)
+from tests.helpers import ALPHA, OMEGA, R1, R2, RB1, T_IN, LineMesh, affine, monolithic_structure
 
 
 def iso(value, n=4):
@@ -56,7 +23,7 @@ def iso(value, n=4):
 
 
 def make(mesh=None, loads=None, **kw):
-    return Structure(paper_system_example(), LineMesh() if mesh is None else mesh,
+    return Structure(paper_system(), LineMesh() if mesh is None else mesh,
                      StructureLoads() if loads is None else loads, **kw)
 
 
@@ -79,7 +46,7 @@ def test_static_reactions_balance_the_mesh_force_and_are_symmetric():
     moment = (sys_.stiffness @ st.full_vector("x"))[sys_.output_dof]
     assert -moment == pytest.approx(-T_IN * R2 / R1, rel=1e-9)
     # loads on stiff supports (first guess for the master)
-    np.testing.assert_allclose(st.support_loads(), -reac, rtol=1e-3)
+    np.testing.assert_allclose(support_loads(st), -reac, rtol=1e-3)
 
 
 def test_gravity_is_carried_by_the_bearings():
@@ -96,53 +63,6 @@ def test_gravity_is_carried_by_the_bearings():
     w_mesh = st.mesh_state.total_load
     np.testing.assert_allclose(reac[0] + reac[1], w_mesh * n - st.system.shaft_masses[0] * g,
                                rtol=1e-9)
-
-
-def monolithic_structure(st, bearing_law):
-    """Full (reduced) M, C, K, load and nonlinear callback for the generic Newmark step."""
-    sys_ = st.system
-    red = sys_.reduced_index
-    m, c, k = (sys_.reduce(a) for a in (sys_.mass, st.damping_full, sys_.stiffness))
-    gear = red[sys_.gear_dofs]
-    brg = red[sys_.bearing_dofs]
-    n = m.shape[0]
-    z1, z2 = sys_.teeth
-    masses = sys_.shaft_masses
-    e = st.loads.unbalance
-    w1, w2 = OMEGA, OMEGA * z1 / z2
-
-    def force(t):  # Eq. (10) written out here independently
-        f = np.zeros(n)
-        f[red[sys_.input_dof]] = st.loads.torque
-        f[gear[0]] += masses[0] * e[0] * w1**2 * math.cos(w1 * t)
-        f[gear[1]] += masses[0] * e[0] * w1**2 * math.sin(w1 * t)
-        f[gear[6]] += masses[1] * e[1] * w2**2 * math.cos(-w2 * t)
-        f[gear[7]] += masses[1] * e[1] * w2**2 * math.sin(-w2 * t)
-        return f
-
-    def nonlinear_at(t):
-        def nl(x, v):
-            ms = st.mesh.evaluate(st.pinion_angle(t), x[gear])
-            f = np.zeros(n)
-            dx = np.zeros((n, n))
-            dv = np.zeros((n, n))
-            f[gear] += ms.force
-            dx[np.ix_(gear, gear)] -= ms.stiffness
-            for j in range(4):
-                fb, kb, cb = bearing_law(j, x[brg[j]], v[brg[j]])
-                f[brg[j]] += fb
-                dx[np.ix_(brg[j], brg[j])] -= kb
-                dv[np.ix_(brg[j], brg[j])] -= cb
-            return NonlinearForce(f, dx, dv, ms.active)
-        return nl
-
-    return m, c, k, force, nonlinear_at
-
-
-def affine(f0, kb, cb):
-    def law(j, x, v):
-        return f0[j] - kb[j] @ x - cb[j] @ v, kb[j], cb[j]
-    return law
 
 
 def test_condensed_step_equals_generic_newmark_on_the_full_system():

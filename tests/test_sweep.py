@@ -8,7 +8,7 @@ import pytest
 from orchestrator.analysis import fit_ellipse, steady_window
 from orchestrator.sweep import SweepPoint, read_sweep, run_sweep
 
-SPUR = "models/baguet2010_spur.toml"
+SPUR = "baguet2010_spur"
 
 
 def test_ellipse_fit_recovers_a_rotated_ellipse_from_a_noisy_orbit():

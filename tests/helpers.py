@@ -1,0 +1,156 @@
+"""Helpers shared by the test modules (no tests here).
+
+Paths are resolved from this file, never from the working directory.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import subprocess
+import sys
+import tempfile
+import textwrap
+import types
+from pathlib import Path
+
+import numpy as np
+
+from gear_fmu.newmark import NonlinearForce
+
+ROOT = Path(__file__).resolve().parents[1]
+DATA = ROOT / "tests" / "data"
+
+
+def run_isolated(code: str, timeout: float = 600, fresh_numba: bool = False) -> dict:
+    """Run ``code`` (dedented) in a fresh interpreter started in an empty temporary folder;
+    it prints one JSON object on its last line and exits normally. Returns that object.
+
+    ``fresh_numba``: compile every numba kernel anew (an empty ``NUMBA_CACHE_DIR``), for
+    comparisons to the last digit (see ``tests/data/generate_golden.py``)."""
+    with tempfile.TemporaryDirectory(prefix="gsb_test_") as cwd:
+        env = dict(os.environ)
+        if fresh_numba:
+            env["NUMBA_CACHE_DIR"] = str(Path(cwd) / "numba")
+        proc = subprocess.run([sys.executable, "-c", textwrap.dedent(code)],
+                              capture_output=True, text=True, timeout=timeout, cwd=cwd, env=env)
+    assert proc.returncode == 0, f"exit code {proc.returncode}: {proc.stderr[-3000:]}"
+    return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
+def numeric_jacobian(model, state, h=1e-6):
+    """(2, 4) central-difference dFbar/d(xbar, ybar, xbar_dot, ybar_dot) of a film model's
+    force at ``state``: the independent check of analytic Jacobians."""
+    out = np.zeros((2, 4))
+    for j in range(4):
+        sp, sm = list(state), list(state)
+        sp[j] += h
+        sm[j] -= h
+        out[:, j] = (model.dimensionless(*sp, jacobian=False).force
+                     - model.dimensionless(*sm, jacobian=False).force) / (2 * h)
+    return out
+
+
+def relative(a, b) -> float:
+    """Largest |a - b| relative to the largest |b|."""
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    return float(np.abs(a - b).max() / max(np.abs(b).max(), 1e-300))
+
+
+def run_paper_case(out_dir, periods, in_process=True, fmu_dir=None, bearing="hybrid",
+                   case="baguet2010_spur", **overrides):
+    """A short run of a shipped case (no figures, no progress): (results dict, summary)."""
+    from fmu_src.case import load_case
+    from orchestrator.results import read_results
+    from orchestrator.run import run_case
+
+    s = run_case(load_case(case, overrides or None), bearing=bearing, periods=periods,
+                 in_process=in_process, out_dir=out_dir, fmu_dir=fmu_dir, progress=False,
+                 figures=False)
+    return read_results(s.results), s
+
+
+# ----------------------------------------------------------------- structure stand-ins
+T_IN = 220.0  # N m
+OMEGA = 325.0  # rad/s
+ALPHA = math.radians(20.0)
+R1, R2 = 0.052, 0.314  # pitch radii (x1 + x2 = 0: operating = standard)
+RB1 = R1 * math.cos(ALPHA)
+
+
+class LineMesh:
+    """Stand-in mesh element: ``evaluate(pinion_angle, q12)`` as gear_fmu.mesh.MeshElement."""
+
+    def __init__(self, width=0.040, n_slices=10, k_per_length=1.4e10, deviation=None,
+                 modulation=0.0, teeth=26):
+        n = np.array([math.sin(ALPHA), math.cos(ALPHA), 0.0])
+        o2 = np.array([R1 + R2, 0.0, 0.0])
+        zs = ((np.arange(n_slices) + 0.5) / n_slices - 0.5) * width
+        self.v = np.array([
+            np.concatenate([n, np.cross([R1, 0.0, z], n), -n, -np.cross(np.array([R1, 0.0, z]) - o2,
+                                                                         n)])
+            for z in zs
+        ])
+        self.kdl = k_per_length * width / n_slices
+        self.e = np.zeros(n_slices) if deviation is None else np.asarray(deviation, float)
+        self.modulation = modulation
+        self.teeth = teeth
+
+    def evaluate(self, pinion_angle, q12):
+        k = self.kdl * (1.0 + self.modulation * math.cos(self.teeth * pinion_angle))
+        delta = self.v @ q12 - self.e
+        active = delta > 0.0
+        load = np.where(active, k * delta, 0.0)
+        va = self.v[active]
+        return types.SimpleNamespace(
+            force=-(self.v.T @ load), stiffness=k * va.T @ va, delta=delta, load=load,
+            active=active, total_load=float(load.sum()), transmission_error=0.0)
+
+
+def monolithic_structure(st, bearing_law):
+    """Full (reduced) M, C, K, load and nonlinear callback for the generic Newmark step."""
+    sys_ = st.system
+    red = sys_.reduced_index
+    m, c, k = (sys_.reduce(a) for a in (sys_.mass, st.damping_full, sys_.stiffness))
+    gear = red[sys_.gear_dofs]
+    brg = red[sys_.bearing_dofs]
+    n = m.shape[0]
+    z1, z2 = sys_.teeth
+    masses = sys_.shaft_masses
+    e = st.loads.unbalance
+    w1 = st.loads.input_speed
+    w2 = w1 * z1 / z2
+
+    def force(t):  # Eq. (10) written out here independently
+        f = np.zeros(n)
+        f[red[sys_.input_dof]] = st.loads.torque
+        f[gear[0]] += masses[0] * e[0] * w1**2 * math.cos(w1 * t)
+        f[gear[1]] += masses[0] * e[0] * w1**2 * math.sin(w1 * t)
+        f[gear[6]] += masses[1] * e[1] * w2**2 * math.cos(-w2 * t)
+        f[gear[7]] += masses[1] * e[1] * w2**2 * math.sin(-w2 * t)
+        return f
+
+    def nonlinear_at(t):
+        def nl(x, v):
+            ms = st.mesh.evaluate(st.pinion_angle(t), x[gear])
+            f = np.zeros(n)
+            dx = np.zeros((n, n))
+            dv = np.zeros((n, n))
+            f[gear] += ms.force
+            dx[np.ix_(gear, gear)] -= ms.stiffness
+            for j in range(4):
+                fb, kb, cb = bearing_law(j, x[brg[j]], v[brg[j]])
+                f[brg[j]] += fb
+                dx[np.ix_(brg[j], brg[j])] -= kb
+                dv[np.ix_(brg[j], brg[j])] -= cb
+            return NonlinearForce(f, dx, dv, ms.active)
+        return nl
+
+    return m, c, k, force, nonlinear_at
+
+
+def affine(f0, kb, cb):
+    def law(j, x, v):
+        return f0[j] - kb[j] @ x - cb[j] @ v, kb[j], cb[j]
+    return law

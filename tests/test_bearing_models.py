@@ -1,0 +1,113 @@
+"""Every registered bearing model (bearing_fmu.MODELS) honours the one contract.
+
+For each model, built by the registry's ``from_parameters`` with its default options:
+
+* a finite force, stiffness and damping at a loaded, moving journal state (SI, local frame);
+* Kb = -dF/dX and Cb = -dF/dXdot against central differences of its own force;
+* through the FMU built for it: one coupled static solution and Newmark step of the paper's
+  spur case equal to the same step in-process.
+
+A model added to the registry is tested here without touching this file.
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+from bearing_fmu import MODELS, BearingData, fmu_name, model_class
+from fmu_src.build import FMUS
+from tests.helpers import ROOT, relative, run_isolated
+
+BEARING = BearingData(diameter=0.070, length=0.050, clearance=150e-6, viscosity=0.0288)
+OMEGA = 325.0  # rad/s
+C = BEARING.clearance
+STATE = (0.35 * C, -0.55 * C, 0.02 * C * OMEGA, -0.01 * C * OMEGA)  # m, m/s (eccentricity 0.65)
+
+#: central-difference step (in units of C and C omega) and the largest disagreement measured
+#: with it (relative to the largest entry of Kb or Cb: truncation O(step^2) for the film models,
+#: round-off for the affine ones); asserted with a margin of 3
+FD_STEP = 1e-4
+MEASURED_JACOBIAN = {"hybrid": 6.8e-8, "short": 1.4e-7, "fd": 7.6e-8, "linear": 6.3e-13,
+                     "lumped": 3.0e-13}
+
+
+def built(name):
+    model = model_class(name).from_parameters(BEARING)
+    # the linear model is its film until the static position is known: freeze it there
+    model.end_initialization(STATE[0], STATE[1], OMEGA)
+    return model
+
+
+def central_differences(model, state, step):
+    """(2, 4) -dF/d(x, y, xdot, ydot) by central differences of the SI force."""
+    scales = (C, C, C * OMEGA, C * OMEGA)
+    out = np.zeros((2, 4))
+    for j in range(4):
+        sp, sm = list(state), list(state)
+        sp[j] += step * scales[j]
+        sm[j] -= step * scales[j]
+        fp = model.evaluate(*sp, OMEGA).force
+        fm = model.evaluate(*sm, OMEGA).force
+        out[:, j] = -(fp - fm) / (2.0 * step * scales[j])
+    return out
+
+
+def test_every_model_has_an_fmu_and_declared_options():
+    assert set(MODELS) == {"hybrid", "short", "fd", "linear", "lumped"}
+    for name in MODELS:
+        cls = model_class(name)
+        assert cls.name == name and fmu_name(name) in FMUS
+        assert set(cls.option_defaults()) == {o.key for o in cls.options}
+
+
+@pytest.mark.parametrize("name", list(MODELS))
+def test_force_and_jacobians_against_central_differences(name):
+    model = built(name)
+    r = model.evaluate(*STATE, OMEGA)
+    assert all(np.all(np.isfinite(a)) for a in (r.force, r.stiffness, r.damping))
+    assert np.hypot(*r.force) > 0.0
+    num = central_differences(model, STATE, FD_STEP)
+    err_k = relative(r.stiffness, num[:, :2])
+    err_c = relative(r.damping, num[:, 2:]) if np.abs(num[:, 2:]).max() > 0 else \
+        float(np.abs(r.damping).max())
+    print(f"\n{name}: Kb {err_k:.1e}, Cb {err_c:.1e} against central differences")
+    limit = 3.0 * MEASURED_JACOBIAN[name]
+    assert err_k <= limit and err_c <= limit
+
+
+@pytest.mark.parametrize("name", list(MODELS))
+def test_one_coupled_step_through_its_fmu_equals_in_process(name, fmu_dir):
+    """Static solution and the first Newmark step of the spur case, FMUs vs in-process."""
+    out = run_isolated(f"""
+        import json, sys
+        sys.path.insert(0, {str(ROOT)!r})
+        import numpy as np
+        from fmu_src.case import load_case
+        from fmu_src.description import time_step
+        from orchestrator.run import build_master
+        case = load_case("baguet2010_spur")
+        res = {{}}
+        for in_process in (True, False):
+            m = build_master(case, {name!r}, in_process=in_process, fmu_dir={str(fmu_dir)!r})
+            try:
+                static = m.solve_static()
+                m.exit_initialization()
+                step = m.step(0.0, time_step(case))
+            finally:
+                m.close()
+            res[in_process] = (static.states.tolist(), step.states.tolist(), step.iterations)
+        print(json.dumps(res))
+    """)
+    (x0_in, x1_in, it_in), (x0_fmu, x1_fmu, it_fmu) = out["true"], out["false"]
+    x0_in, x1_in, x0_fmu, x1_fmu = map(np.asarray, (x0_in, x1_in, x0_fmu, x1_fmu))
+    d_static = relative(x0_fmu[:, :2], x0_in[:, :2])
+    d_pos = relative(x1_fmu[:, :2], x1_in[:, :2])
+    d_vel = relative(x1_fmu[:, 2:], x1_in[:, 2:])
+    print(f"\n{name}: FMU vs in-process: X0 {d_static:.1e}, step 1 positions {d_pos:.1e}, "
+          f"velocities {d_vel:.1e}; iterations {it_fmu} / {it_in}")
+    # measured (every model): X0 and positions <= 1.6e-14, velocities <= 8.3e-10 (a velocity
+    # is 2/dt times a position increment: the round-off is amplified); margins of 6 and 3.6
+    assert it_fmu == it_in
+    assert math.isfinite(d_static) and d_static < 1e-13
+    assert d_pos < 1e-13 and d_vel < 3e-9
