@@ -26,7 +26,6 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 
 from .analyses import reference_damping
 from .condensation import N_BEARING, N_GEAR, NC, Condensation
@@ -39,7 +38,8 @@ from .loads import (
     unbalance_amplitudes,
     unbalance_force,
 )
-from .newmark import newmark_coefficients, newmark_history, newmark_kinematics
+from .newmark import newmark_coefficients
+from .step_assembly import check_laws, check_laws_fast, finish_step, prepare_step
 from .system import GearShaftSystem
 
 __all__ = ["StepInfo", "Structure", "StructureLoads", "StructureState", "check_laws"]
@@ -59,82 +59,6 @@ class StructureState:
     a: np.ndarray
     active: object
     mesh_state: object
-
-
-@njit(cache=True)
-def _prepare_step(h, g_const, x, v, a, f_c, unb, f0, kb, cb, s0, dt, ng):
-    """Right-hand side and condensed tangent of one Newmark step (Eq. 12, 14, 16).
-
-    Returns ``s_lin`` (nc, nc) = S0 + Kb + c1 Cb, ``z0`` (nc,) and ``y`` = A_rr^-1 b_r.
-    """
-    nc = s0.shape[0]
-    _, c1, _ = newmark_coefficients(dt)
-    pq = newmark_history(x, v, a, dt)
-    out = h @ pq
-    z0 = np.empty(nc)
-    for i in range(nc):
-        z0[i] = out[i] + out[nc + i] + g_const[i] + f_c[i]
-    z0[0] += unb[0]  # pinion node (u, v)
-    z0[1] += unb[1]
-    z0[6] += unb[2]  # gear node (u, v)
-    z0[7] += unb[3]
-    y = out[2 * nc:] + g_const[nc:]
-    s_lin = s0.copy()
-    for j in range(4):
-        o = ng + 2 * j
-        for r in range(2):
-            acc = f0[j, r]
-            for c in range(2):
-                acc += cb[j, r, c] * (c1 * x[o + c] + v[o + c])
-                s_lin[o + r, o + c] += kb[j, r, c] + c1 * cb[j, r, c]
-            z0[o + r] += acc
-    return s_lin, z0, y
-
-
-@njit(cache=True)
-def _all_finite(f0, kb, cb):
-    """True when every entry of the bearing laws is finite."""
-    return np.isfinite(f0).all() and np.isfinite(kb).all() and np.isfinite(cb).all()
-
-
-@njit(cache=True)
-def _finish_step(x, v, a, xc, y, w, dt):
-    """X_r = y - W X_c, then Newmark velocities and accelerations (Eq. 12)."""
-    n = x.size
-    nc = xc.size
-    x1 = np.empty(n)
-    x1[:nc] = xc
-    x1[nc:] = y - w @ xc
-    v1, a1 = newmark_kinematics(x1, x, v, a, dt)
-    return x1, v1, a1
-
-
-def check_laws(f0, kb, cb):
-    """Bearing laws as float arrays of shapes (4, 2), (4, 2, 2), (4, 2, 2), all finite."""
-    f0 = np.asarray(f0, dtype=float)
-    kb = np.asarray(kb, dtype=float)
-    cb = np.asarray(cb, dtype=float)
-    if f0.shape != (4, 2) or kb.shape != (4, 2, 2) or cb.shape != (4, 2, 2):
-        raise ValueError(
-            f"bearing laws shapes F0 {f0.shape}, Kb {kb.shape}, Cb {cb.shape}: expected "
-            "(4, 2), (4, 2, 2), (4, 2, 2)"
-        )
-    if not (np.all(np.isfinite(f0)) and np.all(np.isfinite(kb)) and np.all(np.isfinite(cb))):
-        raise ValueError("bearing laws contain non-finite values")
-    return f0, kb, cb
-
-
-def _check_laws_fast(f0, kb, cb):
-    """Shape and finiteness check of the laws at the cost of one sum (hot path)."""
-    if not all(isinstance(m, np.ndarray) for m in (f0, kb, cb)) or (
-        f0.shape != (4, 2) or kb.shape != (4, 2, 2) or cb.shape != (4, 2, 2)
-    ):
-        return check_laws(f0, kb, cb)
-    if f0.dtype != np.float64 or kb.dtype != np.float64 or cb.dtype != np.float64:
-        return check_laws(f0, kb, cb)
-    if not _all_finite(f0, kb, cb):
-        return check_laws(f0, kb, cb)
-    return f0, kb, cb
 
 
 class Structure:
@@ -343,14 +267,14 @@ class Structure:
         """
         timing = self.timing
         t0 = time.perf_counter() if timing is not None else 0.0
-        f0, kb, cb = _check_laws_fast(F0, Kb, Cb)
+        f0, kb, cb = check_laws_fast(F0, Kb, Cb)
         if self.active is None:
             raise RuntimeError("call static() before the first step (initial state X0)")
         cond, h, g_const = self._dynamic(dt)
         x, v, a = self.x, self.v, self.a
         t1 = self.t + dt
         unb = unbalance_force(self._unb, self._omega, t1)  # Eq. (10)
-        s_lin, z0, y = _prepare_step(h, g_const, x, v, a, self._f_c, unb, f0, kb, cb, cond.s0,
+        s_lin, z0, y = prepare_step(h, g_const, x, v, a, self._f_c, unb, f0, kb, cb, cond.s0,
                                      dt, N_GEAR)
         f_scale = max(self._f_scale, math.sqrt(float(np.sum(f0 * f0))))
         if timing is not None:
@@ -361,7 +285,7 @@ class Structure:
                                        f"Newmark step {self.n_steps + 1}", self.tol,
                                        self.max_iter, timing)
         t0 = time.perf_counter() if timing is not None else 0.0
-        self.x, self.v, self.a = _finish_step(x, v, a, xc, y, cond.w, dt)
+        self.x, self.v, self.a = finish_step(x, v, a, xc, y, cond.w, dt)
         self.t = t1
         self.n_steps += 1
         self.active = ms.active

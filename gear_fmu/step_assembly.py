@@ -1,0 +1,94 @@
+"""One structural Newmark step on the condensed DOFs: right-hand side, tangent and update.
+
+With the history terms of Eq. (12) (:func:`gear_fmu.newmark.newmark_history`) and the constant
+part of the tangent condensed onto the gear and bearing DOFs (:mod:`gear_fmu.condensation`),
+:func:`prepare_step` adds the external loads (Eq. 10 at the gear nodes) and the affine bearing
+laws F0 - Kb X - Cb Xdot (Eq. 17) to the right-hand side and ``Kb + c1 Cb`` to the tangent
+(Eq. 14, 16); after the Newton/contact loop :func:`finish_step` recovers the eliminated DOFs
+and updates velocities and accelerations (Eq. 12). :func:`check_laws` validates the laws.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from .newmark import newmark_coefficients, newmark_history, newmark_kinematics
+
+__all__ = ["check_laws", "check_laws_fast", "finish_step", "prepare_step"]
+
+
+@njit(cache=True)
+def prepare_step(h, g_const, x, v, a, f_c, unb, f0, kb, cb, s0, dt, ng):
+    """Right-hand side and condensed tangent of one Newmark step (Eq. 12, 14, 16).
+
+    Returns ``s_lin`` (nc, nc) = S0 + Kb + c1 Cb, ``z0`` (nc,) and ``y`` = A_rr^-1 b_r.
+    """
+    nc = s0.shape[0]
+    _, c1, _ = newmark_coefficients(dt)
+    pq = newmark_history(x, v, a, dt)
+    out = h @ pq
+    z0 = np.empty(nc)
+    for i in range(nc):
+        z0[i] = out[i] + out[nc + i] + g_const[i] + f_c[i]
+    z0[0] += unb[0]  # pinion node (u, v)
+    z0[1] += unb[1]
+    z0[6] += unb[2]  # gear node (u, v)
+    z0[7] += unb[3]
+    y = out[2 * nc:] + g_const[nc:]
+    s_lin = s0.copy()
+    for j in range(4):
+        o = ng + 2 * j
+        for r in range(2):
+            acc = f0[j, r]
+            for c in range(2):
+                acc += cb[j, r, c] * (c1 * x[o + c] + v[o + c])
+                s_lin[o + r, o + c] += kb[j, r, c] + c1 * cb[j, r, c]
+            z0[o + r] += acc
+    return s_lin, z0, y
+
+
+@njit(cache=True)
+def _all_finite(f0, kb, cb):
+    """True when every entry of the bearing laws is finite."""
+    return np.isfinite(f0).all() and np.isfinite(kb).all() and np.isfinite(cb).all()
+
+
+@njit(cache=True)
+def finish_step(x, v, a, xc, y, w, dt):
+    """X_r = y - W X_c, then Newmark velocities and accelerations (Eq. 12)."""
+    n = x.size
+    nc = xc.size
+    x1 = np.empty(n)
+    x1[:nc] = xc
+    x1[nc:] = y - w @ xc
+    v1, a1 = newmark_kinematics(x1, x, v, a, dt)
+    return x1, v1, a1
+
+
+def check_laws(f0, kb, cb):
+    """Bearing laws as float arrays of shapes (4, 2), (4, 2, 2), (4, 2, 2), all finite."""
+    f0 = np.asarray(f0, dtype=float)
+    kb = np.asarray(kb, dtype=float)
+    cb = np.asarray(cb, dtype=float)
+    if f0.shape != (4, 2) or kb.shape != (4, 2, 2) or cb.shape != (4, 2, 2):
+        raise ValueError(
+            f"bearing laws shapes F0 {f0.shape}, Kb {kb.shape}, Cb {cb.shape}: expected "
+            "(4, 2), (4, 2, 2), (4, 2, 2)"
+        )
+    if not (np.all(np.isfinite(f0)) and np.all(np.isfinite(kb)) and np.all(np.isfinite(cb))):
+        raise ValueError("bearing laws contain non-finite values")
+    return f0, kb, cb
+
+
+def check_laws_fast(f0, kb, cb):
+    """Shape and finiteness check of the laws at the cost of one sum (hot path)."""
+    if not all(isinstance(m, np.ndarray) for m in (f0, kb, cb)) or (
+        f0.shape != (4, 2) or kb.shape != (4, 2, 2) or cb.shape != (4, 2, 2)
+    ):
+        return check_laws(f0, kb, cb)
+    if f0.dtype != np.float64 or kb.dtype != np.float64 or cb.dtype != np.float64:
+        return check_laws(f0, kb, cb)
+    if not _all_finite(f0, kb, cb):
+        return check_laws(f0, kb, cb)
+    return f0, kb, cb
