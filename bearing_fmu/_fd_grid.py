@@ -60,7 +60,8 @@ def _up(j, m):
 
 @njit(cache=True)
 def projected_gs(p, b, ct, cx, nt, m, pin0, sweeps, reverse):
-    """Red-black projected Gauss-Seidel for the obstacle problem (exact local LCP solves).
+    """Red-black projected Gauss-Seidel for the obstacle problem (exact local LCP solves): the
+    Swift-Stieber condition of Eq. (4) as p >= 0, A p - b >= 0, p (A p - b) = 0 per node.
 
     ``p_ij <- max(0, (b_ij + sum of neighbour fluxes) / a_ii)``; row i = 0 stays zero when
     ``pin0`` (film start pinned at theta_0). ``reverse`` swaps the colour order.

@@ -25,6 +25,9 @@ __all__ = ["LocalFrame"]
 class LocalFrame:
     """Orientation of a bearing's local frame in the global (s, t) plane.
 
+    The journal-centre position ``OO' = x x_vec + y y_vec`` of Eq. (1) is expressed in this
+    local frame (:meth:`to_local`), where the film models work.
+
     Parameters
     ----------
     angle : float

@@ -94,7 +94,9 @@ class LinearBearing(BearingModel):
 
 
 class LinearisedBearing(BearingModel):
-    """The registered ``linear`` model: a film model until X0 is known, then its linearisation.
+    """The registered ``linear`` model: a film model until X0 is known, then its linearisation
+    (Eq. 17-18); with these bearings the structure's step solves the linear system of
+    Eq. (19).
 
     Parameters
     ----------

@@ -153,7 +153,8 @@ def _short_bearing_kernel(lam, x, y, xd, yd, gx, gw, out_f, out_dx, out_dv):
 
 
 class ShortBearing(FilmBearingModel):
-    """Ocvirk's short-bearing theory with the half-Sommerfeld (pi-film) condition.
+    """Ocvirk's short-bearing theory with the half-Sommerfeld (pi-film) condition: Eq. (2)
+    without its circumferential term, and p = 0 where f < 0 in place of Eq. (4).
 
     Valid for L/D < 1/8 (paper Sec. 4.2.1); Table 4 case 1 uses it at L/D = 0.72 to show how
     far off it is there.

@@ -89,7 +89,8 @@ def quasi_static(st, angles, bearing_stiffness=1e8) -> dict:
 
 
 def modes(st, bearing_stiffness=1e8, n_angles: int = 16):
-    """Natural modes with the mean mesh stiffness at the static load (for ``gsb modal``).
+    """Natural modes with the mean mesh stiffness at the static load (for ``gsb modal``): the
+    undamped modes of K0 of Eq. (20).
 
     ``bearing_stiffness``: isotropic [N/m] or (4, 2, 2) (symmetric part used). Returns
     :class:`gear_fmu.modal.Modes`; format with :func:`gear_fmu.modal.mode_table`.

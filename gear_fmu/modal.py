@@ -108,7 +108,8 @@ def classify(fractions: np.ndarray, dominant: float = 0.75) -> str:
 def natural_modes(
     system: GearShaftSystem, bearing_stiffness, mesh_stiffness=None, stiffness_extra=None
 ) -> Modes:
-    """Undamped natural modes of ``K_shaft + K_mesh + K_bearings`` with mass M.
+    """Undamped natural modes of ``K_shaft + K_mesh + K_bearings`` with mass M: the stiffness
+    K0 of Eq. (20) when the bearings' Kb(X0) and the mean mesh stiffness are given.
 
     Parameters
     ----------
@@ -149,7 +150,8 @@ def natural_modes(
 
 
 def modal_damping_matrix(system: GearShaftSystem, modes: Modes, zeta: float) -> np.ndarray:
-    """Modal damping ``C = M Phi diag(2 zeta omega_i) Phi^T M`` (full numbering) [N s/m].
+    """Modal damping ``C = M Phi diag(2 zeta omega_i) Phi^T M`` (full numbering) [N s/m]: the C
+    of Eq. (9).
 
     Parameters
     ----------

@@ -205,7 +205,8 @@ class GearShaftSystem:
         return sum(s.n_elements + 1 for s in self.shafts)
 
     def build(self) -> None:
-        """Assemble M and K_shaft and the DOF maps."""
+        """Assemble M and K_shaft of Eq. (9) (shaft elements, gear discs, thrust springs) and
+        the DOF maps."""
         n_nodes = self.n_nodes
         self.n_dof = DOF_PER_NODE * n_nodes
         m = np.zeros((self.n_dof, self.n_dof))

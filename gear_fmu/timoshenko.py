@@ -216,7 +216,8 @@ def planar_timoshenko(
 
 
 def timoshenko_element(section: HollowSection, length: float) -> tuple[np.ndarray, np.ndarray]:
-    """Stiffness and consistent mass (12, 12) of a 2-node shaft element along z.
+    """Stiffness and consistent mass (12, 12) of a 2-node shaft element along z (the shaft part
+    of M and K in Eq. 9).
 
     DOF order: node 1 then node 2, each ``(u, v, w, phi, psi, theta)`` (:mod:`gear_fmu.dofs`).
     Bending in (s, z) on ``(u, psi)``, in (t, z) on ``(v, -phi)`` (module docstring), axial rod on
