@@ -1,0 +1,53 @@
+"""Example 3: a short coupled run of the paper's spur case (hybrid bearings, in-process).
+
+64 mesh periods (2048 Newmark steps of a mesh period / 32) from the static solution X0, with
+the master iterating the structure's step and the bearings' linearisations inside every step
+(Fig. 4). Prints the static bearing forces, the dynamic tooth load factor R over the last two
+pinion revolutions and the peak-to-peak of the bearing-1 force there.
+
+Run: ``python examples/ex03_coupled_run.py`` (a few seconds after numba's first compilation)
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import tempfile
+
+import numpy as np
+
+from fmu_src import description
+from fmu_src.examples import paper_case
+from orchestrator.analysis import run_metrics, steady_window
+from orchestrator.results import read_results
+from orchestrator.run import run_case
+
+
+def main(periods: int = 64, bearing: str = "hybrid") -> dict:
+    case = paper_case()
+    z1 = case["gear_pair.teeth"][0]
+    window = 2 * z1 * description.mesh_period(case)  # two pinion revolutions [s]
+    with tempfile.TemporaryDirectory() as tmp:
+        s = run_case(case, bearing=bearing, periods=periods, in_process=True, out_dir=tmp,
+                     progress=False, figures=False)
+        r = read_results(s.results)
+    metrics = run_metrics(r, window)
+    win = steady_window(r["time"], window)
+    return {"steps": s.steps, "wall_time_s": s.wall_time,
+            "iterations_per_step": s.iterations_per_step,
+            "static_bearing_force_N": np.asarray(json.loads(r["attrs"]["static_bearing_force"])),
+            "R": metrics["R"], "bearing1_ptp_N": float(metrics["force_ptp"][0]),
+            "mean_mesh_force_N": float(r["mesh_force"][win].mean()),
+            "static_tooth_load_N": case["operation.torque"] / description.gear_pair(
+                case).base_radius[0]}
+
+
+if __name__ == "__main__":
+    r = main()
+    print(f"{r['steps']} steps in {r['wall_time_s']:.1f} s, {r['iterations_per_step']:.2f} "
+          "coupled iterations per step")
+    for b, f in enumerate(r["static_bearing_force_N"]):
+        print(f"bearing {b + 1}: static film force {math.hypot(*f):.1f} N")
+    print(f"static tooth load T / r_b1 = {r['static_tooth_load_N']:.1f} N; mean dynamic mesh "
+          f"force over the last two pinion revolutions {r['mean_mesh_force_N']:.1f} N")
+    print(f"R = {r['R']:.3f}; bearing-1 force peak-to-peak {r['bearing1_ptp_N']:.0f} N")
