@@ -150,3 +150,21 @@ def test_variable_docs_are_generated_from_the_contract():
 
     doc = ROOT / "docs" / "fmu-variables.md"
     assert doc.read_text() == document(), "run: python -m fmu_src.contract > docs/fmu-variables.md"
+
+
+def test_unit_definitions_come_from_the_unit_table(fmu_dir):
+    """FMI 2.0 BaseUnit exponents from fmu_src.units: rad and rad/s carry rad="1"."""
+    import zipfile
+    from xml.etree import ElementTree as ET
+
+    from fmu_src.units import DIMENSIONS
+
+    with zipfile.ZipFile(fmu_dir / "BearingHybrid.fmu") as z:
+        root = ET.fromstring(z.read("modelDescription.xml"))
+    units = {u.get("name"): dict(u.find("BaseUnit").attrib) for u in root.iter("Unit")}
+    assert units["rad/s"] == {"rad": "1", "s": "-1"}
+    assert units["rad"] == {"rad": "1"}
+    assert units["N.s/m"] == {"kg": "1", "s": "-1"}
+    by_symbol = {d.symbol: d for d in DIMENSIONS.values()}
+    for name, base in units.items():
+        assert base == {k: str(v) for k, v in by_symbol[name].base.items()}, name

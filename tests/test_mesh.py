@@ -85,9 +85,9 @@ def iso_6336_method_b(pair):
 def test_mesh_stiffness_against_iso_6336_method_b():
     """Weber-Banaschek tooth-pair stiffness of Table 1: the single-pair maximum against ISO's
     c' and the time-averaged mesh stiffness per unit face width against ISO's c_gamma_alpha.
-    ISO: c' = 13.4, c_gamma_alpha = 20.6 N/(mm um) for this pair. 15 % is the spread between
-    Weber-type formulas and ISO's fitted constants (ISO 6336-1 states method B within about
-    +-10 % of measurements for standard gears)."""
+    ISO: c' = 13.37, c_gamma_alpha = 20.59 N/(mm um) for this pair; measured: 13.18 and 20.33
+    (1.4 % and 1.3 % below), asserted within 2.5 % (ISO 6336-1 itself states method B within
+    about +-10 % of measurements for standard gears)."""
     c_single_iso, c_gamma_iso = iso_6336_method_b(SPUR)
     model = ToothPairCompliance(SPUR, SPUR.nominal_line_load(T_IN))
     xi = np.linspace(*SPUR.path_of_contact, 201)
@@ -100,8 +100,8 @@ def test_mesh_stiffness_against_iso_6336_method_b():
           f"Weber-Banaschek: max single pair {k_single.max():.2f}, mean mesh "
           f"{k_mesh.mean():.2f} N/(mm um)")
     assert c_single_iso == pytest.approx(13.37, abs=0.01)
-    assert k_single.max() == pytest.approx(c_single_iso, rel=0.15)
-    assert k_mesh.mean() == pytest.approx(c_gamma_iso, rel=0.15)
+    assert k_single.max() == pytest.approx(c_single_iso, rel=0.025)
+    assert k_mesh.mean() == pytest.approx(c_gamma_iso, rel=0.025)
     # the single-pair stiffness peaks inside the path, lowest at the tips
     assert k_single.argmax() not in (0, xi.size - 1)
 
