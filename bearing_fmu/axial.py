@@ -33,11 +33,11 @@ from numba import njit
 
 __all__ = ["AXIAL_COEF", "axial_coefficients", "axial_integrals", "axial_shape"]
 
-#: number of Taylor terms kept (enough for |t| <= T_MAX to round-off)
+#: number of Taylor terms kept (enough for ``|t| <= T_MAX`` to round-off)
 N_TERMS = 60
-#: largest |t| the kernels use
+#: largest ``|t|`` the kernels use
 T_MAX = 150.0
-#: |t| limits below which 16, 26 and 40 terms reach round-off (the term-count switches)
+#: ``|t|`` limits below which 16, 26 and 40 terms reach round-off (the term-count switches)
 T_SWITCH = (6.0, 20.0, 60.0)
 
 

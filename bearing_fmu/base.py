@@ -1,7 +1,7 @@
 """The one interface every journal-bearing model implements.
 
 Frames and units (the contract shared by every bearing model and FMU)
--------------------------------------------------------------------
+---------------------------------------------------------------------
 * Local frame (x, y) of the bearing, origin at the bearing centre O, journal centre O'.
   The journal rotates about +z at ``omega`` [rad/s] (counter-clockwise seen from +z,
   x towards y), Baguet & Jacquenot (2010) Fig. 3.
@@ -217,7 +217,7 @@ class BearingModel(ABC):
 
     #: key of the model in :data:`bearing_fmu.MODELS` and on the command line
     name: str = ""
-    #: settings a case file or an FMU parameter can carry (:class:`ModelOption`)
+    #: settings a case file or an FMU parameter can carry (:class:`~bearing_fmu.base.ModelOption`)
     options: tuple[ModelOption, ...] = ()
 
     def __init__(self, bearing: BearingData) -> None:
@@ -304,7 +304,7 @@ class FilmBearingModel(BearingModel):
     ) -> FilmForce:
         """Dimensionless force (Eq. 5) and its derivatives at a dimensionless state (Eq. 3).
 
-        The caller has validated the state (:func:`check_state`).
+        The caller has validated the state (:func:`~bearing_fmu.base.check_state`).
         """
 
     def dimensionless(

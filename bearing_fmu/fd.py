@@ -25,7 +25,7 @@ Forces (Eq. 5) by the trapezoidal rule in both directions (second order; the int
 across the free boundary).
 
 Solver: truncated nonsmooth Newton multigrid (TNNMG)
----------------------------------------------------
+----------------------------------------------------
 Why this one: a projected FAS (Brandt-Cryer, Venner-Lubrecht) multigrid works in practice but
 has no convergence guarantee near the free boundary, and an active-set outer loop around a
 linear multigrid costs several full linear solves per call. TNNMG (Graser & Kornhuber,
@@ -49,13 +49,15 @@ pressure field. Stopping test: the natural residual of the LCP,
 Jacobians by numerical differentiation of the force, as in the paper's case 4
 (``jacobian_scheme="forward"``, 4 extra solves; default ``"central"``, 8 extra solves), each
 warm-started from the base solution and converged to ``jacobian_tol``.
-:func:`reference_film_force` Richardson-extrapolates successive refinements.
+:func:`~bearing_fmu.fd_reference.reference_film_force` Richardson-extrapolates successive
+refinements.
 
 The kernels are in :mod:`bearing_fmu._fd_grid` (grids, smoothers, transfers) and
-:mod:`bearing_fmu._fd_kernels` (cycles); the direct solver and :func:`reference_film_force` in
-:mod:`bearing_fmu.fd_reference`. ``linear_solver="direct"`` replaces the
-multigrid by a primal-dual active set with sparse LU (:func:`solve_complementarity`): slow, but
-an independent check of the multigrid.
+:mod:`bearing_fmu._fd_kernels` (cycles); the direct solver and
+:func:`~bearing_fmu.fd_reference.reference_film_force` in :mod:`bearing_fmu.fd_reference`.
+``linear_solver="direct"`` replaces the multigrid by a primal-dual active set with sparse LU
+(:func:`~bearing_fmu.fd_reference.solve_complementarity`): slow, but an independent check of
+the multigrid.
 """
 
 from __future__ import annotations
@@ -373,7 +375,7 @@ class FiniteDifferenceBearing(FilmBearingModel):
         xi : ndarray (n_xi + 1,)
             z/R in [-lambda, lambda].
         p : ndarray (n_theta + 1, n_xi + 1)
-            Pressure (scale :meth:`BearingData.pressure_scale`).
+            Pressure (scale :meth:`bearing_fmu.base.BearingData.pressure_scale`).
         """
         th, xi, p = self.pressure(xbar, ybar, xbar_dot, ybar_dot)
         th = np.mod(th, 2.0 * math.pi)

@@ -97,14 +97,14 @@ def reference_film_force(lambda_, xbar, ybar, xbar_dot=0.0, ybar_dot=0.0,
     levels : sequence of (n_theta, n_xi)
         At least two meshes, each the previous one refined by 2 in both directions.
     **kw
-        Passed to :class:`FiniteDifferenceBearing` (e.g. ``pinned_start``).
+        Passed to :class:`~bearing_fmu.fd.FiniteDifferenceBearing` (e.g. ``pinned_start``).
 
     Returns
     -------
     force : ndarray (2,)
         ``F_fine + (F_fine - F_prev) / 3`` (Richardson with the theoretical order 2).
     info : dict
-        ``forces`` per level; ``error_finest``: |F_fine - force| / |force|; with three or more
+        ``forces`` per level; ``error_finest``: ``|F_fine - force| / |force|``; with three or more
         levels also ``observed_order`` (from the force magnitudes), ``force_observed_order``
         (extrapolated with it) and ``error_estimate``: the relative distance between the
         extrapolations with order 2 and with the observed order, or between the last two

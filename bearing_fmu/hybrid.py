@@ -146,7 +146,7 @@ class HybridBearing(FilmBearingModel):
             Axial coordinate z/R in [-lambda, lambda].
         p : ndarray (n + 1, n_xi)
             ``p[i, j] = g(xi_j / lambda; t) a(theta_i)`` (pressure scale
-            6 mu omega (R/C)^2 in :meth:`BearingData.pressure_scale`).
+            6 mu omega (R/C)^2 in :meth:`bearing_fmu.base.BearingData.pressure_scale`).
         """
         check_state(xbar, ybar, xbar_dot, ybar_dot)
         if int(n_xi) != n_xi or n_xi < 2:

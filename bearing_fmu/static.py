@@ -139,7 +139,7 @@ def static_equilibrium(
     eps_max : float
         Largest admissible eccentricity ratio; a load the film cannot carry below it raises.
     tol : float
-        Convergence on the force residual, relative to |W|.
+        Convergence on the force residual, relative to ``|W|``.
 
     Raises
     ------

@@ -65,6 +65,9 @@ def _f(key, kind, doc, **kw):
 
 _POS = dict(minimum=0.0, exclusive_minimum=True)
 
+#: The schema: every field of a case file, once, in the order of ``docs/case-files.md``.
+#:
+#: :meta hide-value:
 FIELDS: tuple[Field, ...] = (
     _f("case.name", "text", "identifier of the case (results are named after it)"),
     _f("case.description", "text", "free text", default=""),

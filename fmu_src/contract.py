@@ -77,6 +77,9 @@ def _option_variables() -> tuple[FmiVar, ...]:
 
 
 _B = _paper_bearing()
+#: The variables of every bearing FMU (module docstring).
+#:
+#: :meta hide-value:
 BEARING_VARIABLES: tuple[FmiVar, ...] = (
     # bearing data (start values: the paper's pinion bearing, Table 3)
     FmiVar("D", _P, "Real", "length", _B["diameter"], "bearing diameter D = 2R"),
@@ -205,6 +208,9 @@ GEAR_OUTPUTS = (
     ("v_gear", "length", "gear node displacement along t"),
 )
 
+#: The variables of the gear-shaft FMU (module docstring).
+#:
+#: :meta hide-value:
 GEAR_VARIABLES: tuple[FmiVar, ...] = (
     FmiVar("case_file", _P, "String", "", "",
            "TOML case file (fmu_src.case) describing the gear pair, shafts and operating "

@@ -96,8 +96,8 @@ def structure(case: Case, damping_bearing_stiffness=1e8) -> Structure:
     """The gear-shaft structure of the case (Newmark step, static solve, modes).
 
     ``damping_bearing_stiffness``: reference bearing stiffness of the modal damping
-    [N/m] or (4, 2, 2); :meth:`Structure.set_damping_reference` replaces it once the static
-    bearing stiffness is known.
+    [N/m] or (4, 2, 2); :meth:`gear_fmu.structure.Structure.set_damping_reference` replaces it
+    once the static bearing stiffness is known.
     """
     pair = gear_pair(case)
     return Structure(gear_shaft_system(case, pair), mesh_element(case, pair),
@@ -117,7 +117,7 @@ def time_step(case: Case) -> float:
 
 
 def bearing_data(case: Case) -> list[BearingData]:
-    """Table 3 -> one :class:`bearing_fmu.BearingData` per bearing."""
+    """Table 3 -> one :class:`bearing_fmu.base.BearingData` per bearing."""
     return [BearingData(case["bearings.diameter"][i], case["bearings.length"][i],
                         case["bearings.clearance"][i], case["bearings.viscosity"][i])
             for i in range(4)]

@@ -46,6 +46,9 @@ class Dimension:
 
 
 _PI = math.pi
+#: The unit table: dimension name -> :class:`Dimension`.
+#:
+#: :meta hide-value:
 DIMENSIONS: dict[str, Dimension] = {d.name: d for d in (
     Dimension("length", "m", {"m": 1}, {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6,
                                         "cm": 1e-2}),

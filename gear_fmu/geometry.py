@@ -1,7 +1,7 @@
 """Involute geometry of an external spur or helical gear pair (paper Table 1, Sec. 2.1).
 
 Frames (shared with :mod:`gear_fmu.mesh` and :mod:`gear_fmu.system`)
--------------------------------------------------------------------
+--------------------------------------------------------------------
 Global frame (s, t, z): pinion centre O1 = (0, 0), gear centre O2 = (a, 0), z along both axes.
 A positive input torque turns the pinion about +z; the gear turns about -z. The transverse line
 of action is the tangent to both base circles with unit vector ``u = (sin a', cos a')`` (a' the
@@ -185,7 +185,7 @@ class GearPair:
 
     @cached_property
     def line_of_action_length(self) -> float:
-        """|T1T2| = a sin(a') [m]."""
+        """``|T1T2| = a sin(a')`` [m]."""
         return self.centre_distance * math.sin(self.operating_pressure_angle)
 
     @cached_property

@@ -142,8 +142,10 @@ class GearBody:
 class GearShaftSystem:
     """Assembled structural model of the two-shaft gear system (paper Eq. 9, K_shaft and M).
 
-    Attributes (all built by :meth:`build`)
-    ---------------------------------------
+    The attributes below are all built by :meth:`build`.
+
+    Attributes
+    ----------
     n_dof : int
         Total DOFs (6 per node, including the clamped one).
     mass, stiffness : (n_dof, n_dof) arrays
@@ -165,8 +167,8 @@ class GearShaftSystem:
 
     Examples
     --------
-    Two solid steel shafts of 8 elements (the paper's system: :func:`fmu_src.examples.
-    paper_system`):
+    Two solid steel shafts of 8 elements (the paper's system:
+    :func:`fmu_src.examples.paper_system`):
 
     >>> steel = dict(young=210e9, poisson=0.3, density=7800.0)
     >>> shaft = Shaft(HollowSection(0.05, 0.0, **steel), 0.2, 8)

@@ -151,7 +151,7 @@ class ToothPairCompliance:
     pair : GearPair
     line_load : float
         Reference load per unit contact length for the secant of the contact term [N/m]
-        (:meth:`GearPair.nominal_line_load`).
+        (:meth:`gear_fmu.geometry.GearPair.nominal_line_load`).
     """
 
     def __init__(self, pair: GearPair, line_load: float):

@@ -131,7 +131,7 @@ def build_master(case: Case, bearing: str | None = None, in_process: bool = Fals
     ``bearing`` overrides ``bearings.model``. In-process the physics objects of
     :mod:`fmu_src.description` are driven directly; through FMUs the bearing FMU of that model
     and the gear-shaft FMU are taken from ``fmu_dir`` (built there if missing). Release the
-    slaves with :meth:`Master.close`.
+    slaves with :meth:`orchestrator.master.Master.close`.
     """
     if bearing is not None:
         case = case.with_overrides({"bearings.model": bearing})

@@ -1,9 +1,12 @@
 """The FMUs driven through fmpy, behind the same master interface as :mod:`orchestrator.inprocess`.
 
-* :mod:`~orchestrator.fmi.instance`: one instantiated FMU with its log (:class:`FmuInstance`);
-* :mod:`~orchestrator.fmi.bearings`: the bearing FMUs as a BearingSet (:class:`FmuBearings`);
+* :mod:`~orchestrator.fmi.instance`: one instantiated FMU with its log
+  (:class:`~orchestrator.fmi.instance.FmuInstance`);
+* :mod:`~orchestrator.fmi.bearings`: the bearing FMUs as a BearingSet
+  (:class:`~orchestrator.fmi.bearings.FmuBearings`);
 * :mod:`~orchestrator.fmi.structure`: the gear-shaft FMU as a StructureSlave
-  (:class:`FmuStructure`, rollback with :class:`FmuState`);
+  (:class:`~orchestrator.fmi.structure.FmuStructure`, rollback with
+  :class:`~orchestrator.fmi.structure.FmuState`);
 * :mod:`~orchestrator.fmi.cache`: built FMUs on disk and a case's system through them.
 """
 

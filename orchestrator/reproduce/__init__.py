@@ -44,7 +44,8 @@ def reproduce(out: str | Path = "results/reproduce", quick: bool = False,
               plan: Plan | None = None) -> Path:
     """Run everything (module docstring), then :func:`draw`; returns the report's path.
 
-    ``plan`` replaces :data:`QUICK` / :data:`FULL` (e.g. a smaller one for tests). The runs are
+    ``plan`` replaces :data:`~orchestrator.reproduce.plan.QUICK` /
+    :data:`~orchestrator.reproduce.plan.FULL` (e.g. a smaller one for tests). The runs are
     kept in ``out`` (``runs/``, ``sweeps/``, ``reproduce.json``) before anything is drawn.
     """
     if plan is None:

@@ -34,9 +34,15 @@ class Plan:
     label: str = "full"
 
 
+#: The full reproduction (the paper's run length and parameter grids).
+#:
+#: :meta hide-value:
 FULL = Plan(periods=2048, speeds=tuple(float(w) for w in range(100, 1201, 100)),
             torques=(50.0, 100.0, 220.0, 400.0, 600.0), unbalances=(0.6e-3, 1.2e-3, 2.4e-3),
             helix_angles=(0.0, 5.0, 10.0, 12.5), table4_periods=2048, fd_periods=16)
+#: ``--quick``: fewer periods, speeds and parameter values; not steady state.
+#:
+#: :meta hide-value:
 QUICK = Plan(periods=192, speeds=(100.0, 325.0, 600.0, 900.0, 1200.0),
              torques=(100.0, 220.0, 400.0), unbalances=(0.6e-3, 2.4e-3),
              helix_angles=(0.0, 12.5), table4_periods=64, fd_periods=2, steady_periods=157,
