@@ -51,6 +51,23 @@ def _sommerfeld_angle(phi, eps, s):
     return math.atan2(s * math.sin(phi) / den, (cphi - eps) / den)
 
 
+@njit(cache=True, inline="always")
+def _quadrature_point(mid, half, gx_q, gw_q, eps, s, cg, sg):
+    """Gauss point of Sommerfeld's substitution ``h = (1 - eps^2)/(1 + eps cos psi)``:
+    ``(cos(theta), sin(theta), h, dphi)`` at ``psi = mid + half gx_q``, with the film angle
+    ``phi = theta - gamma`` (cg, sg: cos and sin of gamma) and ``dphi = sqrt(1 - eps^2) /
+    (1 + eps cos psi) dpsi`` times the Gauss weight."""
+    psi = mid + half * gx_q
+    cpsi = math.cos(psi)
+    spsi = math.sin(psi)
+    den = 1.0 + eps * cpsi
+    cphi = (eps + cpsi) / den
+    sphi = s * spsi / den
+    h = (1.0 - eps * eps) / den
+    dphi = s / den * half * gw_q
+    return cphi * cg - sphi * sg, sphi * cg + cphi * sg, h, dphi
+
+
 @njit(cache=True)
 def _degenerate_jacobian(lam, eps, gamma, s, gx, gw, out_dx, out_dv):
     """Jacobians where the source vanishes (f = 0: a centred journal at rest, or the half-speed
@@ -71,16 +88,8 @@ def _degenerate_jacobian(lam, eps, gamma, s, gx, gw, out_dx, out_dv):
     da = np.zeros(2)
     db = np.zeros(2)
     for q in range(gx.shape[0]):
-        psi = mid + half * gx[q]
-        cpsi = math.cos(psi)
-        spsi = math.sin(psi)
-        den = 1.0 + eps * cpsi
-        cphi = (eps + cpsi) / den
-        sphi = s * spsi / den
-        h = (1.0 - eps * eps) / den
-        w = -(lam**3 / 3.0) * s / den * half * gw[q] / (h * h * h)
-        c = cphi * cg - sphi * sg  # cos(theta)
-        sn = sphi * cg + cphi * sg  # sin(theta)
+        c, sn, h, dphi = _quadrature_point(mid, half, gx[q], gw[q], eps, s, cg, sg)
+        w = -(lam**3 / 3.0) * dphi / (h * h * h)
         da[0] += w * c * c
         da[1] += w * c * sn
         db[0] += w * sn * c
@@ -119,16 +128,7 @@ def _short_bearing_kernel(lam, x, y, xd, yd, gx, gw, out_f, out_dx, out_dv):
     sg = math.sin(gamma)
     scale = -(2.0 / 3.0) * lam**3
     for q in range(gx.shape[0]):
-        psi = mid + half * gx[q]
-        cpsi = math.cos(psi)
-        spsi = math.sin(psi)
-        den = 1.0 + eps * cpsi
-        cphi = (eps + cpsi) / den
-        sphi = s * spsi / den
-        h = (1.0 - eps * eps) / den
-        dphi = s / den * half * gw[q]  # dphi = sqrt(1-eps^2)/(1+eps cos psi) dpsi
-        c = cphi * cg - sphi * sg  # cos(theta)
-        sn = sphi * cg + cphi * sg  # sin(theta)
+        c, sn, h, dphi = _quadrature_point(mid, half, gx[q], gw[q], eps, s, cg, sg)
         f = source(a_coef, b_coef, c, sn)
         if f < 0.0:
             f = 0.0  # round-off at the ends only
