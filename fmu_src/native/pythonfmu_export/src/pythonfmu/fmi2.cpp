@@ -165,6 +165,8 @@ fmi2Status fmi2SetupExperiment(
     } catch (const pythonfmu::fatal_error& e) {
         component->logger->log(fmi2Fatal, e.what());
         return fmi2Fatal;
+    } catch (const pythonfmu::status_error& e) {
+        return static_cast<fmi2Status>(e.status()); // gear-shaft-bearing patch
     } catch (const std::exception& e) {
         component->logger->log(fmi2Error, e.what());
         return fmi2Error;
@@ -181,6 +183,8 @@ fmi2Status fmi2EnterInitializationMode(fmi2Component c)
     } catch (const pythonfmu::fatal_error& e) {
         component->logger->log(fmi2Fatal, e.what());
         return fmi2Fatal;
+    } catch (const pythonfmu::status_error& e) {
+        return static_cast<fmi2Status>(e.status()); // gear-shaft-bearing patch
     } catch (const std::exception& e) {
         component->logger->log(fmi2Error, e.what());
         return fmi2Error;
@@ -197,6 +201,8 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c)
     } catch (const pythonfmu::fatal_error& e) {
         component->logger->log(fmi2Fatal, e.what());
         return fmi2Fatal;
+    } catch (const pythonfmu::status_error& e) {
+        return static_cast<fmi2Status>(e.status()); // gear-shaft-bearing patch
     } catch (const std::exception& e) {
         component->logger->log(fmi2Error, e.what());
         return fmi2Error;
@@ -213,6 +219,8 @@ fmi2Status fmi2Terminate(fmi2Component c)
     } catch (const pythonfmu::fatal_error& e) {
         component->logger->log(fmi2Fatal, e.what());
         return fmi2Fatal;
+    } catch (const pythonfmu::status_error& e) {
+        return static_cast<fmi2Status>(e.status()); // gear-shaft-bearing patch
     } catch (const std::exception& e) {
         component->logger->log(fmi2Error, e.what());
         return fmi2Error;
@@ -229,6 +237,8 @@ fmi2Status fmi2Reset(fmi2Component c)
     } catch (const pythonfmu::fatal_error& e) {
         component->logger->log(fmi2Fatal, e.what());
         return fmi2Fatal;
+    } catch (const pythonfmu::status_error& e) {
+        return static_cast<fmi2Status>(e.status()); // gear-shaft-bearing patch
     } catch (const std::exception& e) {
         component->logger->log(fmi2Error, e.what());
         return fmi2Error;
@@ -249,6 +259,8 @@ fmi2Status fmi2GetReal(
     } catch (const pythonfmu::fatal_error& e) {
         component->logger->log(fmi2Fatal, e.what());
         return fmi2Fatal;
+    } catch (const pythonfmu::status_error& e) {
+        return static_cast<fmi2Status>(e.status()); // gear-shaft-bearing patch
     } catch (const std::exception& e) {
         component->logger->log(fmi2Error, e.what());
         return fmi2Error;
@@ -268,6 +280,8 @@ fmi2Status fmi2GetInteger(
     } catch (const pythonfmu::fatal_error& e) {
         component->logger->log(fmi2Fatal, e.what());
         return fmi2Fatal;
+    } catch (const pythonfmu::status_error& e) {
+        return static_cast<fmi2Status>(e.status()); // gear-shaft-bearing patch
     } catch (const std::exception& e) {
         component->logger->log(fmi2Error, e.what());
         return fmi2Error;
@@ -287,6 +301,8 @@ fmi2Status fmi2GetBoolean(
     } catch (const pythonfmu::fatal_error& e) {
         component->logger->log(fmi2Fatal, e.what());
         return fmi2Fatal;
+    } catch (const pythonfmu::status_error& e) {
+        return static_cast<fmi2Status>(e.status()); // gear-shaft-bearing patch
     } catch (const std::exception& e) {
         component->logger->log(fmi2Error, e.what());
         return fmi2Error;
@@ -306,6 +322,8 @@ fmi2Status fmi2GetString(
     } catch (const pythonfmu::fatal_error& e) {
         component->logger->log(fmi2Fatal, e.what());
         return fmi2Fatal;
+    } catch (const pythonfmu::status_error& e) {
+        return static_cast<fmi2Status>(e.status()); // gear-shaft-bearing patch
     } catch (const std::exception& e) {
         component->logger->log(fmi2Error, e.what());
         return fmi2Error;
@@ -326,6 +344,8 @@ fmi2Status fmi2SetReal(
     } catch (const pythonfmu::fatal_error& e) {
         component->logger->log(fmi2Fatal, e.what());
         return fmi2Fatal;
+    } catch (const pythonfmu::status_error& e) {
+        return static_cast<fmi2Status>(e.status()); // gear-shaft-bearing patch
     } catch (const std::exception& e) {
         component->logger->log(fmi2Error, e.what());
         return fmi2Error;
@@ -345,6 +365,8 @@ fmi2Status fmi2SetInteger(
     } catch (const pythonfmu::fatal_error& e) {
         component->logger->log(fmi2Fatal, e.what());
         return fmi2Fatal;
+    } catch (const pythonfmu::status_error& e) {
+        return static_cast<fmi2Status>(e.status()); // gear-shaft-bearing patch
     } catch (const std::exception& e) {
         component->logger->log(fmi2Error, e.what());
         return fmi2Error;
@@ -364,6 +386,8 @@ fmi2Status fmi2SetBoolean(
     } catch (const pythonfmu::fatal_error& e) {
         component->logger->log(fmi2Fatal, e.what());
         return fmi2Fatal;
+    } catch (const pythonfmu::status_error& e) {
+        return static_cast<fmi2Status>(e.status()); // gear-shaft-bearing patch
     } catch (const std::exception& e) {
         component->logger->log(fmi2Error, e.what());
         return fmi2Error;
@@ -383,6 +407,8 @@ fmi2Status fmi2SetString(
     } catch (const pythonfmu::fatal_error& e) {
         component->logger->log(fmi2Fatal, e.what());
         return fmi2Fatal;
+    } catch (const pythonfmu::status_error& e) {
+        return static_cast<fmi2Status>(e.status()); // gear-shaft-bearing patch
     } catch (const std::exception& e) {
         component->logger->log(fmi2Error, e.what());
         return fmi2Error;
@@ -401,6 +427,8 @@ fmi2Status fmi2GetFMUstate(
     } catch (const pythonfmu::fatal_error& e) {
         component->logger->log(fmi2Fatal, e.what());
         return fmi2Fatal;
+    } catch (const pythonfmu::status_error& e) {
+        return static_cast<fmi2Status>(e.status()); // gear-shaft-bearing patch
     } catch (const std::exception& e) {
         component->logger->log(fmi2Error, e.what());
         return fmi2Error;
@@ -418,6 +446,8 @@ fmi2Status fmi2SetFMUstate(
     } catch (const pythonfmu::fatal_error& e) {
         component->logger->log(fmi2Fatal, e.what());
         return fmi2Fatal;
+    } catch (const pythonfmu::status_error& e) {
+        return static_cast<fmi2Status>(e.status()); // gear-shaft-bearing patch
     } catch (const std::exception& e) {
         component->logger->log(fmi2Error, e.what());
         return fmi2Error;
@@ -435,6 +465,8 @@ fmi2Status fmi2FreeFMUstate(
     } catch (const pythonfmu::fatal_error& e) {
         component->logger->log(fmi2Fatal, e.what());
         return fmi2Fatal;
+    } catch (const pythonfmu::status_error& e) {
+        return static_cast<fmi2Status>(e.status()); // gear-shaft-bearing patch
     } catch (const std::exception& e) {
         component->logger->log(fmi2Error, e.what());
         return fmi2Error;
@@ -453,6 +485,8 @@ fmi2Status fmi2SerializedFMUstateSize(
     } catch (const pythonfmu::fatal_error& e) {
         component->logger->log(fmi2Fatal, e.what());
         return fmi2Fatal;
+    } catch (const pythonfmu::status_error& e) {
+        return static_cast<fmi2Status>(e.status()); // gear-shaft-bearing patch
     } catch (const std::exception& e) {
         component->logger->log(fmi2Error, e.what());
         return fmi2Error;
@@ -472,6 +506,8 @@ fmi2Status fmi2SerializeFMUstate(
     } catch (const pythonfmu::fatal_error& e) {
         component->logger->log(fmi2Fatal, e.what());
         return fmi2Fatal;
+    } catch (const pythonfmu::status_error& e) {
+        return static_cast<fmi2Status>(e.status()); // gear-shaft-bearing patch
     } catch (const std::exception& e) {
         component->logger->log(fmi2Error, e.what());
         return fmi2Error;
@@ -491,6 +527,8 @@ fmi2Status fmi2DeSerializeFMUstate(
     } catch (const pythonfmu::fatal_error& e) {
         component->logger->log(fmi2Fatal, e.what());
         return fmi2Fatal;
+    } catch (const pythonfmu::status_error& e) {
+        return static_cast<fmi2Status>(e.status()); // gear-shaft-bearing patch
     } catch (const std::exception& e) {
         component->logger->log(fmi2Error, e.what());
         return fmi2Error;
@@ -566,6 +604,8 @@ fmi2Status fmi2DoStep(
     } catch (const pythonfmu::fatal_error& e) {
         component->logger->log(fmi2Fatal, e.what());
         return fmi2Fatal;
+    } catch (const pythonfmu::status_error& e) {
+        return static_cast<fmi2Status>(e.status()); // gear-shaft-bearing patch
     } catch (const std::exception& e) {
         component->logger->log(fmi2Error, e.what());
         return fmi2Error;

@@ -1,0 +1,65 @@
+"""First code an FMU of this package runs: the per-user cache and the FMU's own code.
+
+Copied to the root of every FMU's resources and imported by its slave script before anything
+else, so it uses the standard library only. :func:`stage_code` copies the FMU's code
+(``resources/gsb_code``, written by :mod:`fmu_src.build` with a content hash) once into the
+per-user cache and puts it first on ``sys.path``: the FMU then runs in any Python with numpy,
+scipy and numba, without this package installed, and numba's compiled kernels are cached next
+to that stable copy, so they compile once per machine and code version, not at every
+instantiation from a freshly extracted FMU. A host that has already imported the package's
+modules keeps them (one copy of a module per process).
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import sys
+import tempfile
+from pathlib import Path
+
+__all__ = ["cache_dir", "stage_code"]
+
+#: folder of the FMU's resources holding its code, and the file with the code's hash
+CODE_DIR = "gsb_code"
+HASH_FILE = "HASH"
+
+
+def cache_dir() -> Path:
+    """The per-user cache folder: ``GSB_CACHE_DIR``, else the platform's user cache folder
+    (``$XDG_CACHE_HOME`` or ``~/.cache`` on Linux, ``~/Library/Caches`` on macOS,
+    ``%LOCALAPPDATA%`` on Windows) + ``gear-shaft-bearing``."""
+    env = os.environ.get("GSB_CACHE_DIR")
+    if env:
+        return Path(env)
+    if sys.platform == "win32":
+        base = Path(os.environ.get("LOCALAPPDATA", Path.home() / "AppData" / "Local"))
+    elif sys.platform == "darwin":
+        base = Path.home() / "Library" / "Caches"
+    else:
+        base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
+    return base / "gear-shaft-bearing"
+
+
+def stage_code(resources: str | Path) -> Path | None:
+    """Copy ``resources/gsb_code`` to ``<cache>/code/<hash>`` (once; atomic) and put it first on
+    ``sys.path``. Returns the staged folder, or None for an FMU without packaged code."""
+    src = Path(resources) / CODE_DIR
+    if not (src / HASH_FILE).is_file():
+        return None
+    target = cache_dir() / "code" / (src / HASH_FILE).read_text().strip()
+    if not (target / HASH_FILE).is_file():
+        target.parent.mkdir(parents=True, exist_ok=True)
+        tmp = Path(tempfile.mkdtemp(prefix=".staging-", dir=target.parent))
+        try:
+            shutil.copytree(src, tmp / "code")
+            try:
+                os.replace(tmp / "code", target)  # atomic; a concurrent stager may have won
+            except OSError:
+                if not (target / HASH_FILE).is_file():
+                    raise
+        finally:
+            shutil.rmtree(tmp, ignore_errors=True)
+    if str(target) not in sys.path:
+        sys.path.insert(0, str(target))
+    return target
