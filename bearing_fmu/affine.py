@@ -48,16 +48,30 @@ class AffineLaws:
     f0: np.ndarray
     kb: np.ndarray
     cb: np.ndarray
+    #: the journal states (..., 4) the law was linearised about and the force there (..., 2),
+    #: when it was (:meth:`linearise`): what an FMU connection carries (:meth:`expansion`)
+    states: np.ndarray | None = None
+    force_at: np.ndarray | None = None
 
     @classmethod
     def linearise(cls, states, force, kb, cb) -> AffineLaws:
         """Eq. (17) about the journal states ``[x, y, xdot, ydot]`` (..., 4) at which the
         bearings gave ``force`` (..., 2), ``kb`` and ``cb`` (..., 2, 2) (Eq. 18)."""
-        states = np.asarray(states)
+        states = np.array(states, dtype=float)
+        force = np.array(force, dtype=float)
         x = states[..., None, :2]
         v = states[..., None, 2:]
         f0 = force + (kb * x).sum(axis=-1) + (cb * v).sum(axis=-1)
-        return cls(f0, np.array(kb, copy=True), np.array(cb, copy=True))
+        return cls(f0, np.array(kb, copy=True), np.array(cb, copy=True), states, force)
+
+    def expansion(self):
+        """``(states, force, kb, cb)``: the expansion point of the law and the bearing's output
+        there, from which :meth:`linearise` rebuilds it exactly (a law given by ``f0`` alone
+        is its expansion about X = 0, Xdot = 0)."""
+        if self.states is None:
+            zeros = np.zeros((*np.shape(self.f0)[:-1], 4))
+            return zeros, np.array(self.f0, copy=True), self.kb, self.cb
+        return self.states, self.force_at, self.kb, self.cb
 
     def force(self, states) -> np.ndarray:
         """Force of the laws at journal states ``[x, y, xdot, ydot]`` (..., 4) [N]."""

@@ -245,6 +245,16 @@ class FiniteDifferenceBearing(FilmBearingModel):
         self._have_p = False
         self._active = None
 
+    def get_state(self):
+        """The warm start (last pressure field, direct solver's active set), copied."""
+        return (self._p.copy(), self._have_p,
+                None if self._active is None else self._active.copy())
+
+    def set_state(self, state) -> None:
+        self._p[...] = state[0]
+        self._have_p = state[1]
+        self._active = None if state[2] is None else state[2].copy()
+
     # --- one Reynolds solve -------------------------------------------------------------
     def _theta0_of(self, x, y):
         return math.atan2(y, x) + math.pi if self.pinned_start else 0.0

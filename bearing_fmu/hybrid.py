@@ -106,6 +106,16 @@ class HybridBearing(FilmBearingModel):
         self._state["predict"] = False
         self._state["t"] = 1.0
 
+    def get_state(self):
+        """The warm start (state record and pressurised set), copied: a model restored with it
+        gives the same results, bit for bit, as this one from here on."""
+        return self._state.copy(), self._active.copy()
+
+    def set_state(self, state) -> None:
+        record, active = state
+        self._state[...] = record
+        self._active[...] = active
+
     @property
     def last_info(self) -> dict:
         """Diagnostics of the last call (see the class docstring)."""

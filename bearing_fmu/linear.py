@@ -137,16 +137,18 @@ class LinearisedBearing(BearingModel):
         return law.evaluate(x, y, xdot, ydot, omega)
 
     def get_state(self):
-        """The frozen law (X0, F0, Kb, Cb, speed) as lists, or None before the freeze."""
+        """The film model's warm start and the frozen law (X0, F0, Kb, Cb, speed; None before
+        the freeze)."""
         fz = self.frozen
-        if fz is None:
-            return None
-        return [fz.position0.tolist(), fz.force0.tolist(), fz.stiffness.tolist(),
-                fz.damping.tolist(), fz.omega]
+        law = None if fz is None else [fz.position0.tolist(), fz.force0.tolist(),
+                                       fz.stiffness.tolist(), fz.damping.tolist(), fz.omega]
+        return self.film.get_state(), law
 
     def set_state(self, state) -> None:
-        if state is None:
+        film, law = state
+        self.film.set_state(film)
+        if law is None:
             self.frozen = None
             return
-        p0, f0, k, c, omega = state
+        p0, f0, k, c, omega = law
         self.frozen = LinearBearing(self.bearing, p0, f0, np.array(k), np.array(c), omega)
