@@ -1,24 +1,31 @@
-"""The FMI variable contracts of the FMUs (one source of truth).
+"""The FMI variable contracts of the FMUs and their wiring (one source of truth).
 
 :data:`BEARING_VARIABLES`: every bearing FMU (one per model of :data:`bearing_fmu.MODELS`)
-exposes exactly these variables, so a system swaps one for another by file name alone. The FMU works
-in the GLOBAL frame (s, t) of the gear system; its parameters ``frame_angle`` and
+exposes exactly these variables, so a system swaps one for another by file name alone. The FMU
+works in the GLOBAL frame (s, t) of the gear system; its parameters ``frame_angle`` and
 ``rotation_sign`` place the bearing's local frame (:class:`bearing_fmu.frames.LocalFrame`) in
-which the film model runs. Units are SI.
+which the film model runs. Besides the force and its stiffness and damping (Eq. 18) it outputs
+the journal state they were evaluated at (its inputs, ``s_eval`` ...): what the gear-shaft FMU
+linearises about (Eq. 17).
 
-:data:`GEAR_VARIABLES`: the gear-shaft FMU (``GearShaft``): per bearing j = 1..4 an affine
-bearing law ``F_j = F0_j - Kb_j X_j - Cb_j Xdot_j`` in (inputs), the journal state X_j, Xdot_j
-out, plus mesh and gear outputs (DESIGN.md section 4).
+:data:`GEAR_VARIABLES`: the gear-shaft FMU (``GearShaft``): the structural fields of its case
+as parameters (:func:`gear_case_fields`); per bearing j = 1..4 the bearing FMU's outputs as
+inputs (``F_s_j``, ``K_ss_j``, ..., ``s_eval_j``, ...); the journal states, the shaft speeds at
+the bearings, mesh and gear outputs. A system is wired by plain output -> input connections
+(:func:`connections`), with no arithmetic in between.
 
-The layouts of the 40 law inputs and the 16 journal outputs are defined once here
-(:func:`law_input_names`, :func:`pack_laws`, :func:`unpack_laws`, :func:`unpack_journal`).
-Units are the dimensions of :mod:`fmu_src.units`. The tables are rendered into
-``docs/fmu-variables.md`` by :func:`document` and into each FMU's modelDescription.xml (units,
-descriptions, start values) by :mod:`fmu_src.build`.
+Every bound a value must respect is declared here (:class:`FmiVar`: minimum, maximum, choices;
+written as ``min``/``max`` into modelDescription.xml) and checked by the FMUs when the value is
+set (:meth:`FmiVar.check`). The layouts of the 56 law inputs and the 16 journal outputs are
+defined once (:func:`law_input_names`, :func:`pack_laws`, :func:`unpack_laws`,
+:func:`unpack_journal`). Units are the dimensions of :mod:`fmu_src.units`. The tables are
+rendered into ``docs/fmu-variables.md`` by :mod:`fmu_src.contract_doc` and into each FMU's
+modelDescription.xml by :mod:`fmu_src.build`.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -27,30 +34,75 @@ from bearing_fmu import MODELS, model_class
 from bearing_fmu.affine import AffineLaws
 from fmu_src.units import symbol
 
-__all__ = ["BEARING_VARIABLES", "GEAR_DEFAULT_CASE", "GEAR_VARIABLES", "FmiVar",
-           "bearing_option_keys", "document", "markdown_table", "pack_laws", "unpack_journal",
-           "unpack_laws"]
+__all__ = ["BEARINGS", "BEARING_VARIABLES", "GEAR_DEFAULT_CASE", "GEAR_VARIABLES", "FmiVar",
+           "ValueRefused", "bearing_option_keys", "connections", "gear_case_fields",
+           "gear_variables", "journal_output_names", "law_input_names", "pack_laws",
+           "unpack_journal", "unpack_laws"]
+
+
+class ValueRefused(ValueError):
+    """A value an FMU variable does not accept (the message names it and the limit)."""
 
 
 @dataclass(frozen=True)
 class FmiVar:
-    """One FMI 2.0 scalar variable (``dimension``: a key of :data:`fmu_src.units.DIMENSIONS`,
-    "" for integers, strings and flags)."""
+    """One FMI 2.0 scalar variable.
+
+    ``dimension`` is a key of :data:`fmu_src.units.DIMENSIONS` ("" for integers, strings and
+    flags); ``minimum``/``maximum`` bound it (``exclusive_minimum``: the minimum itself is
+    refused); ``choices`` lists the only values allowed.
+    """
 
     name: str
     causality: str  # parameter | calculatedParameter | input | output
-    type: str  # Real | Integer | String
+    type: str  # Real | Integer | Boolean | String
     dimension: str
-    start: float | int | str
+    start: float | int | str | bool
     description: str
+    minimum: float | None = None
+    maximum: float | None = None
+    exclusive_minimum: bool = False
+    choices: tuple = ()
 
     @property
     def unit(self) -> str:
         """The unit symbol (:mod:`fmu_src.units`), "" for none."""
         return symbol(self.dimension) if self.dimension else ""
 
+    def check(self, value) -> None:
+        """Raise :class:`ValueRefused` (value, unit and limit in the message) for a value this
+        variable does not accept: a non-finite number, one out of its bounds or choices."""
+        unit = f" {self.unit}" if self.unit and self.unit != "1" else ""
+        if self.type in ("Real", "Integer") and not math.isfinite(value):
+            raise ValueRefused(f"{self.name} = {value!r}{unit} refused: not a finite number")
+        if self.choices and value not in self.choices:
+            raise ValueRefused(f"{self.name} = {value!r} refused: must be one of "
+                               f"{', '.join(map(str, self.choices))}")
+        if self.minimum is not None and (value < self.minimum or (
+                self.exclusive_minimum and value == self.minimum)):
+            rel = ">" if self.exclusive_minimum else ">="
+            raise ValueRefused(f"{self.name} = {value!r}{unit} refused: must be {rel} "
+                               f"{self.minimum:g}{unit}")
+        if self.maximum is not None and value > self.maximum:
+            raise ValueRefused(f"{self.name} = {value!r}{unit} refused: must be <= "
+                               f"{self.maximum:g}{unit}")
+
 
 _P, _CP, _I, _O = "parameter", "calculatedParameter", "input", "output"
+_POS = dict(minimum=0.0, exclusive_minimum=True)
+
+# --- bearing FMUs --------------------------------------------------------------------------
+
+#: names of the force, stiffness and damping outputs (row-major matrices)
+FORCE_NAMES = ("F_s", "F_t")
+STIFFNESS_NAMES = ("K_ss", "K_st", "K_ts", "K_tt")
+DAMPING_NAMES = ("C_ss", "C_st", "C_ts", "C_tt")
+#: the journal-state inputs of a bearing FMU, and the outputs that echo them
+STATE_NAMES = ("s", "t", "s_dot", "t_dot")
+EVAL_NAMES = ("s_eval", "t_eval", "s_dot_eval", "t_dot_eval")
+#: what a bearing FMU gives the gear-shaft FMU (the law of Eq. 17 and where it was evaluated)
+BEARING_OUTPUTS = (*FORCE_NAMES, *STIFFNESS_NAMES, *DAMPING_NAMES, *EVAL_NAMES)
+
 
 def _paper_bearing():
     """Start values of the bearing data: bearing 1 of the paper's spur case (Table 3)."""
@@ -61,19 +113,25 @@ def _paper_bearing():
                                                    "viscosity")}
 
 
+def _field_variable(name: str, f, value, causality: str = _P) -> FmiVar:
+    """An FMU variable for one value of a case field (:class:`fmu_src.case.Field`)."""
+    bounds = dict(minimum=f.minimum, maximum=f.maximum, exclusive_minimum=f.exclusive_minimum)
+    if f.kind == "count":
+        return FmiVar(name, causality, "Integer", "", int(value), f.doc, **bounds)
+    if f.kind == "flag":
+        return FmiVar(name, causality, "Boolean", "", bool(value), f.doc)
+    if f.kind in ("text", "choice"):
+        return FmiVar(name, causality, "String", "", str(value), f.doc, choices=f.choices)
+    return FmiVar(name, causality, "Real", f.kind, float(value), f.doc, **bounds)
+
+
 def _option_variables() -> tuple[FmiVar, ...]:
     """One parameter per option of the registered bearing models (:mod:`fmu_src.case` merges
     them the same way), so every bearing FMU has the same variables."""
     from fmu_src.case import model_option_fields
 
-    out = []
-    for f in model_option_fields():
-        key = f.key.split(".", 1)[1]
-        if f.kind == "count":
-            out.append(FmiVar(key, _P, "Integer", "", int(f.default), f.doc))
-        else:
-            out.append(FmiVar(key, _P, "Real", f.kind, float(f.default), f.doc))
-    return tuple(out)
+    return tuple(_field_variable(f.key.split(".", 1)[1], f, f.default)
+                 for f in model_option_fields())
 
 
 _B = _paper_bearing()
@@ -82,22 +140,23 @@ _B = _paper_bearing()
 #: :meta hide-value:
 BEARING_VARIABLES: tuple[FmiVar, ...] = (
     # bearing data (start values: the paper's pinion bearing, Table 3)
-    FmiVar("D", _P, "Real", "length", _B["diameter"], "bearing diameter D = 2R"),
-    FmiVar("L", _P, "Real", "length", _B["length"], "bearing length L"),
-    FmiVar("C", _P, "Real", "length", _B["clearance"], "radial clearance C"),
+    FmiVar("D", _P, "Real", "length", _B["diameter"], "bearing diameter D = 2R", **_POS),
+    FmiVar("L", _P, "Real", "length", _B["length"], "bearing length L", **_POS),
+    FmiVar("C", _P, "Real", "length", _B["clearance"], "radial clearance C (< D/2)", **_POS),
     FmiVar("mu", _P, "Real", "viscosity", _B["viscosity"],
-           "dynamic viscosity of the lubricant"),
+           "dynamic viscosity of the lubricant", **_POS),
     FmiVar("frame_angle", _P, "Real", "angle", 0.0,
            "angle from the global s axis to the bearing's local x axis"),
     FmiVar("rotation_sign", _P, "Integer", "", 1,
-           "+1 if the shaft turns about +z, -1 if about -z (local frame mirrored)"),
+           "+1 if the shaft turns about +z, -1 if about -z (local frame mirrored)",
+           choices=(1, -1)),
     *_option_variables(),
     # journal state at the bearing node, global frame
     FmiVar("s", _I, "Real", "length", 0.0, "journal-centre displacement along s (global frame)"),
     FmiVar("t", _I, "Real", "length", 0.0, "journal-centre displacement along t (global frame)"),
     FmiVar("s_dot", _I, "Real", "velocity", 0.0, "journal-centre velocity along s"),
     FmiVar("t_dot", _I, "Real", "velocity", 0.0, "journal-centre velocity along t"),
-    FmiVar("omega", _I, "Real", "angular_speed", 325.0, "shaft speed magnitude (> 0)"),
+    FmiVar("omega", _I, "Real", "angular_speed", 325.0, "shaft speed magnitude", **_POS),
     # film force on the journal and its linearisation, global frame
     FmiVar("F_s", _O, "Real", "force", 0.0, "film force on the journal along s"),
     FmiVar("F_t", _O, "Real", "force", 0.0, "film force on the journal along t"),
@@ -109,6 +168,13 @@ BEARING_VARIABLES: tuple[FmiVar, ...] = (
     FmiVar("C_st", _O, "Real", "damping", 0.0, "damping -dF_s/dt_dot"),
     FmiVar("C_ts", _O, "Real", "damping", 0.0, "damping -dF_t/ds_dot"),
     FmiVar("C_tt", _O, "Real", "damping", 0.0, "damping -dF_t/dt_dot"),
+    FmiVar("s_eval", _O, "Real", "length", 0.0,
+           "the input s at which F, K and C were evaluated (what a structure linearises about)"),
+    FmiVar("t_eval", _O, "Real", "length", 0.0, "the input t at which F, K and C were evaluated"),
+    FmiVar("s_dot_eval", _O, "Real", "velocity", 0.0,
+           "the input s_dot at which F, K and C were evaluated"),
+    FmiVar("t_dot_eval", _O, "Real", "velocity", 0.0,
+           "the input t_dot at which F, K and C were evaluated"),
     FmiVar("eccentricity", _O, "Real", "dimensionless", 0.0,
            "eccentricity ratio e/C of the journal"),
     FmiVar("n_solves", _O, "Integer", "", 0,
@@ -122,45 +188,41 @@ def bearing_option_keys() -> tuple[str, ...]:
                         key=[v.name for v in BEARING_VARIABLES].index))
 
 
-#: names of the output matrices in row-major order, local to global
-FORCE_NAMES = ("F_s", "F_t")
-STIFFNESS_NAMES = ("K_ss", "K_st", "K_ts", "K_tt")
-DAMPING_NAMES = ("C_ss", "C_st", "C_ts", "C_tt")
-STATE_NAMES = ("s", "t", "s_dot", "t_dot")
+# --- gear-shaft FMU ------------------------------------------------------------------------
 
-
-#: the case file shipped in the gear-shaft FMU's resources (``case_file`` empty)
+#: the case the gear-shaft FMU carries by default (its parameters' start values)
 GEAR_DEFAULT_CASE = "baguet2010_spur.toml"
 #: the gear-shaft FMU's bearing numbering (1, 2 pinion shaft; 3, 4 gear shaft)
 BEARINGS = (1, 2, 3, 4)
-#: per-bearing affine-law inputs in the order of the FMU's variables (row-major matrices)
-LAW_NAMES = ("F0_s", "F0_t", *STIFFNESS_NAMES, *DAMPING_NAMES)
-#: start values of the law inputs: isotropic 1e8 N/m, 1e4 N s/m, F0 = 0 (stand-alone runs)
-LAW_START = {"F0_s": 0.0, "F0_t": 0.0, "K_ss": 1e8, "K_st": 0.0, "K_ts": 0.0, "K_tt": 1e8,
-             "C_ss": 1e4, "C_st": 0.0, "C_ts": 0.0, "C_tt": 1e4}
-_LAW_TEXT = {
-    "F0_s": ("force", "bearing {j}: affine-law force at X = 0, Xdot = 0, along s"),
-    "F0_t": ("force", "bearing {j}: affine-law force at X = 0, Xdot = 0, along t"),
-    "K_ss": ("stiffness", "bearing {j}: affine-law stiffness -dF_s/ds"),
-    "K_st": ("stiffness", "bearing {j}: affine-law stiffness -dF_s/dt"),
-    "K_ts": ("stiffness", "bearing {j}: affine-law stiffness -dF_t/ds"),
-    "K_tt": ("stiffness", "bearing {j}: affine-law stiffness -dF_t/dt"),
-    "C_ss": ("damping", "bearing {j}: affine-law damping -dF_s/ds_dot"),
-    "C_st": ("damping", "bearing {j}: affine-law damping -dF_s/dt_dot"),
-    "C_ts": ("damping", "bearing {j}: affine-law damping -dF_t/ds_dot"),
-    "C_tt": ("damping", "bearing {j}: affine-law damping -dF_t/dt_dot"),
-}
+#: start values of the law inputs: isotropic 1e8 N/m, 1e4 N s/m, no force (stand-alone runs)
+_LAW_START = {"K_ss": 1e8, "K_tt": 1e8, "C_ss": 1e4, "C_tt": 1e4}
+_LAW_DIMENSION = {**dict.fromkeys(FORCE_NAMES, "force"),
+                  **dict.fromkeys(STIFFNESS_NAMES, "stiffness"),
+                  **dict.fromkeys(DAMPING_NAMES, "damping"),
+                  "s_eval": "length", "t_eval": "length", "s_dot_eval": "velocity",
+                  "t_dot_eval": "velocity"}
 _STATE_TEXT = {
     "s": ("length", "bearing {j}: journal-centre displacement along s (global frame)"),
     "t": ("length", "bearing {j}: journal-centre displacement along t (global frame)"),
     "s_dot": ("velocity", "bearing {j}: journal-centre velocity along s"),
     "t_dot": ("velocity", "bearing {j}: journal-centre velocity along t"),
 }
+#: outputs of the gear-shaft FMU after the journal states and speeds (name, dimension, text)
+GEAR_OUTPUTS = (
+    ("mesh_force", "force", "total normal tooth load of the mesh (sum of the slice loads)"),
+    ("transmission_error", "length",
+     "transmission error r_b1 theta_1 + r_b2 theta_2 of the gear nodes' elastic torsion"),
+    ("u_pinion", "length", "pinion node displacement along s"),
+    ("v_pinion", "length", "pinion node displacement along t"),
+    ("u_gear", "length", "gear node displacement along s"),
+    ("v_gear", "length", "gear node displacement along t"),
+)
 
 
 def law_input_names() -> list[str]:
-    """The 40 law inputs of the gear-shaft FMU: bearing-major, :data:`LAW_NAMES` within."""
-    return [f"{n}_{j}" for j in BEARINGS for n in LAW_NAMES]
+    """The 56 law inputs of the gear-shaft FMU: bearing-major, the bearing FMU's outputs
+    (:data:`BEARING_OUTPUTS`) within, suffixed with the bearing number."""
+    return [f"{n}_{j}" for j in BEARINGS for n in BEARING_OUTPUTS]
 
 
 def journal_output_names() -> list[str]:
@@ -174,21 +236,24 @@ def support_load_names() -> list[str]:
 
 
 def pack_laws(laws: AffineLaws, out: np.ndarray) -> None:
-    """Write four affine laws (Eq. 17, global frame) into ``out``, the 40 law inputs in the
-    order of :func:`law_input_names` (float64, C order, any shape with 40 elements)."""
-    v = out.reshape(4, 10)
-    v[:, 0:2] = laws.f0
-    v[:, 2:6] = np.reshape(laws.kb, (4, 4))
-    v[:, 6:10] = np.reshape(laws.cb, (4, 4))
+    """Write four affine laws (Eq. 17, global frame) into ``out``, the 56 law inputs in the
+    order of :func:`law_input_names`: each law's expansion (force, Kb, Cb and the journal state
+    it was linearised about; :meth:`bearing_fmu.affine.AffineLaws.expansion`)."""
+    states, force, kb, cb = laws.expansion()
+    v = out.reshape(4, 14)
+    v[:, 0:2] = force
+    v[:, 2:6] = np.reshape(kb, (4, 4))
+    v[:, 6:10] = np.reshape(cb, (4, 4))
+    v[:, 10:14] = states
 
 
 def unpack_laws(values) -> AffineLaws:
-    """The four affine laws of the 40 law inputs (order of :func:`law_input_names`), as
-    C-contiguous arrays F0 (4, 2), Kb (4, 2, 2), Cb (4, 2, 2)."""
-    a = np.array(values, dtype=float).reshape(4, 10)
-    return AffineLaws(np.ascontiguousarray(a[:, 0:2]),
-                      np.ascontiguousarray(a[:, 2:6]).reshape(4, 2, 2),
-                      np.ascontiguousarray(a[:, 6:10]).reshape(4, 2, 2))
+    """The four affine laws of the 56 law inputs (order of :func:`law_input_names`):
+    Eq. (17) about the states ``s_eval_j`` ..., rebuilt exactly as the master built them."""
+    a = np.array(values, dtype=float).reshape(4, 14)
+    return AffineLaws.linearise(a[:, 10:14], a[:, 0:2],
+                                np.ascontiguousarray(a[:, 2:6]).reshape(4, 2, 2),
+                                np.ascontiguousarray(a[:, 6:10]).reshape(4, 2, 2))
 
 
 def unpack_journal(values) -> np.ndarray:
@@ -197,120 +262,78 @@ def unpack_journal(values) -> np.ndarray:
     return np.asarray(values, dtype=float).reshape(4, 4)
 
 
-#: outputs of the gear-shaft FMU after the journal states (name, dimension, description)
-GEAR_OUTPUTS = (
-    ("mesh_force", "force", "total normal tooth load of the mesh (sum of the slice loads)"),
-    ("transmission_error", "length",
-     "transmission error r_b1 theta_1 + r_b2 theta_2 of the gear nodes' elastic torsion"),
-    ("u_pinion", "length", "pinion node displacement along s"),
-    ("v_pinion", "length", "pinion node displacement along t"),
-    ("u_gear", "length", "gear node displacement along s"),
-    ("v_gear", "length", "gear node displacement along t"),
-)
+def gear_case_fields():
+    """The case fields the gear-shaft FMU exposes as parameters: the case's name, the gear pair,
+    the shafts, the operating point, the modal damping and the structure's tolerance (the
+    bearing fields belong to the bearing FMUs, the run length to the master)."""
+    from fmu_src.case import FIELDS
 
-#: The variables of the gear-shaft FMU (module docstring).
+    keep = ("case.name", "simulation.damping_ratio", "simulation.tolerance")
+    return tuple(f for f in FIELDS if f.key.split(".")[0] in ("gear_pair", "shafts", "operation")
+                 or f.key in keep)
+
+
+def gear_parameter_names(field) -> list[str]:
+    """FMU parameter name(s) of a case field: ``gear_pair.module``; lists one per entry,
+    ``gear_pair.teeth[1]``, ``gear_pair.teeth[2]`` (FMI's 1-based index notation)."""
+    if field.shape is None:
+        return [field.key]
+    return [f"{field.key}[{i + 1}]" for i in range(field.shape)]
+
+
+def gear_variables(case=None) -> tuple[FmiVar, ...]:
+    """The gear-shaft FMU's variables, the case parameters starting at the values of ``case``
+    (default: the shipped :data:`GEAR_DEFAULT_CASE`)."""
+    from fmu_src.case import load_case
+    from fmu_src.description import BEARING_FRAMES
+
+    case = load_case(GEAR_DEFAULT_CASE.removesuffix(".toml")) if case is None else case
+    params = []
+    for f in gear_case_fields():
+        values = case[f.key] if f.shape is not None else [case[f.key]]
+        params += [_field_variable(n, f, v) for n, v in zip(gear_parameter_names(f), values,
+                                                             strict=True)]
+    return (
+        *params,
+        *(FmiVar(f"{n}_{j}", _I, "Real", _LAW_DIMENSION[n], _LAW_START.get(n, 0.0),
+                 f"bearing {j}: the bearing FMU's {n} (connect bearing {j}'s output {n})")
+          for j in BEARINGS for n in BEARING_OUTPUTS),
+        *(FmiVar(f"{n}_{j}", _O, "Real", _STATE_TEXT[n][0], 0.0, _STATE_TEXT[n][1].format(j=j))
+          for j in BEARINGS for n in STATE_NAMES),
+        *(FmiVar(f"omega_{j}", _O, "Real", "angular_speed", 0.0,
+                 f"bearing {j}: speed magnitude of its shaft (connect to bearing {j}'s omega)")
+          for j in BEARINGS),
+        *(FmiVar(n, _O, "Real", u, 0.0, d) for n, u, d in GEAR_OUTPUTS),
+        FmiVar("iterations", _O, "Integer", "", 0,
+               "Newton/contact iterations (linear solves) of the last step or static solution"),
+        *(FmiVar(f"support_load_{a}_{j}", _CP, "Real", "force", 0.0,
+                 f"bearing {j}: static load of the structure on the bearing along {a} with "
+                 "stiff (1e12 N/m) supports (a first guess of the static solution)")
+          for j in BEARINGS for a in ("s", "t")),
+        *(FmiVar(f"rotation_sign_{j}", _CP, "Integer", "", fr.rotation_sign,
+                 f"bearing {j}: the rotation_sign its bearing FMU needs (+1: shaft turning "
+                 "about +z)") for j, fr in zip(BEARINGS, BEARING_FRAMES, strict=True)),
+        *(FmiVar(f"frame_angle_{j}", _CP, "Real", "angle", fr.angle,
+                 f"bearing {j}: the frame_angle its bearing FMU needs")
+          for j, fr in zip(BEARINGS, BEARING_FRAMES, strict=True)),
+    )
+
+
+#: The variables of the gear-shaft FMU built for the shipped case (module docstring).
 #:
 #: :meta hide-value:
-GEAR_VARIABLES: tuple[FmiVar, ...] = (
-    FmiVar("case_file", _P, "String", "", "",
-           "TOML case file (fmu_src.case) describing the gear pair, shafts and operating "
-           "point; empty = the paper's spur case shipped in the FMU's resources"),
-    *(FmiVar(f"{n}_{j}", _I, "Real", _LAW_TEXT[n][0], LAW_START[n],
-             _LAW_TEXT[n][1].format(j=j)) for j in BEARINGS for n in LAW_NAMES),
-    *(FmiVar(f"{n}_{j}", _O, "Real", _STATE_TEXT[n][0], 0.0, _STATE_TEXT[n][1].format(j=j))
-      for j in BEARINGS for n in STATE_NAMES),
-    *(FmiVar(n, _O, "Real", u, 0.0, d) for n, u, d in GEAR_OUTPUTS),
-    FmiVar("iterations", _O, "Integer", "", 0,
-           "Newton/contact iterations (linear solves) of the last step or static solution"),
-    *(FmiVar(f"support_load_{a}_{j}", _CP, "Real", "force", 0.0,
-             f"bearing {j}: static load of the structure on the bearing along {a} with stiff "
-             "(1e12 N/m) supports (the master's first guess of the static solution)")
-      for j in BEARINGS for a in ("s", "t")),
-)
+GEAR_VARIABLES: tuple[FmiVar, ...] = gear_variables()
 
 
-def _start(v: FmiVar) -> str:
-    if v.causality in ("output", "calculatedParameter"):
-        return "-"
-    if v.type == "String":
-        return f'"{v.start}"'
-    return f"{v.start:g}"
-
-
-def markdown_table(variables=BEARING_VARIABLES) -> str:
-    """A contract as a Markdown table (for docs/fmu-variables.md)."""
-    lines = ["| name | causality | type | unit | start | description |",
-             "| --- | --- | --- | --- | --- | --- |"]
-    for v in variables:
-        lines.append(f"| `{v.name}` | {v.causality} | {v.type} | {v.unit or '-'} | {_start(v)} | "
-                     f"{v.description} |")
-    return "\n".join(lines)
-
-
-_DOC_HEADER = """# FMU variables
-
-Generated from `fmu_src/contract.py` (`python -m fmu_src.contract > docs/fmu-variables.md`);
-a test keeps the two in sync. Global frame (s, t) of the gear system, SI units. Build the FMUs
-with `gsb build-fmus` (`fmu_src/build.py`); every built FMU passes `fmpy validate`.
-
-## Bearing FMUs
-
-Every bearing FMU ({fmus}) has exactly these variables; the model options (`nodes`, ...)
-are generated from the options the registered models declare, and each FMU ignores the
-options of the other models. The parameters `frame_angle` and `rotation_sign` place the bearing's
-local frame, in which the film model runs (`bearing_fmu/frames.py`). Outputs are computed when
-read, so they follow new inputs without a doStep. A failed evaluation (eccentricity >= 1, bad
-parameters) is logged with status error, gives NaN outputs, and the next doStep returns discard.
-
-"""
-
-_GEAR_HEADER = """
-## Gear-shaft FMU (GearShaft)
-
-The structural slave (`fmu_src/gear_shaft_slave.py` around `gear_fmu.structure.Structure`):
-Timoshenko shafts, the gear pair's distributed mesh element and the Newmark/Newton/contact step.
-It is built from the case file named by `case_file` through `fmu_src.case` and
-`fmu_src.description` (the system description: case file -> physics objects, shared with the
-in-process runs); it imports nothing from the master package `orchestrator`.
-
-Inputs: per bearing j = 1..4 the affine bearing law `F_j = F0_j - Kb_j X_j - Cb_j Xdot_j`
-(force of the bearing on the structure at the bearing node, global frame; `K_st_j` is the
-(s, t) entry of Kb_j, row-major). Outputs: the journal state of each bearing node, the mesh
-and gear-node outputs, the iteration count of the last solve. The start values (isotropic
-1e8 N/m and 1e4 N s/m, F0 = 0) make a stand-alone `fmpy simulate` run sensible.
-
-Behaviour:
-
-- Initialisation mode: outputs are the STATIC solution (velocities zero, constant loads) for
-  the current laws, solved when an output is read after an input changed. The master iterates
-  the static solution through the FMU this way. The support loads (calculated parameters) are
-  the loads on stiff supports, the master's first guess.
-- `fmi2ExitInitializationMode`: if no static solution was computed yet, it is computed for the
-  current laws (otherwise the last one read stays the initial state, as with the in-process
-  structure); the modal damping is rebuilt on the modes with the symmetric part of the current
-  Kb laws (`Structure.set_damping_reference`).
-- `fmi2DoStep(t, dt)`: one Newmark step from t (the FMU's time) to t + dt with the current
-  laws. The outputs do not depend directly on the inputs in step mode (no feedthrough): they
-  change at doStep.
-- Failures (Newton/contact not converged, non-finite laws, a bad case file) are logged with
-  status error and the call returns a non-OK status (doStep: discard, outputs in initialisation
-  mode: NaN); the instance and its host survive, and `fmi2SetFMUstate` returns to a saved state.
-- `fmi2GetFMUstate` / `fmi2SetFMUstate` save and restore the structural state (t, X, Xdot,
-  Xddot, contact set, mesh outputs), the laws and the outputs exactly (the modal damping
-  reference is not part of the state); states serialise with pickle.
-
-"""
-
-
-def document() -> str:
-    """The text of docs/fmu-variables.md."""
-    from bearing_fmu import fmu_name
-
-    fmus = ", ".join(fmu_name(m) for m in MODELS)
-    return (_DOC_HEADER.format(fmus=fmus) + markdown_table(BEARING_VARIABLES) + "\n"
-            + _GEAR_HEADER
-            + markdown_table(GEAR_VARIABLES) + "\n")
-
-
-if __name__ == "__main__":
-    print(document(), end="")
+def connections(gear: str = "gear_shaft", bearing: str = "bearing{j}") -> list[tuple]:
+    """The wiring of the system: ``(from instance, output, to instance, input)`` for every
+    connection, plain output -> input (instance names: ``gear`` and ``bearing`` with ``{j}``
+    the bearing number). The journal state and the shaft speed go to each bearing FMU; its
+    force, stiffness, damping and evaluation state come back."""
+    out = []
+    for j in BEARINGS:
+        b = bearing.format(j=j)
+        out += [(gear, f"{n}_{j}", b, n) for n in STATE_NAMES]
+        out.append((gear, f"omega_{j}", b, "omega"))
+        out += [(b, n, gear, f"{n}_{j}") for n in BEARING_OUTPUTS]
+    return out

@@ -1,86 +1,80 @@
 """pythonfmu slave of the gear-shaft FMU: the contract's variables around one ``Structure``.
 
-Nothing physical happens here: the slave builds :class:`gear_fmu.structure.Structure` from a case
-file (through :mod:`fmu_src.case` and :mod:`fmu_src.description`, the system description
-shared with the in-process runs), keeps the 40 affine-law inputs (layout:
-:func:`fmu_src.contract.unpack_laws`), and maps the FMI calls onto the structure:
+Nothing physical happens here: the slave builds :class:`gear_fmu.structure.Structure` from its
+case (``resources/case.toml`` with the FMU parameters' values, through :mod:`fmu_src.case` and
+:mod:`fmu_src.description`, the system description shared with the in-process runs), keeps the
+56 law inputs (layout: :func:`fmu_src.contract.unpack_laws`: each bearing FMU's outputs) and
+maps the FMI calls onto the structure:
 
 * initialisation mode: outputs are the static solution for the current laws, solved in the
   getter when an input changed since the last solve (the master iterates X0 this way);
 * ``exitInitializationMode``: static solution if none was computed yet, then
   ``set_damping_reference`` with the symmetric part of the current Kb laws;
 * ``doStep(t, dt)``: one ``Structure.step`` from t (must be the structure's time) to t + dt;
-* ``get/setFMUstate``: structure state, laws and outputs (exact rollback); pickle serialises.
+* ``get/setFMUstate``: structure state, parameters, laws, outputs and the bearing stiffness
+  the modal damping was built with (exact rollback, and a restart in another instance or
+  process); pickle serialises.
 
-Every failure (a NewmarkConvergenceError, non-finite laws, a bad case file) is caught, logged
-with status error and reported as a non-OK status (doStep returns False) or NaN outputs: a Python
-exception escaping a pythonfmu callback would be fatal for the instance and its host.
+A refused value (out of its bounds, non-finite) is reported by the set call (fmi2Error); a
+failed solution or a case whose fields do not fit together by the read of the outputs
+(fmi2Error) or the doStep (fmi2Discard), the reason in the log: a Python exception escaping a
+pythonfmu callback would be fatal for the instance and its host.
 """
 
 from __future__ import annotations
 
 import math
 import pickle
+import re
 from pathlib import Path
 
-from pythonfmu import Fmi2Slave
 from pythonfmu.default_experiment import DefaultExperiment
-from pythonfmu.enums import Fmi2Status
 
 from fmu_src.contract import (
     GEAR_DEFAULT_CASE,
     GEAR_OUTPUTS,
-    GEAR_VARIABLES,
+    ValueRefused,
+    gear_variables,
     journal_output_names,
     law_input_names,
     support_load_names,
     unpack_laws,
 )
-from fmu_src.slave_support import (
-    describe_exception,
-    register_contract_variable,
-    release_python_state_at_exit,
-)
+from fmu_src.slave_support import ContractSlave
 
-__all__ = ["GearShaftSlave"]
+__all__ = ["CASE_RESOURCE", "GearShaftSlave"]
 
-DEFAULT_CASE = GEAR_DEFAULT_CASE
+#: the case an FMU carries, in its resources
+CASE_RESOURCE = "case.toml"
 
 _LAWS = law_input_names()
-_OUTPUTS = [*journal_output_names(), *(name for name, _, _ in GEAR_OUTPUTS)]
+_OUTPUTS = [*journal_output_names(), *(f"omega_{j}" for j in range(1, 5)),
+            *(name for name, _, _ in GEAR_OUTPUTS)]
 _SUPPORT = support_load_names()
 _NAN_OUTPUTS = [math.nan] * len(_OUTPUTS)
+_INDEXED = re.compile(r"^(.*)\[(\d+)\]$")
 
 
-def _default_step() -> float:
-    """The time step of the shipped case (mesh period / steps per mesh period) [s]."""
-    from fmu_src.case import load_case
-    from fmu_src.description import time_step
-
-    return time_step(load_case(Path(DEFAULT_CASE).stem))
-
-
-PAPER_STEP = _default_step()
-
-
-class GearShaftSlave(Fmi2Slave):
+class GearShaftSlave(ContractSlave):
     """Gear-shaft structure as an FMI 2.0 co-simulation slave (module docstring)."""
-
-    author = "gear-shaft-bearing contributors"
-    license = "MIT"
-    #: two mesh periods of the shipped paper case at its time step (``fmpy simulate`` defaults)
-    default_experiment = DefaultExperiment(start_time=0.0, stop_time=64 * PAPER_STEP,
-                                           step_size=PAPER_STEP)
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
         self.description = (
             "Gear-shaft structure (Timoshenko shafts, distributed gear mesh, Newmark/Newton/"
-            "contact step) driven by four affine bearing laws; global frame, SI units "
+            "contact step) driven by the outputs of four bearing FMUs; global frame, SI units "
             "(Baguet & Jacquenot 2010)."
         )
-        starts = {v.name: v.start for v in GEAR_VARIABLES}
-        self._case_file = ""
+        from fmu_src.description import time_step
+
+        self._base = self._base_case()
+        step = time_step(self._base)
+        #: two mesh periods of the carried case at its time step (``fmpy simulate`` defaults)
+        self.default_experiment = DefaultExperiment(start_time=0.0, stop_time=64 * step,
+                                                    step_size=step)
+        variables = gear_variables(self._base)
+        starts = {v.name: v.start for v in variables}
+        self._overrides: dict = {}  # case field -> value set through a parameter
         self._laws = [float(starts[n]) for n in _LAWS]  # never rebound: setters hold it
         self._outputs = list(_NAN_OUTPUTS)
         self._iterations = 0
@@ -91,37 +85,54 @@ class GearShaftSlave(Fmi2Slave):
         self._need_static = True  # initialisation: laws changed since the last static solve
         self._have_static = False  # the structure holds a static solution
         self._dirty = True  # outputs must be recomputed from the structure
+        self._failed = False  # the last output computation failed
         self._error: str | None = None  # a failure that forbids stepping (build, initialisation)
-        release_python_state_at_exit(self.resources, type(self).__name__)
-        self._register_all()
+        self._damping_kb = None  # the Kb the modal damping was built with (exit initialisation)
+        self._register_all(variables)
+
+    def _base_case(self):
+        from fmu_src.case import load_case
+
+        if self.resources is not None and (Path(self.resources) / CASE_RESOURCE).is_file():
+            return load_case(Path(self.resources) / CASE_RESOURCE)
+        return load_case(GEAR_DEFAULT_CASE.removesuffix(".toml"))  # shipped with the package
 
     # --- FMI plumbing ------------------------------------------------------------------------
-    def _register_all(self) -> None:
+    def _register_all(self, variables) -> None:
         index = {name: i for i, name in enumerate(_LAWS)}
         out_index = {name: i for i, name in enumerate(_OUTPUTS)}
         sup_index = {name: i for i, name in enumerate(_SUPPORT)}
-        for v in GEAR_VARIABLES:
-            if v.name == "case_file":
-                register_contract_variable(self, v, lambda: self._case_file, self._set_case_file)
+        fixed = {v.name: v.start for v in variables if v.name.startswith(("rotation_sign_",
+                                                                          "frame_angle_"))}
+        for v in variables:
+            if v.causality == "parameter":
+                self.register_contract_variable(v, self._param_getter(v.name),
+                                                self._param_setter(v.name))
             elif v.name in index:
                 i = index[v.name]
-                register_contract_variable(self, v, self._law_getter(i), self._law_setter(i))
+                self.register_contract_variable(v, self._law_getter(i), self._law_setter(i))
             elif v.name in out_index:
-                register_contract_variable(self, v, self._output_getter(out_index[v.name]))
+                self.register_contract_variable(v, self._output_getter(out_index[v.name]))
             elif v.name == "iterations":
-                register_contract_variable(self, v, self._get_iterations)
+                self.register_contract_variable(v, self._get_iterations)
             elif v.name in sup_index:
-                register_contract_variable(self, v, self._support_getter(sup_index[v.name]))
+                self.register_contract_variable(v, self._support_getter(sup_index[v.name]))
+            elif v.name in fixed:
+                self.register_contract_variable(v, lambda value=fixed[v.name]: value)
             else:  # pragma: no cover - the contract and this slave disagree
                 raise RuntimeError(f"gear-shaft slave has no handler for variable {v.name!r}")
         vr = {v.name: v.value_reference for v in self.vars.values()}
         self._law_vrs = [vr[n] for n in _LAWS]
         self._journal_vrs = [vr[n] for n in _OUTPUTS[:16]]
 
-    # The master sets all 40 laws and reads the 16 journal states in one call each: served
-    # without the per-variable loop of Fmi2Slave.set_real/get_real (same effect, ~2x cheaper).
+    # The master sets all 56 law inputs and reads the 16 journal states in one call each:
+    # served without the per-variable loop (same checks and effect, several times cheaper).
     def set_real(self, vrs, values):
         if vrs == self._law_vrs:
+            if not all(map(math.isfinite, values)):
+                bad = next(n for n, x in zip(_LAWS, values, strict=True) if not math.isfinite(x))
+                return self.refuse(ValueRefused(
+                    f"bearing laws refused: {bad} is not a finite number (no input applied)"))
             laws = self._laws
             if self._stepping:
                 laws[:] = values
@@ -129,26 +140,54 @@ class GearShaftSlave(Fmi2Slave):
                 laws[:] = values
                 self._need_static = True
                 self._dirty = True
-        else:
-            super().set_real(vrs, values)
+            return None
+        return super().set_real(vrs, values)
 
     def get_real(self, vrs):
         if vrs == self._journal_vrs:
             if self._dirty:
                 self._refresh()
-            return self._outputs[:16]
+            if self._failed:
+                self._read_status = 3
+            return self._with_status(self._outputs[:16])
         return super().get_real(vrs)
 
-    def _set_case_file(self, value) -> None:
-        value = str(value)
-        if value != self._case_file:
-            self._case_file = value
-            self._structure = None
-            self._support = None
-            self._have_static = False
-            self._need_static = True
-            self._dirty = True
-            self._error = None
+    def _param_getter(self, name):
+        key, i = self._field_of(name)
+
+        def get():
+            value = self._overrides.get(key, self._base[key])
+            return value if i is None else value[i]
+        return get
+
+    def _param_setter(self, name):
+        key, i = self._field_of(name)
+
+        def set_(value):
+            current = self._overrides.get(key, self._base[key])
+            if i is None:
+                new = value
+            else:
+                new = list(current)
+                new[i] = value
+            if new != current:
+                self._overrides[key] = new
+                self._reset_structure()
+        return set_
+
+    @staticmethod
+    def _field_of(name):
+        m = _INDEXED.match(name)
+        return (name, None) if m is None else (m.group(1), int(m.group(2)) - 1)
+
+    def _reset_structure(self) -> None:
+        self._structure = None
+        self._damping_kb = None
+        self._support = None
+        self._have_static = False
+        self._need_static = True
+        self._dirty = True
+        self._error = None
 
     def _law_getter(self, i):
         laws = self._laws
@@ -169,6 +208,8 @@ class GearShaftSlave(Fmi2Slave):
         def get():
             if self._dirty:
                 self._refresh()
+            if self._failed:
+                self._read_status = 3
             return self._outputs[k]
         return get
 
@@ -181,28 +222,21 @@ class GearShaftSlave(Fmi2Slave):
         def get():
             if self._support is None:
                 self._compute_support()
+            if any(math.isnan(x) for x in self._support):
+                self._read_status = 3
             return self._support[k]
         return get
 
-    def _log_error(self, what: str, exc: BaseException) -> str:
-        msg = f"{self.instance_name}: {what}: {describe_exception(exc)}"
-        self.log(msg, Fmi2Status.error)
-        return msg
-
     # --- physics ------------------------------------------------------------------------------
-    def _case_path(self) -> str:
-        if self._case_file:
-            return self._case_file
-        if self.resources is not None and (Path(self.resources) / DEFAULT_CASE).is_file():
-            return str(Path(self.resources) / DEFAULT_CASE)
-        return Path(DEFAULT_CASE).stem  # the case shipped with the package, by name
+    def case(self):
+        """The case the FMU simulates: its carried case with the parameters' values."""
+        return self._base.with_overrides(self._overrides) if self._overrides else self._base
 
     def _ensure_structure(self):
         if self._structure is None:
-            from fmu_src.case import load_case
             from fmu_src.description import structure
 
-            st = structure(load_case(self._case_path()))
+            st = structure(self.case())
             st.t = self._start_time
             self._structure = st
         return self._structure
@@ -217,6 +251,8 @@ class GearShaftSlave(Fmi2Slave):
 
     def _refresh(self) -> None:
         """Recompute the outputs (static solution first in initialisation mode); never raises."""
+        from fmu_src.description import bearing_speeds
+
         try:
             st = self._ensure_structure()
             if self._need_static and not self._stepping:
@@ -226,12 +262,15 @@ class GearShaftSlave(Fmi2Slave):
             ms = st.mesh_state
             g = st.gear_displacements()
             self._outputs = [*st.journal_states().ravel().tolist(),
+                             *bearing_speeds(self.case()),
                              float(ms.total_load), float(ms.transmission_error),
                              float(g[0, 0]), float(g[0, 1]), float(g[1, 0]), float(g[1, 1])]
+            self._failed = False
         except Exception as exc:  # anything raised here would be fatal for the host
             what = "static solution" if not self._stepping else "outputs"
-            self._log_error(f"{what} failed", exc)
+            self.output_failed(f"{what} failed", exc)
             self._outputs = list(_NAN_OUTPUTS)
+            self._failed = True
         self._dirty = False
 
     def _compute_support(self) -> None:
@@ -240,7 +279,7 @@ class GearShaftSlave(Fmi2Slave):
 
             self._support = support_loads(self._ensure_structure()).ravel().tolist()
         except Exception as exc:  # anything raised here would be fatal for the host
-            self._log_error("support loads failed", exc)
+            self.output_failed("support loads failed", exc)
             self._support = [math.nan] * len(_SUPPORT)
 
     # --- FMI life cycle -----------------------------------------------------------------------
@@ -252,15 +291,20 @@ class GearShaftSlave(Fmi2Slave):
     def exit_initialization_mode(self):
         self._stepping = True
         try:
-            st = self._ensure_structure()
+            self._ensure_structure()
             if not self._have_static:
                 self._solve_static()
             kb = unpack_laws(self._laws).kb
-            st.set_damping_reference(0.5 * (kb + kb.transpose(0, 2, 1)))
+            self._set_damping(0.5 * (kb + kb.transpose(0, 2, 1)))
             self._error = None
         except Exception as exc:  # anything raised here would be fatal for the host
-            self._error = self._log_error("initialisation failed", exc)
+            self._error = self.output_failed("initialisation failed", exc)
         self._dirty = True
+
+    def _set_damping(self, kb) -> None:
+        """Modal damping on the modes with bearing stiffness ``kb`` (kept for the FMU state)."""
+        self._ensure_structure().set_damping_reference(kb)
+        self._damping_kb = kb.copy()
 
     def do_step(self, current_time, step_size):
         """One Newmark step with the current laws; False (FMI discard) with a logged reason."""
@@ -277,8 +321,9 @@ class GearShaftSlave(Fmi2Slave):
             info = st.step(step_size, laws.f0, laws.kb, laws.cb)
         except Exception as exc:  # anything raised here would be fatal for the host
             step = "?" if st is None else st.n_steps + 1
-            self._log_error(f"doStep {step} from t = {current_time:.9g} s, dt = "
-                            f"{step_size:.6g} s failed", exc)
+            self.output_failed(f"doStep {step} from t = {current_time:.9g} s, dt = "
+                               f"{step_size:.6g} s failed", exc)
+            self._read_status = 0  # a step reports discard, not the next read
             return False
         self._iterations = info.iterations
         self._dirty = True
@@ -288,33 +333,46 @@ class GearShaftSlave(Fmi2Slave):
     def _get_fmu_state(self):
         st = self._structure
         return {
-            "case_file": self._case_file,
+            "overrides": dict(self._overrides),
             "structure": None if st is None else st.get_state(),
             "laws": list(self._laws),
             "outputs": list(self._outputs),
             "iterations": self._iterations,
+            "stepping": self._stepping,
             "need_static": self._need_static,
             "have_static": self._have_static,
             "dirty": self._dirty,
+            "failed": self._failed,
             "error": self._error,
+            "damping_kb": None if self._damping_kb is None else self._damping_kb.copy(),
         }
 
     def _set_fmu_state(self, state):
         try:
-            self._set_case_file(state["case_file"])
+            if state["overrides"] != self._overrides:
+                self._overrides = dict(state["overrides"])
+                self._reset_structure()
             self._laws[:] = state["laws"]
             if state["structure"] is None:
                 self._structure = None  # saved before the structure was built
+                self._damping_kb = None
             else:
-                self._ensure_structure().set_state(state["structure"])
+                st = self._ensure_structure()
+                kb = state["damping_kb"]
+                if kb is not None and (self._damping_kb is None
+                                       or not (kb == self._damping_kb).all()):
+                    self._set_damping(kb)  # another instance, or another reference
+                st.set_state(state["structure"])
             self._outputs = list(state["outputs"])
             self._iterations = state["iterations"]
+            self._stepping = state["stepping"]
             self._need_static = state["need_static"]
             self._have_static = state["have_static"]
             self._dirty = state["dirty"]
+            self._failed = state["failed"]
             self._error = state["error"]
         except Exception as exc:  # anything raised here would be fatal for the host
-            self._error = self._log_error("cannot restore the FMU state", exc)
+            self._error = self.output_failed("cannot restore the FMU state", exc)
 
     @staticmethod
     def _fmu_state_to_bytes(state) -> bytes:

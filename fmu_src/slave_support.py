@@ -1,25 +1,37 @@
-"""What every pythonfmu slave of this package shares: toolchain workarounds, contract plumbing.
+"""What every pythonfmu slave of this package shares: the contract, statuses, workarounds.
 
-* :func:`pin_namespace` and :func:`release_python_state_at_exit` work around two pythonfmu
-  0.7.0 defects (README, "pythonfmu notes"); every slave script / slave class calls them.
-* :func:`register_contract_variable` registers one :class:`fmu_src.contract.FmiVar` with
-  pythonfmu (causality, variability, type), so the variable lists stay in
-  :mod:`fmu_src.contract` and the slaves only supply getters and setters.
+* :class:`ContractSlave`: registers the variables of a contract (:mod:`fmu_src.contract`) and
+  serves the FMI get/set calls. A value a variable refuses (:meth:`FmiVar.check
+  <fmu_src.contract.FmiVar.check>`, or a setter raising :class:`~fmu_src.contract.ValueRefused`)
+  is logged and reported as fmi2Error by the call that set it; an output that cannot be
+  computed (a getter calls :meth:`ContractSlave.output_failed`) makes the read return fmi2Error.
+  Statuses need the patched library of :mod:`fmu_src.native_build` (it sets
+  ``_fmi_status_protocol``); with pythonfmu's own library a refused value is only logged and
+  a failed output reads NaN.
+* :func:`pin_namespace` and :func:`release_python_state_at_exit` work around two defects of
+  pythonfmu 0.7.0's own library (README, "pythonfmu notes"); with the patched library they are
+  harmless.
 * :func:`describe_exception` formats an exception for the FMU log: a Python exception that
-  escapes a pythonfmu callback is fatal for the instance (and the host may crash on its next
-  call), so slaves catch everything, log it with status error and report a non-OK status.
+  escapes a pythonfmu callback is fatal for the instance, so slaves catch everything, log it
+  and report a non-OK status.
 """
 
 from __future__ import annotations
 
-from pythonfmu import Boolean, Fmi2Causality, Fmi2Variability, Integer, Real, String
+from pythonfmu import Boolean, Fmi2Causality, Fmi2Slave, Fmi2Variability, Integer, Real, String
+from pythonfmu.enums import Fmi2Status
+
+from fmu_src.contract import ValueRefused
 
 __all__ = [
+    "FMI_ERROR",
+    "ContractSlave",
     "describe_exception",
     "pin_namespace",
-    "register_contract_variable",
     "release_python_state_at_exit",
 ]
+
+FMI_OK, FMI_WARNING, FMI_DISCARD, FMI_ERROR = 0, 1, 2, 3
 
 _PINNED: list = []
 
@@ -27,11 +39,11 @@ _PINNED: list = []
 def pin_namespace(namespace: dict, count: int = 10_000) -> None:
     """Hold ``count`` extra references to a slave script's module namespace.
 
-    pythonfmu 0.7.0 drops one reference to the slave module's ``__dict__`` each time an
-    instance is created (seen with ``sys.getrefcount``: the second instantiation of the same FMU
-    in one process frees the namespace, then fails with "module has no attribute" or corrupts
-    the heap). Every slave script calls this once at import; 10,000 instances per process are
-    then safe.
+    pythonfmu 0.7.0's library drops one reference to the slave module's ``__dict__`` each time
+    an instance is created (a borrowed reference released; fixed in the patched library): the
+    second instantiation of the same FMU in one process frees the namespace, then fails with
+    "module has no attribute" or corrupts the heap. Every slave script calls this once at
+    import; 10,000 instances per process are then safe.
     """
     _PINNED.extend([namespace] * count)
 
@@ -49,6 +61,8 @@ def release_python_state_at_exit(resources: str | None, model_identifier: str) -
     from a Python ``atexit`` handler (which runs before the C exit handlers) resets the pointer
     while it is alive, and the late call becomes a no-op. Not done when pythonfmu itself
     started the interpreter (a C host): there Python's exit runs on pythonfmu's own thread.
+    (The patched library never destroys that state, and its ``finalizePythonInterpreter`` does
+    nothing.)
     """
     import atexit
     import ctypes
@@ -63,8 +77,9 @@ def release_python_state_at_exit(resources: str | None, model_identifier: str) -
     if not lib.is_file() or str(lib) in _EXIT_FIXED:
         return
     _EXIT_FIXED.add(str(lib))
-    handle = ctypes.CDLL(str(lib))
-    atexit.register(handle.finalizePythonInterpreter)
+    finalize = getattr(ctypes.CDLL(str(lib)), "finalizePythonInterpreter", None)
+    if finalize is not None:  # not behind this package's loader (the patched library)
+        atexit.register(finalize)
 
 
 _CAUSALITY = {
@@ -74,29 +89,115 @@ _CAUSALITY = {
     "output": Fmi2Causality.output,
 }
 _TYPE = {"Real": Real, "Integer": Integer, "Boolean": Boolean, "String": String}
-
-
-def register_contract_variable(slave, v, getter, setter=None) -> None:
-    """Register contract variable ``v`` (:class:`fmu_src.contract.FmiVar`) on ``slave``.
-
-    Parameters and calculated parameters are ``fixed``; inputs are continuous; outputs are
-    continuous (Real) or discrete (other types). ``setter`` is required for parameters and
-    inputs, ignored otherwise.
-    """
-    kw = dict(causality=_CAUSALITY[v.causality], description=v.description, getter=getter)
-    if v.causality in ("parameter", "calculatedParameter"):
-        kw["variability"] = Fmi2Variability.fixed
-    elif v.causality == "input" or v.type == "Real":
-        kw["variability"] = Fmi2Variability.continuous
-    else:
-        kw["variability"] = Fmi2Variability.discrete
-    if v.causality in ("parameter", "input"):
-        if setter is None:
-            raise ValueError(f"{v.name}: a {v.causality} needs a setter")
-        kw["setter"] = setter
-    slave.register_variable(_TYPE[v.type](v.name, **kw))
+_CONVERT = {Real: float, Integer: int, Boolean: bool, String: str}
 
 
 def describe_exception(exc: BaseException) -> str:
     """``"TypeName: message"`` (the first line of a multi-line message is kept whole)."""
     return f"{type(exc).__name__}: {exc}"
+
+
+class ContractSlave(Fmi2Slave):
+    """Base of this package's slaves (module docstring)."""
+
+    author = "gear-shaft-bearing contributors"
+    license = "MIT"
+    #: set to True by the patched FMU library: statuses can be returned (fmu_src.native_build)
+    _fmi_status_protocol = False
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        self._read_status = FMI_OK
+        release_python_state_at_exit(self.resources, type(self).__name__)
+
+    # --- registration -------------------------------------------------------------------------
+    def register_contract_variable(self, v, getter, setter=None) -> None:
+        """Register contract variable ``v`` (:class:`fmu_src.contract.FmiVar`): parameters and
+        calculated parameters are ``fixed``; inputs continuous; outputs continuous (Real) or
+        discrete. The setter, required for parameters and inputs, is called only with values
+        ``v.check`` accepts (converted to the variable's type)."""
+        kw = dict(causality=_CAUSALITY[v.causality], description=v.description, getter=getter)
+        if v.causality in ("parameter", "calculatedParameter"):
+            kw["variability"] = Fmi2Variability.fixed
+        elif v.causality == "input" or v.type == "Real":
+            kw["variability"] = Fmi2Variability.continuous
+        else:
+            kw["variability"] = Fmi2Variability.discrete
+        if v.causality in ("parameter", "input"):
+            if setter is None:
+                raise ValueError(f"{v.name}: a {v.causality} needs a setter")
+
+            def checked(value, v=v, setter=setter):
+                v.check(value)
+                setter(value)
+            kw["setter"] = checked
+        self.register_variable(_TYPE[v.type](v.name, **kw))
+
+    # --- statuses -----------------------------------------------------------------------------
+    def refuse(self, exc: BaseException) -> int:
+        """Log a refused value; the status its setter call returns (fmi2Error)."""
+        self.log(f"{self.instance_name}: {exc}", Fmi2Status.error)
+        return FMI_ERROR
+
+    def output_failed(self, what: str, exc: BaseException) -> str:
+        """Log why outputs cannot be computed and make the current read return fmi2Error."""
+        msg = f"{self.instance_name}: {what}: {describe_exception(exc)}"
+        self.log(msg, Fmi2Status.error)
+        self._read_status = FMI_ERROR
+        return msg
+
+    def _set(self, kind, vrs, values):
+        status = FMI_OK
+        for vr, value in zip(vrs, values, strict=True):
+            var = self.vars[vr]
+            if not isinstance(var, kind):
+                raise TypeError(f"variable with valueReference={vr} is not of type "
+                                f"{kind.__name__}")
+            try:
+                var.setter(value)
+            except ValueRefused as exc:
+                status = self.refuse(exc)
+        return status or None
+
+    def _get(self, kind, vrs):
+        self._read_status = FMI_OK
+        conv = _CONVERT[kind]
+        out = []
+        for vr in vrs:
+            var = self.vars[vr]
+            if not isinstance(var, kind):
+                raise TypeError(f"variable with valueReference={vr} is not of type "
+                                f"{kind.__name__}")
+            out.append(conv(var.getter()))
+        return self._with_status(out)
+
+    def _with_status(self, values):
+        """``values``, or ``(values, status)`` after a failed output (patched library only)."""
+        status, self._read_status = self._read_status, FMI_OK
+        if status and self._fmi_status_protocol:
+            return values, status
+        return values
+
+    def set_real(self, vrs, values):
+        return self._set(Real, vrs, values)
+
+    def set_integer(self, vrs, values):
+        return self._set(Integer, vrs, values)
+
+    def set_boolean(self, vrs, values):
+        return self._set(Boolean, vrs, values)
+
+    def set_string(self, vrs, values):
+        return self._set(String, vrs, values)
+
+    def get_real(self, vrs):
+        return self._get(Real, vrs)
+
+    def get_integer(self, vrs):
+        return self._get(Integer, vrs)
+
+    def get_boolean(self, vrs):
+        return self._get(Boolean, vrs)
+
+    def get_string(self, vrs):
+        return self._get(String, vrs)

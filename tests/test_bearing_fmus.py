@@ -146,10 +146,11 @@ def test_many_instances_of_one_fmu_in_one_process(fmu_dir):
 
 
 def test_variable_docs_are_generated_from_the_contract():
-    from fmu_src.contract import document
+    from fmu_src.contract_doc import document
 
     doc = ROOT / "docs" / "fmu-variables.md"
-    assert doc.read_text() == document(), "run: python -m fmu_src.contract > docs/fmu-variables.md"
+    assert doc.read_text() == document(), \
+        "run: python -m fmu_src.contract_doc > docs/fmu-variables.md"
 
 
 def test_unit_definitions_come_from_the_unit_table(fmu_dir):

@@ -60,7 +60,11 @@ def test_gear_fmu_passes_fmpy_validation_with_units_and_descriptions(gear_fmu):
     for v in GEAR_VARIABLES:
         if v.type == "Real":
             assert variables[v.name].unit == v.unit, v.name
-    assert variables["case_file"].type == "String" and variables["case_file"].start == ""
+    # the carried case's fields are parameters, with the bounds the case schema declares
+    teeth = variables["gear_pair.teeth[1]"]
+    assert teeth.type == "Integer" and teeth.start == "26" and teeth.min == "5"
+    assert variables["gear_pair.module"].min == "0.0" and variables["gear_pair.module"].unit == "m"
+    assert variables["rotation_sign_3"].causality == "calculatedParameter"
     assert variables["K_st_3"].unit == "N/m" and variables["C_tt_4"].unit == "N.s/m"
     assert variables["s_dot_2"].unit == "m/s" and variables["mesh_force"].unit == "N"
     assert variables["support_load_t_4"].causality == "calculatedParameter"
@@ -79,20 +83,70 @@ def test_slave_registers_exactly_the_contract():
     assert names == [(v.name, v.causality) for v in GEAR_VARIABLES]
 
 
-def test_bad_case_file_is_logged_not_raised():
-    """A getter never raises into pythonfmu: NaN outputs and an error in the log."""
+def test_a_case_that_does_not_fit_is_logged_not_raised():
+    """Parameters each within bounds but not fitting together (the addendum of Table 1 read
+    literally: the tips touch the mating root circle): the getters never raise into
+    pythonfmu; NaN outputs with the read's status fmi2Error, the reason in the log, and doStep
+    discards."""
     from fmu_src.gear_shaft_slave import GearShaftSlave
 
     slave = GearShaftSlave(instance_name="t")
+    slave._fmi_status_protocol = True  # as the patched library sets it
     vr = {v.name: v.value_reference for v in slave.vars.values()}
-    slave.set_string([vr["case_file"]], ["/nonexistent/case.toml"])
-    assert all(math.isnan(x) for x in slave.get_real([vr["s_1"], vr["mesh_force"]]))
-    assert math.isnan(slave.get_real([vr["support_load_s_1"]])[0])
+    assert slave.set_real([vr["gear_pair.addendum_coefficient"]], [1.4]) is None
+    values, status = slave.get_real([vr["s_1"], vr["mesh_force"]])
+    assert status == 3 and all(math.isnan(x) for x in values)
+    values, status = slave.get_real([vr["support_load_s_1"]])
+    assert status == 3 and math.isnan(values[0])
     slave.exit_initialization_mode()
     assert slave.do_step(0.0, 1e-5) is False
     text = " | ".join(m.msg for m in slave.log_queue)
-    assert "case file not found: /nonexistent/case.toml" in text
+    assert "GearGeometryError: the pinion tips touch the gear's root circle" in text
     assert "not stepping after an earlier failure" in text
+
+
+def test_bad_values_are_refused_by_the_call_that_sets_them(gear_fmu):
+    """FMI 2.0 through fmpy: fmi2SetReal/SetInteger of a value out of its declared bounds or
+    not finite returns fmi2Error (fmpy raises), the log names the variable, the value and the
+    limit, and the variable keeps its value; the 56 law inputs set in one call likewise."""
+    out = run_isolated(f"""
+        import json, math
+        from fmpy.fmi1 import FMICallException
+        from orchestrator.fmi import FmuError, FmuStructure
+        fmu = FmuStructure(r"{gear_fmu}")
+        s, vr = fmu.slave, fmu.slave.vr
+        r = {{}}
+        def attempt(key, call):
+            since = len(s.messages)
+            try:
+                call()
+                r[key] = "accepted"
+            except FMICallException as exc:
+                r[key] = [exc.status, s.log_tail(since=since)]
+        attempt("module", lambda: s.fmu.setReal([vr["gear_pair.module"]], [-0.004]))
+        attempt("teeth", lambda: s.fmu.setInteger([vr["gear_pair.teeth[2]"]], [3]))
+        attempt("law", lambda: s.fmu.setReal([vr["K_ss_2"]], [math.nan]))
+        r["module_kept"] = s.fmu.getReal([vr["gear_pair.module"]])[0]
+        r["teeth_kept"] = s.fmu.getInteger([vr["gear_pair.teeth[2]"]])[0]
+        bad = AffineLaws(LAW_A.f0, LAW_A.kb, LAW_A.cb.copy())
+        bad.cb[2, 0, 1] = float("nan")
+        try:
+            fmu.set_bearing_laws(bad)
+        except FmuError as exc:
+            r["laws"] = str(exc)
+        fmu.set_bearing_laws(LAW_A)
+        fmu.solve_static()  # the instance still works
+        fmu.close()
+        print(json.dumps(r))
+    """)
+    assert out["module"][0] == 3
+    assert "gear_pair.module = -0.004 m refused: must be > 0 m" in out["module"][1]
+    assert out["teeth"][0] == 3
+    assert "gear_pair.teeth[2] = 3 refused: must be >= 5" in out["teeth"][1]
+    assert out["law"][0] == 3 and "K_ss_2 = nan N/m refused: not a finite number" in out["law"][1]
+    assert out["module_kept"] == 0.004 and out["teeth_kept"] == 157
+    assert "setting the bearing laws (status error)" in out["laws"]
+    assert "C_st_3 is not a finite number" in out["laws"]
 
 
 @pytest.fixture(scope="module")
@@ -248,14 +302,6 @@ def test_failures_are_reported_and_the_process_survives(gear_fmu):
             fmu.do_step(dt, dt)
         except FmuError as exc:
             msgs["newton"] = str(exc)
-        # NaN input
-        bad = AffineLaws(LAW_A.f0, LAW_A.kb, LAW_A.cb.copy())
-        bad.cb[2, 0, 1] = float("nan")
-        fmu.set_bearing_laws(bad)
-        try:
-            fmu.do_step(dt, dt)
-        except FmuError as exc:
-            msgs["nan"] = str(exc)
         # wrong time
         fmu.set_bearing_laws(LAW_A)
         try:
@@ -273,7 +319,6 @@ def test_failures_are_reported_and_the_process_survives(gear_fmu):
     assert "static solution failed" in m["static"] and "did not converge" in m["static"]
     assert "doStep 2 from t = 2.3e-05 s" in m["newton"] and "(status discard)" in m["newton"]
     assert "NewmarkConvergenceError: Newmark step 2" in m["newton"]
-    assert "bearing laws contain non-finite values" in m["nan"]
     assert "but the structure is at t = 2.3e-05 s" in m["time"]
     assert out["same"] and out["n"] == 2
 

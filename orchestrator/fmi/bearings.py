@@ -1,4 +1,17 @@
-"""The bearing FMUs behind the master's :class:`~orchestrator.master.BearingSet` interface."""
+"""The bearing FMUs behind the master's :class:`~orchestrator.master.BearingSet` interface.
+
+Two kinds of bearing FMU are accepted, told apart by their variables:
+
+* this package's bearing FMUs (:data:`fmu_src.contract.BEARING_VARIABLES`): force, stiffness
+  and damping are outputs;
+* any algebraic FMU with the minimal contract (:data:`MINIMAL_INPUTS`, :data:`MINIMAL_OUTPUTS`:
+  the journal state in, the film force out, global frame, SI units): the stiffness and damping
+  are then central finite differences of its force (steps :data:`FD_STEP`). Of the parameters a
+  case gives a bearing, those the FMU declares are set; an input ``omega`` gets the shaft speed.
+
+Every call's status is checked; a failure raises :class:`~orchestrator.fmi.instance.FmuError`
+with the FMU's log.
+"""
 
 from __future__ import annotations
 
@@ -7,51 +20,121 @@ import ctypes
 import numpy as np
 
 from bearing_fmu.static import newton_equilibrium
-from fmu_src.contract import BEARING_VARIABLES, DAMPING_NAMES, FORCE_NAMES, STIFFNESS_NAMES
-from orchestrator.fmi.instance import FmuError, FmuInstance
+from fmu_src.contract import (
+    DAMPING_NAMES,
+    FORCE_NAMES,
+    STATE_NAMES,
+    STIFFNESS_NAMES,
+)
+from orchestrator.fmi.instance import FmuError, FmuInstance, status_name
 from orchestrator.master import BearingSet
 
-__all__ = ["FmuBearings"]
+__all__ = ["MINIMAL_INPUTS", "MINIMAL_OUTPUTS", "FmuBearings"]
+
+#: what any bearing FMU must have: Real inputs (journal state, global frame [m, m/s]) ...
+MINIMAL_INPUTS = STATE_NAMES
+#: ... and Real outputs (film force on the journal, global frame [N])
+MINIMAL_OUTPUTS = FORCE_NAMES
+#: relative finite-difference steps for force-only FMUs: h = FD_STEP * C on positions and
+#: FD_STEP * C * omega on velocities (central differences: truncation ~ FD_STEP^2, round-off
+#: ~ eps / FD_STEP, both near 1e-10 of the stiffness)
+FD_STEP = 1e-5
 
 
 class FmuBearings(BearingSet):
-    """Bearing FMUs (any of the five models: same variables), one instance per bearing.
+    """Bearing FMUs, one instance per bearing (swap a model by naming another file).
 
     Parameters
     ----------
     fmus : sequence of path
-        FMU file of each bearing (swap a model by naming another file).
+        FMU file of each bearing.
     parameters : sequence of dict
         Parameter values of each bearing (names of :data:`fmu_src.contract.BEARING_VARIABLES`).
+        This package's FMUs must accept all of them; a force-only FMU gets those it declares.
     omegas : sequence of float
         Shaft speed magnitude at each bearing [rad/s].
     """
 
-    _INPUTS = ("s", "t", "s_dot", "t_dot")
     _OUTPUTS = FORCE_NAMES + STIFFNESS_NAMES + DAMPING_NAMES
 
     def __init__(self, fmus, parameters, omegas):
-        names = {v.name for v in BEARING_VARIABLES if v.causality == "parameter"}
         self.slaves = []
-        for b, (path, params) in enumerate(zip(fmus, parameters, strict=True)):
-            unknown = set(params) - names
-            if unknown:
-                raise ValueError(f"bearing {b + 1}: unknown FMU parameters {sorted(unknown)}")
-            s = FmuInstance(path, f"bearing{b + 1}")
-            s.fmu.setupExperiment(startTime=0.0)
-            s.fmu.enterInitializationMode()
-            s.set(params)
-            s.set({"omega": float(omegas[b])})
-            self.slaves.append(s)
+        self.force_only = []  # per bearing: stiffness and damping by finite differences
+        self._steps = []  # per bearing: FD steps (position, velocity)
+        try:
+            for b, (path, params) in enumerate(zip(fmus, parameters, strict=True)):
+                s = FmuInstance(path, f"bearing{b + 1}")
+                self.slaves.append(s)
+                self.force_only.append(self._check_contract(b, s))
+                if not self.force_only[-1]:
+                    unknown = sorted(set(params) - set(s.vr))
+                    if unknown:
+                        raise FmuError(f"bearing {b + 1} ({s.path.name}): unknown FMU "
+                                       f"parameters {unknown}")
+                s.fmu.setupExperiment(startTime=0.0)
+                s.fmu.enterInitializationMode()
+                s.set({k: v for k, v in params.items() if k in s.vr}, f"bearing {b + 1}")
+                if "omega" in s.vr:
+                    s.set({"omega": float(omegas[b])}, f"bearing {b + 1}")
+                h = FD_STEP * float(params.get("C", 1e-4))
+                self._steps.append((h, h * float(omegas[b])))
+        except BaseException:
+            self.close()
+            raise
         self.in_init = True
-        fm = self.slaves[0].fmu
-        self._in_vr = [(ctypes.c_uint * 4)(*[s.vr[n] for n in self._INPUTS]) for s in self.slaves]
-        self._out_vr = [(ctypes.c_uint * 10)(*[s.vr[n] for n in self._OUTPUTS])
-                        for s in self.slaves]
+        self._in_vr = [(ctypes.c_uint * 4)(*[s.vr[n] for n in STATE_NAMES]) for s in self.slaves]
+        self._out_vr = [(ctypes.c_uint * (2 if fo else 10))(
+            *[s.vr[n] for n in (FORCE_NAMES if fo else self._OUTPUTS)])
+            for s, fo in zip(self.slaves, self.force_only, strict=True)]
         self._in_val = (ctypes.c_double * 4)()
         self._out_val = (ctypes.c_double * 10)()
-        self._set = fm.fmi2SetReal
-        self._get = fm.fmi2GetReal
+        self._out_np = np.frombuffer(self._out_val, dtype=np.float64)
+
+    @staticmethod
+    def _check_contract(b: int, s: FmuInstance) -> bool:
+        """True for a force-only FMU; FmuError naming what is missing for anything else."""
+        kinds = {v.name: (v.causality, v.type) for v in s.md.modelVariables}
+        missing = [f"input {n}" for n in MINIMAL_INPUTS if kinds.get(n) != ("input", "Real")]
+        missing += [f"output {n}" for n in MINIMAL_OUTPUTS if kinds.get(n) != ("output", "Real")]
+        if missing:
+            raise FmuError(f"bearing {b + 1} ({s.path.name}) lacks the minimal bearing "
+                           f"contract: {', '.join(missing)} (docs/fmu-variables.md)")
+        jac = STIFFNESS_NAMES + DAMPING_NAMES
+        return not all(kinds.get(n) == ("output", "Real") for n in jac)
+
+    def _call(self, b: int, s: FmuInstance, status: int, what: str, states) -> None:
+        if status > 1:  # discard, error, fatal
+            raise FmuError(f"bearing {b + 1} ({s.path.name}) failed at state "
+                           f"{np.asarray(states).tolist()}: {what} returned "
+                           f"{status_name(status)}; FMU log: {s.log_tail()}")
+
+    def _force(self, b: int, s: FmuInstance, state, n: int) -> np.ndarray:
+        """Set the journal state of bearing b, read its first ``n`` outputs."""
+        f = s.fmu
+        for i in range(4):
+            self._in_val[i] = state[i]
+        self._call(b, s, f.dll.fmi2SetReal(f.component, self._in_vr[b], 4, self._in_val),
+                   "fmi2SetReal", state)
+        self._call(b, s, f.dll.fmi2GetReal(f.component, self._out_vr[b], n, self._out_val),
+                   "fmi2GetReal", state)
+        out = self._out_np[:n]
+        if not np.isfinite(out).all():
+            raise FmuError(f"bearing {b + 1} ({s.path.name}) failed at state "
+                           f"{np.asarray(state).tolist()}: non-finite outputs; FMU log: "
+                           f"{s.log_tail()}")
+        return out.copy()
+
+    def _fd_jacobian(self, b: int, s: FmuInstance, state):
+        """Kb = -dF/dX, Cb = -dF/dXdot of a force-only FMU by central differences (steps
+        :data:`FD_STEP`), then the force at ``state`` itself (its evaluation state last)."""
+        hx, hv = self._steps[b]
+        jac = np.empty((2, 4))
+        for j, h in enumerate((hx, hx, hv, hv)):
+            plus, minus = np.array(state, dtype=float), np.array(state, dtype=float)
+            plus[j] += h
+            minus[j] -= h
+            jac[:, j] = -(self._force(b, s, plus, 2) - self._force(b, s, minus, 2)) / (2 * h)
+        return self._force(b, s, state, 2), jac[:, :2], jac[:, 2:]
 
     def evaluate(self, states):
         nb = len(self.slaves)
@@ -59,18 +142,13 @@ class FmuBearings(BearingSet):
         kb = np.empty((nb, 2, 2))
         cb = np.empty((nb, 2, 2))
         for b, s in enumerate(self.slaves):
-            for i in range(4):
-                self._in_val[i] = states[b, i]
-            s.fmu.fmi2SetReal(s.fmu.component, self._in_vr[b], 4, self._in_val)
-            s.fmu.fmi2GetReal(s.fmu.component, self._out_vr[b], 10, self._out_val)
-            out = np.frombuffer(self._out_val, dtype=np.float64).copy()
-            if not np.all(np.isfinite(out)):
-                log = "; ".join(s.messages[-3:])
-                raise FmuError(f"bearing {b + 1} ({s.path.name}) failed at state "
-                               f"{states[b].tolist()}: {log}")
-            force[b] = out[:2]
-            kb[b] = out[2:6].reshape(2, 2)
-            cb[b] = out[6:].reshape(2, 2)
+            if self.force_only[b]:
+                force[b], kb[b], cb[b] = self._fd_jacobian(b, s, states[b])
+            else:
+                out = self._force(b, s, states[b], 10)
+                force[b] = out[:2]
+                kb[b] = out[2:6].reshape(2, 2)
+                cb[b] = out[6:].reshape(2, 2)
         return force, kb, cb
 
     def static_position(self, loads):
@@ -79,10 +157,10 @@ class FmuBearings(BearingSet):
 
         Each iterate evaluates the whole set with the other journals at the centre, as this
         transport always has: the hybrid FMUs' warm starts, and so the run's last digits,
-        depend on that sequence (issue 10 revisits the FMU's first guess)."""
+        depend on that sequence."""
         pos = np.zeros((len(self.slaves), 2))
-        for b, s in enumerate(self.slaves):
-            clearance = float(s.fmu.getReal([s.vr["C"]])[0])
+        for b in range(len(self.slaves)):
+            clearance = self._steps[b][0] / FD_STEP
             states = np.zeros((len(self.slaves), 4))
 
             def law(x, b=b, states=states):
@@ -97,8 +175,14 @@ class FmuBearings(BearingSet):
 
     def exit_initialization(self) -> None:
         """Leave initialisation mode (the linear FMU freezes its coefficients here)."""
-        for s in self.slaves:
-            s.fmu.exitInitializationMode()
+        for b, s in enumerate(self.slaves):
+            f = s.fmu
+            since = len(s.messages)
+            status = f.dll.fmi2ExitInitializationMode(f.component)
+            if status > 1 or s.errors_since(since):
+                raise FmuError(f"bearing {b + 1} ({s.path.name}): fmi2ExitInitializationMode "
+                               f"returned {status_name(status)}; FMU log: "
+                               f"{s.log_tail(since=since)}")
         self.in_init = False
 
     def close(self) -> None:
@@ -106,5 +190,3 @@ class FmuBearings(BearingSet):
         for s in self.slaves:
             s.close()
         self.slaves = []
-
-

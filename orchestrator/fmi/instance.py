@@ -66,13 +66,38 @@ class FmuInstance:
         self._callbacks = cb  # keep the ctypes callbacks alive
         self.fmu.instantiate(loggingOn=True, callbacks=cb)
 
-    def set(self, values: dict) -> None:
-        reals = {k: v for k, v in values.items() if self.types[k] == "Real"}
-        ints = {k: v for k, v in values.items() if self.types[k] == "Integer"}
-        if reals:
-            self.fmu.setReal([self.vr[k] for k in reals], [float(v) for v in reals.values()])
-        if ints:
-            self.fmu.setInteger([self.vr[k] for k in ints], [int(v) for v in ints.values()])
+    def set(self, values: dict, who: str | None = None) -> None:
+        """Set parameters or inputs by name (one call per type); FmuError with the FMU's log
+        if the FMU refuses a value (fmi2Error: out of its bounds, not finite)."""
+        import ctypes
+
+        by_type: dict[str, tuple[list, list]] = {}
+        for name, value in values.items():
+            vrs, vals = by_type.setdefault(self.types[name], ([], []))
+            vrs.append(self.vr[name])
+            vals.append(value)
+        f = self.fmu
+        setter = {"Real": f.dll.fmi2SetReal, "Integer": f.dll.fmi2SetInteger,
+                  "Boolean": f.dll.fmi2SetBoolean, "String": f.dll.fmi2SetString}
+        for kind, (vrs, vals) in by_type.items():
+            n = len(vrs)
+            if kind == "Real":
+                arr = (ctypes.c_double * n)(*[float(v) for v in vals])
+            elif kind in ("Integer", "Boolean"):
+                arr = (ctypes.c_int * n)(*[int(v) for v in vals])
+            else:
+                arr = (ctypes.c_char_p * n)(*[str(v).encode() for v in vals])
+            since = len(self.messages)
+            status = setter[kind](f.component, (ctypes.c_uint * n)(*vrs), n, arr)
+            if status > 1:
+                names = [k for k in values if self.types[k] == kind]
+                raise FmuError(f"{who or self.path.name}: {self.path.name} refused "
+                               f"{', '.join(names)} ({status_name(status)}): "
+                               f"{self.log_tail(since=since)}")
+
+    def errors_since(self, since: int) -> bool:
+        """Whether a message with status error or fatal was logged from index ``since`` on."""
+        return any(m.startswith(("[error]", "[fatal]")) for m in self.messages[since:])
 
     def log_tail(self, n: int = 3, since: int = 0) -> str:
         """The last ``n`` log messages (from index ``since`` on), for error messages."""

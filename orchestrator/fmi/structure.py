@@ -4,15 +4,15 @@ interface, with rollback through fmi2GetFMUstate / fmi2SetFMUstate."""
 from __future__ import annotations
 
 import ctypes
-import shutil
 import sys
 import weakref
-from pathlib import Path
 
 import numpy as np
 
 from fmu_src.contract import (
     GEAR_OUTPUTS,
+    gear_case_fields,
+    gear_parameter_names,
     journal_output_names,
     law_input_names,
     pack_laws,
@@ -58,14 +58,11 @@ class FmuStructure(StructureSlave):
     Parameters
     ----------
     fmu : path
-        The built gear-shaft FMU (``gsb build-fmus GearShaft``).
-    case_file : path, optional
-        Case file of the system (the FMU's ``case_file`` parameter; default: the paper's spur
-        case shipped in the FMU).
+        The built gear-shaft FMU (``gsb build-fmus``).
     case : fmu_src.case.Case, optional
-        A checked case (e.g. with command-line overrides) instead of ``case_file``: written to
-        a temporary case file (SI values, :meth:`fmu_src.case.Case.to_toml`) removed by
-        :meth:`close`.
+        A checked case (e.g. with command-line overrides): its structural fields are set as
+        the FMU's parameters (:func:`fmu_src.contract.gear_case_fields`); default: the case the
+        FMU carries.
     start_time : float
         Time of the initial (static) state [s].
 
@@ -81,24 +78,15 @@ class FmuStructure(StructureSlave):
 
     n_bearings = 4
 
-    def __init__(self, fmu, case_file=None, case=None, start_time: float = 0.0,
+    def __init__(self, fmu, case=None, start_time: float = 0.0,
                  instance_name: str = "gear_shaft"):
-        self._tmpdir = None
-        if case is not None:
-            if case_file is not None:
-                raise ValueError("give case_file or case, not both")
-            import tempfile
-
-            self._tmpdir = tempfile.mkdtemp(prefix="gsb_case_")
-            case_file = Path(self._tmpdir) / "case.toml"
-            case_file.write_text(case.to_toml())
         self.slave = FmuInstance(fmu, instance_name)
         self._states: weakref.WeakSet = weakref.WeakSet()
         f = self.slave.fmu
         f.setupExperiment(startTime=float(start_time))
         f.enterInitializationMode()
-        if case_file is not None:
-            f.setString([self.slave.vr["case_file"]], [str(case_file)])
+        if case is not None:
+            self._set_case(case)
         self.in_init = True
         self.t = float(start_time)
         self.n_steps = 0
@@ -117,8 +105,10 @@ class FmuStructure(StructureSlave):
         journal = journal_output_names()
         extra = [name for name, _, _ in GEAR_OUTPUTS]
         support = support_load_names()
-        self._law_vr = (ctypes.c_uint * 40)(*[vr[n] for n in laws])
-        self._law_val = (ctypes.c_double * 40)()
+        n_laws = len(laws)
+        self._n_laws = n_laws
+        self._law_vr = (ctypes.c_uint * n_laws)(*[vr[n] for n in laws])
+        self._law_val = (ctypes.c_double * n_laws)()
         self._law_np = np.frombuffer(self._law_val, dtype=np.float64)
         self._jr_vr = (ctypes.c_uint * 16)(*[vr[n] for n in journal])
         self._jr_val = (ctypes.c_double * 16)()
@@ -132,6 +122,14 @@ class FmuStructure(StructureSlave):
         self._sup_val = (ctypes.c_double * 8)()
         self._it_vr = (ctypes.c_uint * 1)(vr["iterations"])
         self._it_val = (ctypes.c_int * 1)()
+
+    def _set_case(self, case) -> None:
+        """Set the case's structural fields as the FMU's parameters (one call per type)."""
+        values = {}
+        for field in gear_case_fields():
+            v = case[field.key] if field.shape is not None else [case[field.key]]
+            values.update(zip(gear_parameter_names(field), v, strict=True))
+        self.slave.set(values, f"gear-shaft FMU, case {case['case.name']!r}")
 
     # --- errors -------------------------------------------------------------------------------
     def _fail(self, what: str, status: int | None = None, since: int = 0, where: bool = True):
@@ -150,10 +148,11 @@ class FmuStructure(StructureSlave):
 
     # --- master interface ---------------------------------------------------------------------
     def set_bearing_laws(self, laws) -> None:
-        """Set the 40 law inputs (F0, Kb, Cb of bearings 1-4, global frame) in one call."""
+        """Set the 56 law inputs in one call: each law's expansion, as a bearing FMU's outputs
+        (force, Kb, Cb and the journal state they belong to; global frame)."""
         self._live()
         pack_laws(laws, self._law_np)
-        self._check(self._set_real(self._c, self._law_vr, 40, self._law_val),
+        self._check(self._set_real(self._c, self._law_vr, self._n_laws, self._law_val),
                     "setting the bearing laws")
 
     def solve_static(self) -> None:
@@ -270,9 +269,6 @@ class FmuStructure(StructureSlave):
 
     def close(self) -> None:
         """Free every saved state, terminate and free the instance (idempotent)."""
-        if self._tmpdir is not None:
-            shutil.rmtree(self._tmpdir, ignore_errors=True)
-            self._tmpdir = None
         if self.slave.fmu is None:
             return
         for state in list(self._states):
