@@ -48,7 +48,9 @@ namespace pythonfmu
             auto const mainPyThread = []() -> PyThreadState* {
                 auto const justInitialized = !Py_IsInitialized();
                 if (justInitialized) {
-                    Py_Initialize();
+                    // gear-shaft-bearing patch: embedded in a C/C++ host, leave the host's
+                    // signal handlers alone (Py_Initialize would install Python's SIGINT one)
+                    Py_InitializeEx(0);
 #if PY_VERSION_HEX < 0x03070000
                     PyEval_InitThreads();
 #endif
