@@ -192,9 +192,9 @@ def _complete_model_description(xml_bytes: bytes, variables, feedthrough: bool =
     return parseString(ET.tostring(root, encoding="UTF-8")).toprettyxml(encoding="UTF-8")
 
 
-def _finish(fmu: Path, out: Path, spec: FmuSpec, native) -> None:
-    """Copy ``fmu`` to ``out`` with the completed modelDescription.xml and, if given
-    (:class:`fmu_src.native_build.NativeLibraries`), the patched library in place of
+def _finish(fmu: Path, out: Path, spec: FmuSpec | None, native) -> None:
+    """Copy ``fmu`` to ``out`` with the completed modelDescription.xml (``spec`` given) and,
+    if given (:class:`fmu_src.native_build.NativeLibraries`), the patched library in place of
     pythonfmu's (Linux binary): behind the loader, with ``resources/gsb_python.txt``, when
     the loader was built."""
     from fmu_src.native_build import python_host_config
@@ -202,7 +202,7 @@ def _finish(fmu: Path, out: Path, spec: FmuSpec, native) -> None:
     with zipfile.ZipFile(fmu) as zin, zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as zout:
         for item in zin.infolist():
             data = zin.read(item.filename)
-            if item.filename == "modelDescription.xml":
+            if item.filename == "modelDescription.xml" and spec is not None:
                 data = _complete_model_description(data, spec.variables, spec.feedthrough)
             elif (native is not None and item.filename.startswith("binaries/linux64/")
                   and item.filename.endswith(".so")):
@@ -215,6 +215,24 @@ def _finish(fmu: Path, out: Path, spec: FmuSpec, native) -> None:
             zout.writestr(item, data)
         if native is not None and native.loader is not None:
             zout.writestr("resources/gsb_python.txt", python_host_config())
+
+
+def patch_fmu(fmu: Path | str, out: Path | str) -> Path:
+    """Copy an FMU built with pythonfmu (e.g. a bearing model of your own) to ``out`` with
+    this package's native layer (:mod:`fmu_src.native_build`: statuses from setters and
+    getters, no exit-time abort, the loader for C/C++ hosts); returns ``out``."""
+    from fmu_src.native_build import export_library
+
+    out = Path(out)
+    fd, part = tempfile.mkstemp(prefix=f".{out.stem}-", suffix=".part", dir=out.parent)
+    os.close(fd)
+    try:
+        _finish(Path(fmu), Path(part), None, export_library())
+        os.replace(part, out)
+    except BaseException:
+        Path(part).unlink(missing_ok=True)
+        raise
+    return out
 
 
 def build_fmus(dest: Path | str, names=None, case=None) -> list[Path]:

@@ -8,7 +8,7 @@ import sys
 from bearing_fmu.base import BearingError
 from fmu_src.case import CaseError
 from gear_fmu.geometry import GearGeometryError
-from orchestrator.run import RunError
+from orchestrator.run import RunError, RunInterrupted
 
 
 def make_parser() -> argparse.ArgumentParser:
@@ -21,25 +21,16 @@ def make_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
     bearing_calc.add_parser(sub)
     run_cli.add_parsers(sub)
-    p = sub.add_parser("build-fmus", help="build the FMUs (pythonfmu) into a folder")
-    p.add_argument("--dest", default="build/fmus", help="output folder (default build/fmus)")
-    p.add_argument("names", nargs="*", help="FMU names (default: all)")
-    p.set_defaults(func=_build_fmus)
     return parser
-
-
-def _build_fmus(args) -> int:
-    from fmu_src.build import build_fmus
-
-    for path in build_fmus(args.dest, args.names or None):
-        print(path)
-    return 0
 
 
 def main(argv: list[str] | None = None) -> int:
     args = make_parser().parse_args(argv)
     try:
         return args.func(args)
+    except RunInterrupted as exc:
+        print(f"gsb {args.command}: {exc}", file=sys.stderr)
+        return exc.exit_code
     except (BearingError, CaseError, GearGeometryError, RunError) as exc:
         print(f"gsb {args.command}: error: {exc}", file=sys.stderr)
         return 2

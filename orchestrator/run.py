@@ -19,8 +19,11 @@ nodes), ``iterations`` (coupled iterations of the step).
 
 from __future__ import annotations
 
+import contextlib
 import math
+import signal
 import sys
+import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -34,7 +37,8 @@ from orchestrator.inprocess import InProcessStructure, ModelBearings
 from orchestrator.master import Master
 from orchestrator.results import ResultsWriter
 
-__all__ = ["CHANNELS", "Progress", "RunError", "RunSummary", "build_master", "run_case"]
+__all__ = ["CHANNELS", "Progress", "RunError", "RunInterrupted", "RunSummary", "build_master",
+           "run_case"]
 
 #: results channels: name -> (shape per step, unit, description)
 CHANNELS = {
@@ -54,6 +58,45 @@ CHANNELS = {
 
 class RunError(RuntimeError):
     """A run that stopped; the message says where and which file keeps the computed steps."""
+
+
+class RunInterrupted(RuntimeError):
+    """A run stopped by SIGINT (Ctrl-C) or SIGTERM between two steps; ``exit_code`` is the
+    shell's convention, 128 + the signal number (130, 143)."""
+
+    def __init__(self, signum: int, message: str):
+        super().__init__(message)
+        self.signum = signum
+        self.exit_code = 128 + int(signum)
+
+
+@contextlib.contextmanager
+def deferred_signals(signals=(signal.SIGINT, signal.SIGTERM)):
+    """Hold SIGINT and SIGTERM in a list instead of raising where they land.
+
+    A KeyboardInterrupt raised inside an FMU's Python code (pythonfmu runs it in this
+    interpreter) is fatal for that FMU and often for the process; the run checks the list
+    between steps instead and stops cleanly there. Only the main thread can install handlers:
+    elsewhere (a Dask worker thread) the list stays empty and signals keep their handlers."""
+    received: list[int] = []
+    if threading.current_thread() is not threading.main_thread():
+        yield received
+        return
+
+    def hold(signum, frame):
+        if not received:
+            print(f"\n{signal.Signals(signum).name} received: stopping after the current step "
+                  "(again to stop at once)", file=sys.stderr, flush=True)
+        elif signum == signal.SIGINT:  # a second Ctrl-C: the user insists
+            raise KeyboardInterrupt
+        received.append(signum)
+
+    previous = {s: signal.signal(s, hold) for s in signals}
+    try:
+        yield received
+    finally:
+        for s, handler in previous.items():
+            signal.signal(s, handler)
 
 
 @dataclass
@@ -125,13 +168,15 @@ def _clearances(case: Case) -> list[float]:
 
 
 def build_master(case: Case, bearing: str | None = None, in_process: bool = False,
-                 fmu_dir: Path | str | None = None) -> Master:
+                 fmu_dir: Path | str | None = None, fmus: dict | None = None) -> Master:
     """The master of a case with its two slaves (``master.structure``, ``master.bearings``).
 
     ``bearing`` overrides ``bearings.model``. In-process the physics objects of
     :mod:`fmu_src.description` are driven directly; through FMUs the bearing FMU of that model
-    and the gear-shaft FMU are taken from ``fmu_dir`` (built there if missing). Release the
-    slaves with :meth:`orchestrator.master.Master.close`.
+    and the gear-shaft FMU are taken from ``fmu_dir`` (default: the per-user cache; built
+    there if missing), or ``fmus`` names the files: ``{"gear": path, "bearings": [4 paths],
+    "bearing_parameters": [4 dicts] (optional)}`` (an SSP's, or a bearing FMU of the user's
+    own). Release the slaves with :meth:`orchestrator.master.Master.close`.
     """
     if bearing is not None:
         case = case.with_overrides({"bearings.model": bearing})
@@ -141,6 +186,11 @@ def build_master(case: Case, bearing: str | None = None, in_process: bool = Fals
         structure = InProcessStructure(description.structure(case))
         bearings = ModelBearings(description.bearing_models(case), description.BEARING_FRAMES,
                                  description.bearing_speeds(case))
+    elif fmus is not None:
+        from orchestrator import fmi
+
+        structure, bearings = fmi.system_from_files(case, fmus["gear"], fmus["bearings"],
+                                                    fmus.get("bearing_parameters"))
     else:
         from orchestrator import fmi
 
@@ -151,79 +201,106 @@ def build_master(case: Case, bearing: str | None = None, in_process: bool = Fals
 def run_case(case: Case, bearing: str | None = None, periods: int | None = None,
              in_process: bool = False, out_dir: Path | str = "results",
              fmu_dir: Path | str | None = None, progress: bool = True, figures: bool = True,
-             block: int = 4096) -> RunSummary:
+             block: int = 4096, fmus: dict | None = None,
+             steps: int | None = None) -> RunSummary:
     """Run a case (module docstring); returns a :class:`RunSummary`.
 
-    Raises :class:`RunError` (with the results file that keeps the steps computed) if the static
-    solution or a step fails.
+    ``steps``: stop after this many time steps (a quick look; default: all the periods').
+
+    ``fmus``: run these FMU files instead of the built ones (:func:`build_master`); the
+    results are then named after the bearing FMU file. Raises :class:`RunError` (with the
+    results file that keeps the steps computed) if the static solution or a step fails, and
+    :class:`RunInterrupted` after SIGINT or SIGTERM, which stop the run between two steps with
+    the results file closed and marked interrupted.
     """
     model = case["bearings.model"] if bearing is None else bearing
+    label = model if fmus is None else Path(fmus["bearings"][0]).stem
     periods = case["simulation.mesh_periods"] if periods is None else int(periods)
     if periods < 1:
         raise ValueError(f"periods = {periods!r}: need at least one mesh period")
     steps_per_period = case["simulation.steps_per_mesh_period"]
     omega = case["operation.speed"]
     dt = description.time_step(case)
-    n_steps = periods * steps_per_period
+    n_steps = periods * steps_per_period if steps is None else int(steps)
+    if n_steps < 1:
+        raise ValueError(f"steps = {steps!r}: need at least one step")
     out_dir = Path(out_dir)
-    name = f"{case['case.name']}_{model}{'_inprocess' if in_process else ''}"
+    name = f"{case['case.name']}_{label}{'_inprocess' if in_process else ''}"
     path = out_dir / f"{name}.h5"
 
-    master = build_master(case, model, in_process, fmu_dir)
-    structure = master.structure
-    try:
-        t0 = time.perf_counter()
-        try:
-            static = master.solve_static()
-        except Exception as exc:
-            raise RunError(f"{case.source}: static solution failed: {exc}") from exc
-        x0 = static.states[:, :2].copy()
-        # leave initialisation: linear bearings freeze, the structure builds its modal damping
-        # on the modes with the bearings' static stiffness
-        master.exit_initialization()
-        static_time = time.perf_counter() - t0
+    with deferred_signals() as received:
 
-        attrs = {
-            "case": case["case.name"], "case_file": str(case.source), "bearing_model": model,
-            "mode": "in-process" if in_process else "fmu", "dt": dt,
-            "steps_per_mesh_period": steps_per_period, "mesh_periods": periods,
-            "speed": omega, "speeds": description.bearing_speeds(case), "teeth": list(
-                case["gear_pair.teeth"]), "torque": case["operation.torque"],
-            "unbalance": list(case["operation.unbalance"]), "clearance": _clearances(case),
-            "tolerance": case["simulation.tolerance"], "static_journal": x0.tolist(),
-            "static_bearing_force": static.bearing_force.tolist(),
-            "static_iterations": static.iterations, "case_values": _jsonable(case.values),
-        }
-        bar = Progress(n_steps, f"{name}", enabled=progress)
-        start_iterations = master.total_iterations
-        start_evals = master.total_bearing_evaluations
-        t_start = time.perf_counter()
-        with ResultsWriter(path, CHANNELS, attrs, block=block) as writer:
-            t = 0.0
-            for i in range(n_steps):
-                try:
-                    report = master.step(t, dt)
-                except Exception as exc:
-                    raise RunError(
-                        f"step {i + 1} of {n_steps} (t = {t + dt:.6e} s) failed: {exc}; the "
-                        f"{i} steps computed are in {path}") from exc
-                t = (i + 1) * dt
-                writer.append(time=t, journal_position=report.states[:, :2],
-                              journal_velocity=report.states[:, 2:],
-                              bearing_force=report.bearing_force,
-                              mesh_force=structure.mesh_force(),
-                              transmission_error=structure.transmission_error(),
-                              gear_nodes=structure.gear_displacements(),
-                              iterations=report.iterations)
-                if progress and (i & 63) == 0:
-                    its = (master.total_iterations - start_iterations) / (i + 1)
-                    bar.update(i + 1, f"{its:.2f} it/step")
-            wall = time.perf_counter() - t_start
-            bar.update(n_steps, f"{(master.total_iterations - start_iterations) / n_steps:.2f}"
-                                " it/step")
-            writer.close(complete=True, wall_time=wall)
-    finally:
-        master.close()
+        def stop_if_asked(where: str, writer: ResultsWriter | None = None) -> None:
+            if not received:
+                return
+            sig = signal.Signals(received[0]).name
+            kept = "nothing was written" if writer is None else f"{writer.rows} steps kept in"
+            if writer is not None:
+                writer.close(complete=False, stopped_by=f"interrupted by {sig} {where}",
+                             interrupted=sig)
+                kept += f" {path}"
+            raise RunInterrupted(received[0], f"interrupted by {sig} {where}; {kept}")
+
+        master = build_master(case, model, in_process, fmu_dir, fmus)
+        structure = master.structure
+        try:
+            stop_if_asked("before the static solution")
+            t0 = time.perf_counter()
+            try:
+                static = master.solve_static()
+            except Exception as exc:
+                raise RunError(f"{case.source}: static solution failed: {exc}") from exc
+            x0 = static.states[:, :2].copy()
+            # leave initialisation: linear bearings freeze, the structure builds its modal
+            # damping on the modes with the bearings' static stiffness
+            master.exit_initialization()
+            static_time = time.perf_counter() - t0
+            stop_if_asked("after the static solution")
+
+            attrs = {
+                "case": case["case.name"], "case_file": str(case.source),
+                "bearing_model": label, "mode": "in-process" if in_process else "fmu",
+                "dt": dt, "steps_per_mesh_period": steps_per_period, "mesh_periods": periods,
+                "speed": omega, "speeds": description.bearing_speeds(case),
+                "teeth": list(case["gear_pair.teeth"]), "torque": case["operation.torque"],
+                "unbalance": list(case["operation.unbalance"]),
+                "clearance": _clearances(case), "tolerance": case["simulation.tolerance"],
+                "static_journal": x0.tolist(),
+                "static_bearing_force": static.bearing_force.tolist(),
+                "static_iterations": static.iterations, "case_values": _jsonable(case.values),
+                "interrupted": "",
+            }
+            bar = Progress(n_steps, f"{name}", enabled=progress)
+            start_iterations = master.total_iterations
+            start_evals = master.total_bearing_evaluations
+            t_start = time.perf_counter()
+            with ResultsWriter(path, CHANNELS, attrs, block=block) as writer:
+                t = 0.0
+                for i in range(n_steps):
+                    try:
+                        report = master.step(t, dt)
+                    except Exception as exc:
+                        raise RunError(
+                            f"step {i + 1} of {n_steps} (t = {t + dt:.6e} s) failed: {exc}; "
+                            f"the {i} steps computed are in {path}") from exc
+                    t = (i + 1) * dt
+                    writer.append(time=t, journal_position=report.states[:, :2],
+                                  journal_velocity=report.states[:, 2:],
+                                  bearing_force=report.bearing_force,
+                                  mesh_force=structure.mesh_force(),
+                                  transmission_error=structure.transmission_error(),
+                                  gear_nodes=structure.gear_displacements(),
+                                  iterations=report.iterations)
+                    if progress and (i & 63) == 0:
+                        its = (master.total_iterations - start_iterations) / (i + 1)
+                        bar.update(i + 1, f"{its:.2f} it/step")
+                    stop_if_asked(f"after step {i + 1} of {n_steps}", writer)
+                wall = time.perf_counter() - t_start
+                its = (master.total_iterations - start_iterations) / n_steps
+                bar.update(n_steps, f"{its:.2f} it/step")
+                writer.close(complete=True, wall_time=wall)
+        finally:
+            master.close()
     summary = RunSummary(path, n_steps, wall, static_time,
                          master.total_iterations - start_iterations,
                          master.total_bearing_evaluations - start_evals, static.iterations, x0)

@@ -59,7 +59,7 @@ def relative(a, b) -> float:
 
 
 def run_paper_case(out_dir, periods, in_process=True, fmu_dir=None, bearing="hybrid",
-                   case="baguet2010_spur", **overrides):
+                   case="baguet2010_spur", steps=None, **overrides):
     """A short run of a shipped case (no figures, no progress): (results dict, summary)."""
     from fmu_src.case import load_case
     from orchestrator.results import read_results
@@ -67,7 +67,7 @@ def run_paper_case(out_dir, periods, in_process=True, fmu_dir=None, bearing="hyb
 
     s = run_case(load_case(case, overrides or None), bearing=bearing, periods=periods,
                  in_process=in_process, out_dir=out_dir, fmu_dir=fmu_dir, progress=False,
-                 figures=False)
+                 figures=False, steps=steps)
     return read_results(s.results), s
 
 

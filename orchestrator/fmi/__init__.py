@@ -11,17 +11,23 @@
 """
 
 from orchestrator.fmi.bearings import FmuBearings
-from orchestrator.fmi.cache import DEFAULT_FMU_DIR, ensure_fmus, system_from_case
+from orchestrator.fmi.cache import (
+    default_fmu_dir,
+    ensure_fmus,
+    system_from_case,
+    system_from_files,
+)
 from orchestrator.fmi.instance import FmuError, FmuInstance
 from orchestrator.fmi.structure import FmuState, FmuStructure
 
 __all__ = [
-    "DEFAULT_FMU_DIR",
     "FmuBearings",
     "FmuError",
     "FmuInstance",
     "FmuState",
     "FmuStructure",
+    "default_fmu_dir",
     "ensure_fmus",
     "system_from_case",
+    "system_from_files",
 ]

@@ -1,12 +1,16 @@
 """Built FMUs on disk, and a case's system through them.
 
-:func:`ensure_fmus` returns the FMU files of a folder, building those that are missing or whose
-variables differ from the contract (built by an older version); :func:`system_from_case` gives
-the gear-shaft FMU and the four bearing FMUs of a case behind the master's interfaces.
+:func:`ensure_fmus` returns the FMU files of a folder, building those that are missing or stale
+(built from other code, or with other variables); by default the folder is in the per-user
+cache, one per code version (:func:`default_fmu_dir`), so runs from any working directory share
+one build. Builds into one folder are serialised by a lock file: two runs that start at once
+build once and both use the result. :func:`system_from_case` gives the gear-shaft FMU and the
+four bearing FMUs of a case behind the master's interfaces.
 """
 
 from __future__ import annotations
 
+import contextlib
 from pathlib import Path
 
 from bearing_fmu import fmu_name
@@ -14,51 +18,93 @@ from fmu_src import description
 from orchestrator.fmi.bearings import FmuBearings
 from orchestrator.fmi.structure import FmuStructure
 
-__all__ = ["DEFAULT_FMU_DIR", "ensure_fmus", "system_from_case"]
+__all__ = ["default_fmu_dir", "ensure_fmus", "system_from_case", "system_from_files"]
 
-#: where ``gsb run`` builds and finds its FMUs unless told otherwise
-DEFAULT_FMU_DIR = Path("build") / "fmus"
+
+def default_fmu_dir() -> Path:
+    """``<user cache>/fmus/<code hash>``: where ``gsb run`` builds and finds its FMUs unless
+    told otherwise (:func:`fmu_src.fmu_bootstrap.cache_dir`; ``GSB_CACHE_DIR`` moves it)."""
+    from fmu_src.build import code_hash
+    from fmu_src.fmu_bootstrap import cache_dir
+
+    return cache_dir() / "fmus" / code_hash()
+
+
+@contextlib.contextmanager
+def _locked(folder: Path):
+    """An exclusive lock on ``folder/.build.lock`` (POSIX ``flock``; elsewhere no lock: the
+    builds' atomic moves still leave complete files)."""
+    folder.mkdir(parents=True, exist_ok=True)
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover - Windows
+        yield
+        return
+    with open(folder / ".build.lock", "a") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(lock, fcntl.LOCK_UN)
+
+
+def _stale(name: str, path: Path, current_hash: str) -> bool:
+    from fmpy import read_model_description
+
+    from fmu_src.build import FMUS, carried_hash
+
+    if carried_hash(path) != current_hash:
+        return True
+    try:
+        md = read_model_description(str(path))
+    except Exception:  # unreadable: build it again
+        return True
+    expected = [(v.name, v.causality) for v in FMUS[name].variables]
+    return [(v.name, v.causality) for v in md.modelVariables] != expected
 
 
 def ensure_fmus(names, fmu_dir=None) -> dict[str, Path]:
-    """Paths of the named FMUs in ``fmu_dir`` (default ``build/fmus``), building those that are
-    missing or whose variables differ from the contract (built by an older version)."""
-    from fmpy import read_model_description
+    """Paths of the named FMUs in ``fmu_dir`` (default :func:`default_fmu_dir`), building
+    those that are missing or stale, under a lock (module docstring)."""
+    from fmu_src.build import FMUS, build_fmus, code_hash
 
-    from fmu_src.build import FMUS, build_fmus
-
-    fmu_dir = Path(DEFAULT_FMU_DIR if fmu_dir is None else fmu_dir)
-    paths, stale = {}, []
+    fmu_dir = default_fmu_dir() if fmu_dir is None else Path(fmu_dir)
     for name in names:
         if name not in FMUS:
             raise ValueError(f"unknown FMU {name!r}; available: {', '.join(FMUS)}")
-        path = fmu_dir / f"{name}.fmu"
-        paths[name] = path
-        expected = [(v.name, v.causality) for v in FMUS[name].variables]
-        try:
-            md = read_model_description(str(path))
-            current = [(v.name, v.causality) for v in md.modelVariables]
-        except Exception:  # missing or unreadable: build it
-            current = None
-        if current != expected:
-            stale.append(name)
-    if stale:
-        build_fmus(fmu_dir, stale)
+    paths = {name: fmu_dir / f"{name}.fmu" for name in names}
+    current = code_hash()
+    if not any(_stale(n, p, current) for n, p in paths.items()):
+        return paths
+    with _locked(fmu_dir):
+        stale = [n for n, p in paths.items() if _stale(n, p, current)]  # another run built?
+        if stale:
+            build_fmus(fmu_dir, stale)
     return paths
 
 
-def system_from_case(case, model: str | None = None, fmu_dir=None):
-    """(FmuStructure, FmuBearings) of a case: the gear-shaft FMU built from the case's values
-    and four instances of the bearing FMU of ``model`` (default ``bearings.model``), taken from
-    ``fmu_dir`` (default ``build/fmus``; built there if missing or stale)."""
-    model = case["bearings.model"] if model is None else model
-    bearing_fmu = fmu_name(model)
-    paths = ensure_fmus(["GearShaft", bearing_fmu], fmu_dir)
-    structure = FmuStructure(paths["GearShaft"], case=case)
+def system_from_files(case, gear_fmu, bearing_fmus, bearing_parameters=None):
+    """(FmuStructure, FmuBearings) from FMU files: the gear-shaft FMU with the case's
+    structural fields as parameters and one bearing FMU per bearing (any file with the
+    bearing contract, :mod:`orchestrator.fmi.bearings`) with ``bearing_parameters`` (default:
+    the case's bearing data, :func:`fmu_src.description.bearing_parameters`)."""
+    if bearing_parameters is None:
+        bearing_parameters = description.bearing_parameters(case)
+    structure = FmuStructure(gear_fmu, case=case)
     try:
-        bearings = FmuBearings([paths[bearing_fmu]] * 4, description.bearing_parameters(case),
+        bearings = FmuBearings(bearing_fmus, bearing_parameters,
                                description.bearing_speeds(case))
-    except Exception:
+    except BaseException:
         structure.close()
         raise
     return structure, bearings
+
+
+def system_from_case(case, model: str | None = None, fmu_dir=None):
+    """(FmuStructure, FmuBearings) of a case: the gear-shaft FMU and four instances of the
+    bearing FMU of ``model`` (default ``bearings.model``), from ``fmu_dir`` (default
+    :func:`default_fmu_dir`; built there if missing or stale)."""
+    model = case["bearings.model"] if model is None else model
+    bearing_fmu = fmu_name(model)
+    paths = ensure_fmus(["GearShaft", bearing_fmu], fmu_dir)
+    return system_from_files(case, paths["GearShaft"], [paths[bearing_fmu]] * 4)
