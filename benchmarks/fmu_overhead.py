@@ -6,7 +6,7 @@ Builds ``GearShaft.fmu`` into a temporary folder (unless ``--fmu`` names one) an
 paper's spur case (the shipped ``baguet2010_spur``) two ways with the same affine bearing laws
 (Kb 1e8 N/m with a cross-coupled part, Cb 1e4 N s/m, dt = mesh period / 32):
 
-* ``FmuStructure`` (:mod:`orchestrator.fmi`): fmi2SetReal of the 40 law inputs, fmi2DoStep,
+* ``FmuStructure`` (:mod:`orchestrator.fmi`): fmi2SetReal of the 56 law inputs, fmi2DoStep,
   fmi2GetReal of the 16 journal outputs; fmi2GetFMUstate + fmi2SetFMUstate (+ free);
 * ``InProcessStructure`` (the same master interface on the in-process structure):
   ``set_bearing_laws`` + ``do_step`` + ``journal_states``; ``get_state`` + ``set_state``.

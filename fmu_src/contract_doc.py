@@ -68,11 +68,9 @@ centre to the gear centre, z along the shafts, t = z x s), SI units. Build the F
 
 - The gear-shaft FMU builds each bearing's affine law (paper Eq. 17) from those inputs:
   `F(X, Xdot) = F - Kb (X - X_eval) - Cb (Xdot - Xdot_eval)`, the force, stiffness and damping
-  the bearing FMU gave at the journal state `X_eval` it echoes (`s_eval`, ...). A
-  non-iterative master (ecos, OMSimulator) evaluates the bearings at the journal state of the
-  last communication point, so `X_eval` is the gear FMU's own previous output; an iterative
-  master (`gsb run`) may evaluate them anywhere and roll the gear FMU back
-  (fmi2GetFMUstate/SetFMUstate) until the law and the film agree.
+  the bearing FMU gave at the journal state `X_eval` it echoes (`s_eval`, ...). Whatever the
+  master, the law is a correct linearisation about a state the structure passed through; how
+  far that state lags is the master's coupling error (next section).
 - Values are checked when set: a value out of its bounds (column "allowed"), a non-finite
   number or a choice not listed is refused by fmi2SetReal/SetInteger with fmi2Error, the value
   and the limit in the log, and the variable keeps its previous value. An output that cannot be
@@ -81,6 +79,48 @@ centre to the gear centre, z along the shafts, t = z x s), SI units. Build the F
 - Every FMU's state (fmi2GetFMUstate, fmi2SerializeFMUstate) holds everything its next outputs
   depend on, the hybrid solver's warm start included: a restored state reproduces the outputs
   bit for bit.
+
+## Masters
+
+- Iterative, with rollback (`gsb run`, `orchestrator.master`): each step, the gear-shaft FMU
+  steps with the laws linearised at the last iterate, the bearings are evaluated at the new
+  journal states, and the step is redone from a saved FMU state (fmi2GetFMUstate /
+  fmi2SetFMUstate) until film force and law agree to the case's tolerance: Newton-Raphson on
+  the bearing nonlinearity, equal to a monolithic solution to that tolerance.
+- Non-iterative, Jacobi type (ecos, and most fixed-step masters): every FMU steps with the
+  inputs of the last exchange, then outputs are exchanged. The bearing outputs exchanged after
+  step n were evaluated at the journal states of step n - 1, so the gear-shaft FMU steps from
+  X_n with laws linearised at X_n-1. `tests/test_ecos.py` reproduces ecos's trajectories to
+  1e-12 with an emulation of exactly this scheme. At the paper's time step (mesh period / 32)
+  the coupling error is large: over 1024 steps of the paper's spur case, ecos's journal
+  positions differ from the iterative solution by up to 5.2 % of the largest displacement,
+  26 % of the orbit's peak-to-peak amplitude (2.0e-5 m); the difference grows over the first
+  8 mesh periods and then stays there (23 % at step 1024). Use a master with rollback, or
+  much smaller communication steps, when the orbit matters.
+- Initialisation: in initialisation mode the gear-shaft FMU's outputs are the static solution
+  for its current law inputs, so a master's initialisation loop is a Newton iteration on X0;
+  from the law inputs' start values (journals at the centre) it overshoots the clearance. The
+  SSP archive of `gsb export-ssp` therefore carries the static solution X0 that `gsb`'s master
+  found as start values of the connected inputs: a non-iterative master starts in equilibrium
+  (ecos reproduces X0 to 6e-15).
+
+## A bearing FMU of your own
+
+`gsb run CASE --bearing-fmu MY.fmu` (or `orchestrator.fmi.FmuBearings`) accepts any
+algebraic FMU (outputs follow inputs without a doStep) with this minimal contract:
+
+- Real inputs `s`, `t` [m] and `s_dot`, `t_dot` [m/s]: the journal-centre state, global frame;
+- Real outputs `F_s`, `F_t` [N]: the film force on the journal, global frame.
+
+Optional: an input `omega` gets the shaft speed magnitude [rad/s]; parameters named as in the
+table below (`D`, `L`, `C`, `mu`, `frame_angle`, `rotation_sign`, the model options) get the
+case's values (mirror your model for `rotation_sign` -1: the gear shaft turns about -z). With
+all eight outputs `K_ss` ... `C_tt` they are used as they are; without them the master takes
+Kb and Cb by central differences of the force (steps 1e-5 C on positions and 1e-5 C omega on
+velocities: 8 more evaluations per call; round-off about 1e-12 of Kb). An FMU built with
+pythonfmu gets this package's native layer (statuses, a clean exit, the loader for C/C++
+hosts) from `fmu_src.build.patch_fmu`. Direct wiring (an SSP, ecos) needs the full bearing
+contract below: the gear-shaft FMU reads Kb, Cb and the evaluation state as inputs.
 
 ## Bearing FMUs
 
@@ -107,8 +147,9 @@ Behaviour:
 - Initialisation mode: outputs are the STATIC solution (velocities zero, constant loads) for
   the current inputs, solved when an output is read after an input changed. The support loads
   (calculated parameters) are the loads on stiff supports, a first guess of the static
-  solution. The start values of the law inputs (isotropic 1e8 N/m and 1e4 N s/m, no force)
-  make a stand-alone `fmpy simulate` run sensible.
+  solution. The start values of the law inputs (isotropic 1e8 N/m and 1e4 N s/m, no force,
+  about the centre) make a stand-alone `fmpy simulate` run sensible; in a system, start from
+  X0 (previous section).
 - `fmi2ExitInitializationMode`: if no static solution was computed yet, it is computed for the
   current inputs; the modal damping is rebuilt on the modes with the symmetric part of the
   current Kb (`Structure.set_damping_reference`).

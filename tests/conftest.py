@@ -13,3 +13,17 @@ def fmu_dir(tmp_path_factory):
     dest = tmp_path_factory.mktemp("fmus")
     build_fmus(dest)
     return dest
+
+
+@pytest.fixture(scope="session")
+def ssp_file(tmp_path_factory):
+    """``gsb export-ssp baguet2010_spur``: the paper's system as an SSP archive."""
+    import subprocess
+    import sys
+
+    folder = tmp_path_factory.mktemp("ssp")
+    proc = subprocess.run([sys.executable, "-m", "orchestrator.cli", "export-ssp",
+                           "baguet2010_spur", "--dest", str(folder)],
+                          capture_output=True, text=True, timeout=600, cwd=folder)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    return folder / "baguet2010_spur.ssp"

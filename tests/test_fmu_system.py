@@ -115,20 +115,11 @@ def test_a_bearing_fmu_without_the_minimal_contract_is_refused(fmu_dir):
     assert "bearing 1 (GearShaft.fmu) lacks the minimal bearing contract: input s" in r
 
 
-@pytest.fixture(scope="module")
-def ssp(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("ssp")
-    proc = subprocess.run([*GSB, "export-ssp", "baguet2010_spur", "--dest", str(folder)],
-                          capture_output=True, text=True, timeout=600, cwd=folder)
-    assert proc.returncode == 0, proc.stderr[-2000:]
-    return folder / "baguet2010_spur.ssp"
-
-
-def test_the_ssp_archive_holds_the_system(ssp):
+def test_the_ssp_archive_holds_the_system(ssp_file):
     from fmu_src.contract import connections
     from fmu_src.ssp import NS
 
-    with zipfile.ZipFile(ssp) as z:
+    with zipfile.ZipFile(ssp_file) as z:
         names = set(z.namelist())
         from xml.etree import ElementTree as ET
 
@@ -159,13 +150,14 @@ def test_the_ssp_archive_holds_the_system(ssp):
     assert float(values[("gear_shaft", "s_eval_3")]) == x0[2, 0]
 
 
-def test_gsb_run_of_the_ssp_equals_gsb_run_of_the_case(fmu_dir, ssp, tmp_path):
+def test_gsb_run_of_the_ssp_equals_gsb_run_of_the_case(fmu_dir, ssp_file, tmp_path):
     """The archive's FMUs and values, run by the iterative master, give the case's run through
     the built FMUs bit for bit (the same code on the same numbers)."""
     from orchestrator.results import read_results
 
     out = {}
-    for source, extra in ((str(ssp), []), ("baguet2010_spur", ["--fmu-dir", str(fmu_dir)])):
+    for source, extra in ((str(ssp_file), []),
+                          ("baguet2010_spur", ["--fmu-dir", str(fmu_dir)])):
         folder = tmp_path / Path(source).stem
         proc = subprocess.run([*GSB, "run", source, "--periods", "1", "--no-figures",
                                "--quiet", "--out", str(folder), *extra],
