@@ -3,7 +3,7 @@
 Nothing physical happens here: the slave builds :class:`gear_fmu.structure.Structure` from its
 case (``resources/case.toml`` with the FMU parameters' values, through :mod:`fmu_src.case` and
 :mod:`fmu_src.description`, the system description shared with the in-process runs), keeps the
-56 law inputs (layout: :func:`fmu_src.contract.unpack_laws`: each bearing FMU's outputs) and
+56 law inputs (layout: :func:`fmu_src.contract.unpack_law_arrays`: each bearing FMU's outputs) and
 maps the FMI calls onto the structure:
 
 * initialisation mode: outputs are the static solution for the current laws, solved in the
@@ -38,7 +38,7 @@ from fmu_src.contract import (
     journal_output_names,
     law_input_names,
     support_load_names,
-    unpack_laws,
+    unpack_law_arrays,
 )
 from fmu_src.slave_support import ContractSlave
 
@@ -234,25 +234,24 @@ class GearShaftSlave(ContractSlave):
 
     def _ensure_structure(self):
         if self._structure is None:
-            from fmu_src.description import structure
+            from fmu_src.description import bearing_speeds, structure
 
-            st = structure(self.case())
+            case = self.case()
+            st = structure(case)
+            self._speeds = bearing_speeds(case)
             st.t = self._start_time
             self._structure = st
         return self._structure
 
     def _solve_static(self) -> None:
         st = self._ensure_structure()
-        laws = unpack_laws(self._laws)
-        info = st.static(laws.f0, laws.kb, laws.cb)
+        info = st.static(*unpack_law_arrays(self._laws))
         self._iterations = info.iterations
         self._need_static = False
         self._have_static = True
 
     def _refresh(self) -> None:
         """Recompute the outputs (static solution first in initialisation mode); never raises."""
-        from fmu_src.description import bearing_speeds
-
         try:
             st = self._ensure_structure()
             if self._need_static and not self._stepping:
@@ -262,7 +261,7 @@ class GearShaftSlave(ContractSlave):
             ms = st.mesh_state
             g = st.gear_displacements()
             self._outputs = [*st.journal_states().ravel().tolist(),
-                             *bearing_speeds(self.case()),
+                             *self._speeds,
                              float(ms.total_load), float(ms.transmission_error),
                              float(g[0, 0]), float(g[0, 1]), float(g[1, 0]), float(g[1, 1])]
             self._failed = False
@@ -294,7 +293,7 @@ class GearShaftSlave(ContractSlave):
             self._ensure_structure()
             if not self._have_static:
                 self._solve_static()
-            kb = unpack_laws(self._laws).kb
+            kb = unpack_law_arrays(self._laws)[1]
             self._set_damping(0.5 * (kb + kb.transpose(0, 2, 1)))
             self._error = None
         except Exception as exc:  # anything raised here would be fatal for the host
@@ -304,7 +303,7 @@ class GearShaftSlave(ContractSlave):
     def _set_damping(self, kb) -> None:
         """Modal damping on the modes with bearing stiffness ``kb`` (kept for the FMU state)."""
         self._ensure_structure().set_damping_reference(kb)
-        self._damping_kb = kb.copy()
+        self._damping_kb = kb.copy()  # never changed in place: FMU states share it
 
     def do_step(self, current_time, step_size):
         """One Newmark step with the current laws; False (FMI discard) with a logged reason."""
@@ -317,8 +316,7 @@ class GearShaftSlave(ContractSlave):
             if abs(current_time - st.t) > 1e-9 * max(step_size, abs(current_time)):
                 raise ValueError(f"doStep from t = {current_time!r} s but the structure is at "
                                  f"t = {st.t!r} s")
-            laws = unpack_laws(self._laws)
-            info = st.step(step_size, laws.f0, laws.kb, laws.cb)
+            info = st.step(step_size, *unpack_law_arrays(self._laws))
         except Exception as exc:  # anything raised here would be fatal for the host
             step = "?" if st is None else st.n_steps + 1
             self.output_failed(f"doStep {step} from t = {current_time:.9g} s, dt = "
@@ -344,7 +342,7 @@ class GearShaftSlave(ContractSlave):
             "dirty": self._dirty,
             "failed": self._failed,
             "error": self._error,
-            "damping_kb": None if self._damping_kb is None else self._damping_kb.copy(),
+            "damping_kb": self._damping_kb,
         }
 
     def _set_fmu_state(self, state):
@@ -359,8 +357,8 @@ class GearShaftSlave(ContractSlave):
             else:
                 st = self._ensure_structure()
                 kb = state["damping_kb"]
-                if kb is not None and (self._damping_kb is None
-                                       or not (kb == self._damping_kb).all()):
+                if kb is not None and kb is not self._damping_kb and (
+                        self._damping_kb is None or not (kb == self._damping_kb).all()):
                     self._set_damping(kb)  # another instance, or another reference
                 st.set_state(state["structure"])
             self._outputs = list(state["outputs"])
