@@ -20,7 +20,6 @@ C >= D/2) makes the read of the outputs return fmi2Error, with the reason in the
 from __future__ import annotations
 
 import math
-import pickle
 
 from pythonfmu.enums import Fmi2Status
 
@@ -182,11 +181,3 @@ class BearingSlave(ContractSlave):
             self._dirty_outputs = True
             self.log(f"{self.instance_name}: cannot restore the FMU state: "
                      f"{describe_exception(exc)}", Fmi2Status.error)
-
-    @staticmethod
-    def _fmu_state_to_bytes(state) -> bytes:
-        return pickle.dumps(state, protocol=pickle.HIGHEST_PROTOCOL)
-
-    @staticmethod
-    def _fmu_state_from_bytes(state: bytes):
-        return pickle.loads(state)

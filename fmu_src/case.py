@@ -243,13 +243,21 @@ def _scalar(field: Field, value, name: str):
         except UnitError as exc:
             raise CaseError(str(exc)) from None
     unit = "" if kind == "count" else f" {symbol(kind)}"
-    if field.minimum is not None:
-        if out < field.minimum or (field.exclusive_minimum and out == field.minimum):
-            rel = ">" if field.exclusive_minimum else ">="
-            raise CaseError(f"{name} = {value!r}: must be {rel} {field.minimum}{unit}")
-    if field.maximum is not None and out > field.maximum:
-        raise CaseError(f"{name} = {value!r}: must be <= {field.maximum}{unit}")
+    violated = bound_violation(out, field.minimum, field.maximum, field.exclusive_minimum)
+    if violated:
+        raise CaseError(f"{name} = {value!r}: must be {violated[0]} {violated[1]}{unit}")
     return out
+
+
+def bound_violation(value, minimum=None, maximum=None, exclusive_minimum=False):
+    """The bound ``value`` breaks as ``(relation, limit)`` (``(">", 0.0)``, ``(">=", 5)``,
+    ``("<=", 0.7)``), or None: the one check behind case fields, model options and FMU
+    variables."""
+    if minimum is not None and (value < minimum or (exclusive_minimum and value == minimum)):
+        return (">" if exclusive_minimum else ">="), minimum
+    if maximum is not None and value > maximum:
+        return "<=", maximum
+    return None
 
 
 def _convert(field: Field, value):
@@ -307,14 +315,10 @@ def _check_consistency(v: dict, source: str) -> None:
     for opt in model_class(v["bearings.model"]).options:
         value, key = v[f"bearings.{opt.key}"], f"bearings.{opt.key}"
         unit = "" if opt.kind == "count" else f" {symbol(opt.kind)}"
-        if opt.minimum is not None and (value < opt.minimum or (
-                opt.exclusive_minimum and value == opt.minimum)):
-            rel = ">" if opt.exclusive_minimum else ">="
+        violated = bound_violation(value, opt.minimum, opt.maximum, opt.exclusive_minimum)
+        if violated:
             raise CaseError(f"{source}: {key} = {value!r}: the {v['bearings.model']} model "
-                            f"needs {rel} {opt.minimum}{unit}")
-        if opt.maximum is not None and value > opt.maximum:
-            raise CaseError(f"{source}: {key} = {value!r}: the {v['bearings.model']} model "
-                            f"needs <= {opt.maximum}{unit}")
+                            f"needs {violated[0]} {violated[1]}{unit}")
 
 
 def shipped_cases() -> dict[str, Path]:

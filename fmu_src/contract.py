@@ -78,14 +78,12 @@ class FmiVar:
         if self.choices and value not in self.choices:
             raise ValueRefused(f"{self.name} = {value!r} refused: must be one of "
                                f"{', '.join(map(str, self.choices))}")
-        if self.minimum is not None and (value < self.minimum or (
-                self.exclusive_minimum and value == self.minimum)):
-            rel = ">" if self.exclusive_minimum else ">="
-            raise ValueRefused(f"{self.name} = {value!r}{unit} refused: must be {rel} "
-                               f"{self.minimum:g}{unit}")
-        if self.maximum is not None and value > self.maximum:
-            raise ValueRefused(f"{self.name} = {value!r}{unit} refused: must be <= "
-                               f"{self.maximum:g}{unit}")
+        from fmu_src.case import bound_violation
+
+        violated = bound_violation(value, self.minimum, self.maximum, self.exclusive_minimum)
+        if violated:
+            raise ValueRefused(f"{self.name} = {value!r}{unit} refused: must be {violated[0]} "
+                               f"{violated[1]:g}{unit}")
 
 
 _P, _CP, _I, _O = "parameter", "calculatedParameter", "input", "output"

@@ -24,7 +24,6 @@ pythonfmu callback would be fatal for the instance and its host.
 from __future__ import annotations
 
 import math
-import pickle
 import re
 from pathlib import Path
 
@@ -371,11 +370,3 @@ class GearShaftSlave(ContractSlave):
             self._error = state["error"]
         except Exception as exc:  # anything raised here would be fatal for the host
             self._error = self.output_failed("cannot restore the FMU state", exc)
-
-    @staticmethod
-    def _fmu_state_to_bytes(state) -> bytes:
-        return pickle.dumps(state, protocol=pickle.HIGHEST_PROTOCOL)
-
-    @staticmethod
-    def _fmu_state_from_bytes(state: bytes):
-        return pickle.loads(state)

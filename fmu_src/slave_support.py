@@ -201,3 +201,16 @@ class ContractSlave(Fmi2Slave):
 
     def get_string(self, vrs):
         return self._get(String, vrs)
+
+    # --- FMU state serialisation (fmi2SerializeFMUstate): the state objects are pickled ------
+    @staticmethod
+    def _fmu_state_to_bytes(state) -> bytes:
+        import pickle
+
+        return pickle.dumps(state, protocol=pickle.HIGHEST_PROTOCOL)
+
+    @staticmethod
+    def _fmu_state_from_bytes(state: bytes):
+        import pickle
+
+        return pickle.loads(state)
