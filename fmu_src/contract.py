@@ -17,7 +17,7 @@ the bearings, mesh and gear outputs. A system is wired by plain output -> input 
 Every bound a value must respect is declared here (:class:`FmiVar`: minimum, maximum, choices;
 written as ``min``/``max`` into modelDescription.xml) and checked by the FMUs when the value is
 set (:meth:`FmiVar.check`). The layouts of the 56 law inputs and the 16 journal outputs are
-defined once (:func:`law_input_names`, :func:`pack_laws`, :func:`unpack_laws`,
+defined once (:func:`law_input_names`, :func:`pack_laws`, :func:`unpack_law_arrays`,
 :func:`unpack_journal`). Units are the dimensions of :mod:`fmu_src.units`. The tables are
 rendered into ``docs/fmu-variables.md`` by :mod:`fmu_src.contract_doc` and into each FMU's
 modelDescription.xml by :mod:`fmu_src.build`.
@@ -26,6 +26,7 @@ modelDescription.xml by :mod:`fmu_src.build`.
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 
 import numpy as np
@@ -36,8 +37,8 @@ from fmu_src.units import symbol
 
 __all__ = ["BEARINGS", "BEARING_VARIABLES", "GEAR_DEFAULT_CASE", "GEAR_VARIABLES", "FmiVar",
            "ValueRefused", "bearing_option_keys", "connections", "gear_case_fields",
-           "gear_variables", "journal_output_names", "law_input_names", "pack_laws",
-           "unpack_journal", "unpack_law_arrays", "unpack_laws"]
+           "gear_parameters", "gear_variables", "journal_output_names", "law_input_names",
+           "pack_laws", "parameter_field", "unpack_journal", "unpack_law_arrays"]
 
 
 class ValueRefused(ValueError):
@@ -261,14 +262,6 @@ def unpack_law_arrays(values):
     return np.array(f0), np.array(kb), np.array(cb)
 
 
-def unpack_laws(values) -> AffineLaws:
-    """The four affine laws of the 56 law inputs (order of :func:`law_input_names`), rebuilt
-    exactly as the master built them (:func:`unpack_law_arrays`), with their expansion."""
-    a = np.array(values, dtype=float).reshape(4, 14)
-    f0, kb, cb = unpack_law_arrays([float(x) for x in values])
-    return AffineLaws(f0, kb, cb, a[:, 10:14].copy(), a[:, 0:2].copy())
-
-
 def unpack_journal(values) -> np.ndarray:
     """(4, 4) journal states [s, t, s_dot, t_dot] of bearings 1-4 from the 16 journal outputs
     (order of :func:`journal_output_names`)."""
@@ -286,12 +279,28 @@ def gear_case_fields():
                  or f.key in keep)
 
 
-def gear_parameter_names(field) -> list[str]:
-    """FMU parameter name(s) of a case field: ``gear_pair.module``; lists one per entry,
-    ``gear_pair.teeth[1]``, ``gear_pair.teeth[2]`` (FMI's 1-based index notation)."""
-    if field.shape is None:
-        return [field.key]
-    return [f"{field.key}[{i + 1}]" for i in range(field.shape)]
+def gear_parameters(case) -> list[tuple]:
+    """``(FMU parameter name, case field, value)`` of every gear-shaft FMU parameter of a
+    case: ``gear_pair.module``; a list field one per entry, ``gear_pair.teeth[1]``,
+    ``gear_pair.teeth[2]`` (FMI's 1-based index notation; :func:`parameter_field` inverts
+    the name)."""
+    out = []
+    for field in gear_case_fields():
+        if field.shape is None:
+            out.append((field.key, field, case[field.key]))
+        else:
+            out += [(f"{field.key}[{i + 1}]", field, v) for i, v in enumerate(case[field.key])]
+    return out
+
+
+_INDEXED = re.compile(r"^(.*)\[(\d+)\]$")
+
+
+def parameter_field(name: str) -> tuple[str, int | None]:
+    """``(case field key, 0-based index or None)`` of a gear-shaft FMU parameter name
+    (:func:`gear_parameters`): ``"gear_pair.teeth[2]"`` -> ``("gear_pair.teeth", 1)``."""
+    m = _INDEXED.match(name)
+    return (name, None) if m is None else (m.group(1), int(m.group(2)) - 1)
 
 
 def gear_variables(case=None) -> tuple[FmiVar, ...]:
@@ -301,11 +310,7 @@ def gear_variables(case=None) -> tuple[FmiVar, ...]:
     from fmu_src.description import BEARING_FRAMES
 
     case = load_case(GEAR_DEFAULT_CASE.removesuffix(".toml")) if case is None else case
-    params = []
-    for f in gear_case_fields():
-        values = case[f.key] if f.shape is not None else [case[f.key]]
-        params += [_field_variable(n, f, v) for n, v in zip(gear_parameter_names(f), values,
-                                                             strict=True)]
+    params = [_field_variable(n, f, v) for n, f, v in gear_parameters(case)]
     return (
         *params,
         *(FmiVar(f"{n}_{j}", _I, "Real", _LAW_DIMENSION[n], _LAW_START.get(n, 0.0),

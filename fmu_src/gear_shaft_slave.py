@@ -24,7 +24,6 @@ pythonfmu callback would be fatal for the instance and its host.
 from __future__ import annotations
 
 import math
-import re
 from pathlib import Path
 
 from pythonfmu.default_experiment import DefaultExperiment
@@ -36,6 +35,7 @@ from fmu_src.contract import (
     gear_variables,
     journal_output_names,
     law_input_names,
+    parameter_field,
     support_load_names,
     unpack_law_arrays,
 )
@@ -51,7 +51,6 @@ _OUTPUTS = [*journal_output_names(), *(f"omega_{j}" for j in range(1, 5)),
             *(name for name, _, _ in GEAR_OUTPUTS)]
 _SUPPORT = support_load_names()
 _NAN_OUTPUTS = [math.nan] * len(_OUTPUTS)
-_INDEXED = re.compile(r"^(.*)\[(\d+)\]$")
 
 
 class GearShaftSlave(ContractSlave):
@@ -152,7 +151,7 @@ class GearShaftSlave(ContractSlave):
         return super().get_real(vrs)
 
     def _param_getter(self, name):
-        key, i = self._field_of(name)
+        key, i = parameter_field(name)
 
         def get():
             value = self._overrides.get(key, self._base[key])
@@ -160,7 +159,7 @@ class GearShaftSlave(ContractSlave):
         return get
 
     def _param_setter(self, name):
-        key, i = self._field_of(name)
+        key, i = parameter_field(name)
 
         def set_(value):
             current = self._overrides.get(key, self._base[key])
@@ -173,11 +172,6 @@ class GearShaftSlave(ContractSlave):
                 self._overrides[key] = new
                 self._reset_structure()
         return set_
-
-    @staticmethod
-    def _field_of(name):
-        m = _INDEXED.match(name)
-        return (name, None) if m is None else (m.group(1), int(m.group(2)) - 1)
 
     def _reset_structure(self) -> None:
         self._structure = None

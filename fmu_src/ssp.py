@@ -18,7 +18,6 @@ the bearing contract may stand in a component.
 from __future__ import annotations
 
 import math
-import re
 import shutil
 import tempfile
 import zipfile
@@ -33,10 +32,10 @@ from fmu_src.contract import (
     BEARINGS,
     STATE_NAMES,
     connections,
-    gear_case_fields,
-    gear_parameter_names,
+    gear_parameters,
     law_input_names,
     pack_laws,
+    parameter_field,
 )
 
 __all__ = ["SspSystem", "read_ssp", "ssd_text", "write_ssp"]
@@ -59,15 +58,6 @@ _SSV_TYPE = {bool: "Boolean", int: "Integer", float: "Real", str: "String"}
 
 def _q(prefix: str, tag: str) -> str:
     return f"{{{NS[prefix]}}}{tag}"
-
-
-def _gear_parameters(case: Case) -> dict:
-    """The gear-shaft FMU's parameter values of a case (:func:`gear_case_fields`)."""
-    out = {}
-    for field in gear_case_fields():
-        values = case[field.key] if field.shape is not None else [case[field.key]]
-        out.update(zip(gear_parameter_names(field), values, strict=True))
-    return out
 
 
 def _text(value) -> str:
@@ -127,7 +117,8 @@ def ssd_text(case: Case, gear_source: str, bearing_source: str, laws=None) -> by
     gear_conns = [(a_var, "output") for a, a_var, _, _ in wiring if a == GEAR]
     gear_conns += [(b_var, "input") for _, _, b, b_var in wiring if b == GEAR]
     gear_start, bearing_start = _start_values(case, laws)
-    _component(elements, GEAR, gear_source, gear_conns, _gear_parameters(case) | gear_start)
+    _component(elements, GEAR, gear_source, gear_conns,
+               {n: v for n, _, v in gear_parameters(case)} | gear_start)
     for j, params, start in zip(BEARINGS, description.bearing_parameters(case), bearing_start,
                                 strict=True):
         name = BEARING.format(j=j)
@@ -185,9 +176,6 @@ class SspSystem:
     folder: Path  # where the archive was extracted (remove it when done)
 
 
-_INDEXED = re.compile(r"^(.*)\[(\d+)\]$")
-
-
 def _parameters(comp) -> dict:
     out = {}
     for p in comp.iterfind(".//ssv:Parameter", NS):
@@ -232,11 +220,10 @@ def read_ssp(path: Path | str, folder: Path | str | None = None) -> SspSystem:
     for name, value in _parameters(comps[gear]).items():
         if name in starts:
             continue  # start values of the law inputs (the master finds X0 itself)
-        m = _INDEXED.match(name)
-        if m is None:
-            overrides[name] = value
+        key, i = parameter_field(name)
+        if i is None:
+            overrides[key] = value
         else:
-            key, i = m.group(1), int(m.group(2)) - 1
             current = list(overrides.get(key, base[key]))
             current[i] = value
             overrides[key] = current

@@ -60,7 +60,8 @@ class FmuBearings(BearingSet):
     def __init__(self, fmus, parameters, omegas):
         self.slaves = []
         self.force_only = []  # per bearing: stiffness and damping by finite differences
-        self._steps = []  # per bearing: FD steps (position, velocity)
+        self._clearances = []  # per bearing [m]: FD steps, the first guess's bound
+        self._omegas = [float(w) for w in omegas]
         try:
             for b, (path, params) in enumerate(zip(fmus, parameters, strict=True)):
                 s = FmuInstance(path, f"bearing{b + 1}")
@@ -76,8 +77,7 @@ class FmuBearings(BearingSet):
                 s.set({k: v for k, v in params.items() if k in s.vr}, f"bearing {b + 1}")
                 if "omega" in s.vr:
                     s.set({"omega": float(omegas[b])}, f"bearing {b + 1}")
-                h = FD_STEP * float(params.get("C", 1e-4))
-                self._steps.append((h, h * float(omegas[b])))
+                self._clearances.append(float(params.get("C", 1e-4)))
         except BaseException:
             self.close()
             raise
@@ -127,7 +127,8 @@ class FmuBearings(BearingSet):
     def _fd_jacobian(self, b: int, s: FmuInstance, state):
         """Kb = -dF/dX, Cb = -dF/dXdot of a force-only FMU by central differences (steps
         :data:`FD_STEP`), then the force at ``state`` itself (its evaluation state last)."""
-        hx, hv = self._steps[b]
+        hx = FD_STEP * self._clearances[b]
+        hv = hx * self._omegas[b]
         jac = np.empty((2, 4))
         for j, h in enumerate((hx, hx, hv, hv)):
             plus, minus = np.array(state, dtype=float), np.array(state, dtype=float)
@@ -160,7 +161,7 @@ class FmuBearings(BearingSet):
         depend on that sequence."""
         pos = np.zeros((len(self.slaves), 2))
         for b in range(len(self.slaves)):
-            clearance = self._steps[b][0] / FD_STEP
+            clearance = self._clearances[b]
             states = np.zeros((len(self.slaves), 4))
 
             def law(x, b=b, states=states):

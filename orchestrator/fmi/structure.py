@@ -11,8 +11,7 @@ import numpy as np
 
 from fmu_src.contract import (
     GEAR_OUTPUTS,
-    gear_case_fields,
-    gear_parameter_names,
+    gear_parameters,
     journal_output_names,
     law_input_names,
     pack_laws,
@@ -61,7 +60,7 @@ class FmuStructure(StructureSlave):
         The built gear-shaft FMU (``gsb build-fmus``).
     case : fmu_src.case.Case, optional
         A checked case (e.g. with command-line overrides): its structural fields are set as
-        the FMU's parameters (:func:`fmu_src.contract.gear_case_fields`); default: the case the
+        the FMU's parameters (:func:`fmu_src.contract.gear_parameters`); default: the case the
         FMU carries.
     start_time : float
         Time of the initial (static) state [s].
@@ -125,10 +124,7 @@ class FmuStructure(StructureSlave):
 
     def _set_case(self, case) -> None:
         """Set the case's structural fields as the FMU's parameters (one call per type)."""
-        values = {}
-        for field in gear_case_fields():
-            v = case[field.key] if field.shape is not None else [case[field.key]]
-            values.update(zip(gear_parameter_names(field), v, strict=True))
+        values = {name: value for name, _, value in gear_parameters(case)}
         self.slave.set(values, f"gear-shaft FMU, case {case['case.name']!r}")
 
     # --- errors -------------------------------------------------------------------------------
