@@ -88,6 +88,12 @@ FIELDS: tuple[Field, ...] = (
     _f("gear_pair.face_width", "length", "face widths [pinion, gear]", shape=2, **_POS),
     _f("gear_pair.centre_distance", "length", "operating centre distance", **_POS),
     _f("gear_pair.mass", "mass", "gear body masses [pinion, gear] (Table 1)", shape=2, **_POS),
+    _f("gear_pair.polar_inertia", "inertia", "polar inertias of the gear bodies [pinion, gear] "
+       "(0: those of a steel annulus of the body's mass, gear_fmu.system)", shape=2,
+       default=[0.0, 0.0], minimum=0.0),
+    _f("gear_pair.diametral_inertia", "inertia", "diametral inertias of the gear bodies "
+       "[pinion, gear] (0: derived as the polar ones)", shape=2, default=[0.0, 0.0],
+       minimum=0.0),
     # shafts, Table 2
     _f("shafts.outer_diameter", "length", "outer diameters [pinion shaft, gear shaft]",
        shape=2, **_POS),
@@ -100,6 +106,24 @@ FIELDS: tuple[Field, ...] = (
     _f("shafts.density", "density", "density rho", **_POS),
     _f("shafts.elements", "count", "Timoshenko elements per shaft (even)", default=8,
        minimum=2),
+    # drivetrain in torsion (not in the paper; defaults: input end free, output end clamped)
+    _f("drivetrain.motor_inertia", "inertia", "motor inertia on the input end of the pinion "
+       "shaft (0: no motor)", default=0.0, minimum=0.0),
+    _f("drivetrain.motor_coupling_stiffness", "torsional_stiffness", "stiffness of a "
+       "coupling between the motor and the input end (0: motor attached rigidly)", default=0.0,
+       minimum=0.0),
+    _f("drivetrain.motor_coupling_damping", "torsional_damping", "viscous damping of the "
+       "motor coupling", default=0.0, minimum=0.0),
+    _f("drivetrain.output_end", "choice", "torsion at the gear shaft's output end: clamped "
+       "(a load of infinite inertia) or load (the load inertia, the resisting torque "
+       "T z2/z1 acting on it)", default="clamped", choices=("clamped", "load")),
+    _f("drivetrain.load_inertia", "inertia", "load inertia on the output end (output_end = "
+       "load)", default=0.0, minimum=0.0),
+    _f("drivetrain.load_coupling_stiffness", "torsional_stiffness", "stiffness of a coupling "
+       "between the output end and the load (0: load attached rigidly)", default=0.0,
+       minimum=0.0),
+    _f("drivetrain.load_coupling_damping", "torsional_damping", "viscous damping of the load "
+       "coupling", default=0.0, minimum=0.0),
     # bearings, Table 3: order 1, 2 (pinion shaft), 3, 4 (gear shaft)
     _f("bearings.model", "choice", "bearing model (the FMU BearingHybrid, ... by that name)",
        default="hybrid", choices=BEARING_MODELS),
@@ -114,8 +138,31 @@ FIELDS: tuple[Field, ...] = (
        "shaft] (Eq. 10)", shape=2, default=[0.0, 0.0], minimum=0.0),
     _f("operation.gravity", "flag", "include gravity (along -t)", default=False),
     # numerics, Sec. 4
-    _f("simulation.damping_ratio", "dimensionless", "modal damping factor", default=0.03,
-       minimum=0.0, maximum=1.0),
+    _f("simulation.damping_ratio", "dimensionless", "damping ratio zeta of the modal "
+       "damping, or of the Rayleigh damping at rayleigh_frequencies", default=0.03,
+       minimum=0.0, maximum=0.99),
+    _f("simulation.damping_model", "choice", "structural damping: modal (zeta on every mode "
+       "of the damping_basis) or rayleigh (alpha M + beta K, gear_fmu.damping)",
+       default="modal", choices=("modal", "rayleigh")),
+    _f("simulation.damping_basis", "choice", "modes of the modal damping: bearings (shafts, "
+       "mean mesh and the bearings' static film stiffness) or structure (shafts and mean mesh)",
+       default="bearings", choices=("bearings", "structure")),
+    _f("simulation.rayleigh_frequencies", "frequency", "[f1, f2] at which the Rayleigh "
+       "damping has the ratio damping_ratio (0, 0: use rayleigh_alpha, rayleigh_beta)",
+       shape=2, default=[0.0, 0.0], minimum=0.0),
+    _f("simulation.rayleigh_alpha", "rate", "mass coefficient alpha of the Rayleigh damping",
+       default=0.0, minimum=0.0),
+    _f("simulation.rayleigh_beta", "time", "stiffness coefficient beta of the Rayleigh "
+       "damping", default=0.0, minimum=0.0),
+    _f("simulation.mesh_damping_ratio", "dimensionless", "mesh damping as the ratio of the "
+       "two-inertia mesh mode (0: none)", default=0.0, minimum=0.0, maximum=0.99),
+    _f("simulation.mesh_damping", "damping", "mesh damping coefficient along the line of "
+       "action (0: none; exclusive with mesh_damping_ratio)", default=0.0, minimum=0.0),
+    _f("simulation.consistent_start", "flag", "start the transient from the acceleration of "
+       "the unbalance at t = 0 instead of zero (gear_fmu.structure)", default=True),
+    _f("simulation.locate_contact", "flag", "cut steps at the angles where contact lines "
+       "enter or leave the path of contact, so that Newmark keeps order 2 "
+       "(gear_fmu.structure)", default=True),
     _f("simulation.steps_per_mesh_period", "count", "time steps per mesh period",
        default=32, minimum=4),
     _f("simulation.mesh_periods", "count", "mesh periods simulated", default=2048, minimum=1),
@@ -308,6 +355,7 @@ def _check_consistency(v: dict, source: str) -> None:
         if v["bearings.clearance"][i] >= 0.5 * v["bearings.diameter"][i]:
             raise CaseError(f"{source}: bearings.clearance[{i}] must be smaller than the "
                             f"bearing radius")
+    _check_physics(v, source)
     if v["shafts.elements"] % 2:
         raise CaseError(f"{source}: shafts.elements = {v['shafts.elements']} must be even "
                         f"(the gear sits at mid-span)")
@@ -319,6 +367,18 @@ def _check_consistency(v: dict, source: str) -> None:
         if violated:
             raise CaseError(f"{source}: {key} = {value!r}: the {v['bearings.model']} model "
                             f"needs {violated[0]} {violated[1]}{unit}")
+
+
+def _check_physics(v: dict, source: str) -> None:
+    """The drivetrain and the damping model, checked by their classes; the messages name the
+    case fields (:func:`fmu_src.description.drivetrain`, :func:`~fmu_src.description.damping`)."""
+    from fmu_src import description
+
+    try:
+        description.drivetrain(v)
+        description.damping(v)
+    except ValueError as exc:
+        raise CaseError(f"{source}: {exc}") from None
 
 
 def shipped_cases() -> dict[str, Path]:

@@ -270,13 +270,17 @@ def unpack_journal(values) -> np.ndarray:
 
 def gear_case_fields():
     """The case fields the gear-shaft FMU exposes as parameters: the case's name, the gear pair,
-    the shafts, the operating point, the modal damping and the structure's tolerance (the
-    bearing fields belong to the bearing FMUs, the run length to the master)."""
+    the shafts, the drivetrain, the operating point, the damping model, the structure's
+    tolerance and time-integration switches (the bearing fields belong to the bearing FMUs,
+    the run length and the coupled iterations to the master)."""
     from fmu_src.case import FIELDS
 
-    keep = ("case.name", "simulation.damping_ratio", "simulation.tolerance")
-    return tuple(f for f in FIELDS if f.key.split(".")[0] in ("gear_pair", "shafts", "operation")
-                 or f.key in keep)
+    master_only = ("simulation.steps_per_mesh_period", "simulation.mesh_periods",
+                   "simulation.max_iterations")
+    return tuple(f for f in FIELDS
+                 if f.key.split(".")[0] in ("gear_pair", "shafts", "drivetrain", "operation")
+                 or f.key == "case.name"
+                 or (f.key.startswith("simulation.") and f.key not in master_only))
 
 
 def gear_parameters(case) -> list[tuple]:

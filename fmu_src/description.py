@@ -17,6 +17,8 @@ import math
 from bearing_fmu import BearingData, BearingModel, model_class
 from bearing_fmu.frames import LocalFrame
 from fmu_src.case import Case
+from gear_fmu.damping import DampingModel
+from gear_fmu.drivetrain import Drivetrain
 from gear_fmu.geometry import GearPair
 from gear_fmu.loads import StructureLoads, shaft_speeds
 from gear_fmu.mesh import MeshElement
@@ -31,6 +33,8 @@ __all__ = [
     "bearing_options",
     "bearing_parameters",
     "bearing_speeds",
+    "damping",
+    "drivetrain",
     "gear_pair",
     "gear_shaft_system",
     "mesh_element",
@@ -71,11 +75,41 @@ def gear_shaft_system(case: Case, pair: GearPair | None = None) -> GearShaftSyst
         Shaft(HollowSection(do, di, **material), case["shafts.length"], case["shafts.elements"])
         for do, di in zip(case["shafts.outer_diameter"], case["shafts.inner_diameter"],
                           strict=True))
-    gears = tuple(GearBody(m, r, b, case["shafts.density"]) for m, r, b in zip(
-        case["gear_pair.mass"], pair.pitch_radius, pair.face_width, strict=True))
+    gears = tuple(GearBody(m, r, b, case["shafts.density"], ip, idiam)
+                  for m, r, b, ip, idiam in zip(
+                      case["gear_pair.mass"], pair.pitch_radius, pair.face_width,
+                      case["gear_pair.polar_inertia"], case["gear_pair.diametral_inertia"],
+                      strict=True))
     return GearShaftSystem(shafts=shafts, gears=gears,  # type: ignore[arg-type]
                            centre_distance=pair.centre_distance, teeth=pair.teeth,
-                           helix_angle_deg=math.degrees(pair.helix_angle))
+                           helix_angle_deg=math.degrees(pair.helix_angle),
+                           drivetrain=drivetrain(case))
+
+
+_DRIVETRAIN = ("motor_inertia", "motor_coupling_stiffness", "motor_coupling_damping",
+               "output_end", "load_inertia", "load_coupling_stiffness", "load_coupling_damping")
+
+
+def drivetrain(case) -> Drivetrain:
+    """``drivetrain.*`` fields -> :class:`gear_fmu.drivetrain.Drivetrain` (a Case or its
+    values); its errors name the fields."""
+    return Drivetrain(**{k: case[f"drivetrain.{k}"] for k in _DRIVETRAIN})
+
+
+def damping(case) -> DampingModel:
+    """``simulation.damping_*``, ``rayleigh_*``, ``mesh_damping*`` fields ->
+    :class:`gear_fmu.damping.DampingModel` (a Case or its values)."""
+    try:
+        return DampingModel(
+            kind=case["simulation.damping_model"], ratio=case["simulation.damping_ratio"],
+            basis=case["simulation.damping_basis"],
+            rayleigh_frequencies=tuple(case["simulation.rayleigh_frequencies"]),
+            rayleigh_alpha=case["simulation.rayleigh_alpha"],
+            rayleigh_beta=case["simulation.rayleigh_beta"],
+            mesh_ratio=case["simulation.mesh_damping_ratio"],
+            mesh_coefficient=case["simulation.mesh_damping"])
+    except ValueError as exc:
+        raise ValueError(f"simulation damping fields: {exc}") from None
 
 
 def structure_loads(case: Case) -> StructureLoads:
@@ -101,9 +135,11 @@ def structure(case: Case, damping_bearing_stiffness=1e8) -> Structure:
     """
     pair = gear_pair(case)
     return Structure(gear_shaft_system(case, pair), mesh_element(case, pair),
-                     structure_loads(case), zeta=case["simulation.damping_ratio"],
+                     structure_loads(case), zeta=damping(case),
                      damping_bearing_stiffness=damping_bearing_stiffness,
-                     tol=case["simulation.tolerance"])
+                     tol=case["simulation.tolerance"],
+                     consistent_start=case["simulation.consistent_start"],
+                     locate_contact=case["simulation.locate_contact"])
 
 
 def mesh_period(case: Case) -> float:

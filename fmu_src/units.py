@@ -68,6 +68,14 @@ DIMENSIONS: dict[str, Dimension] = {d.name: d for d in (
     Dimension("time", "s", {"s": 1}, {"s": 1.0, "ms": 1e-3}),
     Dimension("velocity", "m/s", {"m": 1, "s": -1}, {"m/s": 1.0}),
     Dimension("dimensionless", "1", {}, {"1": 1.0, "-": 1.0}),
+    Dimension("inertia", "kg.m^2", {"kg": 1, "m": 2}, {"kg.m^2": 1.0, "kg m^2": 1.0,
+                                                      "kg.m2": 1.0, "kg m2": 1.0}),
+    Dimension("torsional_stiffness", "N.m/rad", {"kg": 1, "m": 2, "s": -2, "rad": -1},
+              {"N.m/rad": 1.0, "N m/rad": 1.0, "Nm/rad": 1.0}),
+    Dimension("torsional_damping", "N.m.s/rad", {"kg": 1, "m": 2, "s": -1, "rad": -1},
+              {"N.m.s/rad": 1.0, "N m s/rad": 1.0, "Nms/rad": 1.0}),
+    Dimension("frequency", "Hz", {"s": -1}, {"Hz": 1.0, "kHz": 1e3}),
+    Dimension("rate", "1/s", {"s": -1}, {"1/s": 1.0}),
 )}
 
 #: accepted spelling -> (factor to SI, dimension)

@@ -3,10 +3,14 @@
 Each analysis runs static solutions under the constant loads (torque, gravity) with given
 bearing springs and restores the structure's state afterwards:
 
-* :func:`mean_mesh_stiffness`: the mesh tangent averaged over one mesh period;
+* :func:`mean_mesh_stiffness`: the mesh tangent averaged over one mesh period at equally spaced
+  angles (the modal damping reference);
+* :func:`exact_mean_mesh_stiffness`: the same mean integrated piecewise between the contact
+  events (Gauss-Legendre), and :func:`line_of_action_stiffness`, its scalar value;
 * :func:`quasi_static`: transmission error, mesh load and journal positions against the pinion
   angle (the loaded transmission-error sweep);
-* :func:`modes`: natural modes with the mean mesh stiffness (``gsb modal``);
+* :func:`modes`: natural modes with the exact mean mesh stiffness (``gsb modal``);
+* :func:`damped`: damped modes of the linearised system, Eq. (20) with C0 = C + Cb(X0);
 * :func:`reference_damping`: the modal damping matrix on the modes of the reference
   configuration (:mod:`gear_fmu.modal`);
 * :func:`support_loads`: loads on stiff supports, the master's first guess of X0.
@@ -14,13 +18,16 @@ bearing springs and restores the structure's state afterwards:
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
 
-from .modal import modal_damping_matrix, natural_modes
+from .damped_modes import damped_modes
+from .modal import natural_modes
 
-__all__ = ["mean_mesh_stiffness", "modes", "quasi_static", "reference_damping", "support_loads"]
+__all__ = ["damped", "exact_mean_mesh_stiffness", "line_of_action_stiffness",
+           "mean_mesh_stiffness", "modes", "quasi_static", "reference_damping", "support_loads"]
 
 #: stiffness of the "stiff supports" of :func:`support_loads` [N/m]
 STIFF_SUPPORT = 1e12
@@ -88,30 +95,128 @@ def quasi_static(st, angles, bearing_stiffness=1e8) -> dict:
     return {k: np.array(v) for k, v in out.items()}
 
 
-def modes(st, bearing_stiffness=1e8, n_angles: int = 16):
+def exact_mean_mesh_stiffness(st, bearing_stiffness=1e8, n_gauss: int = 8) -> np.ndarray:
+    """Mesh stiffness (12, 12) averaged over one mesh period, integrated between contact events.
+
+    One mesh period of pinion angle, ``[a0, a0 + 2 pi / z1]`` with ``a0 = st.pinion_angle(st.t)``,
+    is split at the kinematic contact events ``st.mesh.event_angles`` (a slice entering or
+    leaving the path of contact: the quasi-static stiffness jumps there). On each event-free
+    sub-interval the stiffness ``st.mesh_state.stiffness`` of the static solution under the
+    constant loads (as in :func:`mean_mesh_stiffness`) is integrated by ``n_gauss``-point
+    Gauss-Legendre, whose nodes lie strictly inside the sub-interval; the state is restored
+    afterwards.
+
+    Accuracy: without tooth deviations every slice on the path is in contact and the stiffness
+    is smooth between events except for the kinks of the linearly interpolated tooth stiffness
+    table (:class:`gear_fmu.mesh.MeshElement`); on the spur case of the paper 8 and 32 points
+    agree to 1.5e-6 (relative), where 16 equally spaced angles are 1.4 % off. A contact lost
+    inside a sub-interval (tip relief at a light load) is not a split point.
+
+    Parameters
+    ----------
+    st : Structure
+    bearing_stiffness : float or (4, 2, 2)
+        Isotropic [N/m] or per-bearing stiffness of the supports (global frame).
+    n_gauss : int
+        Gauss-Legendre points per event-free sub-interval, >= 1.
+
+    Returns
+    -------
+    (12, 12) array
+        Mean of K_gear over the period [N/m, N, N m] (gear-node DOFs, pinion first).
+    """
+    if int(n_gauss) != n_gauss or n_gauss < 1:
+        raise ValueError(f"n_gauss = {n_gauss!r}: need an integer >= 1")
+    f0, kb = _springs(st, bearing_stiffness)
+    a0 = st.pinion_angle(st.t)
+    period = st.mesh.event_period
+    edges = np.unique(np.concatenate([[a0], st.mesh.event_angles(a0, a0 + period),
+                                      [a0 + period]]))
+    edges = edges[np.concatenate([[True], np.diff(edges) > 1e-12 * period])]  # merge ties
+    edges[-1] = a0 + period
+    x, w = np.polynomial.legendre.leggauss(int(n_gauss))
+    saved = st.get_state()
+    acc = np.zeros((12, 12))
+    try:
+        for lo, hi in itertools.pairwise(edges):
+            half, mid = 0.5 * (hi - lo), 0.5 * (hi + lo)
+            for xi, wi in zip(x, w, strict=True):
+                st.static_at(f0, kb, float(mid + half * xi))
+                acc += (wi * half) * st.mesh_state.stiffness
+    finally:
+        st.set_state(saved)
+    return acc / period
+
+
+def line_of_action_stiffness(st, mesh_stiffness) -> float:
+    """Scalar mesh stiffness along the line of action (normal to the flanks) [N/m].
+
+    ``K[theta1, theta1] / (r_b1 cos(beta_b))^2`` of a (12, 12) mesh stiffness: for every contact
+    point the structure vector of Eq. (12) has ``V[theta1] = r_b1 cos(beta_b)`` (the line of
+    action is tangent to the base circle), so this is exactly ``sum k dl``, the sum of the
+    slice springs. Divide by ``st.mesh.pair.contact_width`` for the stiffness per unit face
+    width (1 N/(mm um) = 1e9 N/m^2).
+    """
+    k = np.asarray(mesh_stiffness, dtype=float)
+    if k.shape != (12, 12):
+        raise ValueError(f"mesh stiffness shape {k.shape} must be (12, 12)")
+    pair = st.mesh.pair
+    lever = pair.base_radius[0] * math.cos(pair.base_helix_angle)
+    return float(k[5, 5] / lever**2)
+
+
+def modes(st, bearing_stiffness=1e8, n_gauss: int = 8, mesh_stiffness=None):
     """Natural modes with the mean mesh stiffness at the static load (for ``gsb modal``): the
     undamped modes of K0 of Eq. (20).
 
-    ``bearing_stiffness``: isotropic [N/m] or (4, 2, 2) (symmetric part used). Returns
+    ``bearing_stiffness``: isotropic [N/m] or (4, 2, 2) (symmetric part used);
+    ``mesh_stiffness``: a (12, 12) mean mesh stiffness already computed, else
+    :func:`exact_mean_mesh_stiffness` with these bearings and ``n_gauss``. Returns
     :class:`gear_fmu.modal.Modes`; format with :func:`gear_fmu.modal.mode_table`.
     """
-    k_mesh = mean_mesh_stiffness(st, bearing_stiffness, n_angles)
-    return natural_modes(st.system, bearing_stiffness, k_mesh)
+    if mesh_stiffness is None:
+        mesh_stiffness = exact_mean_mesh_stiffness(st, bearing_stiffness, n_gauss)
+    return natural_modes(st.system, bearing_stiffness, mesh_stiffness)
 
 
-def reference_damping(st, zeta: float, bearing_stiffness):
-    """Modal damping ``C`` (full numbering) on the modes of the reference configuration
-    (:mod:`gear_fmu.modal`): shafts, the mean mesh stiffness at the static load with these
-    bearings, and the bearing stiffness (isotropic [N/m] or (4, 2, 2), symmetric part).
+def damped(st, kb, cb, mesh_stiffness=None, n_gauss: int = 8):
+    """Damped modes of the linearised system about X0, Eq. (20) with C0 = C + Cb(X0).
 
-    Returns ``(C, modes, mean mesh stiffness)``; C is zero (and the others None) for zeta 0.
+    M, the structure's damping ``st.damping_full`` (whatever built it), K_shaft, the mean mesh
+    stiffness and the bearings' full 2x2 ``kb`` [N/m] and ``cb`` [N s/m] (4, 2, 2) in the
+    global frame (:func:`gear_fmu.damped_modes.damped_modes`). ``mesh_stiffness``: a (12, 12)
+    mean already computed, else :func:`exact_mean_mesh_stiffness` with the symmetric part of
+    ``kb`` (as the modal damping reference). Returns
+    :class:`gear_fmu.damped_modes.DampedModes`.
     """
+    kb = np.asarray(kb, dtype=float)
+    if mesh_stiffness is None:
+        sym = kb if kb.ndim == 0 else 0.5 * (kb + np.swapaxes(kb, -1, -2))
+        mesh_stiffness = exact_mean_mesh_stiffness(st, sym, n_gauss)
+    return damped_modes(st.system, st.damping_full, mesh_stiffness, kb, cb)
+
+
+def reference_damping(st, model, bearing_stiffness):
+    """The damping matrix ``C`` (full numbering) of a damping model
+    (:mod:`gear_fmu.damping`) on the reference configuration: shafts, the mean mesh stiffness
+    at the static load with these bearings, and the bearing stiffness (isotropic [N/m] or
+    (4, 2, 2), symmetric part).
+
+    ``model``: a :class:`gear_fmu.damping.DampingModel`, or a float zeta (modal damping on the
+    ``"bearings"`` basis). Returns ``(C, modes, mean mesh stiffness)``; the modes are those
+    of the modal damping (None otherwise), the mean mesh stiffness None when nothing needs it.
+    """
+    from .damping import DampingModel, damping_matrix
+
+    if not isinstance(model, DampingModel):
+        model = DampingModel(ratio=float(model))
     system = st.system
-    if zeta == 0.0:
-        return np.zeros((system.n_dof, system.n_dof)), None, None
+    if model.is_zero:
+        return np.array(system.coupling_damping, copy=True), None, None
     k_mesh = mean_mesh_stiffness(st, bearing_stiffness)
-    ref = natural_modes(system, bearing_stiffness, k_mesh)
-    return modal_damping_matrix(system, ref, zeta), ref, k_mesh
+    radii = st.mesh.pair.base_radius if (model.mesh_ratio or model.mesh_coefficient) else None
+    c, ref = damping_matrix(system, model, k_mesh, bearing_stiffness, radii)
+    return c, ref, k_mesh
 
 
 def support_loads(st) -> np.ndarray:

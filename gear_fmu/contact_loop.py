@@ -5,7 +5,13 @@ On the condensed DOFs (:mod:`gear_fmu.condensation`) the residual of Eq. (11) is
 bearing laws. The mesh force is piecewise linear in X (fixed active set), so Newton (Eq. 13-15)
 converges in one solve once the contact set is right; the loop ends when the contact set used by
 the last solve equals the one at the iterate and the relative residual
-``||G_c|| / max(f_scale, ||F_mesh||)`` is below the limit l.
+``||G_c|| / max(f_scale, ||F_mesh||)`` is below the limit l, or below the round-off floor of
+its evaluation when that is larger: ``64 eps (||z0|| + ||F_mesh||)`` over the same scale (at
+the solution ``S X_c`` balances ``z0 + F_mesh``, so these are the sizes of the terms that
+cancel). At small time steps the inertia terms in S and z0 (``4/dt^2 M``) are many
+orders above the external loads, and a limit such as 1e-10 of the loads lies below what
+double precision can resolve; the floor only accepts where the limit could never be met, so
+it changes no step that converged before.
 
 Mesh element API consumed: ``mesh.evaluate(pinion_angle, q12) -> state`` with ``state.force``
 (12,) the generalised mesh force on the gear-node DOFs, ``state.stiffness`` (12, 12) its tangent
@@ -24,7 +30,10 @@ from numba import njit
 from .condensation import N_GEAR, gauss_solve
 from .newmark import NewmarkConvergenceError
 
-__all__ = ["StepInfo", "solve_condensed"]
+__all__ = ["ROUNDOFF", "StepInfo", "solve_condensed"]
+
+#: the round-off floor of the residual, in units of machine epsilon times the norms of its terms
+ROUNDOFF = 64.0 * np.finfo(float).eps
 
 
 @dataclass
@@ -119,6 +128,7 @@ def solve_condensed(mesh, s_lin, z0, xc, angle, active_used, f_scale, t, what, t
         With the time, the residual history and the contact count.
     """
     residuals = []
+    z_norm = -1.0  # ||z0||, computed when first needed
     for k in range(max_iter + 1):
         t0 = time.perf_counter() if timing is not None else 0.0
         ms = mesh.evaluate(angle, xc[:N_GEAR])
@@ -128,9 +138,15 @@ def solve_condensed(mesh, s_lin, z0, xc, angle, active_used, f_scale, t, what, t
             t0 = t1_
         force = ms.force
         scale = max(f_scale, math.sqrt(float(force @ force)))
-        r = _residual_norm(s_lin, z0, xc, force) / (scale if scale > 0.0 else 1.0)
+        scale = scale if scale > 0.0 else 1.0
+        r = _residual_norm(s_lin, z0, xc, force) / scale
         residuals.append(r)
-        if r <= tol and active_used is not None and same_contact_set(ms.active, active_used):
+        limit = tol
+        if r > tol:  # the round-off floor at this iterate (module docstring)
+            if z_norm < 0.0:
+                z_norm = math.sqrt(float(z0 @ z0))
+            limit = max(tol, ROUNDOFF * (z_norm + math.sqrt(float(force @ force))) / scale)
+        if r <= limit and active_used is not None and same_contact_set(ms.active, active_used):
             if timing is not None:
                 timing["solve"] += time.perf_counter() - t0
             return xc, ms, StepInfo(t, k, r, residuals)

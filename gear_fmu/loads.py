@@ -1,7 +1,9 @@
 """External loads on the gear-shaft structure (paper Sec. 3.1 and 4.1, Eq. 10).
 
-* The input torque T acts on the torsion DOF of the pinion shaft's input end; the resisting
-  torque is the reaction of the clamped output torsion DOF (:mod:`gear_fmu.system`).
+* The input torque T acts on the torsion DOF of the pinion shaft's input end (or on the motor
+  behind a coupling); the resisting torque is the reaction of the clamped output torsion DOF
+  or, with a load at the output (:mod:`gear_fmu.drivetrain`), ``T z2 / z1`` on the load,
+  the torque that balances T through the mesh (``T r_b2 / r_b1``).
 * Mass unbalance, Eq. (10): a force of magnitude ``M e_mu omega^2`` turning with each shaft,
   applied at its gear node, with M the shaft plus gear mass. The pinion shaft turns about +z
   at omega, the gear shaft about -z at ``omega z1 / z2`` (:mod:`gear_fmu.geometry`).
@@ -81,12 +83,16 @@ def unbalance_force(amplitudes, speeds, t: float) -> np.ndarray:
 
 def constant_loads(system, loads: StructureLoads) -> np.ndarray:
     """The time-invariant part of F(t) on the full DOF numbering [N, N m]: the input torque on
-    the pinion shaft's input torsion DOF and, if set, gravity ``M g``."""
+    the pinion shaft's input torsion DOF (or the motor), the resisting torque ``T z2 / z1`` on
+    the load when the output is not clamped and, if set, gravity ``M g``."""
     f = np.zeros(system.n_dof)
-    f[system.input_dof] += loads.torque
+    f[system.torque_dof] += loads.torque
+    if system.load_dof is not None:
+        # the gear turns about -z: the mesh drives its torsion DOF negative, the load resists
+        f[system.load_dof] += loads.torque * system.teeth[1] / system.teeth[0]
     if loads.gravity is not None:
         g = np.zeros(system.n_dof)
-        nodes = np.arange(system.n_nodes)
+        nodes = np.arange(system.n_nodes)  # the drivetrain DOFs are rotations: no weight
         g[DOF_PER_NODE * nodes + U] = loads.gravity[0]
         g[DOF_PER_NODE * nodes + V] = loads.gravity[1]
         f += system.mass @ g

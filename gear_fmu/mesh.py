@@ -310,6 +310,60 @@ class MeshElement:
         """Mean stiffness per unit face width of one tooth pair over the path [N/m^2]."""
         return float(np.mean(self.k_table)) / math.cos(self.pair.base_helix_angle)
 
+    @property
+    def event_period(self) -> float:
+        """Pinion angle of one mesh period, ``2 pi / z1`` [rad]."""
+        return 2.0 * math.pi / self.pair.teeth[0]
+
+    def event_angles(self, angle0: float, angle1: float) -> np.ndarray:
+        """Pinion angles in ``(angle0, angle1]`` at which a slice enters or leaves the path of
+        contact (rigid-body kinematics, module docstring), sorted, duplicates merged [rad].
+
+        Slice s at ``z_s`` carries the lines ``xi_A + p_bt (frac(w) + j)``,
+        ``w = (r_b1 Theta1 - z_s tan(beta_b)) / p_bt``: a line enters at xi_A when w is an
+        integer and the last one leaves at xi_E when ``frac(w) = frac(eps_alpha)``,
+        ``eps_alpha = (xi_E - xi_A) / p_bt``. Between two such angles the set of slices on the
+        path is fixed and the mesh stiffness is continuous in the angle; across one it jumps.
+        Angles within 1e-9 p_bt / r_b1 of each other are merged.
+
+        Examples
+        --------
+        A spur pair has two events per mesh period (an entry and an exit):
+
+        >>> from gear_fmu.geometry import GearPair
+        >>> pair = GearPair(teeth=(20, 40), module=3e-3, pressure_angle=math.radians(20.0),
+        ...                 centre_distance=0.09, face_width=(0.03, 0.03))
+        >>> mesh = MeshElement(pair, line_load=6.5e4)
+        >>> mesh.event_angles(0.0, mesh.event_period).size
+        2
+        """
+        pair = self.pair
+        xi_a, xi_e = pair.path_of_contact
+        pbt = pair.base_pitch
+        rb1 = pair.base_radius[0]
+        tanb = math.tan(pair.base_helix_angle)
+        eps = (xi_e - xi_a) / pbt
+        phases = np.unique([0.0, eps - math.floor(eps)])
+        # w(angle) of every slice, then every w in (w0, w1] with frac(w) in phases
+        shift = np.unique(self.z_slices * tanb / pbt)
+        w0 = rb1 * angle0 / pbt - shift
+        w1 = rb1 * angle1 / pbt - shift
+        out = []
+        for c in phases:
+            k0 = np.floor(w0 - c) + 1.0
+            k1 = np.floor(w1 - c)
+            for s in range(shift.size):
+                ks = np.arange(k0[s], k1[s] + 1.0)
+                out.append((ks + c + shift[s]) * pbt / rb1)
+        if not out:
+            return np.empty(0)
+        angles = np.sort(np.concatenate(out))
+        angles = angles[(angles > angle0) & (angles <= angle1)]
+        if angles.size > 1:
+            keep = np.concatenate([[True], np.diff(angles) > 1e-9 * pbt / rb1])
+            angles = angles[keep]
+        return angles
+
     def error_displacement(self, pinion_angle: float) -> np.ndarray:
         """q_err: mounting errors and runouts as rigid gear-node displacements (12,)."""
         q = self._mounting.copy()

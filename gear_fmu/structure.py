@@ -11,6 +11,22 @@ j), re-set by the master at every iteration: the Newton tangent is
 ``c0 M + c1 C + K + K_mesh + Kb + c1 Cb`` (Eq. 14, 16; c0 = 4/dt^2, c1 = 2/dt). External loads
 ``F0(t)`` (:mod:`gear_fmu.loads`): input torque, mass unbalance of Eq. (10), optional gravity.
 
+Time integration refinements (switched on by the case file, :mod:`fmu_src.description`):
+
+* ``consistent_start``: the static solution X0 balances the constant loads only, so at t = 0
+  the unbalance of Eq. (10) is the one force not in equilibrium; the transient starts from
+  ``Xdd_0 = M^-1 F_unb(0)`` instead of zero (Newmark's update carries Xdd_n forward, and a
+  wrong Xdd_0 leaves a first-order error).
+* ``locate_contact``: the mesh stiffness jumps when a contact line enters or leaves the path
+  of contact (:meth:`gear_fmu.mesh.MeshElement.event_angles`, known from the rigid-body
+  kinematics). A step containing such angles is cut into sub-steps ending on them; a sub-step
+  ending on an event is solved with the contact set before it (mesh evaluated
+  ``EVENT_SIDE`` base pitch earlier), then the acceleration is reset to the one after it,
+  ``Xdd+ = Xdd- + M^-1 (F_mesh+ - F_mesh-)`` at the same X and Xd. Each sub-step then
+  integrates a smooth problem and the scheme keeps its order 2. The bearing laws of the step
+  serve every sub-step (they are affine in X and Xd). Contact changes that are not kinematic
+  (a tooth pair separating under dynamic load) are not located.
+
 Solution method: the constant part of the tangent is condensed onto the 20 gear and bearing DOFs
 once per dt (:mod:`gear_fmu.condensation`); each step costs one matrix-vector product for the
 right-hand side and, per Newton/contact iteration, a mesh evaluation and a 20 x 20 solve
@@ -26,10 +42,12 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.linalg
 
 from .analyses import reference_damping
 from .condensation import N_BEARING, N_GEAR, NC, Condensation
 from .contact_loop import StepInfo, solve_condensed
+from .damping import DampingModel
 from .dofs import THETA
 from .loads import (
     StructureLoads,
@@ -46,6 +64,12 @@ __all__ = ["StepInfo", "Structure", "StructureLoads", "StructureState", "check_l
 
 #: first static iterate: pinion torsion [rad] that closes every potential contact
 INITIAL_APPROACH_ROTATION = 1e-3
+#: contact location: the side of an event the mesh is evaluated on, in base pitches (above the
+#: mesh kernel's snap of 1e-9 pitch, :mod:`gear_fmu.mesh`)
+EVENT_SIDE = 1e-8
+#: sub-step fractions of dt are rounded to multiples of 2**-30, so that the condensations of
+#: the recurring sub-steps are computed once (:meth:`Structure._dynamic`)
+_FRACTION = 2.0**30
 
 
 @dataclass(frozen=True)
@@ -71,8 +95,9 @@ class Structure:
     mesh : object
         Mesh element with ``evaluate(pinion_angle, q12)`` (:mod:`gear_fmu.contact_loop`).
     loads : StructureLoads
-    zeta : float
-        Modal damping factor (paper 0.03).
+    zeta : float or DampingModel
+        The damping model (:mod:`gear_fmu.damping`); a float is the modal damping factor on
+        the ``"bearings"`` basis (paper 0.03).
     damping_bearing_stiffness : float or (4, 2, 2)
         Bearing stiffness of the reference configuration of the modal damping
         (:mod:`gear_fmu.modal`) [N/m]; :meth:`set_damping_reference` replaces it.
@@ -82,6 +107,9 @@ class Structure:
         Relative residual limit l (paper 1e-5).
     max_iter : int
         Newton/contact iterations per step.
+    consistent_start, locate_contact : bool
+        Time integration refinements (module docstring); off by default here, on by default
+        in case files.
 
     Attributes
     ----------
@@ -97,11 +125,13 @@ class Structure:
         system: GearShaftSystem,
         mesh,
         loads: StructureLoads | None = None,
-        zeta: float = 0.03,
+        zeta: float | DampingModel = 0.03,
         damping_bearing_stiffness=1e8,
         damping: np.ndarray | None = None,
         tol: float = 1e-5,
         max_iter: int = 30,
+        consistent_start: bool = False,
+        locate_contact: bool = False,
     ):
         if not (tol > 0.0 and math.isfinite(tol)):
             raise ValueError(f"tol = {tol!r} must be finite and > 0")
@@ -114,7 +144,15 @@ class Structure:
         self._ordering()
         self._m = self._permute(system.mass)
         self._k = self._permute(system.stiffness)
-        self._static = Condensation(self._k)
+        k_static = self._k
+        if system.load_dof is not None:  # fix the free torsional rotation (gear_fmu.drivetrain)
+            k_static = k_static.copy()
+            i = int(np.flatnonzero(self._full_of_internal == system.load_dof)[0])
+            k_static[i, i] += system.static_ground
+        self._static = Condensation(k_static)
+        self.consistent_start = bool(consistent_start)
+        self.locate_contact = bool(locate_contact) and hasattr(mesh, "event_angles")
+        self._m_gear = None  # M^-1 restricted to the gear-node columns, when first needed
         self._forces()
         # the state: at rest at t = 0, no contact known yet
         n = self._perm.size
@@ -126,7 +164,8 @@ class Structure:
         self.active = None
         self.mesh_state = None
         self._dyn_cache: dict[float, tuple] = {}
-        self.zeta = float(zeta)
+        self.damping_model = zeta if isinstance(zeta, DampingModel) else DampingModel(
+            ratio=float(zeta))
         self.reference_modes = None
         self.reference_mesh_stiffness = None
         if damping is not None:
@@ -156,7 +195,7 @@ class Structure:
         the transient.
         """
         c, self.reference_modes, self.reference_mesh_stiffness = reference_damping(
-            self, self.zeta, bearing_stiffness)
+            self, self.damping_model, bearing_stiffness)
         self.set_damping(c)
 
     # ------------------------------------------------------------------ set-up
@@ -207,7 +246,7 @@ class Structure:
         h = np.vstack([mc[:NC], cond.g @ mc[NC:]])
         g_const = cond.g @ self._f_const[NC:]
         entry = (cond, h, g_const)
-        if len(self._dyn_cache) > 8:
+        if len(self._dyn_cache) > 256:
             self._dyn_cache.clear()
         self._dyn_cache[dt] = entry
         return entry
@@ -222,7 +261,19 @@ class Structure:
         ones (torque, gravity) without the rotating unbalance. ``Cb`` is ignored (zero velocity).
         """
         f0, kb, _ = check_laws(F0, Kb, np.zeros((4, 2, 2)) if Cb is None else Cb)
-        return self.static_at(f0, kb, self.pinion_angle(self.t))
+        info = self.static_at(f0, kb, self.pinion_angle(self.t))
+        if self.consistent_start:
+            f = np.zeros(N_GEAR)
+            f[[0, 1, 6, 7]] = unbalance_force(self._unb, self._omega, self.t)  # Eq. (10)
+            self.a = self._gear_compliance() @ f
+        return info
+
+    def _gear_compliance(self) -> np.ndarray:
+        """``M^-1`` restricted to the gear-node columns, (n, 12) (internal order)."""
+        if self._m_gear is None:
+            cho = scipy.linalg.cho_factor(self._m)
+            self._m_gear = scipy.linalg.cho_solve(cho, np.eye(self._m.shape[0])[:, :N_GEAR])
+        return self._m_gear
 
     def static_at(self, f0, kb, angle) -> StepInfo:
         """Static solution at a given rigid-body pinion angle [rad] (checked laws)."""
@@ -265,29 +316,81 @@ class Structure:
         NewmarkConvergenceError
             With the step number, the time and the residual.
         """
-        timing = self.timing
-        t0 = time.perf_counter() if timing is not None else 0.0
         f0, kb, cb = check_laws_fast(F0, Kb, Cb)
         if self.active is None:
             raise RuntimeError("call static() before the first step (initial state X0)")
-        cond, h, g_const = self._dynamic(dt)
-        x, v, a = self.x, self.v, self.a
+        if not (dt > 0.0 and math.isfinite(dt)):
+            raise ValueError(f"time step dt = {dt!r} s must be finite and > 0")
         t1 = self.t + dt
+        what = f"Newmark step {self.n_steps + 1}"
+        pieces = self._sub_steps(dt) if self.locate_contact else None
+        if not pieces:
+            info = self._advance(dt, t1, self.pinion_angle(t1), f0, kb, cb, what)
+        else:
+            info = StepInfo(t1, 0, 0.0)
+            t_start = self.t
+            for h, frac, at_event in pieces:
+                te = t1 if frac == 1.0 else t_start + frac * dt
+                angle = self.pinion_angle(te)
+                side = EVENT_SIDE * self.mesh.pair.base_pitch / self.mesh.pair.base_radius[0]
+                sub = self._advance(h, te, angle - side if at_event else angle, f0, kb, cb,
+                                    what)
+                info.iterations += sub.iterations
+                info.residual = max(info.residual, sub.residual)
+                info.residuals += sub.residuals
+                if at_event:  # Xdd after the event (module docstring)
+                    after = self.mesh.evaluate(angle + side, self.x[:N_GEAR])
+                    jump = after.force - self.mesh_state.force
+                    self.a = self.a + self._gear_compliance() @ jump
+                    self.active = after.active
+                    self.mesh_state = after
+        self.t = t1
+        self.n_steps += 1
+        return info
+
+    def _sub_steps(self, dt: float) -> list:
+        """``[(h, end fraction of dt, ends on an event)]`` of a step with contact events
+        (None without): the step cut at the event angles, fractions rounded to ``2**-30``."""
+        a0 = self.pinion_angle(self.t)
+        a1 = self.pinion_angle(self.t + dt)
+        tol = 1e-9 * self.mesh.pair.base_pitch / self.mesh.pair.base_radius[0]
+        events = self.mesh.event_angles(a0 - tol, a1 + tol)
+        if events.size == 0:
+            return None
+        cuts = []
+        for e in events:
+            if e - a0 <= tol:
+                continue  # on the step's start: the previous step ended on it
+            frac = 1.0 if a1 - e <= tol else round((e - a0) / (a1 - a0) * _FRACTION) / _FRACTION
+            if 0.0 < frac and (not cuts or frac > cuts[-1]):
+                cuts.append(frac)
+        if not cuts:
+            return None
+        ends = cuts + ([] if cuts[-1] == 1.0 else [1.0])
+        out, prev = [], 0.0
+        for frac in ends:
+            out.append(((frac - prev) * dt, frac, frac in cuts))
+            prev = frac
+        return out
+
+    def _advance(self, h, t1, angle, f0, kb, cb, what) -> StepInfo:
+        """One Newmark step of length h to t1 (mesh at ``angle``); updates X, Xd, Xdd and the
+        contact state, not the time."""
+        timing = self.timing
+        t0 = time.perf_counter() if timing is not None else 0.0
+        cond, hh, g_const = self._dynamic(h)
+        x, v, a = self.x, self.v, self.a
         unb = unbalance_force(self._unb, self._omega, t1)  # Eq. (10)
-        s_lin, z0, y = prepare_step(h, g_const, x, v, a, self._f_c, unb, f0, kb, cb, cond.s0,
-                                     dt, N_GEAR)
+        s_lin, z0, y = prepare_step(hh, g_const, x, v, a, self._f_c, unb, f0, kb, cb, cond.s0,
+                                     h, N_GEAR)
         f_scale = max(self._f_scale, math.sqrt(float(np.sum(f0 * f0))))
         if timing is not None:
             timing["assembly"] += time.perf_counter() - t0
-        xc0 = x[:NC] + dt * v[:NC]
-        xc, ms, info = solve_condensed(self.mesh, s_lin, z0, xc0, self.pinion_angle(t1),
-                                       self.active, f_scale, t1,
-                                       f"Newmark step {self.n_steps + 1}", self.tol,
-                                       self.max_iter, timing)
+        xc0 = x[:NC] + h * v[:NC]
+        xc, ms, info = solve_condensed(self.mesh, s_lin, z0, xc0, angle, self.active, f_scale,
+                                       t1, what, self.tol, self.max_iter, timing)
         t0 = time.perf_counter() if timing is not None else 0.0
-        self.x, self.v, self.a = finish_step(x, v, a, xc, y, cond.w, dt)
-        self.t = t1
-        self.n_steps += 1
+        self.x, self.v, self.a = finish_step(x, v, a, xc, y, cond.w, h)
         self.active = ms.active
         self.mesh_state = ms
         if timing is not None:

@@ -20,11 +20,14 @@ Node numbering: pinion shaft nodes ``0..n``, gear shaft nodes ``n+1..2n+1`` (bot
 
 Boundary conditions (choices, documented)
 -----------------------------------------
-* Torsion: the torsion DOF at the gear shaft's output end (z = +L/2) is clamped, i.e. the output
-  drives a load of infinite inertia; the resisting torque is the reaction there. The rigid-body
-  rotation of both shafts is imposed kinematics (pinion angle ``omega t``) and the ``theta`` DOFs
-  are the small elastic rotations on top of it. The input torque acts on the pinion shaft's
-  torsion DOF at its input end (z = -L/2).
+* Torsion (default, :class:`gear_fmu.drivetrain.Drivetrain` ``()``): the torsion DOF at the
+  gear shaft's output end (z = +L/2) is clamped, i.e. the output drives a load of infinite
+  inertia; the resisting torque is the reaction there. The rigid-body rotation of both shafts
+  is imposed kinematics (pinion angle ``omega t``) and the ``theta`` DOFs are the small elastic
+  rotations on top of it. The input torque acts on the pinion shaft's torsion DOF at its input
+  end (z = -L/2). A motor inertia at the input and a load inertia at the output (rigid or
+  behind couplings, extra DOFs after the node DOFs) are set by ``drivetrain``
+  (:mod:`gear_fmu.drivetrain`).
 * Axial: one axial spring (thrust bearing) of stiffness ``axial_stiffness`` (default 1e9 N/m, not
   given in the paper) on ``w`` at the z = -L/2 node of each shaft.
 * Radial (u, v): no support in the structural matrices; the four bearings enter from outside
@@ -32,11 +35,12 @@ Boundary conditions (choices, documented)
 
 Gear bodies (choice, documented)
 --------------------------------
-Rigid discs on the mid nodes with the Table 1 masses (pinion 2 kg, gear 74 kg). Their inertias are
-those of a steel annulus (rho = 7800 kg/m^3) of face width b and outer radius equal to the
-transverse pitch radius r = m z / (2 cos beta), the bore radius r_i chosen so that the annulus has
-the given mass: ``r_i^2 = r^2 - M / (rho pi b)``. Spur case: pinion r = 52 mm, r_i = 32.7 mm (close
-to the 35 mm shaft radius), Ip = 3.77e-3 kg m^2, Id = 2.30e-3 kg m^2; gear r = 314 mm, r_i =
+Rigid discs on the mid nodes with the Table 1 masses (pinion 2 kg, gear 74 kg). Unless given
+(``GearBody.polar_inertia``, ``diametral_inertia``), their inertias are those of a steel
+annulus (rho = 7800 kg/m^3) of face width b and outer radius equal to the transverse pitch
+radius r = m z / (2 cos beta), the bore radius r_i chosen so that the annulus has the given
+mass: ``r_i^2 = r^2 - M / (rho pi b)``. Spur case: pinion r = 52 mm, r_i = 32.7 mm (close to
+the 35 mm shaft radius), Ip = 3.77e-3 kg m^2, Id = 2.30e-3 kg m^2; gear r = 314 mm, r_i =
 152 mm, Ip = 4.50 kg m^2, Id = 2.26 kg m^2 (see :func:`annulus_inertias`).
 """
 
@@ -48,6 +52,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .dofs import DOF_PER_NODE, THETA, U, V, W, dof
+from .drivetrain import Drivetrain
 from .timoshenko import HollowSection, disc_matrices, timoshenko_element
 
 __all__ = [
@@ -125,17 +130,33 @@ def annulus_inertias(
 
 @dataclass(frozen=True)
 class GearBody:
-    """Rigid gear body on the mid node of its shaft (inertias: :func:`annulus_inertias`)."""
+    """Rigid gear body on the mid node of its shaft.
+
+    Inertias [kg m^2]: ``polar_inertia`` and ``diametral_inertia`` when given (> 0), else those
+    of :func:`annulus_inertias` (0 = derived).
+    """
 
     mass: float
     pitch_radius: float
     face_width: float
     density: float = 7800.0
+    polar_inertia: float = 0.0
+    diametral_inertia: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name in ("polar_inertia", "diametral_inertia"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v >= 0.0):
+                raise ValueError(f"gear {name} = {v!r} kg.m^2 must be finite and >= 0 "
+                                 "(0 = derived from the mass)")
 
     @property
     def inertias(self) -> tuple[float, float, float]:
         """(bore radius [m], diametral inertia [kg m^2], polar inertia [kg m^2])."""
-        return annulus_inertias(self.mass, self.pitch_radius, self.face_width, self.density)
+        ri, idiam, ip = annulus_inertias(self.mass, self.pitch_radius, self.face_width,
+                                         self.density) if not (
+            self.polar_inertia and self.diametral_inertia) else (math.nan, 0.0, 0.0)
+        return (ri, self.diametral_inertia or idiam, self.polar_inertia or ip)
 
 
 @dataclass
@@ -147,11 +168,15 @@ class GearShaftSystem:
     Attributes
     ----------
     n_dof : int
-        Total DOFs (6 per node, including the clamped one).
+        Total DOFs (6 per node, including the clamped one, then the drivetrain's motor and
+        load DOFs, :mod:`gear_fmu.drivetrain`).
     mass, stiffness : (n_dof, n_dof) arrays
-        Global M and K_shaft (shafts, discs, axial springs) [SI].
+        Global M and K_shaft (shafts, discs, axial springs, motor and load inertias and
+        couplings) [SI].
+    coupling_damping : (n_dof, n_dof) array
+        Viscous damping of the drivetrain couplings [N m s/rad].
     free : int array
-        DOFs kept (all but the clamped output torsion DOF).
+        DOFs kept (all but the clamped output torsion DOF, if clamped).
     bearing_nodes : (4,) int
         Nodes of bearings 1..4.
     bearing_dofs : (4, 2) int
@@ -161,7 +186,13 @@ class GearShaftSystem:
     gear_dofs : (12,) int
         Pinion node 6 DOFs then gear node 6 DOFs (the mesh element's q12).
     input_dof, output_dof : int
-        Pinion shaft torsion at z = -L/2; gear shaft torsion at z = +L/2 (clamped).
+        Pinion shaft torsion at z = -L/2; gear shaft torsion at z = +L/2 (clamped by default).
+    torque_dof, load_dof : int, int or None
+        Where the input torque acts (the motor DOF behind a coupling, else ``input_dof``);
+        where the resisting torque acts (None when the output is clamped).
+    static_ground : float
+        Stiffness [N m/rad] of the spring on ``load_dof`` that fixes the free torsional
+        rotation in static solutions (0 when the output is clamped).
     shaft_masses : (2,) float
         Shaft + gear mass per shaft [kg] (the M of Eq. 10).
 
@@ -184,6 +215,7 @@ class GearShaftSystem:
     teeth: tuple[int, int]
     axial_stiffness: float = 1e9
     helix_angle_deg: float = 0.0
+    drivetrain: Drivetrain = field(default_factory=Drivetrain)
     n_dof: int = field(init=False)
     mass: np.ndarray = field(init=False, repr=False)
     stiffness: np.ndarray = field(init=False, repr=False)
@@ -239,10 +271,53 @@ class GearShaftSystem:
         )
         self.input_dof = dof(firsts[0], THETA)
         self.output_dof = dof(firsts[1] + self.shafts[1].n_elements, THETA)
-        self.free = np.setdiff1d(np.arange(self.n_dof), [self.output_dof])
+        self._drivetrain()
+        clamped = [self.output_dof] if self.drivetrain.clamped else []
+        self.free = np.setdiff1d(np.arange(self.n_dof), clamped)
         self.shaft_masses = np.array(
             [s.mass + g.mass for s, g in zip(self.shafts, self.gears, strict=True)]
         )
+
+    def _drivetrain(self) -> None:
+        """Motor and load inertias and couplings (:mod:`gear_fmu.drivetrain`)."""
+        dt = self.drivetrain
+        n0 = self.n_dof
+        n = n0 + dt.n_extra
+        m = np.zeros((n, n))
+        k = np.zeros((n, n))
+        m[:n0, :n0] = self.mass
+        k[:n0, :n0] = self.stiffness
+        c = np.zeros((n, n))
+        nxt = n0
+        self.torque_dof = self.input_dof
+        self.load_dof = None
+        self.extra_dofs = {}
+        pairs = [("motor", self.input_dof, dt.motor_inertia, dt.motor_coupling_stiffness,
+                  dt.motor_coupling_damping)]
+        if not dt.clamped:
+            pairs.append(("load", self.output_dof, dt.load_inertia, dt.load_coupling_stiffness,
+                          dt.load_coupling_damping))
+        for name, end, inertia, kc, cc in pairs:
+            at = end
+            if kc > 0.0:
+                at = nxt
+                nxt += 1
+                self.extra_dofs[name] = at
+                idx = [end, at]
+                k[np.ix_(idx, idx)] += kc * np.array([[1.0, -1.0], [-1.0, 1.0]])
+                c[np.ix_(idx, idx)] += cc * np.array([[1.0, -1.0], [-1.0, 1.0]])
+            m[at, at] += inertia
+            if name == "motor":
+                self.torque_dof = at
+            else:
+                self.load_dof = at
+        self.n_dof = n
+        self.mass = m
+        self.stiffness = k
+        self.coupling_damping = c
+        # static ground on the load: the torsional stiffness scale of the gear shaft
+        self.static_ground = 0.0 if dt.clamped else float(
+            np.max(np.diag(k)[self.dof_kind() == 1]))
 
     # ------------------------------------------------------------------ reduced space
     @property
@@ -266,11 +341,15 @@ class GearShaftSystem:
         return out
 
     def dof_kind(self) -> np.ndarray:
-        """Per full DOF: 0 bending (u, v, phi, psi), 1 torsion (theta), 2 axial (w)."""
-        local = np.arange(self.n_dof) % DOF_PER_NODE
-        kind = np.zeros(self.n_dof, dtype=int)
-        kind[local == THETA] = 1
-        kind[local == W] = 2
+        """Per full DOF: 0 bending (u, v, phi, psi), 1 torsion (theta, motor, load), 2 axial
+        (w)."""
+        n_node = DOF_PER_NODE * self.n_nodes
+        n = self.mass.shape[0] if hasattr(self, "mass") else n_node
+        local = np.arange(n_node) % DOF_PER_NODE
+        kind = np.ones(n, dtype=int)  # the drivetrain DOFs are torsion
+        kind[:n_node] = 0
+        kind[:n_node][local == THETA] = 1
+        kind[:n_node][local == W] = 2
         return kind
 
     def node_positions(self) -> np.ndarray:
