@@ -23,8 +23,10 @@ from orchestrator.results import read_results
 from orchestrator.run import run_case
 
 
-def main(periods: int = 64, bearing: str = "hybrid") -> dict:
-    case = paper_case()
+def main(periods: int = 64, bearing: str = "hybrid", **overrides) -> dict:
+    """The run's figures; ``overrides``: case fields (e.g. ``**{"simulation.locate_contact":
+    False}``)."""
+    case = paper_case(**overrides)
     z1 = case["gear_pair.teeth"][0]
     window = 2 * z1 * description.mesh_period(case)  # two pinion revolutions [s]
     with tempfile.TemporaryDirectory() as tmp:

@@ -18,8 +18,11 @@ from orchestrator.sweep import SweepPoint, read_sweep, run_sweep
 SPEEDS = (250.0, 325.0, 400.0)  # rad/s
 
 
-def main(speeds=SPEEDS, periods: int = 64, scheduler: str | None = "none") -> list[dict]:
-    points = [SweepPoint({"operation.speed": w}, "hybrid", f"{w:g} rad/s") for w in speeds]
+def main(speeds=SPEEDS, periods: int = 64, scheduler: str | None = "none",
+         overrides: dict | None = None) -> list[dict]:
+    """One dict per speed; ``overrides``: further case fields for every point."""
+    points = [SweepPoint({"operation.speed": w, **(overrides or {})}, "hybrid", f"{w:g} rad/s")
+              for w in speeds]
     with tempfile.TemporaryDirectory() as tmp:
         res = run_sweep("baguet2010_spur", points, Path(tmp) / "sweep.h5", periods=periods,
                         steady_periods=52, scheduler=scheduler, progress=False)

@@ -1,5 +1,6 @@
 """Post-processing of runs: steady-state window, dynamic tooth load factor, bearing-load
-peak-to-peak, orbit ellipse fit (paper Sec. 4, Figs. 7-11, 14).
+peak-to-peak, orbit ellipse fit (paper Sec. 4, Figs. 7-11, 14), order lines of the bearing
+loads and the report of ``gsb run`` (:func:`run_report`).
 
 Pure functions on arrays from a results file (:func:`orchestrator.results.read_results`).
 """
@@ -14,7 +15,8 @@ import numpy as np
 from fmu_src.case import Case
 from fmu_src.description import gear_pair
 
-__all__ = ["fit_ellipse", "run_metrics", "static_mesh_load", "steady_window"]
+__all__ = ["fit_ellipse", "order_lines", "pinion_lines", "resolved_lines", "run_metrics",
+           "run_report", "static_mesh_load", "steady_window"]
 
 
 def steady_window(time: np.ndarray, duration: float) -> np.ndarray:
@@ -27,6 +29,14 @@ def steady_window(time: np.ndarray, duration: float) -> np.ndarray:
 def static_mesh_load(torque: float, base_radius: float, base_helix_angle: float = 0.0) -> float:
     """Normal mesh load balancing the input torque, ``T / (r_b1 cos(beta_b))`` [N]."""
     return abs(torque) / (base_radius * math.cos(base_helix_angle))
+
+
+def _static_load(results: dict) -> float:
+    """Static mesh load [N] of the case stored in a results file's ``case_values``."""
+    values = json.loads(results["attrs"]["case_values"])
+    pair = gear_pair(Case(values, str(results["attrs"].get("case_file", "results"))))
+    return static_mesh_load(values["operation.torque"], pair.base_radius[0],
+                            pair.base_helix_angle)
 
 
 def fit_ellipse(x, y) -> dict:
@@ -86,9 +96,7 @@ def run_metrics(results: dict, steady: float) -> dict:
     [m] (ellipse fit, Fig. 9, 14) and ``orbit_mean`` (4, 2) [m].
     """
     win = steady_window(results["time"], steady)
-    values = json.loads(results["attrs"]["case_values"])
-    pair = gear_pair(Case(values, str(results["attrs"].get("case_file", "results"))))
-    w0 = static_mesh_load(values["operation.torque"], pair.base_radius[0], pair.base_helix_angle)
+    w0 = _static_load(results)
     fb = np.hypot(results["bearing_force"][win, :, 0], results["bearing_force"][win, :, 1])
     journal = results["journal_position"][win]
     centres = []
@@ -103,4 +111,127 @@ def run_metrics(results: dict, steady: float) -> dict:
         "force_mean": fb.mean(axis=0),
         "orbit_centre": np.array(centres),
         "orbit_mean": journal.mean(axis=0),
+    }
+
+
+def order_lines(time_s, signal, frequencies_hz) -> np.ndarray:
+    """Amplitudes of sinusoidal lines at exactly known frequencies, by linear least squares.
+
+    Fits ``c0 + sum_k a_k cos(2 pi f_k t) + b_k sin(2 pi f_k t)`` to the samples and returns
+    ``hypot(a_k, b_k)``, the peak amplitude of each line. Unlike a DFT this needs no whole
+    number of periods in the window (one gear revolution holds 157/26 = 6.04 pinion
+    revolutions in the paper's case), only lines resolved by it (:func:`resolved_lines`).
+
+    Parameters
+    ----------
+    time_s : array_like, shape (N,)
+        Sample times [s] (any spacing).
+    signal : array_like, shape (N, ...)
+        Samples; trailing axes are independent signals fitted at once.
+    frequencies_hz : array_like, shape (n,)
+        Line frequencies [Hz].
+
+    Returns
+    -------
+    numpy.ndarray, shape (n, ...)
+        Peak amplitudes, in the unit of ``signal``.
+
+    Examples
+    --------
+    >>> t = np.arange(1000) * 1e-3
+    >>> y = 2.0 + 3.0 * np.cos(2 * np.pi * 7.3 * t + 0.4) + 0.5 * np.sin(2 * np.pi * 50 * t)
+    >>> np.round(order_lines(t, y, [7.3, 50.0]), 12).tolist()
+    [3.0, 0.5]
+    """
+    t = np.asarray(time_s, dtype=float)
+    y = np.asarray(signal, dtype=float)
+    f = np.atleast_1d(np.asarray(frequencies_hz, dtype=float))
+    if t.ndim != 1 or y.shape[:1] != t.shape:
+        raise ValueError(f"time_s has shape {t.shape}, signal {y.shape}: need (N,) and (N, ...)")
+    n, unknowns = f.size, 1 + 2 * f.size
+    if t.size < unknowns:
+        raise ValueError(f"{t.size} samples cannot fit a mean and {n} lines: need at least "
+                         f"{unknowns}")
+    # phases from the first sample: smaller arguments, same amplitudes
+    arg = 2.0 * np.pi * np.outer(t - t[0], f)
+    design = np.column_stack([np.ones_like(t), np.cos(arg), np.sin(arg)])
+    coef, _, rank, _ = np.linalg.lstsq(design, y.reshape(t.size, -1), rcond=None)
+    if rank < unknowns:
+        raise ValueError(f"lines at {f.tolist()} Hz are not separable over "
+                         f"{t[-1] - t[0]:.6g} s: rank {rank} of {unknowns}")
+    return np.hypot(coef[1:n + 1], coef[n + 1:]).reshape((n, *y.shape[1:]))
+
+
+def resolved_lines(frequencies_hz, duration_s: float, dt_s: float) -> np.ndarray:
+    """Which lines a window of ``duration_s`` sampled every ``dt_s`` resolves (boolean mask).
+
+    A line is resolved if the window holds at least one of its periods, it lies below the
+    Nyquist frequency ``1 / (2 dt_s)``, and it is at least ``1 / duration_s`` away from every
+    resolved line before it (Rayleigh). Lines outside this are left out of the fit: over a
+    shorter window they are indistinguishable from the mean or from each other.
+
+    >>> resolved_lines([1.0, 0.5, 1.2, 10.0, 60.0], 2.0, 0.01).tolist()
+    [True, True, False, True, False]
+    """
+    f = np.atleast_1d(np.asarray(frequencies_hz, dtype=float))
+    tol = 1.0 - 1e-9  # one gear revolution holds exactly one gear period, up to round-off
+    ok = (np.abs(f) * duration_s >= tol) & (np.abs(f) * 2.0 * dt_s < 1.0)
+    for k in range(f.size):
+        if ok[k] and np.any(ok[:k] & (np.abs(f[:k] - f[k]) * duration_s < tol)):
+            ok[k] = False
+    return ok
+
+
+def pinion_lines(teeth, harmonics: int = 3) -> tuple[np.ndarray, list[str]]:
+    """Orders (in pinion revolutions) and labels of the reported lines: pinion 1x, gear 1x
+    (``z1 / z2``) and the mesh orders ``k z1``, k = 1 .. ``harmonics``.
+
+    >>> pinion_lines([26, 157])[1]
+    ['1x', 'gear_1x', '26x', '52x', '78x']
+    """
+    z1, z2 = (int(z) for z in teeth)
+    orders = np.array([1.0, z1 / z2] + [float(k * z1) for k in range(1, harmonics + 1)])
+    return orders, ["1x", "gear_1x"] + [f"{k * z1}x" for k in range(1, harmonics + 1)]
+
+
+def run_report(results: dict) -> dict:
+    """Figures of ``gsb run`` over the last gear revolution (the last half of a shorter run).
+
+    Returns ``dynamic_factor`` (R, the maximum mesh force in the window over the static load
+    ``T / (r_b1 cos(beta_b))``), ``bearing_force_ptp`` (4,) the peak-to-peak of ||F_b|| [N],
+    ``line_amplitudes`` (4, n) the peak amplitudes [N] of the lines of ||F_b||
+    (:func:`order_lines`; NaN for a line the window does not resolve, :func:`resolved_lines`)
+    at ``line_orders`` (n,) pinion orders named ``line_labels`` (:func:`pinion_lines`),
+    ``window_s`` (2,) [s] the window's start and end (it holds the steps ending after the
+    start) and ``window_kind`` ("last gear revolution" or "last half of the run").
+    """
+    time_s = np.asarray(results["time"], dtype=float)
+    if time_s.size < 2:
+        raise ValueError(f"a report needs at least 2 time steps, got {time_s.size}")
+    values = json.loads(results["attrs"]["case_values"])
+    teeth = values["gear_pair.teeth"]
+    pinion_hz = abs(values["operation.speed"]) / (2.0 * np.pi)
+    gear_rev_s = teeth[1] / (teeth[0] * pinion_hz)
+    end_s = float(time_s[-1])
+    if end_s >= gear_rev_s * (1.0 - 1e-9):
+        duration, kind = gear_rev_s, "last gear revolution"
+    else:
+        duration, kind = 0.5 * end_s, "last half of the run"
+    win = steady_window(time_s, duration)
+    force = np.asarray(results["bearing_force"], dtype=float)[win]
+    norm = np.hypot(force[..., 0], force[..., 1])
+    orders, labels = pinion_lines(teeth)
+    freqs = orders * pinion_hz
+    ok = resolved_lines(freqs, duration, (end_s - time_s[0]) / (time_s.size - 1))
+    amplitudes = np.full((norm.shape[1], orders.size), np.nan)
+    if ok.any() and norm.shape[0] >= 1 + 2 * ok.sum():
+        amplitudes[:, ok] = order_lines(time_s[win], norm, freqs[ok]).T
+    return {
+        "dynamic_factor": float(np.max(results["mesh_force"][win]) / _static_load(results)),
+        "bearing_force_ptp": np.ptp(norm, axis=0),
+        "line_amplitudes": amplitudes,
+        "line_orders": orders,
+        "line_labels": labels,
+        "window_s": np.array([end_s - duration, end_s]),
+        "window_kind": kind,
     }

@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["ResultsWriter", "export_csv", "read_results"]
+__all__ = ["ResultsWriter", "add_attributes", "export_csv", "read_results"]
 
 
 class ResultsWriter:
@@ -100,6 +100,29 @@ class ResultsWriter:
         reason = "" if exc is None else f"{type(exc).__name__}: {exc}"
         self.close(complete=exc is None, stopped_by=reason)
         return False
+
+
+def add_attributes(path, **attrs) -> None:
+    """Add (or replace) root attributes of a closed results file, keeping their types.
+
+    Numbers and numeric numpy arrays are stored as numeric HDF5 attributes, strings as
+    strings, lists or tuples of strings as an array of strings; anything else as JSON text
+    (as :class:`ResultsWriter` does). :func:`read_results` gives them back as numbers, numpy
+    arrays and strings.
+    """
+    import h5py
+
+    with h5py.File(path, "a") as f:
+        for key, value in attrs.items():
+            if isinstance(value, (str, int, float, np.number)):
+                f.attrs[key] = value
+            elif isinstance(value, np.ndarray) and value.dtype.kind in "biuf":
+                f.attrs[key] = value
+            elif isinstance(value, (list, tuple)) and value \
+                    and all(isinstance(v, str) for v in value):
+                f.attrs[key] = np.array(value, dtype=h5py.string_dtype())
+            else:
+                f.attrs[key] = json.dumps(value)
 
 
 def read_results(path) -> dict:

@@ -15,6 +15,15 @@ Channels (:data:`CHANNELS`, units from :mod:`fmu_src.units`): ``journal_position
 and ``journal_velocity`` (4, 2) of the journal centres, ``bearing_force`` (4, 2),
 ``mesh_force``, ``transmission_error``, ``gear_nodes`` (2, 2) (u, v of the pinion and gear
 nodes), ``iterations`` (coupled iterations of the step).
+
+Report (:func:`orchestrator.analysis.run_report`, over the last gear revolution or the last half
+of a shorter run; :meth:`RunSummary.report_text`), stored as numeric root attributes of the
+results file once the transient stops (complete, failed or interrupted; at least 2 steps):
+``dynamic_factor`` [1] (R, max mesh force over the static load), ``bearing_force_ptp`` (4,) [N]
+(peak-to-peak of ||F_b||), ``line_amplitudes`` (4, n) [N] (peak amplitudes of the lines of
+||F_b||, NaN where the window does not resolve a line), ``line_orders`` (n,) [1] (pinion orders),
+``line_labels`` (n,) (strings: "1x", "gear_1x", "26x", ...) and ``report_window`` (2,) [s]
+(start and end of the window); ``report_units`` repeats these units as JSON text.
 """
 
 from __future__ import annotations
@@ -33,6 +42,7 @@ import numpy as np
 from fmu_src import description
 from fmu_src.case import Case
 from fmu_src.units import symbol
+from orchestrator.checks import time_step_warnings
 from orchestrator.inprocess import InProcessStructure, ModelBearings
 from orchestrator.master import Master
 from orchestrator.results import ResultsWriter
@@ -112,6 +122,7 @@ class RunSummary:
     static_iterations: int
     static_positions: np.ndarray  # (4, 2) m
     figures: list = field(default_factory=list)
+    report: dict | None = None  # orchestrator.analysis.run_report, None below 2 steps
 
     @property
     def iterations_per_step(self) -> float:
@@ -126,6 +137,27 @@ class RunSummary:
                 f"steps/s), {self.iterations_per_step:.2f} coupled iterations per step, "
                 f"{4 * self.bearing_evaluations} bearing evaluations; static solution in "
                 f"{self.static_iterations} iterations ({self.static_time:.2f} s)")
+
+    def report_text(self) -> str:
+        """The report (``report``) in a few lines: R, bearing-force peak-to-peak [N] and a
+        table of the line amplitudes of ||F_b|| [N] per bearing."""
+        r = self.report
+        if r is None:
+            return f"no report: {self.steps} step(s), at least 2 needed"
+        t0, t1 = r["window_s"]
+        ptp = ", ".join(f"{b + 1}: {v:.0f}" for b, v in enumerate(r["bearing_force_ptp"]))
+        lines = [f"dynamic factor R = {r['dynamic_factor']:.3f} ({r['window_kind']}, "
+                 f"t = {t0:.6g} - {t1:.6g} s)",
+                 f"bearing force peak-to-peak [N]: {ptp}",
+                 "line amplitudes of ||F_b|| [N]:",
+                 "bearing" + "".join(f"{label:>9}" for label in r["line_labels"])]
+        amplitudes = np.asarray(r["line_amplitudes"])
+        for b, row in enumerate(amplitudes):
+            lines.append(f"{b + 1:>7}" + "".join("        -" if np.isnan(v) else f"{v:9.1f}"
+                                                for v in row))
+        if np.isnan(amplitudes).any():
+            lines.append("(-: a line the window does not resolve)")
+        return "\n".join(lines)
 
 
 class Progress:
@@ -227,6 +259,7 @@ def run_case(case: Case, bearing: str | None = None, periods: int | None = None,
     out_dir = Path(out_dir)
     name = f"{case['case.name']}_{label}{'_inprocess' if in_process else ''}"
     path = out_dir / f"{name}.h5"
+    writer = None  # this run's results file, once the transient starts
 
     with deferred_signals() as received:
 
@@ -254,6 +287,14 @@ def run_case(case: Case, bearing: str | None = None, periods: int | None = None,
             # leave initialisation: linear bearings freeze, the structure builds its modal
             # damping on the modes with the bearings' static stiffness
             master.exit_initialization()
+            try:
+                warnings = time_step_warnings(
+                    case, master.laws, dt,
+                    structure.structure if isinstance(structure, InProcessStructure) else None)
+            except (ValueError, np.linalg.LinAlgError) as exc:  # a check, not the run
+                warnings = [f"the time-step check could not run: {exc}"]
+            for text in warnings:
+                print(f"warning: {text}", file=sys.stderr, flush=True)
             static_time = time.perf_counter() - t0
             stop_if_asked("after the static solution")
 
@@ -268,7 +309,7 @@ def run_case(case: Case, bearing: str | None = None, periods: int | None = None,
                 "static_journal": x0.tolist(),
                 "static_bearing_force": static.bearing_force.tolist(),
                 "static_iterations": static.iterations, "case_values": _jsonable(case.values),
-                "interrupted": "",
+                "interrupted": "", "warnings": "\n".join(warnings),
             }
             bar = Progress(n_steps, f"{name}", enabled=progress)
             start_iterations = master.total_iterations
@@ -299,17 +340,43 @@ def run_case(case: Case, bearing: str | None = None, periods: int | None = None,
                 its = (master.total_iterations - start_iterations) / n_steps
                 bar.update(n_steps, f"{its:.2f} it/step")
                 writer.close(complete=True, wall_time=wall)
+        except (RunError, RunInterrupted):
+            if writer is not None:  # report what the file kept; the run's error comes first
+                with contextlib.suppress(Exception):
+                    _store_report(path)
+            raise
         finally:
             master.close()
     summary = RunSummary(path, n_steps, wall, static_time,
                          master.total_iterations - start_iterations,
                          master.total_bearing_evaluations - start_evals, static.iterations, x0)
+    summary.report = _store_report(path)
     if figures:
         from orchestrator.plots import basic_figures
 
         gear_rev = 2.0 * math.pi / description.bearing_speeds(case)[2]
         summary.figures = basic_figures(path, out_dir / name, last=min(gear_rev, n_steps * dt))
     return summary
+
+
+def _store_report(path: Path) -> dict | None:
+    """:func:`orchestrator.analysis.run_report` of a closed results file, stored as its root
+    attributes (module docstring); None (nothing stored) below 2 steps."""
+    from orchestrator.analysis import run_report
+    from orchestrator.results import add_attributes, read_results
+
+    results = read_results(path)
+    if results["time"].size < 2:
+        return None
+    report = run_report(results)
+    add_attributes(path, dynamic_factor=report["dynamic_factor"],
+                   bearing_force_ptp=report["bearing_force_ptp"],
+                   line_amplitudes=report["line_amplitudes"], line_orders=report["line_orders"],
+                   line_labels=report["line_labels"], report_window=report["window_s"],
+                   report_units={"dynamic_factor": "1", "bearing_force_ptp": "N",
+                                 "line_amplitudes": "N", "line_orders": "1",
+                                 "report_window": "s"})
+    return report
 
 
 def _jsonable(values: dict) -> dict:

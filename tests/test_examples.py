@@ -10,6 +10,8 @@ import pytest
 
 from tests.helpers import ROOT
 
+#: the time integration without contact location (see the test of example 3)
+NO_LOCATION = {"simulation.locate_contact": False}
 EXAMPLES = sorted((ROOT / "examples").glob("ex*.py"))
 
 
@@ -65,9 +67,15 @@ def test_ex03_coupled_run_balances_the_static_loads():
     """Statics: each bearing carries half the tooth force T / r_b1 (measured to 1.1e-13); the
     dynamic mesh force averages to the static one over two pinion revolutions (torque balance;
     measured -3.3e-6: the gear shaft's unbalance turns 6 times slower and is not averaged out
-    over this window). Margins of 5 and 3."""
+    over this window). Margins of 5 and 3.
+
+    The balance holds for the time average of the mesh force. With the contact events located
+    (the default) the force jumps inside steps and the mean of its step-end samples is off by
+    the jump times the part of the step after the event (measured +1.69 %: a sampling bias,
+    not a torque imbalance), so the balance is checked on the run without location, whose
+    Newmark steps see the force at their ends only."""
     ex = load("ex03_coupled_run")
-    r = ex.main()
+    r = ex.main(**NO_LOCATION)
     w = r["static_tooth_load_N"]
     f = np.hypot(*r["static_bearing_force_N"].T)
     print(f"\nex03: static bearing forces / (W/2) - 1 up to {np.abs(f / (w / 2) - 1).max():.1e};"
@@ -80,15 +88,16 @@ def test_ex03_coupled_run_balances_the_static_loads():
 def test_ex04_speed_sweep():
     """Every point: the mean mesh force equals the static tooth load (torque balance over two
     pinion revolutions; measured up to 8.5e-6 at 400 rad/s, asserted 2.5e-5) and R > 1; the
-    325 rad/s point is the run of example 3 (the same case)."""
+    325 rad/s point is the run of example 3 (the same case). Without contact location, as in
+    the test of example 3."""
     ex = load("ex04_speed_sweep")
-    points = ex.main()
+    points = ex.main(overrides=NO_LOCATION)
     w = 220.0 / (0.052 * math.cos(math.radians(20)))
     for p in points:
         assert p["error"] is None
         assert abs(p["mean_mesh_force_N"] / w - 1) < 2.5e-5
         assert p["R"] > 1.0
-    r3 = load("ex03_coupled_run").main()
+    r3 = load("ex03_coupled_run").main(**NO_LOCATION)
     at325 = next(p for p in points if p["speed_rad_s"] == 325.0)
     assert at325["R"] == r3["R"] and at325["force_ptp_N"][0] == r3["bearing1_ptp_N"]
     print("\nex04: R " + ", ".join(f"{p['speed_rad_s']:g} rad/s {p['R']:.3f}" for p in points))

@@ -11,14 +11,14 @@ from bearing_fmu import MODELS
 from tests.helpers import run_isolated
 
 
-def compare(fmu_dir, model, periods, tmp, steps=None):
+def compare(fmu_dir, model, periods, tmp, steps=None, overrides=None):
     return run_isolated(f"""
         import json
         import numpy as np
         from fmu_src.case import load_case
         from orchestrator.results import read_results
         from orchestrator.run import run_case
-        case = load_case("baguet2010_spur")
+        case = load_case("baguet2010_spur", {overrides or {}!r})
         out = {{}}
         for in_process in (True, False):
             s = run_case(case, bearing={model!r}, periods={periods}, in_process=in_process,
@@ -104,3 +104,29 @@ def test_swapping_the_bearing_fmu_is_a_file_name(fmu_dir):
         print(json.dumps(out))
     """)
     assert r == {"hybrid": ["BearingHybrid.fmu"], "lumped": ["BearingLumped.fmu"]}
+
+
+#: drivetrain, damping and time-integration settings reach the gear-shaft FMU as parameters
+#: (inertias, String choices, Boolean flags): each through FMUs equals in-process exactly with
+#: the lumped bearings (the same numbers on both sides, measured 0.0)
+SETTINGS = {
+    "motor and load behind couplings, Rayleigh damping": {
+        "drivetrain.motor_inertia": 0.5, "drivetrain.motor_coupling_stiffness": 1e4,
+        "drivetrain.motor_coupling_damping": 5.0, "drivetrain.output_end": "load",
+        "drivetrain.load_inertia": 5.0, "drivetrain.load_coupling_stiffness": 1e5,
+        "simulation.damping_model": "rayleigh",
+        "simulation.rayleigh_frequencies": [1000.0, 5000.0]},
+    "rigid motor, structure basis, mesh damping, refinements off": {
+        "drivetrain.motor_inertia": 0.05, "simulation.damping_basis": "structure",
+        "simulation.mesh_damping_ratio": 0.05, "simulation.consistent_start": False,
+        "simulation.locate_contact": False, "gear_pair.polar_inertia": [0.004, 4.6]},
+}
+
+
+@pytest.mark.parametrize("name", sorted(SETTINGS))
+def test_drivetrain_and_damping_settings_through_fmus(fmu_dir, tmp_path, name):
+    r = compare(fmu_dir, "lumped", 2, tmp_path, steps=64, overrides=SETTINGS[name])
+    print(f"\n{name}: FMUs vs in-process, {r['steps']} steps: positions {r['position']:.1e}, "
+          f"velocities {r['velocity']:.1e}")
+    assert r["mode"] == "fmu" and r["steps"] == 64
+    assert r["position"] == 0.0 and r["velocity"] == 0.0

@@ -108,7 +108,7 @@ def test_paper_case_order_hybrid_bearings():
 
 @pytest.mark.parametrize("steps, warned", [(32, True), (48, False)])
 def test_run_warns_when_a_damped_mesh_mode_gets_under_10_steps(steps, warned, tmp_path, capsys):
-    """The spur case's damped mesh mode near 4.4 kHz gets 9.8 steps per period at T/32
+    """The spur case's damped mesh mode near 4.4 kHz gets 9.9 steps per period at T/32
     (f_mesh = 1345 Hz): ``gsb run`` says so, names the field to raise, and stores it."""
     import h5py
 
@@ -123,8 +123,8 @@ def test_run_warns_when_a_damped_mesh_mode_gets_under_10_steps(steps, warned, tm
         stored = f.attrs["warnings"]
     if warned:
         assert "warning: the damped mesh mode at 43" in err
-        assert "9.8 time steps per period" in err
+        assert "9.9 time steps per period" in err
         assert "simulation.steps_per_mesh_period >= 33 (now 32)" in err
-        assert "9.8 time steps per period" in str(stored)
+        assert "9.9 time steps per period" in str(stored)
     else:
         assert "warning" not in err and str(stored) == ""
