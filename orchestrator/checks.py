@@ -1,7 +1,8 @@
 """Checks of a run before its transient: what the time step resolves.
 
 :func:`time_step_warnings` linearises the case about its static solution X0 (the bearings' Kb
-and Cb there, the damping the transient uses, the exact mean mesh stiffness, as ``gsb modal``) and flags the damped mesh modes that get fewer than
+and Cb there, the damping the transient uses, the exact mean mesh stiffness, as ``gsb modal``)
+and flags the damped mesh modes that get fewer than
 :data:`gear_fmu.damped_modes.MIN_STEPS_PER_PERIOD` steps per period
 (:func:`gear_fmu.damped_modes.under_resolved`). ``gsb run`` prints the warnings and stores them
 in the results file.
