@@ -37,6 +37,7 @@ error, support loads) are in :mod:`gear_fmu.analyses`.
 
 from __future__ import annotations
 
+import bisect
 import math
 import time
 from dataclasses import dataclass
@@ -153,6 +154,7 @@ class Structure:
         self.consistent_start = bool(consistent_start)
         self.locate_contact = bool(locate_contact) and hasattr(mesh, "event_angles")
         self._m_gear = None  # M^-1 restricted to the gear-node columns, when first needed
+        self._event_phases = None  # (mesh period [rad], event angles in it), when first needed
         self._forces()
         # the state: at rest at t = 0, no contact known yet
         n = self._perm.size
@@ -354,8 +356,8 @@ class Structure:
         a0 = self.pinion_angle(self.t)
         a1 = self.pinion_angle(self.t + dt)
         tol = 1e-9 * self.mesh.pair.base_pitch / self.mesh.pair.base_radius[0]
-        events = self.mesh.event_angles(a0 - tol, a1 + tol)
-        if events.size == 0:
+        events = self._events_in(a0 - tol, a1 + tol)
+        if not events:
             return None
         cuts = []
         for e in events:
@@ -372,6 +374,24 @@ class Structure:
             out.append(((frac - prev) * dt, frac, frac in cuts))
             prev = frac
         return out
+
+    def _events_in(self, lo: float, hi: float) -> list:
+        """Contact event angles in ``(lo, hi]`` [rad]: those of one mesh period
+        (:meth:`gear_fmu.mesh.MeshElement.event_angles`, computed once) repeated with the
+        period ``2 pi / z1`` (the events of every slice recur with it)."""
+        if self._event_phases is None:
+            period = self.mesh.event_period
+            self._event_phases = (period, self.mesh.event_angles(0.0, period).tolist())
+        period, phases = self._event_phases
+        out = []
+        k = math.floor(lo / period)
+        while True:
+            base = k * period
+            for e in phases[bisect.bisect_right(phases, lo - base):]:
+                if base + e > hi:
+                    return out
+                out.append(base + e)
+            k += 1
 
     def _advance(self, h, t1, angle, f0, kb, cb, what) -> StepInfo:
         """One Newmark step of length h to t1 (mesh at ``angle``); updates X, Xd, Xdd and the

@@ -128,3 +128,21 @@ def test_run_warns_when_a_damped_mesh_mode_gets_under_10_steps(steps, warned, tm
         assert "9.9 time steps per period" in str(stored)
     else:
         assert "warning" not in err and str(stored) == ""
+
+
+@pytest.mark.parametrize("helix", [0.0, 20.0])
+def test_event_schedule_repeats_the_events_of_one_mesh_period(helix):
+    """The structure's periodic event schedule equals the mesh's events computed directly over
+    any interval (spur: 2 per mesh period, helical: one entry and one exit per slice)."""
+    from fmu_src.examples import paper_structure
+
+    st = paper_structure(helix)
+    period = st.mesh.event_period
+    rng = np.random.default_rng(3)
+    for lo in rng.uniform(0.0, 500.0, 200):
+        hi = lo + rng.uniform(0.0, 2.5) * period
+        direct = st.mesh.event_angles(lo, hi)
+        scheduled = np.array(st._events_in(lo, hi))
+        assert scheduled.size == direct.size
+        np.testing.assert_allclose(scheduled, direct, rtol=0, atol=1e-12)
+    assert len(st._events_in(0.0, period)) == (2 if helix == 0.0 else 40)
