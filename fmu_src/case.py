@@ -23,6 +23,8 @@ from typing import Any
 from bearing_fmu import MODELS as _BEARING_TABLE
 from bearing_fmu import model_class
 from fmu_src.units import UnitError, parse_quantity, symbol
+from gear_fmu.damping import BASES, DAMPING_KINDS
+from gear_fmu.drivetrain import OUTPUT_ENDS
 
 __all__ = ["BEARING_MODELS", "CASES_DIR", "FIELDS", "Case", "CaseError", "Field", "load_case",
            "model_option_fields", "schema_markdown", "shipped_cases"]
@@ -116,7 +118,7 @@ FIELDS: tuple[Field, ...] = (
        "motor coupling", default=0.0, minimum=0.0),
     _f("drivetrain.output_end", "choice", "torsion at the gear shaft's output end: clamped "
        "(a load of infinite inertia) or load (the load inertia, the resisting torque "
-       "T z2/z1 acting on it)", default="clamped", choices=("clamped", "load")),
+       "T z2/z1 acting on it)", default="clamped", choices=OUTPUT_ENDS),
     _f("drivetrain.load_inertia", "inertia", "load inertia on the output end (output_end = "
        "load)", default=0.0, minimum=0.0),
     _f("drivetrain.load_coupling_stiffness", "torsional_stiffness", "stiffness of a coupling "
@@ -143,10 +145,10 @@ FIELDS: tuple[Field, ...] = (
        minimum=0.0, maximum=0.99),
     _f("simulation.damping_model", "choice", "structural damping: modal (zeta on every mode "
        "of the damping_basis) or rayleigh (alpha M + beta K, gear_fmu.damping)",
-       default="modal", choices=("modal", "rayleigh")),
+       default="modal", choices=DAMPING_KINDS),
     _f("simulation.damping_basis", "choice", "modes of the modal damping: bearings (shafts, "
        "mean mesh and the bearings' static film stiffness) or structure (shafts and mean mesh)",
-       default="bearings", choices=("bearings", "structure")),
+       default="bearings", choices=BASES),
     _f("simulation.rayleigh_frequencies", "frequency", "[f1, f2] at which the Rayleigh "
        "damping has the ratio damping_ratio (0, 0: use rayleigh_alpha, rayleigh_beta)",
        shape=2, default=[0.0, 0.0], minimum=0.0),

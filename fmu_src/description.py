@@ -13,6 +13,7 @@ omega z1 / z2 (:func:`gear_fmu.loads.shaft_speeds`).
 from __future__ import annotations
 
 import math
+from dataclasses import fields
 
 from bearing_fmu import BearingData, BearingModel, model_class
 from bearing_fmu.frames import LocalFrame
@@ -86,14 +87,10 @@ def gear_shaft_system(case: Case, pair: GearPair | None = None) -> GearShaftSyst
                            drivetrain=drivetrain(case))
 
 
-_DRIVETRAIN = ("motor_inertia", "motor_coupling_stiffness", "motor_coupling_damping",
-               "output_end", "load_inertia", "load_coupling_stiffness", "load_coupling_damping")
-
-
 def drivetrain(case) -> Drivetrain:
     """``drivetrain.*`` fields -> :class:`gear_fmu.drivetrain.Drivetrain` (a Case or its
-    values); its errors name the fields."""
-    return Drivetrain(**{k: case[f"drivetrain.{k}"] for k in _DRIVETRAIN})
+    values; one field per attribute, same name); its errors name the fields."""
+    return Drivetrain(**{f.name: case[f"drivetrain.{f.name}"] for f in fields(Drivetrain)})
 
 
 def damping(case) -> DampingModel:

@@ -37,12 +37,11 @@ from dataclasses import dataclass, replace
 import numpy as np
 import scipy.linalg
 
-from .modal import KINDS, classify, mesh_stiffness_matrix
+from .modal import KINDS, bearing_block_matrix, classify, mesh_stiffness_matrix
 from .system import GearShaftSystem
 
 __all__ = [
     "DampedModes",
-    "bearing_block_matrix",
     "critical_speed_table",
     "damped_eigen",
     "damped_mode_table",
@@ -170,34 +169,6 @@ def damped_eigen(m, c, k, k_mesh=None, dof_kind=None, zero_tol: float = 1e-6) ->
     order = np.lexsort((np.abs(lam), np.abs(lam.imag), real))
     return DampedModes(lam[order], phi[:, order], kin[order], mesh_frac[order],
                        [kinds[i] for i in order], real[order], int(zero.sum()))
-
-
-def bearing_block_matrix(system: GearShaftSystem, blocks, name: str = "bearing stiffness"
-                         ) -> np.ndarray:
-    """Full (n_dof, n_dof) matrix of one 2x2 block per bearing on its (u, v) DOFs, as given
-    (not symmetrised).
-
-    Parameters
-    ----------
-    system : GearShaftSystem
-    blocks : float or array_like (4, 2, 2)
-        Isotropic value for every bearing, or one 2x2 block per bearing (global s, t):
-        Kb [N/m] or Cb [N s/m].
-    name : str
-        For error messages.
-    """
-    b = np.asarray(blocks, dtype=float)
-    if b.ndim == 0:
-        b = np.broadcast_to(b * np.eye(2), (4, 2, 2))
-    if b.shape != (4, 2, 2):
-        raise ValueError(f"{name} shape {b.shape} must be () or (4, 2, 2)")
-    if not np.all(np.isfinite(b)):
-        raise ValueError(f"{name} has non-finite entries")
-    out = np.zeros((system.n_dof, system.n_dof))
-    for j in range(4):
-        idx = system.bearing_dofs[j]
-        out[np.ix_(idx, idx)] += b[j]
-    return out
 
 
 def damped_modes(system: GearShaftSystem, damping_full, mesh_stiffness12, kb, cb

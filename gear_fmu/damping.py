@@ -46,7 +46,7 @@ from .dofs import THETA
 from .modal import Modes, mesh_stiffness_matrix, modal_damping_matrix, natural_modes
 
 __all__ = ["BASES", "DAMPING_KINDS", "DampingModel", "damping_matrix", "mesh_damping_coefficient",
-           "rayleigh_coefficients"]
+           "rayleigh_coefficients", "transverse_mesh_stiffness"]
 
 DAMPING_KINDS = ("modal", "rayleigh")
 BASES = ("bearings", "structure")
@@ -116,9 +116,8 @@ class DampingModel:
     @property
     def is_zero(self) -> bool:
         """No structural and no mesh damping."""
-        structural = (self.ratio == 0.0 if self.kind == "modal" or
-                      self.rayleigh_frequencies != (0.0, 0.0)
-                      else self.rayleigh_alpha == 0.0 and self.rayleigh_beta == 0.0)
+        structural = (self.ratio == 0.0 if self.kind == "modal"
+                      else rayleigh_coefficients(self) == (0.0, 0.0))
         return structural and self.mesh_ratio == 0.0 and self.mesh_coefficient == 0.0
 
 
@@ -131,6 +130,12 @@ def rayleigh_coefficients(model: DampingModel) -> tuple[float, float]:
     return 2.0 * model.ratio * w1 * w2 / (w1 + w2), 2.0 * model.ratio / (w1 + w2)
 
 
+def transverse_mesh_stiffness(k_mesh12, rb1: float) -> float:
+    """``k_m = K_mesh[theta1, theta1] / r_b1^2`` [N/m]: the mesh stiffness seen along the
+    transverse line of action (module docstring)."""
+    return float(k_mesh12[THETA, THETA]) / rb1**2
+
+
 def mesh_damping_coefficient(model: DampingModel, k_mesh12, base_radii, polar_inertias) -> float:
     """``c_m`` [N s/m] (module docstring) for the mean mesh stiffness (12, 12)."""
     if model.mesh_coefficient > 0.0:
@@ -138,7 +143,7 @@ def mesh_damping_coefficient(model: DampingModel, k_mesh12, base_radii, polar_in
     if model.mesh_ratio == 0.0:
         return 0.0
     rb1, rb2 = base_radii
-    k_m = float(k_mesh12[THETA, THETA]) / rb1**2
+    k_m = transverse_mesh_stiffness(k_mesh12, rb1)
     m_e = 1.0 / (rb1**2 / polar_inertias[0] + rb2**2 / polar_inertias[1])
     return 2.0 * model.mesh_ratio * math.sqrt(k_m * m_e)
 
@@ -175,6 +180,6 @@ def damping_matrix(system, model: DampingModel, k_mesh12, bearing_stiffness, bas
                                   [g.inertias[2] for g in system.gears]) if (
         model.mesh_ratio or model.mesh_coefficient) else 0.0
     if cm > 0.0:
-        k_m = float(k_mesh12[THETA, THETA]) / base_radii[0] ** 2
+        k_m = transverse_mesh_stiffness(k_mesh12, base_radii[0])
         c += (cm / k_m) * mesh_stiffness_matrix(system, k_mesh12)
     return 0.5 * (c + c.T), ref

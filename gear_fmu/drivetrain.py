@@ -62,26 +62,20 @@ class Drivetrain:
         if self.output_end not in OUTPUT_ENDS:
             raise ValueError(f"drivetrain.output_end = {self.output_end!r}: one of "
                              f"{', '.join(OUTPUT_ENDS)}")
-        if self.motor_coupling_stiffness > 0.0 and self.motor_inertia == 0.0:
-            raise ValueError(f"drivetrain.motor_coupling_stiffness = "
-                             f"{self.motor_coupling_stiffness!r} N.m/rad needs a motor: "
-                             "drivetrain.motor_inertia must be > 0")
-        if self.motor_coupling_damping > 0.0 and self.motor_coupling_stiffness == 0.0:
-            raise ValueError(f"drivetrain.motor_coupling_damping = "
-                             f"{self.motor_coupling_damping!r} N.m.s/rad needs a coupling: "
-                             "drivetrain.motor_coupling_stiffness must be > 0")
         if self.output_end == "clamped" and (self.load_inertia or self.load_coupling_stiffness
                                              or self.load_coupling_damping):
             raise ValueError("drivetrain.load_* is set but drivetrain.output_end = 'clamped' "
                              "(set output_end = 'load')")
-        if self.load_coupling_stiffness > 0.0 and self.load_inertia == 0.0:
-            raise ValueError(f"drivetrain.load_coupling_stiffness = "
-                             f"{self.load_coupling_stiffness!r} N.m/rad needs a load: "
-                             "drivetrain.load_inertia must be > 0")
-        if self.load_coupling_damping > 0.0 and self.load_coupling_stiffness == 0.0:
-            raise ValueError(f"drivetrain.load_coupling_damping = "
-                             f"{self.load_coupling_damping!r} N.m.s/rad needs a coupling: "
-                             "drivetrain.load_coupling_stiffness must be > 0")
+        for end in ("motor", "load"):  # a coupling needs its inertia, a damper its coupling
+            inertia, stiffness, damping = (getattr(self, f"{end}_{k}") for k in (
+                "inertia", "coupling_stiffness", "coupling_damping"))
+            if stiffness > 0.0 and inertia == 0.0:
+                raise ValueError(f"drivetrain.{end}_coupling_stiffness = {stiffness!r} "
+                                 f"N.m/rad needs a {end}: drivetrain.{end}_inertia must be > 0")
+            if damping > 0.0 and stiffness == 0.0:
+                raise ValueError(f"drivetrain.{end}_coupling_damping = {damping!r} N.m.s/rad "
+                                 f"needs a coupling: drivetrain.{end}_coupling_stiffness must "
+                                 "be > 0")
 
     @property
     def motor_dof(self) -> bool:

@@ -25,6 +25,7 @@ from .system import GearShaftSystem
 
 __all__ = [
     "Modes",
+    "bearing_block_matrix",
     "bearing_stiffness_matrix",
     "mesh_stiffness_matrix",
     "modal_damping_matrix",
@@ -35,8 +36,37 @@ __all__ = [
 KINDS = ("bending", "torsion", "axial")
 
 
+def bearing_block_matrix(system: GearShaftSystem, blocks, name: str = "bearing stiffness"
+                         ) -> np.ndarray:
+    """Full (n_dof, n_dof) matrix of one 2x2 block per bearing on its (u, v) DOFs, as given
+    (not symmetrised).
+
+    Parameters
+    ----------
+    system : GearShaftSystem
+    blocks : float or array_like (4, 2, 2)
+        Isotropic value for every bearing, or one 2x2 block per bearing (global s, t):
+        Kb [N/m] or Cb [N s/m].
+    name : str
+        For error messages.
+    """
+    b = np.asarray(blocks, dtype=float)
+    if b.ndim == 0:
+        b = np.broadcast_to(b * np.eye(2), (4, 2, 2))
+    if b.shape != (4, 2, 2):
+        raise ValueError(f"{name} shape {b.shape} must be () or (4, 2, 2)")
+    if not np.all(np.isfinite(b)):
+        raise ValueError(f"{name} has non-finite entries")
+    out = np.zeros((system.n_dof, system.n_dof))
+    for j in range(4):
+        idx = system.bearing_dofs[j]
+        out[np.ix_(idx, idx)] += b[j]
+    return out
+
+
 def bearing_stiffness_matrix(system: GearShaftSystem, kb) -> np.ndarray:
-    """Full (n_dof, n_dof) matrix of the bearing springs (symmetric part of each 2x2 Kb).
+    """Full (n_dof, n_dof) matrix of the bearing springs, the symmetric part of each 2x2 Kb
+    (:func:`bearing_block_matrix` symmetrised).
 
     Parameters
     ----------
@@ -44,18 +74,8 @@ def bearing_stiffness_matrix(system: GearShaftSystem, kb) -> np.ndarray:
     kb : float or array_like (4, 2, 2)
         Isotropic stiffness [N/m] for every bearing, or one 2x2 Kb per bearing (global s, t).
     """
-    kb = np.asarray(kb, dtype=float)
-    if kb.ndim == 0:
-        kb = np.broadcast_to(kb * np.eye(2), (4, 2, 2))
-    if kb.shape != (4, 2, 2):
-        raise ValueError(f"bearing stiffness shape {kb.shape} must be () or (4, 2, 2)")
-    if not np.all(np.isfinite(kb)):
-        raise ValueError("bearing stiffness has non-finite entries")
-    out = np.zeros((system.n_dof, system.n_dof))
-    for j in range(4):
-        idx = system.bearing_dofs[j]
-        out[np.ix_(idx, idx)] += 0.5 * (kb[j] + kb[j].T)
-    return out
+    b = bearing_block_matrix(system, kb)
+    return 0.5 * (b + b.T)
 
 
 def mesh_stiffness_matrix(system: GearShaftSystem, k12) -> np.ndarray:

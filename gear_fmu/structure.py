@@ -331,10 +331,10 @@ class Structure:
         else:
             info = StepInfo(t1, 0, 0.0)
             t_start = self.t
+            side = EVENT_SIDE * self.mesh.pair.base_pitch / self.mesh.pair.base_radius[0]
             for h, frac, at_event in pieces:
                 te = t1 if frac == 1.0 else t_start + frac * dt
                 angle = self.pinion_angle(te)
-                side = EVENT_SIDE * self.mesh.pair.base_pitch / self.mesh.pair.base_radius[0]
                 sub = self._advance(h, te, angle - side if at_event else angle, f0, kb, cb,
                                     what)
                 info.iterations += sub.iterations

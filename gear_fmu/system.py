@@ -344,9 +344,8 @@ class GearShaftSystem:
         """Per full DOF: 0 bending (u, v, phi, psi), 1 torsion (theta, motor, load), 2 axial
         (w)."""
         n_node = DOF_PER_NODE * self.n_nodes
-        n = self.mass.shape[0] if hasattr(self, "mass") else n_node
         local = np.arange(n_node) % DOF_PER_NODE
-        kind = np.ones(n, dtype=int)  # the drivetrain DOFs are torsion
+        kind = np.ones(self.n_dof, dtype=int)  # the drivetrain DOFs are torsion
         kind[:n_node] = 0
         kind[:n_node][local == THETA] = 1
         kind[:n_node][local == W] = 2
