@@ -135,7 +135,8 @@ FIELDS: tuple[Field, ...] = (
     _f("bearings.viscosity", "viscosity", "lubricant dynamic viscosity mu", shape=4, **_POS),
     # operating point, Sec. 4.1
     _f("operation.speed", "angular_speed", "pinion (input) speed omega", **_POS),
-    _f("operation.torque", "torque", "input torque T on the pinion shaft", minimum=0.0),
+    _f("operation.torque", "torque", "input torque T on the pinion shaft (> 0: the teeth "
+       "stay in contact only under load)", **_POS),
     _f("operation.unbalance", "length", "unbalance eccentricity e_mu [pinion shaft, gear "
        "shaft] (Eq. 10)", shape=2, default=[0.0, 0.0], minimum=0.0),
     _f("operation.gravity", "flag", "include gravity (along -t)", default=False),
@@ -372,15 +373,44 @@ def _check_consistency(v: dict, source: str) -> None:
 
 
 def _check_physics(v: dict, source: str) -> None:
-    """The drivetrain and the damping model, checked by their classes; the messages name the
-    case fields (:func:`fmu_src.description.drivetrain`, :func:`~fmu_src.description.damping`)."""
+    """The gear geometry, the drivetrain and the damping model, checked by their classes; the
+    messages name the case fields (:func:`fmu_src.description.gear_pair`,
+    :func:`~fmu_src.description.drivetrain`, :func:`~fmu_src.description.damping`)."""
     from fmu_src import description
+    from gear_fmu.geometry import GearGeometryError
 
+    try:
+        description.gear_pair(v)
+    except GearGeometryError as exc:
+        raise CaseError(f"{source}: {_geometry_message(v, exc)}") from None
     try:
         description.drivetrain(v)
         description.damping(v)
     except ValueError as exc:
         raise CaseError(f"{source}: {exc}") from None
+
+
+def _geometry_message(v: dict, exc: Exception) -> str:
+    """A gear-geometry error in the case's terms: the [gear_pair] fields that set the mesh,
+    and the centre distance at which the profile shifts would mesh without backlash."""
+    from gear_fmu.geometry import zero_backlash_centre_distance
+
+    a = v["gear_pair.centre_distance"]
+    shifts = list(v["gear_pair.profile_shift"])
+    try:
+        a0 = zero_backlash_centre_distance(v["gear_pair.teeth"], v["gear_pair.module"],
+                                           v["gear_pair.pressure_angle"],
+                                           v["gear_pair.helix_angle"], shifts)
+    except (ValueError, ZeroDivisionError):
+        a0 = math.nan
+    hint = ""
+    if math.isfinite(a0) and abs(a0 - a) > 1e-6:
+        hint = (f"; with gear_pair.profile_shift = {shifts} the gears mesh without backlash at "
+                f"gear_pair.centre_distance = {a0 * 1e3:.3f} mm: set that centre distance or "
+                f"profile shifts that fit {a * 1e3:.3f} mm")
+    return (f"gear_pair (centre_distance = {a * 1e3:.3f} mm, profile_shift = {shifts}, "
+            f"addendum_coefficient = {v['gear_pair.addendum_coefficient']:g}, "
+            f"dedendum_coefficient = {v['gear_pair.dedendum_coefficient']:g}): {exc}{hint}")
 
 
 def shipped_cases() -> dict[str, Path]:

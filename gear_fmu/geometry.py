@@ -45,6 +45,22 @@ def involute(alpha: float) -> float:
     return math.tan(alpha) - alpha
 
 
+def zero_backlash_centre_distance(teeth, module: float, pressure_angle: float,
+                                  helix_angle: float, profile_shift) -> float:
+    """Centre distance at which two gears with these profile shifts mesh without backlash [m]
+    (ISO 21771: inv a'_t = inv a_t + 2 tan(a_n) (x1 + x2) / (z1 + z2),
+    a' = (z1 + z2) m_n cos(a_t) / (2 cos(beta) cos(a'_t)))."""
+    from scipy.optimize import brentq
+
+    z = float(teeth[0]) + float(teeth[1])
+    alpha_t = math.atan(math.tan(pressure_angle) / math.cos(helix_angle))
+    target = involute(alpha_t) + 2.0 * math.tan(pressure_angle) * sum(profile_shift) / z
+    if target <= 0.0:
+        return float("nan")
+    alpha_w = brentq(lambda a: involute(a) - target, 1e-9, 0.5 * math.pi - 1e-9, xtol=1e-15)
+    return z * module * math.cos(alpha_t) / (2.0 * math.cos(helix_angle) * math.cos(alpha_w))
+
+
 def _positive(name: str, value: float, unit: str) -> float:
     value = float(value)
     if not (math.isfinite(value) and value > 0.0):
@@ -291,7 +307,7 @@ class GearPair:
                     f"(centre distance {self.centre_distance * 1e3:.3f} mm, tip radius "
                     f"{self.tip_radius[0 if name == 'pinion' else 1] * 1e3:.3f} mm, root radius "
                     f"{self.root_radius[1 if name == 'pinion' else 0] * 1e3:.3f} mm): no bottom "
-                    f"clearance (are addendum and dedendum coefficients swapped?)")
+                    f"clearance")
         if self.backlash < -1e-9 * self.module:
             raise GearGeometryError(
                 f"the teeth overlap by {-self.backlash * 1e6:.2f} um along the line of action at "

@@ -7,7 +7,6 @@ Pure functions on arrays from a results file (:func:`orchestrator.results.read_r
 
 from __future__ import annotations
 
-import json
 import math
 
 import numpy as np
@@ -15,8 +14,8 @@ import numpy as np
 from fmu_src.case import Case
 from fmu_src.description import gear_pair
 
-__all__ = ["fit_ellipse", "order_lines", "pinion_lines", "resolved_lines", "run_metrics",
-           "run_report", "static_mesh_load", "steady_window"]
+__all__ = ["fit_ellipse", "order_lines", "order_spectrum", "pinion_lines", "resolved_lines",
+           "run_metrics", "run_report", "static_mesh_load", "steady_window", "stored_case"]
 
 
 def steady_window(time: np.ndarray, duration: float) -> np.ndarray:
@@ -31,11 +30,22 @@ def static_mesh_load(torque: float, base_radius: float, base_helix_angle: float 
     return abs(torque) / (base_radius * math.cos(base_helix_angle))
 
 
+def stored_case(attrs: dict) -> Case:
+    """The case a results file was run with (root attribute ``case_toml``, the effective case
+    after the overrides, bit for bit)."""
+    import tomllib
+
+    from fmu_src.case import parse_case
+
+    return parse_case(tomllib.loads(str(attrs["case_toml"])),
+                      f"{attrs.get('case_file', 'results')} (stored case)")
+
+
 def _static_load(results: dict) -> float:
-    """Static mesh load [N] of the case stored in a results file's ``case_values``."""
-    values = json.loads(results["attrs"]["case_values"])
-    pair = gear_pair(Case(values, str(results["attrs"].get("case_file", "results"))))
-    return static_mesh_load(values["operation.torque"], pair.base_radius[0],
+    """Static mesh load [N] of the case stored in a results file (:func:`stored_case`)."""
+    case = stored_case(results["attrs"])
+    pair = gear_pair(case)
+    return static_mesh_load(case["operation.torque"], pair.base_radius[0],
                             pair.base_helix_angle)
 
 
@@ -208,7 +218,7 @@ def run_report(results: dict) -> dict:
     time_s = np.asarray(results["time"], dtype=float)
     if time_s.size < 2:
         raise ValueError(f"a report needs at least 2 time steps, got {time_s.size}")
-    values = json.loads(results["attrs"]["case_values"])
+    values = stored_case(results["attrs"]).values
     teeth = values["gear_pair.teeth"]
     pinion_hz = abs(values["operation.speed"]) / (2.0 * np.pi)
     gear_rev_s = teeth[1] / (teeth[0] * pinion_hz)
@@ -235,3 +245,55 @@ def run_report(results: dict) -> dict:
         "window_s": np.array([end_s - duration, end_s]),
         "window_kind": kind,
     }
+
+
+def order_spectrum(signal, samples_per_revolution: float, max_order: float | None = None):
+    """Single-sided peak-amplitude spectrum of uniformly sampled signals against order.
+
+    The DFT of the whole window (no taper): bin ``k`` is the order ``k samples_per_revolution /
+    N`` (cycles per revolution of the reference shaft), its amplitude ``2 |X_k| / N`` (``|X_0| /
+    N``, the mean, at order 0, and at the Nyquist bin of an even ``N``), so a line
+    ``A cos(2 pi q theta + phi)`` whose order ``q`` falls on a bin (a window of a whole number of
+    its periods, e.g. of revolutions for integer orders) reads ``A`` exactly.
+
+    Parameters
+    ----------
+    signal : array_like, shape (N, ...)
+        Samples; trailing axes are independent signals.
+    samples_per_revolution : float
+        Samples per revolution of the reference shaft (the resolution is
+        ``samples_per_revolution / N`` orders).
+    max_order : float, optional
+        Keep the bins up to this order (default: up to the Nyquist order).
+
+    Returns
+    -------
+    orders : numpy.ndarray, shape (m,)
+    amplitudes : numpy.ndarray, shape (m, ...)
+        In the unit of ``signal``.
+
+    Examples
+    --------
+    >>> theta = np.arange(64) / 32  # two revolutions, 32 samples each
+    >>> y = 2.0 + 3.0 * np.cos(2 * np.pi * theta + 0.4) + 0.5 * np.sin(2 * np.pi * 4 * theta)
+    >>> q, a = order_spectrum(y, 32, max_order=5)
+    >>> q.tolist()
+    [0.0, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0, 3.5, 4.0, 4.5, 5.0]
+    >>> np.round(a[[0, 2, 8]], 12).tolist()
+    [2.0, 3.0, 0.5]
+    """
+    x = np.asarray(signal, dtype=float)
+    n = x.shape[0]
+    if n < 2:
+        raise ValueError(f"a spectrum needs at least 2 samples, got {n}")
+    if not samples_per_revolution > 0:
+        raise ValueError(f"samples_per_revolution = {samples_per_revolution!r} must be > 0")
+    amp = np.abs(np.fft.rfft(x, axis=0)) * (2.0 / n)
+    amp[0] *= 0.5
+    if n % 2 == 0:
+        amp[-1] *= 0.5
+    orders = np.arange(amp.shape[0]) * (samples_per_revolution / n)
+    if max_order is not None:
+        keep = orders <= max_order * (1.0 + 1e-12)
+        orders, amp = orders[keep], amp[keep]
+    return orders, amp

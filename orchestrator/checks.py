@@ -1,4 +1,9 @@
-"""Checks of a run before its transient: what the time step resolves.
+"""Checks of a run before its transient: what the time step resolves, what the films carry.
+
+:func:`unbalance_warnings` compares each shaft's unbalance force ``M e_mu omega^2`` (Eq. 10)
+with the static load capacity of its two bearings (:func:`film_capacities`, the film force at
+the eccentricity limit); :func:`overload_message` explains a static solution that fails because
+a bearing's static load exceeds that capacity, in newtons and case fields.
 
 :func:`time_step_warnings` linearises the case about its static solution X0 (the bearings' Kb
 and Cb there, the damping the transient uses, the exact mean mesh stiffness, as ``gsb modal``)
@@ -10,15 +15,81 @@ in the results file.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from bearing_fmu.affine import AffineLaws
+from bearing_fmu.base import FilmBearingModel
 from fmu_src import description
 from fmu_src.case import Case
 from gear_fmu.analyses import exact_mean_mesh_stiffness
 from gear_fmu.damped_modes import MIN_STEPS_PER_PERIOD, damped_modes, under_resolved
 
-__all__ = ["time_step_warnings"]
+__all__ = ["EPS_LIMIT", "film_capacities", "overload_message", "time_step_warnings",
+           "unbalance_warnings"]
+
+#: eccentricity ratio up to which the static solution searches (bearing_fmu.static)
+EPS_LIMIT = 0.995
+#: the case fields that raise a film's load capacity, and those that lower the load
+RAISE_CAPACITY = ("bearings.length", "bearings.diameter", "bearings.viscosity",
+                  "operation.speed", "a smaller bearings.clearance")
+LOWER_LOAD = "operation.torque"
+
+
+def film_capacities(case: Case) -> tuple[np.ndarray, str]:
+    """The largest static load of each bearing's film [N] (4,): the film force at the
+    eccentricity ratio :data:`EPS_LIMIT`, zero velocity, at the bearing's speed; and the model
+    that gave it (the case's model if it is a film model, else the hybrid film)."""
+    name = case["bearings.model"]
+    models = description.bearing_models(case)
+    if not all(isinstance(m, FilmBearingModel) for m in models):
+        name = "hybrid"
+        models = description.bearing_models(case, name)
+    out = np.empty(len(models))
+    for b, (m, w) in enumerate(zip(models, description.bearing_speeds(case), strict=True)):
+        fbar = m.dimensionless(EPS_LIMIT, 0.0, jacobian=False).force
+        out[b] = m.bearing.force_scale(w) * math.hypot(*fbar)
+    return out, name
+
+
+def unbalance_warnings(case: Case) -> list[str]:
+    """One sentence per shaft whose unbalance force ``M e_mu omega^2`` exceeds the static load
+    capacity of its two bearings (the journals then run close to the bearing wall)."""
+    system = description.gear_shaft_system(case)
+    speeds = description.bearing_speeds(case)
+    unbalance = case["operation.unbalance"]
+    capacity, model = film_capacities(case)
+    out = []
+    for i, shaft in enumerate(("pinion", "gear")):
+        force = system.shaft_masses[i] * unbalance[i] * speeds[2 * i] ** 2
+        cap = capacity[2 * i] + capacity[2 * i + 1]
+        if force > cap:
+            out.append(
+                f"the unbalance force of the {shaft} shaft, M e_mu omega^2 = "
+                f"{system.shaft_masses[i]:.3g} kg x {unbalance[i] * 1e3:g} mm x "
+                f"({speeds[2 * i]:.4g} rad/s)^2 = {force:.4g} N, exceeds the static load "
+                f"capacity of bearings {2 * i + 1} and {2 * i + 2}, {cap:.4g} N ({model} film at "
+                f"eccentricity {EPS_LIMIT}): the journals will run near the bearing wall or "
+                f"the run will fail; lower operation.unbalance[{i}] or operation.speed")
+    return out
+
+
+def overload_message(case: Case) -> str | None:
+    """Why a static solution cannot exist, in the case's terms, if a bearing's static load
+    (the structure on stiff supports) exceeds its film's capacity; None otherwise."""
+    from gear_fmu.analyses import support_loads
+
+    loads = np.hypot(*support_loads(description.structure(case)).T)
+    capacity, model = film_capacities(case)
+    over = [b for b in range(len(loads)) if loads[b] > capacity[b]]
+    if not over:
+        return None
+    what = "; ".join(f"bearing {b + 1} carries {loads[b]:.5g} N but its film carries at most "
+                     f"{capacity[b]:.5g} N" for b in over)
+    return (f"{what} (static loads with T = {case['operation.torque']:g} N m, {model} film at "
+            f"eccentricity {EPS_LIMIT}, {case['operation.speed']:g} rad/s): raise "
+            f"{', '.join(RAISE_CAPACITY)}, or lower {LOWER_LOAD}")
 
 
 def time_step_warnings(case: Case, laws: AffineLaws, dt: float, structure=None) -> list[str]:

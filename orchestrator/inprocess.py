@@ -65,6 +65,12 @@ class InProcessStructure(StructureSlave):
         kb = self._require_laws().kb
         self.structure.set_damping_reference(0.5 * (kb + np.transpose(kb, (0, 2, 1))))
 
+    def checkpoint(self):
+        return self.structure.get_state()
+
+    def restore(self, checkpoint) -> None:
+        self.structure.set_state(checkpoint)
+
     def journal_states(self) -> np.ndarray:
         return self.structure.journal_states()
 
@@ -134,6 +140,13 @@ class ModelBearings(BearingSet):
             sol = static_equilibrium(model, fr.to_local(loads[b]), om)
             pos[b] = fr.to_global((sol.x0, sol.y0))
         return pos
+
+    def checkpoint(self):
+        return [model.get_state() for model in self.models]
+
+    def restore(self, checkpoint) -> None:
+        for model, state in zip(self.models, checkpoint, strict=True):
+            model.set_state(state)
 
     def exit_initialization(self) -> None:
         if self._local is None:

@@ -27,6 +27,7 @@ objects directly) and :mod:`orchestrator.fmi` (the FMUs through fmpy) implement 
 from __future__ import annotations
 
 import math
+import pickle
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 
@@ -102,6 +103,15 @@ class StructureSlave(ABC):
     def gear_displacements(self) -> np.ndarray:
         """(2, 2) [u, v] of the pinion and gear nodes [m], global frame."""
 
+    def checkpoint(self):
+        """A picklable copy of the state after the last accepted step, from which
+        :meth:`restore` continues bit for bit in another process (resumed runs)."""
+        raise NotImplementedError(f"{type(self).__name__} cannot save its state")
+
+    def restore(self, checkpoint) -> None:
+        """Continue from a :meth:`checkpoint` (after the same static solution)."""
+        raise NotImplementedError(f"{type(self).__name__} cannot restore a state")
+
     def close(self) -> None:  # noqa: B027 - optional: nothing to release by default
         """Release what the slave holds (FMU instances, files); idempotent."""
 
@@ -121,6 +131,14 @@ class BearingSet(ABC):
     def exit_initialization(self) -> None:
         """End of the static phase (at the journal states of the last evaluation): the linear
         model freezes its coefficients there."""
+
+    def checkpoint(self):
+        """A picklable copy of what the bearings remember between calls (the solvers' warm
+        starts); None for memoryless bearings."""
+        return None
+
+    def restore(self, checkpoint) -> None:  # noqa: B027 - memoryless by default
+        """Restore a :meth:`checkpoint`."""
 
     def close(self) -> None:  # noqa: B027 - optional: nothing to release by default
         """Release what the set holds (FMU instances); idempotent."""
@@ -201,6 +219,23 @@ class Master:
         its modal damping with the bearings' static stiffness)."""
         self.bearings.exit_initialization()
         self.structure.exit_initialization()
+
+    def checkpoint(self) -> bytes:
+        """The coupled state after the last accepted step (structure, bearing warm starts,
+        the laws the next step starts from) as bytes: :meth:`restore` on a master built from
+        the same case, after the same static solution, continues bit for bit."""
+        laws = self.laws
+        return pickle.dumps({
+            "structure": self.structure.checkpoint(), "bearings": self.bearings.checkpoint(),
+            "laws": (laws.f0, laws.kb, laws.cb, laws.states, laws.force_at)},
+            protocol=pickle.HIGHEST_PROTOCOL)
+
+    def restore(self, checkpoint: bytes) -> None:
+        """Continue from :meth:`checkpoint` bytes (a pickle: restore only files you trust)."""
+        state = pickle.loads(checkpoint)
+        self.structure.restore(state["structure"])
+        self.bearings.restore(state["bearings"])
+        self.laws = AffineLaws(*state["laws"])
 
     def close(self) -> None:
         """Release both slaves (FMU instances; nothing in-process); idempotent."""

@@ -1,14 +1,23 @@
-"""Results files: HDF5, self-describing, written as the run goes.
+"""Results files: HDF5, self-describing, readable while the run writes them, never lost.
 
 One file per run. Each channel is a dataset whose first axis is time, created resizable and
-extended in blocks; every block is flushed, so a crash or Ctrl-C keeps everything up to the last
-block (the file is closed cleanly on exceptions, including KeyboardInterrupt). Units and
-descriptions are attributes of each dataset; the case and the run's settings are attributes of
-the root. h5py is used because HDF5 is what NVH and rotordynamics tools open directly.
+extended as the run goes. The writer flushes at least every ``flush_seconds`` (1 s) of wall
+time, so a crash, a kill or a power cut loses at most about a second of steps; the file is in
+HDF5's single-writer / multiple-reader mode (SWMR) while it is written, so ``read_results``,
+``gsb plot`` or any HDF5 tool opening it with SWMR (``h5py.File(path, "r", swmr=True)``) can
+read it during the run. Units and descriptions are attributes of each dataset; the case and the
+run's settings are root attributes, numbers and numeric arrays (not JSON text), each with its
+unit in ``<name>_unit``.
+
+Resume checkpoint: at every flush the writer can store an opaque state (bytes, from its
+``checkpoint`` callable: the structure's state and the bearing laws after the last row written)
+in the group ``resume``. Two slots are written in turn and ``resume/index`` names the valid one
+only once its bytes are flushed, so a kill in the middle of a checkpoint leaves the previous one
+intact. :func:`read_checkpoint` returns it with the number of rows it belongs to.
 
 >>> import tempfile, os, numpy as np
 >>> path = os.path.join(tempfile.mkdtemp(), "r.h5")
->>> with ResultsWriter(path, {"x": ((2,), "m", "journal position")}, block=4) as w:
+>>> with ResultsWriter(path, {"x": ((2,), "m", "journal position")}) as w:
 ...     for k in range(10):
 ...         w.append(time=k * 1e-3, x=np.array([k, -k]))
 >>> read_results(path)["x"].shape
@@ -18,62 +27,129 @@ the root. h5py is used because HDF5 is what NVH and rotordynamics tools open dir
 from __future__ import annotations
 
 import json
+import time
 from pathlib import Path
 
 import numpy as np
 
-__all__ = ["ResultsWriter", "add_attributes", "export_csv", "read_results"]
+__all__ = ["ResultsWriter", "add_attributes", "attribute_value", "export_csv",
+           "read_checkpoint", "read_results"]
+
+#: rows buffered at most between two writes (the time bound usually flushes first)
+CAPACITY = 4096
+
+
+def attribute_value(value):
+    """``value`` as an HDF5 attribute: numbers and numeric lists as numbers and numeric
+    arrays, strings and lists of strings as strings; only other objects as JSON text."""
+    import h5py
+
+    if isinstance(value, (str, bool, int, float, np.number, np.bool_)):
+        return value
+    if isinstance(value, np.ndarray) and value.dtype.kind in "biuf":
+        return value
+    if isinstance(value, (list, tuple)):
+        if value and all(isinstance(v, str) for v in value):
+            return np.array(value, dtype=h5py.string_dtype())
+        try:
+            arr = np.asarray(value)
+        except ValueError:  # ragged
+            arr = None
+        if arr is not None and arr.dtype.kind in "biuf":
+            return arr
+    if value is None:
+        return ""
+    return json.dumps(value)
+
+
+def _open_append(path):
+    """Open a closed results file for writing; a reader holding it open (SWMR readers take a
+    shared lock) must not stop the writer from recording how the run ended."""
+    import h5py
+
+    try:
+        return h5py.File(path, "a", libver="latest")
+    except BlockingIOError:
+        return h5py.File(path, "a", libver="latest", locking=False)
 
 
 class ResultsWriter:
-    """Append rows of named channels to an HDF5 file, flushing every ``block`` rows.
+    """Append rows of named channels to an HDF5 file (module docstring).
 
     Parameters
     ----------
     path : path
-        The .h5 file (overwritten).
+        The .h5 file; created (it must not exist: the caller decides about overwriting).
     channels : dict
         ``name -> (shape, unit, description)``; ``time`` [s] is always present.
     attrs : dict
-        Root attributes (strings, numbers, or JSON-able objects stored as JSON text).
-    block : int
-        Rows buffered between writes.
+        Root attributes (:func:`attribute_value`).
+    flush_seconds : float
+        Longest wall time [s] between two flushes.
+    capacity : int
+        Rows buffered at most between two writes.
+    checkpoint : callable, optional
+        ``checkpoint() -> bytes``: the state after the last appended row, stored at each flush.
     """
 
-    def __init__(self, path, channels: dict, attrs: dict | None = None, block: int = 1024):
+    def __init__(self, path, channels: dict, attrs: dict | None = None,
+                 flush_seconds: float = 1.0, capacity: int = CAPACITY, checkpoint=None,
+                 _resume_rows: int | None = None):
         import h5py
 
         self.path = Path(path)
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        self.file = h5py.File(self.path, "w")
-        self.block = int(block)
         self.channels = {"time": ((), "s", "simulated time")} | dict(channels)
-        self.rows = 0
-        self._n = 0  # rows buffered
-        self._buf = {name: np.empty((self.block, *shape))
+        self.flush_seconds = float(flush_seconds)
+        self.capacity = max(int(capacity), 1)
+        self.checkpoint = checkpoint
+        self._buf = {name: np.empty((self.capacity, *shape))
                      for name, (shape, _, _) in self.channels.items()}
-        for name, (shape, unit, desc) in self.channels.items():
-            ds = self.file.create_dataset(name, shape=(0, *shape), maxshape=(None, *shape),
-                                          dtype="f8", chunks=(max(self.block, 1), *shape))
-            ds.attrs["unit"] = unit
-            ds.attrs["description"] = desc
+        self._n = 0  # rows buffered
+        if _resume_rows is None:
+            self.file = h5py.File(self.path, "x", libver="latest")
+            for name, (shape, unit, desc) in self.channels.items():
+                ds = self.file.create_dataset(name, shape=(0, *shape), maxshape=(None, *shape),
+                                              dtype="f8", chunks=(1024, *shape))
+                ds.attrs["unit"] = unit
+                ds.attrs["description"] = desc
+            grp = self.file.create_group("resume")
+            for slot in ("slot0", "slot1"):
+                grp.create_dataset(slot, shape=(0,), maxshape=(None,), dtype="u1",
+                                   chunks=(65536,))
+            # [valid slot, bytes, rows] of the last checkpoint; slot -1: none yet
+            grp.create_dataset("index", data=np.array([-1, 0, 0], dtype=np.int64))
+            self.rows = 0
+        else:  # continue an existing file after its first _resume_rows rows
+            self.file = _open_append(self.path)
+            self.rows = int(_resume_rows)
+            for name in self.channels:
+                self.file[name].resize(self.rows, axis=0)
         for key, value in (attrs or {}).items():
-            self.file.attrs[key] = value if isinstance(value, (str, int, float)) \
-                else json.dumps(value)
+            self.file.attrs[key] = attribute_value(value)
         self.file.attrs["complete"] = False
+        self.file.swmr_mode = True  # readers may open the file from now on
+        self._last = time.monotonic()
+
+    @classmethod
+    def resume(cls, path, channels: dict, rows: int, attrs: dict | None = None, **kw):
+        """Continue writing ``path`` after its first ``rows`` rows (later rows are dropped:
+        they belong to no checkpoint)."""
+        return cls(path, channels, attrs, _resume_rows=rows, **kw)
 
     def append(self, **row) -> None:
-        missing = set(self.channels) - set(row)
-        if missing:
-            raise ValueError(f"row lacks channels {sorted(missing)}")
         i = self._n
-        for name, buf in self._buf.items():
-            buf[i] = row[name]
+        try:
+            for name, buf in self._buf.items():
+                buf[i] = row[name]
+        except KeyError:
+            missing = set(self.channels) - set(row)
+            raise ValueError(f"row lacks channels {sorted(missing)}") from None
         self._n = i + 1
-        if self._n >= self.block:
+        if self._n >= self.capacity or time.monotonic() - self._last >= self.flush_seconds:
             self.flush()
 
     def flush(self) -> None:
+        """Write the buffered rows and the checkpoint, and flush the file."""
         n = self._n
         if n:
             for name, buf in self._buf.items():
@@ -83,70 +159,107 @@ class ResultsWriter:
             self.rows += n
             self._n = 0
         self.file.flush()
+        if self.checkpoint is not None:
+            self._store_checkpoint(self.checkpoint())
+        self._last = time.monotonic()
 
-    def close(self, complete: bool = True, **attrs) -> None:
-        if self.file.id.valid:
-            self.flush()
-            self.file.attrs["complete"] = bool(complete)
-            for key, value in attrs.items():
-                self.file.attrs[key] = value if isinstance(value, (str, int, float)) \
-                    else json.dumps(value)
-            self.file.close()
+    def _store_checkpoint(self, state: bytes) -> None:
+        grp = self.file["resume"]
+        index = grp["index"]
+        slot = 1 - int(index[0]) if index[0] >= 0 else 0
+        data = np.frombuffer(state, dtype=np.uint8)
+        ds = grp[f"slot{slot}"]
+        ds.resize(data.size, axis=0)
+        ds[:] = data
+        self.file.flush()  # the bytes first, then the index that names them
+        index[:] = np.array([slot, data.size, self.rows], dtype=np.int64)
+        self.file.flush()
+
+    def close(self, complete: bool = True, checkpoint: bool = True, **attrs) -> None:
+        """Flush, close, and record how the run ended (``complete`` and ``attrs``).
+        ``checkpoint=False``: keep the last checkpoint (the state after the last row is not
+        a consistent one, e.g. after a failed step)."""
+        if not self.file.id.valid:
+            return
+        if not checkpoint:
+            self.checkpoint = None
+        self.flush()
+        self.file.close()
+        add_attributes(self.path, complete=bool(complete), **attrs)
 
     def __enter__(self):
         return self
 
     def __exit__(self, exc_type, exc, tb):
         reason = "" if exc is None else f"{type(exc).__name__}: {exc}"
-        self.close(complete=exc is None, stopped_by=reason)
+        self.close(complete=exc is None, checkpoint=exc is None, stopped_by=reason)
         return False
 
 
 def add_attributes(path, **attrs) -> None:
-    """Add (or replace) root attributes of a closed results file, keeping their types.
+    """Add (or replace) root attributes of a closed results file (:func:`attribute_value`);
+    :func:`read_results` gives them back as numbers, numpy arrays and strings."""
+    with _open_append(path) as f:
+        for key, value in attrs.items():
+            f.attrs[key] = attribute_value(value)
 
-    Numbers and numeric numpy arrays are stored as numeric HDF5 attributes, strings as
-    strings, lists or tuples of strings as an array of strings; anything else as JSON text
-    (as :class:`ResultsWriter` does). :func:`read_results` gives them back as numbers, numpy
-    arrays and strings.
-    """
+
+def _open_read(path):
     import h5py
 
-    with h5py.File(path, "a") as f:
-        for key, value in attrs.items():
-            if isinstance(value, (str, int, float, np.number)):
-                f.attrs[key] = value
-            elif isinstance(value, np.ndarray) and value.dtype.kind in "biuf":
-                f.attrs[key] = value
-            elif isinstance(value, (list, tuple)) and value \
-                    and all(isinstance(v, str) for v in value):
-                f.attrs[key] = np.array(value, dtype=h5py.string_dtype())
-            else:
-                f.attrs[key] = json.dumps(value)
+    try:
+        return h5py.File(path, "r", swmr=True)  # also while a run writes it
+    except OSError:
+        return h5py.File(path, "r")
 
 
 def read_results(path) -> dict:
-    """All channels as numpy arrays, plus ``attrs`` (root) and ``units``."""
-    import h5py
-
-    with h5py.File(path, "r") as f:
-        out = {name: f[name][()] for name in f}
-        out["units"] = {name: f[name].attrs["unit"] for name in f}
-        out["attrs"] = dict(f.attrs)
+    """All channels as numpy arrays, plus ``attrs`` (root) and ``units``; works while the
+    file is being written (the rows flushed so far)."""
+    with _open_read(path) as f:
+        names = [n for n in f if n != "resume"]
+        out = {name: f[name][()] for name in names}
+        rows = min(len(out[n]) for n in names) if names else 0
+        out = {name: v[:rows] for name, v in out.items()}  # channels flushed one by one
+        out["units"] = {name: f[name].attrs["unit"] for name in names}
+        out["attrs"] = {k: (v.decode() if isinstance(v, bytes) else v)
+                        for k, v in f.attrs.items()}
     return out
 
 
+def read_checkpoint(path) -> tuple[int, bytes] | None:
+    """``(rows, state)`` of the last checkpoint of a results file, None if it has none."""
+    with _open_read(path) as f:
+        if "resume" not in f:
+            return None
+        slot, nbytes, rows = (int(v) for v in f["resume/index"][()])
+        if slot < 0:
+            return None
+        return rows, f[f"resume/slot{slot}"][:nbytes].tobytes()
+
+
 def export_csv(path, csv_path, channels=None) -> Path:
-    """Write the chosen channels (default: all) as CSV with ``name [unit]`` headers."""
+    """Write the chosen channels (default: all) as CSV: one row per time step, columns named
+    ``channel[index] [unit]`` (e.g. ``journal_position[0,1] [m]``: bearing 1, t)."""
     data = read_results(path)
-    names = ["time"] + [n for n in (channels or data) if n not in ("time", "units", "attrs")]
+    chosen = channels or [n for n in data if n not in ("units", "attrs")]
+    unknown = [n for n in chosen if n not in data or n in ("units", "attrs")]
+    if unknown:
+        known = [n for n in data if n not in ("units", "attrs")]
+        raise ValueError(f"unknown channel(s) {', '.join(unknown)}; the file has "
+                         f"{', '.join(known)}")
+    names = ["time"] + [n for n in chosen if n != "time"]
+    n_rows = len(data["time"])
     cols, heads = [], []
     for name in names:
-        arr = data[name].reshape(len(data["time"]), -1)
-        for j in range(arr.shape[1]):
-            heads.append(f"{name}{'' if arr.shape[1] == 1 else f'[{j}]'} [{data['units'][name]}]")
-            cols.append(arr[:, j])
+        arr = np.asarray(data[name])
+        shape = arr.shape[1:]
+        flat = arr.reshape(n_rows, -1)
+        for j, idx in enumerate(np.ndindex(*shape) if shape else [()]):
+            label = name + (f"[{','.join(str(i) for i in idx)}]" if idx else "")
+            heads.append(f"{label} [{data['units'][name]}]")
+            cols.append(flat[:, j])
     csv_path = Path(csv_path)
     np.savetxt(csv_path, np.column_stack(cols), delimiter=",", header=",".join(heads),
-               comments="")
+               comments="", fmt="%.17g")
     return csv_path

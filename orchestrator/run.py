@@ -42,13 +42,15 @@ import numpy as np
 from fmu_src import description
 from fmu_src.case import Case
 from fmu_src.units import symbol
-from orchestrator.checks import time_step_warnings
+from orchestrator import run_files
+from orchestrator.checks import overload_message, time_step_warnings, unbalance_warnings
 from orchestrator.inprocess import InProcessStructure, ModelBearings
 from orchestrator.master import Master
-from orchestrator.results import ResultsWriter
+from orchestrator.results import ResultsWriter, add_attributes, read_results
+from orchestrator.run_files import results_name
 
-__all__ = ["CHANNELS", "Progress", "RunError", "RunInterrupted", "RunSummary", "build_master",
-           "run_case"]
+__all__ = ["ATTRIBUTE_UNITS", "CHANNELS", "Progress", "RunError", "RunInterrupted",
+           "RunSummary", "build_master", "resume_run", "run_case"]
 
 #: results channels: name -> (shape per step, unit, description)
 CHANNELS = {
@@ -230,14 +232,68 @@ def build_master(case: Case, bearing: str | None = None, in_process: bool = Fals
     return Master(structure, bearings, tol, max_it)
 
 
+#: units of the numeric root attributes, stored beside each as ``<name>_unit``
+ATTRIBUTE_UNITS = {
+    "dt": symbol("time"), "speed": symbol("angular_speed"),
+    "speeds": symbol("angular_speed"), "torque": symbol("torque"),
+    "unbalance": symbol("length"), "clearance": symbol("length"),
+    "static_journal": symbol("length"), "static_bearing_force": symbol("force"),
+    "static_mesh_force": symbol("force"), "static_transmission_error": symbol("length"),
+    "wall_time": symbol("time"), "dynamic_factor": symbol("dimensionless"),
+    "bearing_force_ptp": symbol("force"), "line_amplitudes": symbol("force"),
+    "line_orders": symbol("dimensionless"), "report_window": symbol("time"),
+}
+
+
+def _with_units(attrs: dict) -> dict:
+    return attrs | {f"{k}_unit": ATTRIBUTE_UNITS[k] for k in attrs if k in ATTRIBUTE_UNITS}
+
+
+def _start(master: Master, case: Case, dt: float, stop_if_asked) -> tuple:
+    """Static solution X0 and the end of initialisation; returns (static report, x0,
+    warnings, seconds)."""
+    t0 = time.perf_counter()
+    try:
+        static = master.solve_static()
+    except Exception as exc:
+        try:
+            why = overload_message(case)
+        except Exception:  # the explanation must not hide the failure
+            why = None
+        if why is not None:
+            raise RunError(f"{case.source}: no static solution: {why}") from None
+        raise RunError(f"{case.source}: static solution failed: {exc}") from exc
+    x0 = static.states[:, :2].copy()
+    stop_if_asked("after the static solution")
+    # leave initialisation: linear bearings freeze, the structure builds its modal
+    # damping on the modes with the bearings' static stiffness
+    structure = master.structure
+    static_mesh = (structure.mesh_force(), structure.transmission_error())
+    master.exit_initialization()
+    try:
+        warnings = time_step_warnings(
+            case, master.laws, dt,
+            structure.structure if isinstance(structure, InProcessStructure) else None)
+    except (ValueError, np.linalg.LinAlgError) as exc:  # a check, not the run
+        warnings = [f"the time-step check could not run: {exc}"]
+    warnings = unbalance_warnings(case) + warnings
+    for text in warnings:
+        print(f"warning: {text}", file=sys.stderr, flush=True)
+    return static, x0, static_mesh, warnings, time.perf_counter() - t0
+
+
 def run_case(case: Case, bearing: str | None = None, periods: int | None = None,
              in_process: bool = False, out_dir: Path | str = "results",
              fmu_dir: Path | str | None = None, progress: bool = True, figures: bool = True,
-             block: int = 4096, fmus: dict | None = None,
-             steps: int | None = None) -> RunSummary:
+             fmus: dict | None = None, steps: int | None = None, overwrite: bool = False,
+             flush_seconds: float = 1.0) -> RunSummary:
     """Run a case (module docstring); returns a :class:`RunSummary`.
 
     ``steps``: stop after this many time steps (a quick look; default: all the periods').
+    The results file is named after the effective parameters
+    (:func:`orchestrator.run_files.results_name`); an existing one stops the run before it
+    starts unless ``overwrite`` (:func:`orchestrator.run_files.target`: a complete file is
+    replaced only by a complete run).
 
     ``fmus``: run these FMU files instead of the built ones (:func:`build_master`); the
     results are then named after the bearing FMU file. Raises :class:`RunError` (with the
@@ -247,115 +303,210 @@ def run_case(case: Case, bearing: str | None = None, periods: int | None = None,
     """
     model = case["bearings.model"] if bearing is None else bearing
     label = model if fmus is None else Path(fmus["bearings"][0]).stem
-    periods = case["simulation.mesh_periods"] if periods is None else int(periods)
-    if periods < 1:
-        raise ValueError(f"periods = {periods!r}: need at least one mesh period")
+    periods = case["simulation.mesh_periods"] if periods is None else periods
+    if isinstance(periods, bool) or not isinstance(periods, (int, np.integer)) or periods < 1:
+        raise RunError(f"--periods {periods!r}: need a whole number of mesh periods >= 1")
+    if steps is not None and int(steps) < 1:
+        raise RunError(f"steps = {steps!r}: need at least one step")
+    case = case.with_overrides({"bearings.model": model, "simulation.mesh_periods": int(periods)})
     steps_per_period = case["simulation.steps_per_mesh_period"]
-    omega = case["operation.speed"]
-    dt = description.time_step(case)
     n_steps = periods * steps_per_period if steps is None else int(steps)
-    if n_steps < 1:
-        raise ValueError(f"steps = {steps!r}: need at least one step")
-    out_dir = Path(out_dir)
-    name = f"{case['case.name']}_{label}{'_inprocess' if in_process else ''}"
-    path = out_dir / f"{name}.h5"
+    name = results_name(case, label, in_process, steps,
+                        None if fmus is None else fmus["bearings"][0])
+    try:
+        where = run_files.target(out_dir, name, overwrite)
+    except run_files.TargetError as exc:
+        raise RunError(str(exc)) from None
+    attrs = {
+        "kind": "run", "case": case["case.name"], "case_file": str(case.source),
+        "case_toml": case.to_toml(), "bearing_model": label,
+        "mode": "in-process" if in_process else "fmu",
+        "bearing_fmu": "" if fmus is None else str(Path(fmus["bearings"][0]).resolve()),
+        "dt": description.time_step(case), "steps_per_mesh_period": steps_per_period,
+        "mesh_periods": int(periods), "steps_total": n_steps, "speed": case["operation.speed"],
+        "speeds": description.bearing_speeds(case), "teeth": list(case["gear_pair.teeth"]),
+        "torque": case["operation.torque"], "unbalance": list(case["operation.unbalance"]),
+        "clearance": _clearances(case), "tolerance": case["simulation.tolerance"],
+        "interrupted": "", "stopped_by": "",
+    }
+    return _run(case, attrs, where, 0, None, in_process, fmu_dir, fmus, progress, figures,
+                flush_seconds)
+
+
+def resume_run(path: Path | str, periods: int | None = None, fmu_dir: Path | str | None = None,
+               progress: bool = True, figures: bool = True,
+               flush_seconds: float = 1.0) -> RunSummary:
+    """Continue the run of a results file from its last checkpoint (``gsb run --resume``).
+
+    The case comes from the file (``case_toml``), the static solution is solved again and must
+    equal the stored one, then the structure, the bearings' warm starts and the laws are
+    restored from the checkpoint (:meth:`orchestrator.master.Master.checkpoint`; through FMUs,
+    their serialised FMU states) and the steps go on in the same file: the trajectory is that
+    of an uninterrupted run. ``periods`` extends the run (default: the file's own length).
+    """
+    import tomllib
+
+    from fmu_src.case import CaseError, parse_case
+    from orchestrator.results import read_checkpoint
+
+    path = Path(path)
+    if not path.is_file():
+        raise RunError(f"--resume {path}: no such file")
+    state = run_files.describe_file(path)
+    if state.startswith(("open for writing", "not a readable")):
+        raise RunError(f"--resume {path}: {state}")
+    a = read_results(path)["attrs"]
+    if a.get("kind") != "run" or "case_toml" not in a:
+        raise RunError(f"--resume {path}: not the results file of a gsb run of this version "
+                       "(no stored case)")
+    if a.get("bearing_fmu"):
+        raise RunError(f"--resume {path}: a run of a bearing FMU of your own (or of an SSP) "
+                       "cannot be resumed; run it again")
+    try:
+        case = parse_case(tomllib.loads(str(a["case_toml"])), f"{path} (stored case)")
+    except CaseError as exc:
+        raise RunError(f"--resume {path}: the stored case does not load: {exc}") from None
+    ckpt = read_checkpoint(path)
+    if ckpt is None:
+        raise RunError(f"--resume {path}: the file holds no checkpoint (the run stopped before "
+                       "its first flush); run it again")
+    rows, blob = ckpt
+    steps_per_period = int(a["steps_per_mesh_period"])
+    if periods is not None:
+        if isinstance(periods, bool) or int(periods) != periods or periods < 1:
+            raise RunError(f"--periods {periods!r}: need a whole number of mesh periods >= 1")
+        n_steps = int(periods) * steps_per_period
+    else:
+        n_steps = int(a["steps_total"])
+    if n_steps <= rows:
+        raise RunError(f"--resume {path}: the file already holds {rows} steps "
+                       f"({rows / steps_per_period:g} mesh periods); give --periods above "
+                       f"{rows // steps_per_period} to extend it")
+    attrs = {"mesh_periods": n_steps // steps_per_period if periods else a["mesh_periods"],
+             "steps_total": n_steps, "interrupted": "", "stopped_by": "",
+             "resumed_at_step": rows}
+    where = run_files.Target(path, path, path.with_suffix(""))
+    in_process = a["mode"] == "in-process"
+    return _run(case, attrs, where, rows, blob, in_process, fmu_dir, None, progress, figures,
+                flush_seconds, stored_x0=np.asarray(a["static_journal"]))
+
+
+def _run(case, attrs, where, first, blob, in_process, fmu_dir, fmus, progress, figures,
+         flush_seconds, stored_x0=None) -> RunSummary:
+    """Static solution, then steps ``first`` .. ``steps_total`` into ``where`` (from a
+    checkpoint ``blob`` when resuming)."""
+    dt = float(attrs.get("dt", description.time_step(case)))
+    n_steps = int(attrs["steps_total"])
+    path = where.write
+    name = where.final.stem
     writer = None  # this run's results file, once the transient starts
+    kept = {}  # where the steps of a run that did not complete are
+
+    def give_up(**how) -> Path:
+        writer.close(complete=False, **how)
+        kept["path"] = where.finish(False)
+        return kept["path"]
 
     with deferred_signals() as received:
 
-        def stop_if_asked(where: str, writer: ResultsWriter | None = None) -> None:
+        def stop_if_asked(where_: str, writer: ResultsWriter | None = None) -> None:
             if not received:
                 return
             sig = signal.Signals(received[0]).name
             kept = "nothing was written" if writer is None else f"{writer.rows} steps kept in"
             if writer is not None:
-                writer.close(complete=False, stopped_by=f"interrupted by {sig} {where}",
-                             interrupted=sig)
-                kept += f" {path}"
-            raise RunInterrupted(received[0], f"interrupted by {sig} {where}; {kept}")
+                kept += " " + str(give_up(stopped_by=f"interrupted by {sig} {where_}",
+                                          interrupted=sig))
+            raise RunInterrupted(received[0], f"interrupted by {sig} {where_}; {kept}")
 
-        master = build_master(case, model, in_process, fmu_dir, fmus)
+        master = build_master(case, None, in_process, fmu_dir, fmus)
         structure = master.structure
         try:
             stop_if_asked("before the static solution")
-            t0 = time.perf_counter()
-            try:
-                static = master.solve_static()
-            except Exception as exc:
-                raise RunError(f"{case.source}: static solution failed: {exc}") from exc
-            x0 = static.states[:, :2].copy()
-            # leave initialisation: linear bearings freeze, the structure builds its modal
-            # damping on the modes with the bearings' static stiffness
-            master.exit_initialization()
-            try:
-                warnings = time_step_warnings(
-                    case, master.laws, dt,
-                    structure.structure if isinstance(structure, InProcessStructure) else None)
-            except (ValueError, np.linalg.LinAlgError) as exc:  # a check, not the run
-                warnings = [f"the time-step check could not run: {exc}"]
-            for text in warnings:
-                print(f"warning: {text}", file=sys.stderr, flush=True)
-            static_time = time.perf_counter() - t0
+            static, x0, static_mesh, warnings, static_time = _start(master, case, dt,
+                                                                     stop_if_asked)
+            if stored_x0 is not None:
+                diff = float(np.abs(x0 - stored_x0).max())
+                if diff > 0.0:
+                    print(f"warning: the static solution differs from the stored one by "
+                          f"{diff:.3e} m (another code version or machine): the resumed "
+                          f"steps may differ from an uninterrupted run at that level",
+                          file=sys.stderr, flush=True)
+            if blob is not None:
+                try:
+                    master.restore(blob)
+                except Exception as exc:
+                    raise RunError(f"--resume {path}: the checkpoint does not restore: "
+                                   f"{exc}") from exc
+            else:
+                attrs |= {"static_journal": x0, "static_bearing_force": static.bearing_force,
+                          "static_iterations": static.iterations,
+                          "static_mesh_force": static_mesh[0],
+                          "static_transmission_error": static_mesh[1],
+                          "warnings": "\n".join(warnings)}
             stop_if_asked("after the static solution")
 
-            attrs = {
-                "case": case["case.name"], "case_file": str(case.source),
-                "bearing_model": label, "mode": "in-process" if in_process else "fmu",
-                "dt": dt, "steps_per_mesh_period": steps_per_period, "mesh_periods": periods,
-                "speed": omega, "speeds": description.bearing_speeds(case),
-                "teeth": list(case["gear_pair.teeth"]), "torque": case["operation.torque"],
-                "unbalance": list(case["operation.unbalance"]),
-                "clearance": _clearances(case), "tolerance": case["simulation.tolerance"],
-                "static_journal": x0.tolist(),
-                "static_bearing_force": static.bearing_force.tolist(),
-                "static_iterations": static.iterations, "case_values": _jsonable(case.values),
-                "interrupted": "", "warnings": "\n".join(warnings),
-            }
-            bar = Progress(n_steps, f"{name}", enabled=progress)
+            bar = Progress(n_steps, name, enabled=progress)
             start_iterations = master.total_iterations
             start_evals = master.total_bearing_evaluations
             t_start = time.perf_counter()
-            with ResultsWriter(path, CHANNELS, attrs, block=block) as writer:
-                t = 0.0
-                for i in range(n_steps):
-                    try:
-                        report = master.step(t, dt)
-                    except Exception as exc:
-                        raise RunError(
-                            f"step {i + 1} of {n_steps} (t = {t + dt:.6e} s) failed: {exc}; "
-                            f"the {i} steps computed are in {path}") from exc
-                    t = (i + 1) * dt
-                    writer.append(time=t, journal_position=report.states[:, :2],
-                                  journal_velocity=report.states[:, 2:],
-                                  bearing_force=report.bearing_force,
-                                  mesh_force=structure.mesh_force(),
-                                  transmission_error=structure.transmission_error(),
-                                  gear_nodes=structure.gear_displacements(),
-                                  iterations=report.iterations)
-                    if progress and (i & 63) == 0:
-                        its = (master.total_iterations - start_iterations) / (i + 1)
-                        bar.update(i + 1, f"{its:.2f} it/step")
-                    stop_if_asked(f"after step {i + 1} of {n_steps}", writer)
-                wall = time.perf_counter() - t_start
-                its = (master.total_iterations - start_iterations) / n_steps
-                bar.update(n_steps, f"{its:.2f} it/step")
-                writer.close(complete=True, wall_time=wall)
+            try:
+                if blob is None:
+                    writer = ResultsWriter(path, CHANNELS, _with_units(attrs),
+                                           flush_seconds=flush_seconds,
+                                           checkpoint=master.checkpoint)
+                else:
+                    writer = ResultsWriter.resume(path, CHANNELS, first, attrs,
+                                                  flush_seconds=flush_seconds,
+                                                  checkpoint=master.checkpoint)
+            except OSError as exc:
+                raise RunError(f"cannot write {path}: {exc}") from None
+            bar.update(first)
+            for i in range(first, n_steps):
+                t = i * dt
+                try:
+                    report = master.step(t, dt)
+                except Exception as exc:
+                    into = give_up(checkpoint=False, stopped_by=f"{type(exc).__name__}: {exc}")
+                    raise RunError(
+                        f"step {i + 1} of {n_steps} (t = {t + dt:.6e} s) failed: {exc}; "
+                        f"the {i} steps computed are in {into}") from exc
+                writer.append(time=(i + 1) * dt, journal_position=report.states[:, :2],
+                              journal_velocity=report.states[:, 2:],
+                              bearing_force=report.bearing_force,
+                              mesh_force=structure.mesh_force(),
+                              transmission_error=structure.transmission_error(),
+                              gear_nodes=structure.gear_displacements(),
+                              iterations=report.iterations)
+                if progress and (i & 63) == 0:
+                    its = (master.total_iterations - start_iterations) / (i + 1 - first)
+                    bar.update(i + 1, f"{its:.2f} it/step")
+                stop_if_asked(f"after step {i + 1} of {n_steps}", writer)
+            wall = time.perf_counter() - t_start
+            its = (master.total_iterations - start_iterations) / max(n_steps - first, 1)
+            bar.update(n_steps, f"{its:.2f} it/step")
+            writer.close(complete=True, wall_time=wall)
+            path = where.finish(True)
         except (RunError, RunInterrupted):
-            if writer is not None:  # report what the file kept; the run's error comes first
+            if "path" in kept:  # report what the file kept; the run's error comes first
                 with contextlib.suppress(Exception):
-                    _store_report(path)
+                    _store_report(kept["path"])
+            raise
+        except BaseException as exc:  # a bug or a second Ctrl-C: keep the steps all the same
+            if writer is not None and "path" not in kept:
+                with contextlib.suppress(Exception):
+                    give_up(checkpoint=False, stopped_by=f"{type(exc).__name__}: {exc}")
             raise
         finally:
             master.close()
-    summary = RunSummary(path, n_steps, wall, static_time,
+    summary = RunSummary(path, n_steps - first, wall, static_time,
                          master.total_iterations - start_iterations,
                          master.total_bearing_evaluations - start_evals, static.iterations, x0)
     summary.report = _store_report(path)
     if figures:
-        from orchestrator.plots import basic_figures
+        from orchestrator.plots import run_figures
 
-        gear_rev = 2.0 * math.pi / description.bearing_speeds(case)[2]
-        summary.figures = basic_figures(path, out_dir / name, last=min(gear_rev, n_steps * dt))
+        summary.figures = run_figures(path, where.figures)
     return summary
 
 
@@ -363,30 +514,17 @@ def _store_report(path: Path) -> dict | None:
     """:func:`orchestrator.analysis.run_report` of a closed results file, stored as its root
     attributes (module docstring); None (nothing stored) below 2 steps."""
     from orchestrator.analysis import run_report
-    from orchestrator.results import add_attributes, read_results
 
     results = read_results(path)
     if results["time"].size < 2:
         return None
     report = run_report(results)
-    add_attributes(path, dynamic_factor=report["dynamic_factor"],
-                   bearing_force_ptp=report["bearing_force_ptp"],
-                   line_amplitudes=report["line_amplitudes"], line_orders=report["line_orders"],
-                   line_labels=report["line_labels"], report_window=report["window_s"],
-                   report_units={"dynamic_factor": "1", "bearing_force_ptp": "N",
-                                 "line_amplitudes": "N", "line_orders": "1",
-                                 "report_window": "s"})
+    add_attributes(path, **_with_units({
+        "dynamic_factor": report["dynamic_factor"],
+        "bearing_force_ptp": report["bearing_force_ptp"],
+        "line_amplitudes": report["line_amplitudes"], "line_orders": report["line_orders"],
+        "line_labels": report["line_labels"], "report_window": report["window_s"]}))
     return report
-
-
-def _jsonable(values: dict) -> dict:
-    def conv(v):
-        if isinstance(v, (list, tuple)):
-            return [conv(x) for x in v]
-        if isinstance(v, (np.floating, np.integer)):
-            return v.item()
-        return v
-    return {k: conv(v) for k, v in values.items()}
 
 
 def static_report(case: Case, positions: np.ndarray) -> str:

@@ -13,21 +13,24 @@ from orchestrator.results import ResultsWriter, export_csv, read_results
 def test_units_and_attributes_are_stored(tmp_path):
     path = tmp_path / "r.h5"
     with ResultsWriter(path, {"F": ((4, 2), "N", "bearing forces")},
-                       attrs={"case": "demo", "settings": {"dt": 1e-4}}, block=3) as w:
+                       attrs={"case": "demo", "clearance": [1e-4, 2e-4]}, capacity=3) as w:
         for k in range(7):
             w.append(time=k * 1e-4, F=np.full((4, 2), k))
     r = read_results(path)
     assert r["units"]["F"] == "N" and r["units"]["time"] == "s"
     assert r["F"].shape == (7, 4, 2) and r["F"][6, 3, 1] == 6
     assert r["attrs"]["complete"] and r["attrs"]["case"] == "demo"
+    assert r["attrs"]["clearance"].dtype == np.float64  # numeric, not JSON text
     csv = export_csv(path, tmp_path / "r.csv")
-    assert csv.read_text().splitlines()[0].startswith("time [s],F[0] [N]")
+    head, first = csv.read_text().splitlines()[:2]
+    assert head.startswith("time [s],F[0,0] [N],F[0,1] [N],F[1,0] [N]")
+    assert [float(x) for x in first.split(",")] == [0.0] * 9
 
 
 def test_exception_keeps_flushed_rows_and_marks_incomplete(tmp_path):
     path = tmp_path / "r.h5"
     with pytest.raises(KeyboardInterrupt):
-        with ResultsWriter(path, {"x": ((), "m", "x")}, block=4) as w:
+        with ResultsWriter(path, {"x": ((), "m", "x")}, capacity=4) as w:
             for k in range(10):
                 w.append(time=float(k), x=float(k))
                 if k == 8:
@@ -43,7 +46,7 @@ def test_killed_process_keeps_flushed_blocks(tmp_path):
     code = textwrap.dedent(f"""
         import os
         from orchestrator.results import ResultsWriter
-        w = ResultsWriter(r"{path}", {{"x": ((), "m", "x")}}, block=5)
+        w = ResultsWriter(r"{path}", {{"x": ((), "m", "x")}}, capacity=5, flush_seconds=1e9)
         for k in range(12):
             w.append(time=float(k), x=float(k))
         os._exit(9)

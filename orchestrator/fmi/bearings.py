@@ -186,6 +186,16 @@ class FmuBearings(BearingSet):
                                f"{s.log_tail(since=since)}")
         self.in_init = False
 
+    def checkpoint(self) -> list:
+        """Each bearing FMU's state serialised (its solver's warm start); None for an FMU
+        that cannot serialise (a force-only FMU of the user's own: assumed memoryless)."""
+        return [s.serialize_state() if s.can_serialize else None for s in self.slaves]
+
+    def restore(self, checkpoint) -> None:
+        for s, data in zip(self.slaves, checkpoint, strict=True):
+            if data is not None:
+                s.restore_serialized(data)
+
     def close(self) -> None:
         """Terminate and free every instance, remove the extracted FMU folders."""
         for s in self.slaves:

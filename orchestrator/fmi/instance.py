@@ -104,6 +104,32 @@ class FmuInstance:
         tail = self.messages[since:][-n:]
         return "; ".join(tail) if tail else "(no message in the FMU log)"
 
+    @property
+    def can_serialize(self) -> bool:
+        """Whether the FMU declares canSerializeFMUstate (and get/set FMU state)."""
+        cs = self.md.coSimulation
+        return bool(cs.canGetAndSetFMUstate and cs.canSerializeFMUstate)
+
+    def serialize_state(self) -> bytes:
+        """The instance's current FMU state as bytes (fmi2GetFMUstate,
+        fmi2SerializeFMUstate; the copy is freed before returning)."""
+        f = self.fmu
+        state = f.getFMUstate()
+        try:
+            return f.serializeFMUstate(state)
+        finally:
+            f.freeFMUstate(state)
+
+    def restore_serialized(self, data: bytes) -> None:
+        """Set the instance to a state of :meth:`serialize_state` (fmi2DeSerializeFMUstate,
+        fmi2SetFMUstate)."""
+        f = self.fmu
+        state = f.deSerializeFMUstate(data)
+        try:
+            f.setFMUstate(state)
+        finally:
+            f.freeFMUstate(state)
+
     def close(self) -> None:
         """Terminate and free the instance, remove the extracted folder (idempotent)."""
         if self.fmu is None:

@@ -214,6 +214,22 @@ class FmuStructure(StructureSlave):
         self._check(self._set_state(self._c, state._handle), "fmi2SetFMUstate")
         self.t, self.n_steps = state.t, state.n_steps
 
+    def checkpoint(self) -> dict:
+        """The FMU state serialised (fmi2SerializeFMUstate), with the time and step count."""
+        self._live()
+        if not self.slave.can_serialize:
+            raise FmuError(f"gear-shaft FMU ({self.slave.path.name}) cannot serialise its "
+                           "state (canSerializeFMUstate is false)")
+        return {"fmu": self.slave.serialize_state(), "t": self.t, "n_steps": self.n_steps}
+
+    def restore(self, checkpoint: dict) -> None:
+        """Continue from :meth:`checkpoint` (fmi2DeSerializeFMUstate + fmi2SetFMUstate)."""
+        self._live()
+        if self.in_init:
+            self.exit_initialization()
+        self.slave.restore_serialized(checkpoint["fmu"])
+        self.t, self.n_steps = checkpoint["t"], checkpoint["n_steps"]
+
     def _free_handle(self, handle) -> None:
         if self.slave.fmu is not None:
             self._free_state(self._c, ctypes.byref(handle))
