@@ -10,7 +10,6 @@ Run: ``python examples/ex03_coupled_run.py`` (a few seconds after numba's first 
 
 from __future__ import annotations
 
-import json
 import math
 import tempfile
 
@@ -37,7 +36,7 @@ def main(periods: int = 64, bearing: str = "hybrid", **overrides) -> dict:
     win = steady_window(r["time"], window)
     return {"steps": s.steps, "wall_time_s": s.wall_time,
             "iterations_per_step": s.iterations_per_step,
-            "static_bearing_force_N": np.asarray(json.loads(r["attrs"]["static_bearing_force"])),
+            "static_bearing_force_N": np.asarray(r["attrs"]["static_bearing_force"]),
             "R": metrics["R"], "bearing1_ptp_N": float(metrics["force_ptp"][0]),
             "mean_mesh_force_N": float(r["mesh_force"][win].mean()),
             "static_tooth_load_N": case["operation.torque"] / description.gear_pair(

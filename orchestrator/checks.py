@@ -31,16 +31,19 @@ __all__ = ["EPS_LIMIT", "film_capacities", "overload_message", "time_step_warnin
 
 #: eccentricity ratio up to which the static solution searches (bearing_fmu.static)
 EPS_LIMIT = 0.995
+#: eccentricity ratio of the load capacity the unbalance warning compares with (minimum film
+#: thickness 0.1 C, a common design limit; the film force grows without bound towards 1)
+EPS_DESIGN = 0.9
 #: the case fields that raise a film's load capacity, and those that lower the load
 RAISE_CAPACITY = ("bearings.length", "bearings.diameter", "bearings.viscosity",
                   "operation.speed", "a smaller bearings.clearance")
 LOWER_LOAD = "operation.torque"
 
 
-def film_capacities(case: Case) -> tuple[np.ndarray, str]:
-    """The largest static load of each bearing's film [N] (4,): the film force at the
-    eccentricity ratio :data:`EPS_LIMIT`, zero velocity, at the bearing's speed; and the model
-    that gave it (the case's model if it is a film model, else the hybrid film)."""
+def film_capacities(case: Case, eps: float = EPS_LIMIT) -> tuple[np.ndarray, str]:
+    """The static load capacity of each bearing's film [N] (4,): the film force at the
+    eccentricity ratio ``eps``, zero velocity, at the bearing's speed; and the model that gave
+    it (the case's model if it is a film model, else the hybrid film)."""
     name = case["bearings.model"]
     models = description.bearing_models(case)
     if not all(isinstance(m, FilmBearingModel) for m in models):
@@ -48,18 +51,19 @@ def film_capacities(case: Case) -> tuple[np.ndarray, str]:
         models = description.bearing_models(case, name)
     out = np.empty(len(models))
     for b, (m, w) in enumerate(zip(models, description.bearing_speeds(case), strict=True)):
-        fbar = m.dimensionless(EPS_LIMIT, 0.0, jacobian=False).force
+        fbar = m.dimensionless(eps, 0.0, jacobian=False).force
         out[b] = m.bearing.force_scale(w) * math.hypot(*fbar)
     return out, name
 
 
 def unbalance_warnings(case: Case) -> list[str]:
     """One sentence per shaft whose unbalance force ``M e_mu omega^2`` exceeds the static load
-    capacity of its two bearings (the journals then run close to the bearing wall)."""
+    capacity of its two bearings at the eccentricity ratio :data:`EPS_DESIGN` (the journals
+    then orbit closer to the wall than a minimum film thickness of 0.1 C)."""
     system = description.gear_shaft_system(case)
     speeds = description.bearing_speeds(case)
     unbalance = case["operation.unbalance"]
-    capacity, model = film_capacities(case)
+    capacity, model = film_capacities(case, EPS_DESIGN)
     out = []
     for i, shaft in enumerate(("pinion", "gear")):
         force = system.shaft_masses[i] * unbalance[i] * speeds[2 * i] ** 2
@@ -70,8 +74,8 @@ def unbalance_warnings(case: Case) -> list[str]:
                 f"{system.shaft_masses[i]:.3g} kg x {unbalance[i] * 1e3:g} mm x "
                 f"({speeds[2 * i]:.4g} rad/s)^2 = {force:.4g} N, exceeds the static load "
                 f"capacity of bearings {2 * i + 1} and {2 * i + 2}, {cap:.4g} N ({model} film at "
-                f"eccentricity {EPS_LIMIT}): the journals will run near the bearing wall or "
-                f"the run will fail; lower operation.unbalance[{i}] or operation.speed")
+                f"eccentricity {EPS_DESIGN}): the journals will orbit near the bearing wall "
+                f"(or the run fail); lower operation.unbalance[{i}] or operation.speed")
     return out
 
 
@@ -85,8 +89,8 @@ def overload_message(case: Case) -> str | None:
     over = [b for b in range(len(loads)) if loads[b] > capacity[b]]
     if not over:
         return None
-    what = "; ".join(f"bearing {b + 1} carries {loads[b]:.5g} N but its film carries at most "
-                     f"{capacity[b]:.5g} N" for b in over)
+    what = "; ".join(f"bearing {b + 1} carries {loads[b]:.4g} N, its film at most "
+                     f"{capacity[b]:.4g} N" for b in over)
     return (f"{what} (static loads with T = {case['operation.torque']:g} N m, {model} film at "
             f"eccentricity {EPS_LIMIT}, {case['operation.speed']:g} rad/s): raise "
             f"{', '.join(RAISE_CAPACITY)}, or lower {LOWER_LOAD}")

@@ -268,8 +268,10 @@ def _start(master: Master, case: Case, dt: float, stop_if_asked) -> tuple:
     # leave initialisation: linear bearings freeze, the structure builds its modal
     # damping on the modes with the bearings' static stiffness
     structure = master.structure
-    static_mesh = (structure.mesh_force(), structure.transmission_error())
     master.exit_initialization()
+    # read after leaving initialisation: a gear-shaft FMU in initialisation mode would solve
+    # its static problem again for outputs read after the final laws were set
+    static_mesh = (structure.mesh_force(), structure.transmission_error())
     try:
         warnings = time_step_warnings(
             case, master.laws, dt,

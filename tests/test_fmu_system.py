@@ -236,9 +236,12 @@ def test_an_fmu_runs_where_this_package_is_not_installed(fmu_dir, tmp_path):
 INTERRUPT_TRIES = 10
 
 
+@pytest.mark.slow
 def test_ctrl_c_and_sigterm_stop_a_fmu_run_cleanly(fmu_dir, tmp_path):
     """SIGINT or SIGTERM at a random moment of a run through FMUs: exit 130 / 143, no crash
-    or traceback, and the results file closed, marked interrupted, with the steps done."""
+    or traceback, and the results file closed, marked interrupted, with the steps done.
+    (Ten random moments: slow; tests/test_results_safety.py interrupts each transport once
+    per signal in the default run and resumes the runs.)"""
     from orchestrator.results import read_results
 
     rng = random.Random(10)

@@ -5,7 +5,6 @@ returns ``(png path, info dict)``.
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 
@@ -22,10 +21,10 @@ __all__ = ["draw_all", "has_line"]
 
 def _attrs(results):
     a = results["attrs"]
-    return {"dt": float(a["dt"]), "speeds": json.loads(a["speeds"]),
-            "clearance": np.asarray(json.loads(a["clearance"])),
-            "teeth": json.loads(a["teeth"]),
-            "static": np.asarray(json.loads(a["static_journal"]))}
+    return {"dt": float(a["dt"]), "speeds": np.asarray(a["speeds"], dtype=float).tolist(),
+            "clearance": np.asarray(a["clearance"], dtype=float),
+            "teeth": [int(z) for z in a["teeth"]],
+            "static": np.asarray(a["static_journal"], dtype=float)}
 
 
 def _window(results, revolutions: float, bearing: int):
