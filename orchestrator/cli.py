@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 
 from bearing_fmu.base import BearingError
@@ -12,7 +13,7 @@ from orchestrator.run import RunError, RunInterrupted
 
 
 def make_parser() -> argparse.ArgumentParser:
-    from orchestrator import bearing_calc, run_cli
+    from orchestrator import bearing_calc, plot_cli, run_cli, sweep_cli
 
     parser = argparse.ArgumentParser(
         prog="gsb",
@@ -21,6 +22,8 @@ def make_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
     bearing_calc.add_parser(sub)
     run_cli.add_parsers(sub)
+    sweep_cli.add_parser(sub)
+    plot_cli.add_parser(sub)
     return parser
 
 
@@ -37,6 +40,12 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"gsb {args.command}: interrupted", file=sys.stderr)
         return 130
+    except Exception as exc:  # a bug, not the user's input: one line, the traceback on demand
+        if os.environ.get("GSB_TRACEBACK"):
+            raise
+        print(f"gsb {args.command}: internal error: {type(exc).__name__}: {exc} (please "
+              "report it; GSB_TRACEBACK=1 shows the traceback)", file=sys.stderr)
+        return 1
 
 
 if __name__ == "__main__":

@@ -9,7 +9,10 @@
    stiffness (Structure docs).
 4. Transient (Sec. 3.2): ``steps_per_mesh_period x mesh_periods`` coupled Newmark steps, each
    converged to the case tolerance; every step's channels go to the results file as the run
-   goes (HDF5, flushed in blocks: an interrupted or failed run keeps what it computed).
+   goes (:mod:`orchestrator.results`: HDF5 SWMR, flushed every second with a checkpoint of the
+   coupled state; an interrupted or failed run keeps what it computed, :func:`resume_run`
+   continues it). The file's name and what happens to an existing one:
+   :mod:`orchestrator.run_files`.
 
 Channels (:data:`CHANNELS`, units from :mod:`fmu_src.units`): ``journal_position`` (4, 2) [s, t]
 and ``journal_velocity`` (4, 2) of the journal centres, ``bearing_force`` (4, 2),
@@ -23,7 +26,8 @@ results file once the transient stops (complete, failed or interrupted; at least
 (peak-to-peak of ||F_b||), ``line_amplitudes`` (4, n) [N] (peak amplitudes of the lines of
 ||F_b||, NaN where the window does not resolve a line), ``line_orders`` (n,) [1] (pinion orders),
 ``line_labels`` (n,) (strings: "1x", "gear_1x", "26x", ...) and ``report_window`` (2,) [s]
-(start and end of the window); ``report_units`` repeats these units as JSON text.
+(start and end of the window); each numeric attribute with a unit has it in ``<name>_unit``
+(:data:`ATTRIBUTE_UNITS`).
 """
 
 from __future__ import annotations

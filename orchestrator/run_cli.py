@@ -33,6 +33,10 @@ def _common(p, case_help: str = "case file (TOML) or the name of a shipped case,
         p.add_argument("case", nargs="?", default="baguet2010_spur", help=case_help)
     else:
         p.add_argument("case", help=case_help)
+    _overrides_options(p)
+
+
+def _overrides_options(p) -> None:
     p.add_argument("--speed", help="override operation.speed (e.g. '500 rad/s', '3000 rpm')")
     p.add_argument("--torque", help="override operation.torque (e.g. '300 N.m')")
     p.add_argument("--unbalance", help="override operation.unbalance of both shafts (e.g. "
@@ -44,17 +48,31 @@ def _common(p, case_help: str = "case file (TOML) or the name of a shipped case,
 def add_parsers(sub) -> None:
     p = sub.add_parser("run", help="static solution and transient of a case (FMUs by default)",
                        description="Static solution X0 and the coupled transient of a case; "
-                                   "writes results/<case>_<model>.h5 and PNG figures. Ctrl-C "
-                                   "or SIGTERM stops it after the current step (exit 130 / "
-                                   "143), the steps computed kept.")
-    _common(p, "case file (TOML), the name of a shipped case (e.g. baguet2010_spur), or an SSP "
-               "archive of `gsb export-ssp` (its FMUs and values are run)")
+                                   "writes <out>/<case>_<model>_<hash>.h5 (the hash of the "
+                                   "effective parameters: runs with other overrides keep their "
+                                   "own files) and PNG figures in the folder beside it. The "
+                                   "file is readable while the run writes it (HDF5 SWMR) and "
+                                   "flushed every second. Ctrl-C or SIGTERM stops the run after "
+                                   "the current step (exit 130 / 143), the steps computed kept; "
+                                   "--resume continues it.")
+    p.add_argument("case", nargs="?", default=None,
+                   help="case file (TOML), the name of a shipped case (e.g. baguet2010_spur; "
+                        "`gsb cases` lists them), or an SSP archive of `gsb export-ssp` (its FMUs "
+                        "and values are run)")
+    _overrides_options(p)
     p.add_argument("--bearing", choices=tuple(MODELS), help="bearing model (overrides the "
                                                             "case; swaps the bearing FMU)")
-    p.add_argument("--periods", type=int, help="mesh periods to simulate (overrides the case)")
+    p.add_argument("--periods", type=int, help="mesh periods to simulate (overrides the case; "
+                                               "with --resume: the new total length)")
     p.add_argument("--in-process", action="store_true",
                    help="run the Python slaves directly, without the FMI layer")
     p.add_argument("--out", default="results", help="output folder (default results/)")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace an existing results file of the same parameters (a complete "
+                        "one only once the new run is complete)")
+    p.add_argument("--resume", metavar="FILE", default=None,
+                   help="continue the run of this results file from its last checkpoint (its "
+                        "stored case, transport and model; --periods extends it)")
     p.add_argument("--fmu-dir", default=None, help="folder of built FMUs (default: the per-user "
                                                    "cache; built there if missing)")
     p.add_argument("--bearing-fmu", default=None, metavar="FMU",
@@ -63,6 +81,23 @@ def add_parsers(sub) -> None:
     p.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
     p.add_argument("--quiet", action="store_true", help="no progress display")
     p.set_defaults(func=run)
+
+    p = sub.add_parser("cases", help="list the cases shipped with the package",
+                       description="The case files installed with the package; `gsb run NAME` "
+                                   "runs one from any folder, `--show NAME` prints its file.")
+    p.add_argument("--show", metavar="NAME", default=None, help="print this case's file")
+    p.set_defaults(func=cases)
+
+    p = sub.add_parser("export", help="write a results file's channels as CSV",
+                       description="One row per time step, one column per channel component, "
+                                   "named `channel[index] [unit]` (e.g. journal_position[0,1] "
+                                   "[m]: bearing 1, t), 17 significant digits.")
+    p.add_argument("file", help="results file (.h5) of gsb run")
+    p.add_argument("--csv", metavar="OUT", nargs="?", const="", default="",
+                   help="CSV file to write (default: the results file with .csv)")
+    p.add_argument("--channel", dest="channels", action="append", default=[],
+                   help="export only this channel (repeatable; default all)")
+    p.set_defaults(func=export)
 
     p = sub.add_parser("reproduce", help="regenerate the paper's section 4 (figures, Table 4, "
                                          "report)",
@@ -177,11 +212,84 @@ def export_ssp(args) -> int:
     return 0
 
 
+def cases(args) -> int:
+    from fmu_src.case import load_case, shipped_cases
+
+    shipped = shipped_cases()
+    if args.show is not None:
+        if args.show not in shipped:
+            raise CaseError(f"--show {args.show}: no shipped case of that name; shipped: "
+                            f"{', '.join(shipped)}")
+        print(shipped[args.show].read_text(), end="")
+        return 0
+    for name, path in shipped.items():
+        c = load_case(path)
+        print(f"{name:<24} {c['operation.speed']:g} rad/s, T = {c['operation.torque']:g} N m, "
+              f"helix {math.degrees(c['gear_pair.helix_angle']):g} deg, "
+              f"{c['bearings.model']} bearings, {c['simulation.mesh_periods']} mesh periods "
+              f"({path})")
+    return 0
+
+
+def export(args) -> int:
+    from orchestrator.results import export_csv
+
+    path = Path(args.file)
+    _require_results(path, "export")
+    out = Path(args.csv) if args.csv else path.with_suffix(".csv")
+    if out.resolve() == path.resolve():
+        raise CaseError(f"--csv {out}: would overwrite the results file")
+    try:
+        written = export_csv(path, out, args.channels or None)
+    except ValueError as exc:
+        raise CaseError(f"--channel: {exc}") from None
+    except OSError as exc:
+        raise CaseError(f"--csv {out}: cannot write ({exc.strerror or exc})") from None
+    print(written)
+    return 0
+
+
+def _require_results(path: Path, command: str) -> None:
+    """CaseError unless ``path`` is a readable results file of ``gsb run``."""
+    import h5py
+
+    if not path.is_file():
+        raise CaseError(f"{path}: no such file")
+    try:
+        with h5py.File(path, "r", swmr=True) as f:
+            if "time" not in f:
+                raise CaseError(f"{path}: not a results file of gsb run (no time channel)")
+    except OSError as exc:
+        raise CaseError(f"{path}: not a readable HDF5 results file ({exc})") from None
+
+
 def run(args) -> int:
     import shutil
 
-    from orchestrator.run import run_case, static_report
+    from orchestrator.run import resume_run, run_case, static_report
 
+    if args.resume is not None:
+        ignored = [o for o, v in (("CASE", args.case), ("--bearing", args.bearing),
+                                  ("--speed", args.speed), ("--torque", args.torque),
+                                  ("--unbalance", args.unbalance), ("--set", args.overrides),
+                                  ("--bearing-fmu", args.bearing_fmu),
+                                  ("--in-process", args.in_process),
+                                  ("--overwrite", args.overwrite)) if v]
+        if ignored:
+            raise CaseError(f"--resume continues the stored run as it was: drop "
+                            f"{', '.join(ignored)} (only --periods, --fmu-dir, --no-figures "
+                            f"and --quiet apply)")
+        summary = resume_run(args.resume, periods=args.periods, fmu_dir=args.fmu_dir,
+                             progress=not args.quiet, figures=not args.no_figures)
+        print(summary.describe())
+        print(summary.report_text())
+        print(f"results: {summary.results}")
+        for path in summary.figures:
+            print(f"figure: {path}")
+        return 0
+    if args.case is None:
+        raise CaseError("a case is needed: a case file, a shipped case name (gsb cases) or an "
+                        "SSP archive; or --resume FILE")
     fmus, folder = None, None
     if str(args.case).endswith(".ssp"):
         from fmu_src.ssp import read_ssp
@@ -208,7 +316,7 @@ def run(args) -> int:
     try:
         summary = run_case(case, periods=args.periods, in_process=args.in_process,
                            out_dir=args.out, fmu_dir=args.fmu_dir, progress=not args.quiet,
-                           figures=not args.no_figures, fmus=fmus)
+                           figures=not args.no_figures, fmus=fmus, overwrite=args.overwrite)
     finally:
         if folder is not None:
             shutil.rmtree(folder, ignore_errors=True)

@@ -19,7 +19,7 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
-__all__ = ["Target", "describe_file", "results_name", "target"]
+__all__ = ["Target", "TargetError", "describe_file", "results_name", "target"]
 
 
 class TargetError(RuntimeError):

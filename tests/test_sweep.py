@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from orchestrator.analysis import fit_ellipse, steady_window
-from orchestrator.sweep import SweepPoint, read_sweep, run_sweep
+from orchestrator.sweep import SweepPoint, read_sweep, read_sweep_attrs, run_sweep
 
 SPUR = "baguet2010_spur"
 
@@ -47,8 +47,14 @@ def test_sweep_gathers_points_and_reports_a_failed_one(scheduler, tmp_path):
     assert "operation.speed" in res.failed[0][1]
     data = read_sweep(res.path)
     assert [d["label"] for d in data] == ["a", "bad", "b"]
+    assert [d["values"].tolist() for d in data] == [[200.0], [-5.0], [400.0]]
+    a = read_sweep_attrs(res.path)
+    assert a["kind"] == "sweep" and a["vary_keys"] == ["operation.speed"]
+    assert a["vary_units"] == ["rad/s"] and a["bearings"] == ["linear"]
+    assert not a["complete"] and a["status"] == "failed points" and a["n_failed"] == 1
     assert data[1]["error"] and "R" not in data[1]
     for d in (data[0], data[2]):
         assert d["error"] is None
         assert d["R"] > 1.0 and d["force_ptp"].shape == (4,)
         assert d["orbit"].shape[1:] == (4, 2)
+        assert d["spectrum"].shape == (4, d["spectrum_orders"].size)

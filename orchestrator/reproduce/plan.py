@@ -57,7 +57,8 @@ def run_base_cases(plan: Plan, out: Path, progress: bool) -> dict:
                              ("helical_linear", HELICAL, "linear"),
                              ("helical_lumped", HELICAL, "lumped")):
         s = run_case(load_case(path), bearing=model, periods=plan.periods, in_process=True,
-                     out_dir=out / "runs", progress=progress, figures=False)
+                     out_dir=out / "runs", progress=progress, figures=False,
+                     overwrite=True)  # a reproduction regenerates its runs
         runs[key] = s.results.name
     return runs
 
@@ -75,7 +76,8 @@ def run_table4(plan: Plan, out: Path, progress: bool) -> list[dict]:
         ecc = math.hypot(*master.structure.journal_states()[0, :2]) / case["bearings.clearance"][0]
         periods = plan.fd_periods if model == "fd" else plan.table4_periods
         s = run_case(case, bearing=model, periods=periods, in_process=True,
-                     out_dir=out / "runs" / "table4", progress=progress, figures=False)
+                     out_dir=out / "runs" / "table4", progress=progress, figures=False,
+                     overwrite=True)
         per_step = s.wall_time / s.steps
         evals_per_step = 4 * s.bearing_evaluations / s.steps
         full_steps = 2048 * 32
@@ -97,25 +99,26 @@ def run_parameter_sweeps(plan: Plan, out: Path, scheduler, workers, progress) ->
     """All sweep files (``out/sweeps/<name>.h5``), run one after the other on the cluster;
     returns the failed points of each."""
     w = plan.speeds
+    spur, helical = load_case(SPUR), load_case(HELICAL)  # the workers get the content
     sweeps = {
-        "fig08_speed": (SPUR, [SweepPoint({"operation.speed": s}, m, f"{m} {s:g}")
+        "fig08_speed": (spur, [SweepPoint({"operation.speed": s}, m, f"{m} {s:g}")
                                for m in ("hybrid", "linear") for s in w]),
-        "fig09_torque": (SPUR, [SweepPoint({"operation.torque": T}, "hybrid", f"T {T:g}")
+        "fig09_torque": (spur, [SweepPoint({"operation.torque": T}, "hybrid", f"T {T:g}")
                                 for T in plan.torques]),
-        "fig10_unbalance": (SPUR, [
+        "fig10_unbalance": (spur, [
             SweepPoint({"operation.speed": s, "operation.unbalance": [e, e]}, m,
                        f"{m} e {e * 1e3:g} mm {s:g}")
             for e in plan.unbalances if e != 0.6e-3 for m in ("hybrid", "linear") for s in w]),
-        "fig11_helix": (SPUR, [
+        "fig11_helix": (spur, [
             SweepPoint({"operation.speed": s, **helix_overrides(b)}, "hybrid",
                        f"beta {b:g} {s:g}")
             for b in plan.helix_angles if b != 0.0 for s in (*w, 325.0)]),
-        "fig16_models": (HELICAL, [SweepPoint({"operation.speed": s}, m, f"{m} {s:g}")
+        "fig16_models": (helical, [SweepPoint({"operation.speed": s}, m, f"{m} {s:g}")
                                    for m in ("lumped", "linear") for s in w]),
     }
     failed = {}
-    for name, (case_path, points) in sweeps.items():
-        res = run_sweep(case_path, points, out / "sweeps" / f"{name}.h5", plan.periods,
+    for name, (case, points) in sweeps.items():
+        res = run_sweep(case, points, out / "sweeps" / f"{name}.h5", plan.periods,
                         plan.steady_periods, scheduler=scheduler, n_workers=workers,
                         progress=progress, name=name)
         failed[name] = res.failed
