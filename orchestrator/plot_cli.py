@@ -1,6 +1,7 @@
-"""``gsb plot FILE``: the figures of a results file, a run's (:func:`orchestrator.plots.
-run_figures`) or a sweep's (:func:`orchestrator.sweep_figures.sweep_figures`), also of an
-incomplete file or one still being written."""
+"""``gsb plot FILE``: the figures of a results file, a run's
+(:func:`orchestrator.plots.run_figures`) or a sweep's
+(:func:`orchestrator.sweep_figures.sweep_figures`), also of an incomplete file or one still
+being written."""
 
 from __future__ import annotations
 

@@ -536,8 +536,9 @@ _DRAW = {"orbits.png": _orbits, "bearing_forces.png": _bearing_forces,
 
 
 def make_run_figures(results: dict) -> dict:
-    """The run figures (matplotlib Figures, by file name) of :func:`read_results` output;
-    the caller closes them. Raises ValueError below 2 time steps."""
+    """The run figures (matplotlib Figures, by file name) of what
+    :func:`orchestrator.results.read_results` returns; the caller closes them. Raises
+    ValueError below 2 time steps."""
     plt = pyplot()
     run = _Run(results)
     figures = {}

@@ -136,7 +136,7 @@ def field_unit(key: str) -> str:
 
 
 def as_case(case) -> Case:
-    """A :class:`Case`: itself, parsed from TOML text (a string with a line break), or read
+    """A :class:`~fmu_src.case.Case`: itself, parsed from TOML text (a string with a line break), or read
     from a file path or shipped name (in the client only: workers get the content)."""
     if isinstance(case, Case):
         return case
@@ -220,7 +220,7 @@ def point_spectrum(case: Case, results: dict, steady_periods: int) -> dict:
 def run_point(case, point: SweepPoint, periods: int, steady_periods: int,
               keep_steps: int = 4096) -> dict:
     """Run one point and reduce it (executed on a worker). ``case``: the sweep's case as a
-    :class:`Case` or its TOML text (never a path); the point's overrides are applied here.
+    :class:`~fmu_src.case.Case` or its TOML text (never a path); the point's overrides are applied here.
     Never raises (errors are returned) except :class:`~orchestrator.run.RunInterrupted`, a
     Ctrl-C of a serial sweep."""
     folder = ""
@@ -371,7 +371,7 @@ def run_sweep(case, points, path: str | Path, periods: int, steady_periods: int 
               name: str = "", vary_keys=None, worker_timeout: float = 60.0) -> SweepResult:
     """Run the points, gather them into one HDF5 file as they complete (module docstring).
 
-    ``case``: a :class:`Case`, its TOML text, or a case file / shipped name read here (the
+    ``case``: a :class:`~fmu_src.case.Case`, its TOML text, or a case file / shipped name read here (the
     workers get its content). ``vary_keys``: the fields varied (default: every key the points
     override, in order of appearance). ``worker_timeout`` [s]: stop when no worker is connected
     to the scheduler for that long. Raises :class:`~orchestrator.run.RunError` if the cluster
