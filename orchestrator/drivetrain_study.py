@@ -112,7 +112,7 @@ def run_plan(periods: int, scheduler: str | None = None, workers: int = 2,
 
     from orchestrator.sweep import _client
 
-    client, cluster = _client(scheduler, workers)
+    client, cluster = _client(scheduler, workers, 60.0)
     try:
         futures = {client.submit(run_point, case, overrides, periods, pure=False): i
                    for i, (_, _, case, overrides) in enumerate(PLAN)}

@@ -129,6 +129,7 @@ class RunSummary:
     static_positions: np.ndarray  # (4, 2) m
     figures: list = field(default_factory=list)
     report: dict | None = None  # orchestrator.analysis.run_report, None below 2 steps
+    warnings: list = field(default_factory=list)  # sentences of the checks before the transient
 
     @property
     def iterations_per_step(self) -> float:
@@ -253,7 +254,7 @@ def _with_units(attrs: dict) -> dict:
     return attrs | {f"{k}_unit": ATTRIBUTE_UNITS[k] for k in attrs if k in ATTRIBUTE_UNITS}
 
 
-def _start(master: Master, case: Case, dt: float, stop_if_asked) -> tuple:
+def _start(master: Master, case: Case, dt: float, stop_if_asked, echo: bool) -> tuple:
     """Static solution X0 and the end of initialisation; returns (static report, x0,
     warnings, seconds)."""
     t0 = time.perf_counter()
@@ -283,7 +284,7 @@ def _start(master: Master, case: Case, dt: float, stop_if_asked) -> tuple:
     except (ValueError, np.linalg.LinAlgError) as exc:  # a check, not the run
         warnings = [f"the time-step check could not run: {exc}"]
     warnings = unbalance_warnings(case) + warnings
-    for text in warnings:
+    for text in warnings if echo else ():
         print(f"warning: {text}", file=sys.stderr, flush=True)
     return static, x0, static_mesh, warnings, time.perf_counter() - t0
 
@@ -292,10 +293,12 @@ def run_case(case: Case, bearing: str | None = None, periods: int | None = None,
              in_process: bool = False, out_dir: Path | str = "results",
              fmu_dir: Path | str | None = None, progress: bool = True, figures: bool = True,
              fmus: dict | None = None, steps: int | None = None, overwrite: bool = False,
-             flush_seconds: float = 1.0) -> RunSummary:
+             flush_seconds: float = 1.0, echo_warnings: bool = True) -> RunSummary:
     """Run a case (module docstring); returns a :class:`RunSummary`.
 
     ``steps``: stop after this many time steps (a quick look; default: all the periods').
+    ``echo_warnings``: print the checks' warnings on stderr (they are also in the summary and
+    the results file).
     The results file is named after the effective parameters
     (:func:`orchestrator.run_files.results_name`); an existing one stops the run before it
     starts unless ``overwrite`` (:func:`orchestrator.run_files.target`: a complete file is
@@ -336,7 +339,7 @@ def run_case(case: Case, bearing: str | None = None, periods: int | None = None,
         "interrupted": "", "stopped_by": "",
     }
     return _run(case, attrs, where, 0, None, in_process, fmu_dir, fmus, progress, figures,
-                flush_seconds)
+                flush_seconds, echo=echo_warnings)
 
 
 def resume_run(path: Path | str, periods: int | None = None, fmu_dir: Path | str | None = None,
@@ -398,7 +401,7 @@ def resume_run(path: Path | str, periods: int | None = None, fmu_dir: Path | str
 
 
 def _run(case, attrs, where, first, blob, in_process, fmu_dir, fmus, progress, figures,
-         flush_seconds, stored_x0=None) -> RunSummary:
+         flush_seconds, stored_x0=None, echo: bool = True) -> RunSummary:
     """Static solution, then steps ``first`` .. ``steps_total`` into ``where`` (from a
     checkpoint ``blob`` when resuming)."""
     dt = float(attrs.get("dt", description.time_step(case)))
@@ -430,7 +433,7 @@ def _run(case, attrs, where, first, blob, in_process, fmu_dir, fmus, progress, f
         try:
             stop_if_asked("before the static solution")
             static, x0, static_mesh, warnings, static_time = _start(master, case, dt,
-                                                                     stop_if_asked)
+                                                                     stop_if_asked, echo)
             if stored_x0 is not None:
                 diff = float(np.abs(x0 - stored_x0).max())
                 if diff > 0.0:
@@ -507,7 +510,8 @@ def _run(case, attrs, where, first, blob, in_process, fmu_dir, fmus, progress, f
             master.close()
     summary = RunSummary(path, n_steps - first, wall, static_time,
                          master.total_iterations - start_iterations,
-                         master.total_bearing_evaluations - start_evals, static.iterations, x0)
+                         master.total_bearing_evaluations - start_evals, static.iterations, x0,
+                         warnings=warnings)
     summary.report = _store_report(path)
     if figures:
         from orchestrator.plots import run_figures

@@ -15,20 +15,7 @@ no worker is connected to the scheduler for ``worker_timeout`` seconds the sweep
 finished points are kept, the others recorded as failed with that reason. Ctrl-C
 (KeyboardInterrupt) does the same and raises :class:`SweepInterrupted`.
 
-The sweep's results are one HDF5 file (:data:`DATASETS` lists every dataset; each carries
-``unit`` and ``description`` attributes):
-
-* root attributes: ``kind = "sweep"``, ``case`` (name), ``case_file`` (where the client read
-  it), ``case_toml`` (the case's text, SI; the points override it), ``vary_keys`` (strings,
-  the case fields varied), ``vary_units`` (their SI units), ``bearings`` (the bearing models,
-  strings), ``periods``, ``steady_periods`` (mesh periods of the run and of its steady window),
-  ``n_points``, ``n_failed``, ``status`` ("complete", "failed points", "worker timeout",
-  "scheduler lost", "interrupted"), ``complete`` (true only when every point succeeded) and
-  ``wall_time`` [s];
-* a group per point, ``points/<index>``: attributes ``values`` (the varied values in SI units,
-  in ``vary_keys`` order; the first entry of a list field), ``bearing``, ``label``,
-  ``overrides`` (JSON text, as given), ``error`` and ``traceback`` if it failed, ``warnings``
-  (the run's warnings, if any), and the datasets of :data:`DATASETS` if it succeeded.
+The sweep's results are one HDF5 file, written one point at a time: :mod:`orchestrator.sweep_file`.
 """
 
 from __future__ import annotations
@@ -36,8 +23,6 @@ from __future__ import annotations
 import asyncio
 import concurrent.futures
 import contextlib
-import io
-import json
 import math
 import sys
 import tempfile
@@ -50,44 +35,14 @@ from pathlib import Path
 
 import numpy as np
 
-from fmu_src.case import FIELDS, Case, CaseError, load_case, parse_case
-from fmu_src.units import DIMENSIONS, symbol
+from fmu_src.case import Case, CaseError, load_case, parse_case
+from orchestrator import sweep_file
 from orchestrator.run import RunError, RunInterrupted
+from orchestrator.sweep_file import DATASETS, field_unit, read_sweep, read_sweep_attrs
 
 __all__ = ["DATASETS", "SweepInterrupted", "SweepPoint", "SweepResult", "as_case",
            "check_point", "field_unit", "point_spectrum", "read_sweep", "read_sweep_attrs",
            "run_point", "run_sweep"]
-
-_BY_KEY = {f.key: f for f in FIELDS}
-
-#: Datasets of a successful point: name -> (unit, description).
-#:
-#: :meta hide-value:
-DATASETS = {
-    "R": (symbol("dimensionless"), "dynamic tooth load factor: max mesh force over the static "
-                                   "mesh load, steady window"),
-    "force_ptp": (symbol("force"), "peak-to-peak of ||F_b|| at bearings 1-4, steady window"),
-    "force_mean": (symbol("force"), "mean of ||F_b|| at bearings 1-4, steady window"),
-    "orbit_centre": (symbol("length"), "centre of the ellipse fitted to the orbit [s, t] at "
-                                       "bearings 1-4, steady window"),
-    "orbit_mean": (symbol("length"), "mean journal position [s, t] at bearings 1-4, steady "
-                                     "window"),
-    "time": (symbol("time"), "time of the decimated steady-window samples"),
-    "orbit": (symbol("length"), "journal position [s, t] at bearings 1-4, steady window, "
-                                "decimated"),
-    "bearing_force": (symbol("force"), "film force [F_s, F_t] at bearings 1-4, steady window, "
-                                       "decimated"),
-    "mesh_force": (symbol("force"), "total normal mesh force, steady window, decimated"),
-    "static_journal": (symbol("length"), "static journal positions X0 [s, t] at bearings 1-4"),
-    "wall_time": (symbol("time"), "wall time of the point on its worker"),
-    "iterations_per_step": (symbol("dimensionless"), "coupled iterations per time step"),
-    "spectrum_orders": (symbol("dimensionless"), "orders of the spectrum bins (cycles per "
-                                                 "pinion revolution), 0 to 3.5 z1"),
-    "spectrum": (symbol("force"), "single-sided peak amplitude of ||F_b|| at bearings 1-4 per "
-                                  "order (full-resolution steady window, a whole number of "
-                                  "pinion revolutions when it holds one)"),
-    "spectrum_window": (symbol("time"), "start and end of the spectrum's window"),
-}
 
 #: the highest order kept in a point's spectrum, in mesh orders (z1)
 MAX_MESH_ORDER = 3.5
@@ -127,17 +82,10 @@ class SweepResult:
         return not self.failed
 
 
-def field_unit(key: str) -> str:
-    """SI unit of a case field (``"1"`` for counts, ``""`` for text, choices and flags)."""
-    kind = _BY_KEY[key].kind
-    if kind in DIMENSIONS:
-        return symbol(kind)
-    return "1" if kind == "count" else ""
-
-
 def as_case(case) -> Case:
-    """A :class:`~fmu_src.case.Case`: itself, parsed from TOML text (a string with a line break), or read
-    from a file path or shipped name (in the client only: workers get the content)."""
+    """A :class:`~fmu_src.case.Case`: itself, parsed from TOML text (a string with a line
+    break), or read from a file path or shipped name (in the client only: workers get the
+    content)."""
     if isinstance(case, Case):
         return case
     if isinstance(case, str) and "\n" in case:
@@ -146,51 +94,6 @@ def as_case(case) -> Case:
         except tomllib.TOMLDecodeError as exc:
             raise CaseError(f"sweep case: not valid TOML: {exc}") from None
     return load_case(case)
-
-
-class _ThreadStderr:
-    """``sys.stderr`` that sends the writes of a thread to its own buffer while it captures
-    (:func:`_captured_stderr`): safe with several tasks per worker process."""
-
-    def __init__(self, base):
-        self.base = base
-        self.local = threading.local()
-
-    def _target(self):
-        return getattr(self.local, "buffer", None) or self.base
-
-    def write(self, text):
-        return self._target().write(text)
-
-    def flush(self):
-        return self._target().flush()
-
-    def __getattr__(self, name):
-        return getattr(self.base, name)
-
-
-_STDERR_LOCK = threading.Lock()
-_STDERR_USERS = [0]
-
-
-@contextlib.contextmanager
-def _captured_stderr():
-    """What this thread writes to ``sys.stderr`` (a run's warnings), kept in a buffer."""
-    with _STDERR_LOCK:
-        if not isinstance(sys.stderr, _ThreadStderr):
-            sys.stderr = _ThreadStderr(sys.stderr)
-        proxy = sys.stderr
-        _STDERR_USERS[0] += 1
-    buffer = io.StringIO()
-    proxy.local.buffer = buffer
-    try:
-        yield buffer
-    finally:
-        proxy.local.buffer = None
-        with _STDERR_LOCK:
-            _STDERR_USERS[0] -= 1
-            if _STDERR_USERS[0] == 0 and sys.stderr is proxy:
-                sys.stderr = proxy.base
 
 
 def point_spectrum(case: Case, results: dict, steady_periods: int) -> dict:
@@ -220,9 +123,9 @@ def point_spectrum(case: Case, results: dict, steady_periods: int) -> dict:
 def run_point(case, point: SweepPoint, periods: int, steady_periods: int,
               keep_steps: int = 4096) -> dict:
     """Run one point and reduce it (executed on a worker). ``case``: the sweep's case as a
-    :class:`~fmu_src.case.Case` or its TOML text (never a path); the point's overrides are applied here.
-    Never raises (errors are returned) except :class:`~orchestrator.run.RunInterrupted`, a
-    Ctrl-C of a serial sweep."""
+    :class:`~fmu_src.case.Case` or its TOML text (never a path); the point's overrides are
+    applied here. Never raises (errors are returned) except
+    :class:`~orchestrator.run.RunInterrupted`, a Ctrl-C of a serial sweep."""
     folder = ""
     try:
         from orchestrator.analysis import run_metrics, steady_window
@@ -239,10 +142,10 @@ def run_point(case, point: SweepPoint, periods: int, steady_periods: int,
         steady_n = min(steady_periods, periods)
         steady = steady_n * mesh_period
         t0 = time.perf_counter()
-        with tempfile.TemporaryDirectory() as tmp, _captured_stderr() as err:
+        with tempfile.TemporaryDirectory() as tmp:
             folder = tmp
             s = run_case(case, bearing=point.bearing, periods=periods, in_process=True,
-                         out_dir=tmp, progress=False, figures=False)
+                         out_dir=tmp, progress=False, figures=False, echo_warnings=False)
             r = read_results(s.results)
         metrics = run_metrics(r, steady)
         win = steady_window(r["time"], steady)
@@ -256,7 +159,7 @@ def run_point(case, point: SweepPoint, periods: int, steady_periods: int,
         out.update(point_spectrum(case, r, steady_n))
         out["wall_time"] = np.asarray(time.perf_counter() - t0)
         out["iterations_per_step"] = np.asarray(s.iterations_per_step)
-        return {"ok": True, "data": out, "warnings": err.getvalue().strip()}
+        return {"ok": True, "data": out, "warnings": "\n".join(s.warnings)}
     except RunInterrupted:
         raise
     except Exception as exc:  # reported, the sweep goes on
@@ -264,27 +167,6 @@ def run_point(case, point: SweepPoint, periods: int, steady_periods: int,
         if folder:  # the run's file is gone with its temporary folder
             text = text.replace(folder, "<the point's temporary folder, removed>")
         return {"ok": False, "error": text, "traceback": traceback.format_exc()}
-
-
-def _point_values(base: Case, overrides: dict, keys) -> list[float]:
-    """The varied values of a point in SI units, bounds not checked (the first entry of a list
-    field; NaN where a value is not a number or not readable)."""
-    from fmu_src.units import UnitError, parse_quantity
-
-    out = []
-    for key in keys:
-        value = overrides[key] if key in overrides else base.values.get(key)
-        if isinstance(value, (list, tuple)):
-            value = value[0] if value else math.nan
-        kind = _BY_KEY[key].kind if key in _BY_KEY else None
-        if kind in DIMENSIONS and isinstance(value, (int, float, str)) \
-                and not isinstance(value, bool):
-            try:
-                value = parse_quantity(value, kind, key)
-            except UnitError:
-                value = math.nan
-        out.append(float(value) if isinstance(value, (int, float)) else math.nan)
-    return out
 
 
 def check_point(case: Case, point: SweepPoint) -> Case:
@@ -345,40 +227,17 @@ def _workers(client) -> int:
     return int(info.get("n_workers", len(info.get("workers", {}))))
 
 
-def _open(path: Path, mode: str, wait: float = 30.0):
-    """``h5py.File(path, mode)``, retried for ``wait`` s while a reader holds the file's
-    lock (``gsb plot`` of a running sweep)."""
-    import h5py
-
-    t0 = time.monotonic()
-    while True:
-        try:
-            return h5py.File(path, mode)
-        except BlockingIOError:
-            if time.monotonic() - t0 > wait:
-                raise
-            time.sleep(0.2)
-
-
-def _strings(values):
-    import h5py
-
-    return np.array([str(v) for v in values], dtype=h5py.string_dtype())
-
-
 def run_sweep(case, points, path: str | Path, periods: int, steady_periods: int = 26,
               scheduler: str | None = None, n_workers: int = 2, progress: bool = True,
               name: str = "", vary_keys=None, worker_timeout: float = 60.0) -> SweepResult:
     """Run the points, gather them into one HDF5 file as they complete (module docstring).
 
-    ``case``: a :class:`~fmu_src.case.Case`, its TOML text, or a case file / shipped name read here (the
-    workers get its content). ``vary_keys``: the fields varied (default: every key the points
-    override, in order of appearance). ``worker_timeout`` [s]: stop when no worker is connected
-    to the scheduler for that long. Raises :class:`~orchestrator.run.RunError` if the cluster
-    cannot be reached (nothing written) and :class:`SweepInterrupted` on Ctrl-C (the finished
-    points kept in the file)."""
-    import h5py
-
+    ``case``: a :class:`~fmu_src.case.Case`, its TOML text, or a case file / shipped name read
+    here (the workers get its content). ``vary_keys``: the fields varied (default: every key the
+    points override, in order of appearance). ``worker_timeout`` [s]: stop when no worker is
+    connected to the scheduler for that long. Raises :class:`~orchestrator.run.RunError` if the
+    cluster cannot be reached (nothing written) and :class:`SweepInterrupted` on Ctrl-C (the
+    finished points kept in the file)."""
     from orchestrator.run import Progress
 
     base = as_case(case)
@@ -409,30 +268,12 @@ def run_sweep(case, points, path: str | Path, periods: int, steady_periods: int 
     stored: set[int] = set()
 
     def store(i, res):
-        """One point into the file, opened for it only: between points the file is closed,
-        complete and readable (gsb plot), and a killed client loses no finished point."""
-        p = points[i]
-        with _open(path, "a") as f:
-            g = f["points"].create_group(f"{i:04d}")
-            g.attrs["overrides"] = json.dumps(p.overrides)
-            g.attrs["values"] = np.asarray(_point_values(base, p.overrides, vary_keys),
-                                           dtype=float)
-            g.attrs["bearing"] = p.bearing or base["bearings.model"]
-            g.attrs["label"] = p.label
-            if res["ok"]:
-                for key, val in res["data"].items():
-                    d = g.create_dataset(key, data=val)
-                    unit, doc = DATASETS.get(key, ("", ""))
-                    d.attrs["unit"] = unit
-                    d.attrs["description"] = doc
-                if res.get("warnings"):
-                    g.attrs["warnings"] = res["warnings"]
-                    warned[i] = res["warnings"]
-            else:
-                g.attrs["error"] = res["error"]
-                g.attrs["traceback"] = res.get("traceback", "")
-                failed.append((i, res["error"]))
-            f.attrs["n_failed"] = len(failed)
+        """One point into the file (:func:`orchestrator.sweep_file.store_point`)."""
+        if res["ok"] and res.get("warnings"):
+            warned[i] = res["warnings"]
+        elif not res["ok"]:
+            failed.append((i, res["error"]))
+        sweep_file.store_point(path, i, points[i], base, vary_keys, res, len(failed))
         stored.add(i)
 
     def give_up(why):
@@ -441,24 +282,8 @@ def run_sweep(case, points, path: str | Path, periods: int, steady_periods: int 
                 store(i, {"ok": False, "error": why, "traceback": ""})
 
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        with h5py.File(path, "w") as f:
-            f.attrs["kind"] = "sweep"
-            f.attrs["case"] = base.name
-            f.attrs["case_file"] = str(base.source)
-            f.attrs["case_toml"] = base.to_toml()
-            f.attrs["vary_keys"] = _strings(vary_keys)
-            f.attrs["vary_units"] = _strings(field_unit(k) if k in _BY_KEY else ""
-                                             for k in vary_keys)
-            f.attrs["bearings"] = _strings(bearings)
-            f.attrs["periods"] = int(periods)
-            f.attrs["steady_periods"] = int(steady_periods)
-            f.attrs["n_points"] = len(points)
-            f.attrs["n_failed"] = 0
-            f.attrs["status"] = "running"
-            f.attrs["complete"] = False
-            f.attrs["wall_time"] = 0.0
-            f.create_group("points")
+        sweep_file.write_header(path, base, vary_keys, bearings, periods, steady_periods,
+                                len(points))
         try:
             for i, why in rejected.items():
                 store(i, {"ok": False, "error": why, "traceback": ""})
@@ -482,10 +307,7 @@ def run_sweep(case, points, path: str | Path, periods: int, steady_periods: int 
         wall = time.perf_counter() - t0
         if status == "complete" and failed:
             status = "failed points"
-        with _open(path, "a") as f:
-            f.attrs["wall_time"] = wall
-            f.attrs["status"] = status
-            f.attrs["complete"] = not failed
+        sweep_file.finish(path, status, not failed, wall)
     finally:
         if client is not None:
             _close(client, cluster)
@@ -580,39 +402,3 @@ def _close(client, cluster):
     if cluster is not None:
         with contextlib.suppress(Exception):
             cluster.close(timeout=10)
-
-
-def read_sweep(path) -> list[dict]:
-    """The points of a sweep file: dicts with ``overrides``, ``values``, ``bearing``, ``label``,
-    ``error`` and the datasets (absent for failed points), in point order."""
-    import h5py
-
-    out = []
-    with h5py.File(path, "r") as f:
-        for key in sorted(f["points"]):
-            g = f["points"][key]
-            d = {"overrides": json.loads(g.attrs["overrides"]), "bearing": g.attrs["bearing"],
-                 "label": g.attrs["label"], "error": g.attrs.get("error"),
-                 "values": np.asarray(g.attrs.get("values", []), dtype=float),
-                 "warnings": g.attrs.get("warnings", "")}
-            for name in g:
-                d[name] = g[name][()]
-            out.append(d)
-    return out
-
-
-def read_sweep_attrs(path) -> dict:
-    """The root attributes of a sweep file (strings arrays as lists of str)."""
-    import h5py
-
-    with h5py.File(path, "r") as f:
-        out = {}
-        for key, value in f.attrs.items():
-            if isinstance(value, np.ndarray) and value.dtype.kind == "O":
-                value = [v.decode() if isinstance(v, bytes) else str(v) for v in value]
-            elif isinstance(value, bytes):
-                value = value.decode()
-            elif isinstance(value, np.generic):
-                value = value.item()
-            out[key] = value
-    return out

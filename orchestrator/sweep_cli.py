@@ -177,7 +177,7 @@ def _bearings(text: str | None, case) -> list[str]:
 
 
 def _fmt(key: str, value) -> str:
-    from orchestrator.sweep import field_unit
+    from orchestrator.sweep_file import field_unit
 
     unit = field_unit(key)
     return f"{key.split('.')[-1]} {value:g}{' ' + unit if unit not in ('', '1') else ''}"

@@ -107,7 +107,7 @@ def sweep_figures(path, out_dir=None) -> list[Path]:
 
     from fmu_src.case import parse_case
     from orchestrator.plots import pyplot
-    from orchestrator.sweep import read_sweep, read_sweep_attrs
+    from orchestrator.sweep_file import read_sweep, read_sweep_attrs
 
     path = Path(path)
     out_dir = path.parent / path.stem if out_dir is None else Path(out_dir)

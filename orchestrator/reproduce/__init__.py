@@ -34,7 +34,7 @@ from orchestrator.reproduce.plan import (
 )
 from orchestrator.reproduce.report import json_default, write_report
 from orchestrator.results import read_results
-from orchestrator.sweep import read_sweep
+from orchestrator.sweep_file import read_sweep
 
 __all__ = ["FULL", "QUICK", "Plan", "draw", "reproduce"]
 
