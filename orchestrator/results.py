@@ -32,8 +32,8 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["ResultsWriter", "add_attributes", "attribute_value", "export_csv",
-           "read_checkpoint", "read_results"]
+__all__ = ["ResultsWriter", "add_attributes", "attribute_value", "clear_write_flags",
+           "export_csv", "live_writer", "read_checkpoint", "read_results"]
 
 #: rows buffered at most between two writes (the time bound usually flushes first)
 CAPACITY = 4096
@@ -62,15 +62,117 @@ def attribute_value(value):
     return json.dumps(value)
 
 
-def _open_append(path):
+def _open_append(path, strict: bool = False):
     """Open a closed results file for writing; a reader holding it open (SWMR readers take a
-    shared lock) must not stop the writer from recording how the run ended."""
+    shared lock) must not stop the writer from recording how the run ended. ``strict``: no
+    such exception (to continue writing steps, nobody else may hold the file)."""
     import h5py
 
     try:
         return h5py.File(path, "a", libver="latest")
     except BlockingIOError:
+        if strict:
+            raise BlockingIOError(f"{path} is open in another process (a run writing it, or "
+                                  "a reader): close it first") from None
         return h5py.File(path, "a", libver="latest", locking=False)
+
+
+_SIGNATURE = b"\x89HDF\r\n\x1a\n"
+
+
+def _lookup3(data: bytes, initval: int = 0) -> int:
+    """Bob Jenkins' lookup3 ``hashlittle``: HDF5's metadata checksum (H5_checksum_lookup3)."""
+    m = 0xFFFFFFFF
+
+    def rot(x, k):
+        return ((x << k) | (x >> (32 - k))) & m
+
+    n = len(data)
+    a = b = c = (0xDEADBEEF + n + initval) & m
+    i = 0
+    while n > 12:
+        a = (a + int.from_bytes(data[i:i + 4], "little")) & m
+        b = (b + int.from_bytes(data[i + 4:i + 8], "little")) & m
+        c = (c + int.from_bytes(data[i + 8:i + 12], "little")) & m
+        a = (a - c) & m; a ^= rot(c, 4); c = (c + b) & m  # noqa: E702 - the mix, as published
+        b = (b - a) & m; b ^= rot(a, 6); a = (a + c) & m  # noqa: E702
+        c = (c - b) & m; c ^= rot(b, 8); b = (b + a) & m  # noqa: E702
+        a = (a - c) & m; a ^= rot(c, 16); c = (c + b) & m  # noqa: E702
+        b = (b - a) & m; b ^= rot(a, 19); a = (a + c) & m  # noqa: E702
+        c = (c - b) & m; c ^= rot(b, 4); b = (b + a) & m  # noqa: E702
+        n -= 12
+        i += 12
+    if n == 0:
+        return c
+    tail = data[i:] + bytes(12 - n)
+    a = (a + int.from_bytes(tail[0:4], "little")) & m
+    b = (b + int.from_bytes(tail[4:8], "little")) & m
+    c = (c + int.from_bytes(tail[8:12], "little")) & m
+    c ^= b; c = (c - rot(b, 14)) & m  # noqa: E702 - the final mix, as published
+    a ^= c; a = (a - rot(c, 11)) & m  # noqa: E702
+    b ^= a; b = (b - rot(a, 25)) & m  # noqa: E702
+    c ^= b; c = (c - rot(b, 16)) & m  # noqa: E702
+    a ^= c; a = (a - rot(c, 4)) & m  # noqa: E702
+    b ^= a; b = (b - rot(a, 14)) & m  # noqa: E702
+    c ^= b; c = (c - rot(b, 24)) & m  # noqa: E702
+    return c
+
+
+def _superblock(path) -> tuple[bytearray, int]:
+    """The version-2/3 superblock of an HDF5 file (no user block) and its length."""
+    with open(path, "rb") as f:
+        head = bytearray(f.read(64))
+    if head[:8] != _SIGNATURE or head[8] not in (2, 3):
+        raise OSError(f"{path}: not an HDF5 file with a version 2/3 superblock")
+    size = 12 + 4 * head[9] + 4  # fields, 4 addresses, checksum
+    if _lookup3(bytes(head[:size - 4])) != int.from_bytes(head[size - 4:size], "little"):
+        raise OSError(f"{path}: the HDF5 superblock checksum does not match")
+    return head, size
+
+
+def _write_flags(path) -> int:
+    """HDF5's file consistency flags (bit 0: open for writing, bit 2: SWMR writing)."""
+    return _superblock(path)[0][11]
+
+
+def live_writer(path) -> int | None:
+    """The id of a process on this machine that holds ``path`` open for writing, or None
+    (the file was closed, or its writer is gone: killed, crashed)."""
+    import os
+    import socket
+
+    import h5py
+
+    try:
+        if not _write_flags(path):
+            return None
+        with h5py.File(path, "r", swmr=True) as f:
+            pid = int(f.attrs.get("writer_pid", -1))
+            host = str(f.attrs.get("writer_host", ""))
+    except OSError:
+        return None
+    if pid <= 0 or host != socket.gethostname():
+        return None
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return None
+    except PermissionError:  # alive, another user's
+        return pid
+    return pid
+
+
+def clear_write_flags(path) -> bool:
+    """Clear the write flags a killed writer left in the superblock (what HDF5's ``h5clear
+    -s`` does), so that the file opens for writing again; True if there were any."""
+    head, size = _superblock(path)
+    if not head[11]:
+        return False
+    head[11] = 0
+    head[size - 4:size] = _lookup3(bytes(head[:size - 4])).to_bytes(4, "little")
+    with open(path, "r+b") as f:
+        f.write(bytes(head[:size]))
+    return True
 
 
 class ResultsWriter:
@@ -120,13 +222,18 @@ class ResultsWriter:
             grp.create_dataset("index", data=np.array([-1, 0, 0], dtype=np.int64))
             self.rows = 0
         else:  # continue an existing file after its first _resume_rows rows
-            self.file = _open_append(self.path)
+            self.file = _open_append(self.path, strict=True)
             self.rows = int(_resume_rows)
             for name in self.channels:
                 self.file[name].resize(self.rows, axis=0)
         for key, value in (attrs or {}).items():
             self.file.attrs[key] = attribute_value(value)
         self.file.attrs["complete"] = False
+        import os
+        import socket
+
+        self.file.attrs["writer_pid"] = os.getpid()  # live_writer: is a run still writing it?
+        self.file.attrs["writer_host"] = socket.gethostname()
         self.file.swmr_mode = True  # readers may open the file from now on
         self._last = time.monotonic()
 

@@ -356,11 +356,15 @@ def resume_run(path: Path | str, periods: int | None = None, fmu_dir: Path | str
     import tomllib
 
     from fmu_src.case import CaseError, parse_case
-    from orchestrator.results import read_checkpoint
+    from orchestrator.results import clear_write_flags, live_writer, read_checkpoint
 
     path = Path(path)
     if not path.is_file():
         raise RunError(f"--resume {path}: no such file")
+    pid = live_writer(path)
+    if pid is not None:
+        raise RunError(f"--resume {path}: process {pid} is still writing it (stop it first: "
+                       f"kill -INT {pid})")
     state = run_files.describe_file(path)
     if state.startswith(("open for writing", "not a readable")):
         raise RunError(f"--resume {path}: {state}")
@@ -380,6 +384,10 @@ def resume_run(path: Path | str, periods: int | None = None, fmu_dir: Path | str
         raise RunError(f"--resume {path}: the file holds no checkpoint (the run stopped before "
                        "its first flush); run it again")
     rows, blob = ckpt
+    with contextlib.suppress(OSError):
+        if clear_write_flags(path):  # what h5clear -s does
+            print(f"note: {path} was not closed by its run (killed?): its rows after the last "
+                  f"checkpoint (step {rows}) are computed again", file=sys.stderr, flush=True)
     steps_per_period = int(a["steps_per_mesh_period"])
     if periods is not None:
         if isinstance(periods, bool) or int(periods) != periods or periods < 1:

@@ -102,14 +102,17 @@ def target(out_dir: Path | str, name: str, overwrite: bool) -> Target:
     figures = out_dir / name
     if not final.exists():
         return Target(final, final, figures)
+    from orchestrator.results import live_writer
+
+    pid = live_writer(final)
+    if pid is not None:
+        raise TargetError(f"{final} is being written by another run (process {pid}); wait for "
+                          "it, stop it, or use another --out")
     state = describe_file(final)
     if not overwrite:
         hint = "" if state.startswith("complete") else f", --resume {final} to continue it"
         raise TargetError(f"{final} exists ({state}): this run would overwrite it; "
                           f"--overwrite to replace it{hint}, or another --out")
-    if state == "open for writing by another run":
-        raise TargetError(f"{final} is being written by another run; wait for it or use "
-                          "another --out")
     if _is_complete(final):
         partial = out_dir / f"{name}.partial.h5"
         partial.unlink(missing_ok=True)

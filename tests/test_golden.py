@@ -10,15 +10,14 @@ The fixture predates the time-integration refinements of ``gear_fmu.structure`` 
 start, contact location); with them switched off in the case (:data:`REFINEMENTS_OFF`) and the
 drivetrain defaults, the case must still give the recorded trajectories.
 
-Each transport runs in a fresh interpreter that compiles every numba kernel anew, as the
-fixture was recorded: with kernels loaded from numba's cache the last digits differ (2e-12 on
+The run is in a fresh interpreter that compiles every numba kernel anew, as the fixture was
+recorded: with kernels loaded from numba's cache the last digits differ (2e-12 on
 positions, 2e-10 on velocities here; see the generator).
 """
 
 import json
 
 import numpy as np
-import pytest
 
 from tests.helpers import DATA, ROOT, run_isolated
 
@@ -32,27 +31,32 @@ def relative_difference(got, ref):
     return float(np.abs(got - ref).max() / np.abs(ref).max())
 
 
-@pytest.mark.parametrize("transport", ["in-process", "fmu"])
-def test_spur_case_reproduces_the_golden_trajectories(transport, fmu_dir):
-    ref = GOLDEN[transport]
+def test_spur_case_reproduces_the_golden_trajectories(fmu_dir):
+    """Both transports, one after the other in one fresh interpreter (one compilation of the
+    kernels for both: the FMUs' Python runs in that interpreter)."""
     out = run_isolated(f"""
         import json, sys, tempfile
         sys.path.insert(0, {str(ROOT)!r})
         from tests.helpers import run_paper_case
-        with tempfile.TemporaryDirectory() as tmp:
-            r, s = run_paper_case(tmp, periods={GOLDEN["periods"]},
-                                  in_process={transport == "in-process"},
-                                  fmu_dir={str(fmu_dir)!r}, **{REFINEMENTS_OFF!r})
-        print(json.dumps({{"time": r["time"].tolist(),
-                          "position": r["journal_position"].tolist(),
-                          "velocity": r["journal_velocity"].tolist(),
-                          "static": s.static_positions.tolist()}}))
+        out = {{}}
+        for transport in ("in-process", "fmu"):
+            with tempfile.TemporaryDirectory() as tmp:
+                r, s = run_paper_case(tmp, periods={GOLDEN["periods"]},
+                                      in_process=transport == "in-process",
+                                      fmu_dir={str(fmu_dir)!r}, **{REFINEMENTS_OFF!r})
+            out[transport] = {{"time": r["time"].tolist(),
+                               "position": r["journal_position"].tolist(),
+                               "velocity": r["journal_velocity"].tolist(),
+                               "static": s.static_positions.tolist()}}
+        print(json.dumps(out))
     """, fresh_numba=True)
-    journal = np.asarray(ref["journal"])
-    assert len(out["time"]) == len(ref["time"])
-    d_pos = relative_difference(out["position"], journal[:, :, :2])
-    d_vel = relative_difference(out["velocity"], journal[:, :, 2:])
-    d_static = relative_difference(out["static"], ref["static"])
-    print(f"\n{transport}: against {GOLDEN['commit']}: positions {d_pos:.1e}, velocities "
-          f"{d_vel:.1e}, static X0 {d_static:.1e}")
-    assert d_pos <= TOLERANCE and d_vel <= TOLERANCE and d_static <= TOLERANCE
+    for transport in ("in-process", "fmu"):
+        ref, got = GOLDEN[transport], out[transport]
+        journal = np.asarray(ref["journal"])
+        assert len(got["time"]) == len(ref["time"])
+        d_pos = relative_difference(got["position"], journal[:, :, :2])
+        d_vel = relative_difference(got["velocity"], journal[:, :, 2:])
+        d_static = relative_difference(got["static"], ref["static"])
+        print(f"\n{transport}: against {GOLDEN['commit']}: positions {d_pos:.1e}, velocities "
+              f"{d_vel:.1e}, static X0 {d_static:.1e}")
+        assert d_pos <= TOLERANCE and d_vel <= TOLERANCE and d_static <= TOLERANCE, transport
