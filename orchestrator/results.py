@@ -347,7 +347,8 @@ def read_checkpoint(path) -> tuple[int, bytes] | None:
 
 def export_csv(path, csv_path, channels=None) -> Path:
     """Write the chosen channels (default: all) as CSV: one row per time step, columns named
-    ``channel[index] [unit]`` (e.g. ``journal_position[0,1] [m]``: bearing 1, t)."""
+    ``channel[i][j] [unit]`` (e.g. ``journal_position[0][1] [m]``: bearing 1, t; no comma
+    inside a name, so any CSV reader splits them right)."""
     data = read_results(path)
     chosen = channels or [n for n in data if n not in ("units", "attrs")]
     unknown = [n for n in chosen if n not in data or n in ("units", "attrs")]
@@ -363,7 +364,7 @@ def export_csv(path, csv_path, channels=None) -> Path:
         shape = arr.shape[1:]
         flat = arr.reshape(n_rows, -1)
         for j, idx in enumerate(np.ndindex(*shape) if shape else [()]):
-            label = name + (f"[{','.join(str(i) for i in idx)}]" if idx else "")
+            label = name + "".join(f"[{i}]" for i in idx)
             heads.append(f"{label} [{data['units'][name]}]")
             cols.append(flat[:, j])
     csv_path = Path(csv_path)

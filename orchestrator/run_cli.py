@@ -90,7 +90,7 @@ def add_parsers(sub) -> None:
 
     p = sub.add_parser("export", help="write a results file's channels as CSV",
                        description="One row per time step, one column per channel component, "
-                                   "named `channel[index] [unit]` (e.g. journal_position[0,1] "
+                                   "named `channel[i][j] [unit]` (e.g. journal_position[0][1] "
                                    "[m]: bearing 1, t), 17 significant digits.")
     p.add_argument("file", help="results file (.h5) of gsb run")
     p.add_argument("--csv", metavar="OUT", nargs="?", const="", default="",
