@@ -1,0 +1,80 @@
+"""What never losing results costs: the flushes and resume checkpoints of a run's file.
+
+Runs the paper's spur case (hybrid bearings) in-process and through FMUs, with the results
+writer instrumented: number of flushes (one per second of wall time), time spent in them
+(rows, HDF5 flush, checkpoint of the coupled state) and the checkpoint's size; the share of the
+run's wall time they take. Usage::
+
+    python benchmarks/results_writer.py [--periods 256] [--skip-fmu]
+"""
+
+from __future__ import annotations
+
+import argparse
+import tempfile
+import time
+
+from fmu_src.case import load_case
+from orchestrator import results
+from orchestrator.run import run_case
+
+
+def measure(in_process: bool, periods: int) -> dict:
+    stats = {"flushes": 0, "flush_s": 0.0, "checkpoint_s": 0.0, "bytes": 0}
+    flush, store = results.ResultsWriter.flush, results.ResultsWriter._store_checkpoint
+
+    def timed_flush(self):
+        t0 = time.perf_counter()
+        flush(self)
+        stats["flushes"] += 1
+        stats["flush_s"] += time.perf_counter() - t0
+
+    def timed_checkpoint(self):
+        t0 = time.perf_counter()
+        state = self._checkpoint_source()
+        stats["checkpoint_s"] += time.perf_counter() - t0
+        stats["bytes"] = len(state)
+        return state
+
+    results.ResultsWriter.flush = timed_flush
+    try:
+        with tempfile.TemporaryDirectory() as tmp:
+            original = results.ResultsWriter.__init__
+
+            def init(self, *args, **kw):
+                original(self, *args, **kw)
+                if self.checkpoint is not None:
+                    self._checkpoint_source = self.checkpoint
+                    self.checkpoint = lambda: timed_checkpoint(self)
+
+            results.ResultsWriter.__init__ = init
+            try:
+                s = run_case(load_case("baguet2010_spur"), periods=periods, in_process=in_process,
+                             out_dir=tmp, progress=False, figures=False, echo_warnings=False)
+            finally:
+                results.ResultsWriter.__init__ = original
+    finally:
+        results.ResultsWriter.flush = flush
+        results.ResultsWriter._store_checkpoint = store
+    return stats | {"wall_s": s.wall_time, "steps": s.steps}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--periods", type=int, default=256)
+    parser.add_argument("--skip-fmu", action="store_true")
+    args = parser.parse_args()
+    print(f"paper spur case, hybrid bearings, {args.periods} mesh periods")
+    print(f"{'transport':<11} {'steps':>6} {'run [s]':>8} {'flushes':>7} {'flush [ms]':>10} "
+          f"{'of which checkpoint [ms]':>24} {'checkpoint [kB]':>15} {'share of run':>12}")
+    for in_process in (True, False) if not args.skip_fmu else (True,):
+        m = measure(in_process, args.periods)
+        n = max(m["flushes"], 1)
+        print(f"{'in-process' if in_process else 'FMUs':<11} {m['steps']:>6} {m['wall_s']:>8.2f} "
+              f"{m['flushes']:>7} {1e3 * m['flush_s'] / n:>10.2f} "
+              f"{1e3 * m['checkpoint_s'] / n:>24.2f} {m['bytes'] / 1e3:>15.1f} "
+              f"{100 * m['flush_s'] / m['wall_s']:>11.2f} %")
+
+
+if __name__ == "__main__":
+    main()
