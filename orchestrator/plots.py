@@ -3,7 +3,7 @@
 
 :func:`run_figures` writes four PNGs into the folder beside the results file
 (``<file stem>/``), each titled with the case, bearing model, mode, speed, torque and unbalance
-(:func:`run_title`):
+(:func:`orchestrator.plot_base.run_title`):
 
 ``orbits.png``
     the journal-centre orbits of bearings 1-4 [um], zoomed on the orbit, the last gear
@@ -28,13 +28,24 @@ attributes ``case``, ``bearing_model``, ``mode``, ``speed`` [rad/s], ``teeth`` (
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 
 import numpy as np
 
-from orchestrator.analysis import order_lines, pinion_lines, resolved_lines, steady_window
+from orchestrator.analysis import order_lines, pinion_lines, resolved_lines
+from orchestrator.plot_base import (
+    BEARING_STYLE,
+    DPI,
+    SHAFTS,
+    UM,
+    RunData,
+    normalised_spectrum,
+    order_amplitude_spectrum,
+    pyplot,
+    run_title,
+    titled_figure,
+)
 from orchestrator.results import read_results
 
 __all__ = ["RUN_FIGURES", "make_run_figures", "normalised_spectrum", "order_amplitude_spectrum",
@@ -44,158 +55,6 @@ __all__ = ["RUN_FIGURES", "make_run_figures", "normalised_spectrum", "order_ampl
 RUN_FIGURES = ("orbits.png", "bearing_forces.png", "spectra.png", "mesh.png")
 #: names of earlier versions, removed as stale too
 _OLD_FIGURES = ("bearing_force.png", "mesh_force.png")
-
-_FIGSIZE = (11, 8)
-_DPI = 120
-_UM = 1e6
-#: colour, line style, marker of bearings 1-4: 1/2 and 3/4 coincide in the spur case, so the
-#: second of each shaft is dashed with open markers offset by half a marker step
-_STYLE = [("C0", "-", "o"), ("C1", "--", "s"), ("C2", "-", "^"), ("C3", "--", "v")]
-_SHAFTS = (("pinion shaft", (0, 1)), ("gear shaft", (2, 3)))
-
-
-def pyplot():
-    """matplotlib.pyplot on the file-only Agg backend (no display needed)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
-def normalised_spectrum(signal, dt: float, rotation_frequency: float):
-    """One-sided amplitude spectrum on the paper's normalised axis (Fig. 7, 15).
-
-    Returns (f_tilde, amplitude / max amplitude), f_tilde = f / rotation_frequency, the mean
-    removed, so a line at f_tilde = 1 is once per revolution and at Z the mesh frequency.
-    """
-    x = np.asarray(signal, dtype=float)
-    x = x - x.mean()
-    amp = np.abs(np.fft.rfft(x)) * 2.0 / len(x)
-    f = np.fft.rfftfreq(len(x), dt) / rotation_frequency
-    return f, amp / max(amp.max(), 1e-300)
-
-
-def order_amplitude_spectrum(signal, dt: float, rotation_hz: float, pad: int = 8):
-    """Peak-amplitude spectrum of uniformly sampled signals against order, for windows that
-    are not a whole number of periods: the mean removed, a Hann window, zero-padded ``pad``
-    times; amplitudes ``2 |X_k| / sum(w)``, so a line ``A cos(...)`` reads about ``A`` at its
-    peak (the padding bounds the scalloping loss).
-
-    Returns ``(orders, amplitudes)``, orders = f / ``rotation_hz``, amplitudes (m, ...) in the
-    unit of ``signal`` (trailing axes are independent signals).
-    """
-    x = np.asarray(signal, dtype=float)
-    n = x.shape[0]
-    if n < 2:
-        raise ValueError(f"a spectrum needs at least 2 samples, got {n}")
-    w = np.hanning(n + 2)[1:-1]  # no zero end points
-    x = (x - x.mean(axis=0)) * w.reshape((n,) + (1,) * (x.ndim - 1))
-    nfft = 1 << math.ceil(math.log2(max(pad, 1) * n))
-    amp = np.abs(np.fft.rfft(x, nfft, axis=0)) * (2.0 / w.sum())
-    return np.fft.rfftfreq(nfft, dt) / rotation_hz, amp
-
-
-# ---------------------------------------------------------------------------- attributes
-
-
-def _num(attrs: dict, key: str, default=None):
-    """A numeric root attribute as float / float array (older files: JSON text)."""
-    value = attrs.get(key)
-    if value is None or (isinstance(value, str) and not value.strip()):
-        return default
-    if isinstance(value, str):
-        try:
-            value = json.loads(value)
-        except ValueError:
-            return default
-    try:
-        arr = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        return default
-    return float(arr) if arr.ndim == 0 else arr
-
-
-def _text(attrs: dict, key: str, default: str = "?") -> str:
-    value = attrs.get(key, default)
-    return value.decode() if isinstance(value, bytes) else str(value)
-
-
-def run_title(attrs: dict, steps: int, what: str = "") -> str:
-    """Two-line figure title from a results file's root attributes: what the figure shows,
-    the case, bearing model and mode; pinion speed (rad/s and rpm), torque, unbalance, and
-    "(incomplete run: N steps)" unless the file is marked complete."""
-    head = f"{_text(attrs, 'case')} - {_text(attrs, 'bearing_model')} bearings, " \
-           f"{_text(attrs, 'mode')}"
-    parts = []
-    speed = _num(attrs, "speed")
-    if speed is not None:
-        parts.append(f"pinion speed {speed:.4g} rad/s ({speed * 30.0 / math.pi:.4g} rpm)")
-    torque = _num(attrs, "torque")
-    if torque is not None:
-        parts.append(f"torque {torque:.4g} N m")
-    unbalance = _num(attrs, "unbalance")
-    if unbalance is not None:
-        u = np.atleast_1d(unbalance) * 1e3
-        parts.append("unbalance " + " / ".join(f"{v:.3g}" for v in u) + " mm"
-                     + (" (pinion / gear)" if u.size == 2 else ""))
-    tail = "" if bool(attrs.get("complete", False)) else f" (incomplete run: {steps} steps)"
-    return (f"{what}: " if what else "") + head + "\n" + ", ".join(parts) + tail
-
-
-class _Run:
-    """The arrays and windows the figures share."""
-
-    def __init__(self, results: dict):
-        self.attrs = results["attrs"]
-        self.time = np.asarray(results["time"], dtype=float)
-        self.steps = self.time.size
-        if self.steps < 2:
-            raise ValueError(f"the file has {self.steps} time step(s): nothing to plot yet")
-        self.journal = np.asarray(results["journal_position"], dtype=float)
-        self.force = np.asarray(results["bearing_force"], dtype=float)
-        self.force_norm = np.hypot(self.force[..., 0], self.force[..., 1])
-        self.mesh = np.asarray(results["mesh_force"], dtype=float)
-        te = results.get("transmission_error")
-        self.te = None if te is None else np.asarray(te, dtype=float)
-        self.dt = float(np.median(np.diff(self.time)))
-        self.speed = abs(_num(self.attrs, "speed", 0.0)) or 2.0 * math.pi  # rad/s
-        self.pinion_hz = self.speed / (2.0 * math.pi)
-        teeth = _num(self.attrs, "teeth")
-        self.teeth = None if teeth is None else [int(z) for z in np.rint(teeth)]
-        self.pinion_rev = 1.0 / self.pinion_hz
-        self.gear_rev = (None if self.teeth is None
-                         else self.pinion_rev * self.teeth[1] / self.teeth[0])
-        self.clearance = _num(self.attrs, "clearance")
-        self.static_journal = _num(self.attrs, "static_journal")
-        self.static_mesh = _num(self.attrs, "static_mesh_force")
-        self.static_te = _num(self.attrs, "static_transmission_error")
-
-    def title(self, what: str) -> str:
-        return run_title(self.attrs, self.steps, what)
-
-    def long_window(self) -> tuple[np.ndarray, str]:
-        """The last gear revolution (the last half of a shorter run): mask and name."""
-        end = self.time[-1]
-        if self.gear_rev is not None and end >= self.gear_rev * (1 - 1e-9):
-            return steady_window(self.time, self.gear_rev), "last gear revolution"
-        return steady_window(self.time, 0.5 * end), "last half of the run"
-
-    def short_window(self) -> tuple[np.ndarray, str]:
-        """The last pinion revolution (the whole run if shorter)."""
-        if self.time[-1] - self.time[0] >= self.pinion_rev * (1 - 1e-9):
-            return steady_window(self.time, self.pinion_rev), "last pinion revolution"
-        return np.ones(self.steps, dtype=bool), "whole run, shorter than a pinion revolution"
-
-
-# ---------------------------------------------------------------------------- figures
-
-
-def _figure(plt, run: _Run, what: str, **kw):
-    fig = plt.figure(figsize=_FIGSIZE, layout="constrained", **kw)
-    fig.suptitle(run.title(what), fontsize=12)
-    return fig
 
 
 def _corners(sw: float, sh: float, pad: float):
@@ -244,29 +103,29 @@ def _zoom(xs, ys, shape: float, floor: float = 1e-3, side: float = 0.34, margin:
     return (cx - hx, cx + hx), (bottom, bottom + 2 * hy), [1 - pad - sw, 1 - pad - sh, sw, sh]
 
 
-def _orbits(plt, run: _Run):
+def _orbits(plt, run: RunData):
     from matplotlib.lines import Line2D
     from matplotlib.patches import Rectangle
 
-    fig = _figure(plt, run, "journal-centre orbits")
+    fig = titled_figure(plt, run, "journal-centre orbits")
     axes = fig.subplots(2, 2)
     win, kind = run.long_window()
     span_ms = (run.time[win][-1] - run.time[win][0] + run.dt) * 1e3
     circle = np.linspace(0.0, 2.0 * np.pi, 361)
     insets = []
     for b, ax in enumerate(axes.flat):
-        colour = _STYLE[b][0]
-        s, t = run.journal[:, b, 0] * _UM, run.journal[:, b, 1] * _UM
+        colour = BEARING_STYLE[b][0]
+        s, t = run.journal[:, b, 0] * UM, run.journal[:, b, 1] * UM
         ax.plot(s, t, color="0.6", lw=0.5, alpha=0.6, zorder=1)
         ax.plot(s[win], t[win], color=colour, lw=1.3, zorder=3)
         ax.plot(s[-1], t[-1], "o", color=colour, ms=4, zorder=4)
         xs, ys = list(s[win]), list(t[win])
-        x0 = None if run.static_journal is None else run.static_journal[b] * _UM
+        x0 = None if run.static_journal is None else run.static_journal[b] * UM
         if x0 is not None:
             ax.plot(*x0, "P", color="k", ms=9, mec="w", mew=0.8, zorder=5)
             xs.append(x0[0])
             ys.append(x0[1])
-        c = None if run.clearance is None else float(run.clearance[b]) * _UM
+        c = None if run.clearance is None else float(run.clearance[b]) * UM
         ax.ticklabel_format(useOffset=False)
         ax.grid(True, lw=0.4, alpha=0.5)
         ax.set_xlabel("s [um]")
@@ -316,7 +175,7 @@ def _orbits(plt, run: _Run):
     return fig
 
 
-def _angle_axis(ax, run: _Run, t_start: float):
+def _angle_axis(ax, run: RunData, t_start: float):
     """Top axis in ms of run time for a bottom axis in pinion degrees since ``t_start``."""
     deg_per_s = math.degrees(run.speed)
     top = ax.secondary_xaxis("top", functions=(lambda a: (t_start + a / deg_per_s) * 1e3,
@@ -325,17 +184,17 @@ def _angle_axis(ax, run: _Run, t_start: float):
     return top
 
 
-def _bearing_forces(plt, run: _Run):
-    fig = _figure(plt, run, "bearing force norms ||F_b||")
+def _bearing_forces(plt, run: RunData):
+    fig = titled_figure(plt, run, "bearing force norms ||F_b||")
     axes = fig.subplots(2, 1, sharex=True)
     win, kind = run.short_window()
     t = run.time[win]
     t_start = t[0] - run.dt
     angle = (t - t_start) * math.degrees(run.speed)
     every = max(1, t.size // 14)
-    for ax, (shaft, pair) in zip(axes, _SHAFTS, strict=True):
+    for ax, (shaft, pair) in zip(axes, SHAFTS, strict=True):
         for j, b in enumerate(pair):
-            colour, ls, marker = _STYLE[b]
+            colour, ls, marker = BEARING_STYLE[b]
             ax.plot(angle, run.force_norm[win, b], color=colour, ls=ls, marker=marker,
                     lw=2.0 if j == 0 else 1.4, ms=6, mfc=colour if j == 0 else "none",
                     markevery=(j * every // 2, every), label=f"bearing {b + 1}",
@@ -353,7 +212,7 @@ def _bearing_forces(plt, run: _Run):
     return fig
 
 
-def _line_table(run: _Run, win) -> tuple[np.ndarray, np.ndarray, list[str]]:
+def _line_table(run: RunData, win) -> tuple[np.ndarray, np.ndarray, list[str]]:
     """Least-squares peak amplitudes (4, n) [N] of the pinion lines over ``win`` (NaN where
     the window does not resolve a line), their orders and labels."""
     orders, labels = pinion_lines(run.teeth)
@@ -377,8 +236,8 @@ def _short(value: float) -> str:
     return f"{value:.0f}" if 1e3 <= abs(value) < 1e6 else f"{value:.0e}"
 
 
-def _spectra(plt, run: _Run):
-    fig = _figure(plt, run, "order spectra of ||F_b||")
+def _spectra(plt, run: RunData):
+    fig = titled_figure(plt, run, "order spectra of ||F_b||")
     grid = fig.add_gridspec(2, 2, width_ratios=[3.3, 1])
     axes = [fig.add_subplot(grid[0, 0])]
     axes.append(fig.add_subplot(grid[1, 0], sharex=axes[0]))
@@ -395,9 +254,9 @@ def _spectra(plt, run: _Run):
     q_hi = min(3.6 * z1, q[-1])
     keep = (q >= q_lo * 0.9) & (q <= q_hi)
     top = max(float(amp[keep].max()), 1e-12) if keep.any() else 1.0
-    for ax, (shaft, pair) in zip(axes, _SHAFTS, strict=True):
+    for ax, (shaft, pair) in zip(axes, SHAFTS, strict=True):
         for j, b in enumerate(pair):
-            colour, ls, marker = _STYLE[b]
+            colour, ls, marker = BEARING_STYLE[b]
             ax.plot(q[keep], amp[keep, b], color=colour, ls=ls, lw=1.5 if j == 0 else 1.1,
                     label=f"bearing {b + 1} (Hann spectrum)", zorder=2 + j)
             if lines is not None:
@@ -470,8 +329,8 @@ def _envelope(ax, x, y, colour, period: int, bins: int = 600):
     ax.plot(xc, mean, color="0.3", lw=0.6, label="mean per bin")
 
 
-def _mesh(plt, run: _Run):
-    fig = _figure(plt, run, "transmission error and mesh force")
+def _mesh(plt, run: RunData):
+    fig = titled_figure(plt, run, "transmission error and mesh force")
     axes = fig.subplots(2, 2, sharex="col", width_ratios=[1, 1.25])
     win, kind = run.short_window()
     t = run.time[win]
@@ -484,13 +343,13 @@ def _mesh(plt, run: _Run):
     period = round(1.0 / (teeth * run.pinion_hz * run.dt))  # steps per mesh period
     te = run.te
     if te is not None:
-        axes[0, 0].plot(angle, te[win] * _UM, color="C4", lw=1.0)
+        axes[0, 0].plot(angle, te[win] * UM, color="C4", lw=1.0)
         if run.static_te is not None:
-            axes[0, 0].axhline(run.static_te * _UM, color="k", ls=":", lw=0.9,
+            axes[0, 0].axhline(run.static_te * UM, color="k", ls=":", lw=0.9,
                                label="static TE")
             axes[0, 0].legend(loc="best", fontsize=9)
         axes[0, 0].set_ylabel("transmission error [um]")
-        _envelope(axes[0, 1], run.time * 1e3, te * _UM, "C4", period)
+        _envelope(axes[0, 1], run.time * 1e3, te * UM, "C4", period)
     else:
         for ax in axes[0]:
             ax.text(0.5, 0.5, "no transmission_error channel", ha="center",
@@ -540,7 +399,7 @@ def make_run_figures(results: dict) -> dict:
     :func:`orchestrator.results.read_results` returns; the caller closes them. Raises
     ValueError below 2 time steps."""
     plt = pyplot()
-    run = _Run(results)
+    run = RunData(results)
     figures = {}
     with plt.rc_context({"font.size": 10, "axes.titlesize": 11, "axes.labelsize": 10}):
         try:
@@ -569,7 +428,7 @@ def run_figures(path, out_dir=None) -> list[Path]:
     try:
         for name, fig in figures.items():
             written.append(out_dir / name)
-            fig.savefig(written[-1], dpi=_DPI)
+            fig.savefig(written[-1], dpi=DPI)
     finally:
         for fig in figures.values():
             plt.close(fig)
