@@ -1,6 +1,7 @@
 """Wall time of the paper's spur case (Table 4): 2048 mesh periods, 65,536 steps.
 
-Usage: ``python benchmarks/paper_case.py [--periods N] [--skip-fmu] [--contact-location]``
+Usage: ``python benchmarks/paper_case.py [--periods N] [--skip-fmu] [--contact-location]
+[--breakdown]``
 
 Runs, in one process and in this order: hybrid bearings in-process, the linear 8-coefficient
 model in-process (Table 4 case 0), hybrid through the FMUs (fmpy), and prints wall time,
@@ -10,18 +11,111 @@ helical cases with ``simulation.locate_contact`` off (the steps not cut at the c
 :mod:`gear_fmu.structure`) and the ratio of the default (on) to them. The numba kernels are
 compiled before the clock starts (a 2-period warm-up run per configuration). The paper needed
 8 minutes for case 2 in 2010.
+
+``--breakdown`` times every call the master and the runner make on the slaves, per coupled
+iteration (microseconds): the structure step (in-process: the Python Structure and its
+kernels; through FMUs: the fmi2DoStep call, the FMU's Python included), the bearing set's
+evaluation, state saves and restores, the law linearisation and mismatch of the master, the
+results writer, and the rest (the loop, the progress test); and the ratio of the total to the
+sum of the timed calls. The timers add about 0.5 us per call (measured by the ratio of the
+runs with and without them).
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import platform
 import tempfile
+import time
 
 from fmu_src.case import load_case
 from orchestrator.run import run_case
 
 CASE = "baguet2010_spur"
+
+
+#: (label, class path, method) of the calls timed by --breakdown
+TIMED = [
+    ("structure step", "orchestrator.inprocess.InProcessStructure", "do_step"),
+    ("structure step", "orchestrator.fmi.structure.FmuStructure", "do_step"),
+    ("bearing evaluation", "orchestrator.inprocess.ModelBearings", "evaluate"),
+    ("bearing evaluation", "orchestrator.fmi.bearings.FmuBearings", "evaluate"),
+    ("state save / restore", "orchestrator.inprocess.InProcessStructure", "get_state"),
+    ("state save / restore", "orchestrator.inprocess.InProcessStructure", "set_state"),
+    ("state save / restore", "orchestrator.fmi.structure.FmuStructure", "get_state"),
+    ("state save / restore", "orchestrator.fmi.structure.FmuStructure", "set_state"),
+    ("laws in / journals out", "orchestrator.inprocess.InProcessStructure", "set_bearing_laws"),
+    ("laws in / journals out", "orchestrator.inprocess.InProcessStructure", "journal_states"),
+    ("laws in / journals out", "orchestrator.fmi.structure.FmuStructure", "set_bearing_laws"),
+    ("laws in / journals out", "orchestrator.fmi.structure.FmuStructure", "journal_states"),
+    ("master: linearise + mismatch", "bearing_fmu.affine.AffineLaws", "linearise"),
+    ("master: linearise + mismatch", "orchestrator.master.Master", "_mismatch"),
+    ("outputs + results writer", "orchestrator.results.ResultsWriter", "append"),
+    ("outputs + results writer", "orchestrator.inprocess.InProcessStructure", "mesh_force"),
+    ("outputs + results writer", "orchestrator.inprocess.InProcessStructure",
+     "transmission_error"),
+    ("outputs + results writer", "orchestrator.inprocess.InProcessStructure",
+     "gear_displacements"),
+    ("outputs + results writer", "orchestrator.fmi.structure.FmuStructure", "mesh_force"),
+    ("outputs + results writer", "orchestrator.fmi.structure.FmuStructure",
+     "transmission_error"),
+    ("outputs + results writer", "orchestrator.fmi.structure.FmuStructure",
+     "gear_displacements"),
+]
+
+
+@contextlib.contextmanager
+def timed_calls():
+    """Wrap the :data:`TIMED` methods with timers; yields ``{label: seconds}``."""
+    import importlib
+
+    totals: dict[str, float] = {}
+    saved = []
+    for label, path, name in TIMED:
+        module, cls_name = path.rsplit(".", 1)
+        cls = getattr(importlib.import_module(module), cls_name)
+        raw = cls.__dict__[name]
+        func = raw.__func__ if isinstance(raw, classmethod) else raw
+
+        def wrapper(*a, _f=func, _label=label, **kw):
+            t0 = time.perf_counter()
+            try:
+                return _f(*a, **kw)
+            finally:
+                totals[_label] = totals.get(_label, 0.0) + time.perf_counter() - t0
+
+        setattr(cls, name, classmethod(wrapper) if isinstance(raw, classmethod) else wrapper)
+        saved.append((cls, name, raw))
+    try:
+        yield totals
+    finally:
+        for cls, name, raw in reversed(saved):
+            setattr(cls, name, raw)
+
+
+def breakdown(periods: int, in_process: bool) -> None:
+    """Per coupled iteration: the timed calls (:data:`TIMED`) and the rest."""
+    kw = dict(bearing="hybrid", in_process=in_process, progress=False, figures=False)
+    case = load_case(CASE)
+    with tempfile.TemporaryDirectory() as tmp:
+        run_case(case, periods=2, out_dir=tmp + "/w", **kw)  # warm-up
+        plain = run_case(case, periods=periods, out_dir=tmp + "/p", **kw)
+        with timed_calls() as totals:
+            s = run_case(case, periods=periods, out_dir=tmp + "/t", **kw)
+    n = s.iterations
+    us = 1e6 / n
+    where = "in-process" if in_process else "FMUs (fmpy)"
+    print(f"\nbreakdown, hybrid {where}: {s.steps} steps, {n} coupled iterations "
+          f"({s.iterations_per_step:.2f} per step); {s.wall_time:.2f} s timed, "
+          f"{plain.wall_time:.2f} s without the timers")
+    for label, total in sorted(totals.items(), key=lambda kv: -kv[1]):
+        print(f"  {label:30s} {total * us:8.1f} us/iteration  {100 * total / s.wall_time:5.1f} %")
+    rest = s.wall_time - sum(totals.values())
+    print(f"  {'rest (loop, progress, ...)':30s} {rest * us:8.1f} us/iteration  "
+          f"{100 * rest / s.wall_time:5.1f} %")
+    print(f"  {'total':30s} {s.wall_time * us:8.1f} us/iteration; total / timed calls "
+          f"{s.wall_time / sum(totals.values()):.3f}")
 
 
 def main() -> None:
@@ -30,7 +124,16 @@ def main() -> None:
     parser.add_argument("--skip-fmu", action="store_true")
     parser.add_argument("--contact-location", action="store_true",
                         help="also time the runs with simulation.locate_contact off")
+    parser.add_argument("--breakdown", action="store_true",
+                        help="only the per-iteration breakdown (hybrid, in-process and FMUs)")
     args = parser.parse_args()
+    if args.breakdown:
+        print(f"machine: {platform.machine()}, CPython {platform.python_version()}; {CASE}, "
+              f"{args.periods} mesh periods ({args.periods * 32} steps)")
+        breakdown(args.periods, True)
+        if not args.skip_fmu:
+            breakdown(args.periods, False)
+        return
     configs = [("hybrid", True), ("linear", True)]
     if not args.skip_fmu:
         configs.append(("hybrid", False))
