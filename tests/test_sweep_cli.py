@@ -191,14 +191,14 @@ def empty_scheduler(tmp_path_factory):
 def test_no_worker_stops_after_the_worker_timeout(empty_scheduler, tmp_path):
     t0 = time.monotonic()
     res = _gsb([SPUR, "--vary", "speed=300,400", *TINY, "--scheduler", empty_scheduler,
-                "--worker-timeout", "5", "--out", "out", "--quiet"], tmp_path, timeout=60)
+                "--worker-timeout", "2", "--out", "out", "--quiet"], tmp_path, timeout=60)
     wall = time.monotonic() - t0
-    print(f"\nno worker, --worker-timeout 5: exit {res.returncode} after {wall:.1f} s; "
+    print(f"\nno worker, --worker-timeout 2: exit {res.returncode} after {wall:.1f} s; "
           f"{res.stderr.strip()}")
     assert res.returncode == 1
     assert wall < 30
     assert "Traceback" not in res.stderr
-    assert "worker timeout" in res.stderr and "--worker-timeout 5" in res.stderr
+    assert "worker timeout" in res.stderr and "--worker-timeout 2" in res.stderr
     (path,) = (tmp_path / "out").glob("*.h5")
     assert str(path.relative_to(tmp_path)) in res.stderr
     with h5py.File(path) as f:
