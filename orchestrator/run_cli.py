@@ -281,11 +281,7 @@ def run(args) -> int:
                             f"and --quiet apply)")
         summary = resume_run(args.resume, periods=args.periods, fmu_dir=args.fmu_dir,
                              progress=not args.quiet, figures=not args.no_figures)
-        print(summary.describe())
-        print(summary.report_text())
-        print(f"results: {summary.results}")
-        for path in summary.figures:
-            print(f"figure: {path}")
+        _print_summary(summary)
         return 0
     if args.case is None:
         raise CaseError("a case is needed: a case file, a shipped case name (gsb cases) or an "
@@ -322,12 +318,18 @@ def run(args) -> int:
             shutil.rmtree(folder, ignore_errors=True)
     print(f"static solution X0 ({case['case.name']}):")
     print(static_report(case, summary.static_positions))
+    _print_summary(summary)
+    return 0
+
+
+def _print_summary(summary) -> None:
+    """What ``gsb run`` prints of a finished (or resumed) run: its figures, the report and the
+    files it wrote."""
     print(summary.describe())
     print(summary.report_text())
     print(f"results: {summary.results}")
     for path in summary.figures:
         print(f"figure: {path}")
-    return 0
 
 
 def _modal_checks(args) -> tuple[float, float]:

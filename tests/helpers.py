@@ -71,6 +71,22 @@ def run_paper_case(out_dir, periods, in_process=True, fmu_dir=None, bearing="hyb
     return read_results(s.results), s
 
 
+def fail_master_step(monkeypatch, at: int) -> None:
+    """Make the master's ``at``-th coupled step raise a CouplingError (a run failing midway)."""
+    from orchestrator import master as master_module
+
+    calls = {"n": 0}
+    real_step = master_module.Master.step
+
+    def failing(self, t, dt):
+        calls["n"] += 1
+        if calls["n"] == at:
+            raise master_module.CouplingError("forced failure for the test")
+        return real_step(self, t, dt)
+
+    monkeypatch.setattr(master_module.Master, "step", failing)
+
+
 # ----------------------------------------------------------------- structure stand-ins
 T_IN = 220.0  # N m
 OMEGA = 325.0  # rad/s

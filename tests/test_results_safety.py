@@ -71,14 +71,11 @@ def test_a_failing_run_leaves_a_complete_file_untouched(tmp_path):
     data = complete.read_bytes()
     code = textwrap.dedent(f"""
         import sys
-        from orchestrator import master, cli
-        real, calls = master.Master.step, [0]
-        def failing(self, t, dt):
-            calls[0] += 1
-            if calls[0] == 40:
-                raise master.CouplingError("forced failure for the test")
-            return real(self, t, dt)
-        master.Master.step = failing
+        sys.path.insert(0, {str(ROOT)!r})
+        import pytest
+        from orchestrator import cli
+        from tests.helpers import fail_master_step
+        fail_master_step(pytest.MonkeyPatch(), at=40)
         sys.exit(cli.main(["run", "baguet2010_spur", "--periods", "2", *{QUICK!r},
                            "--out", {str(out)!r}, "--overwrite"]))
     """)

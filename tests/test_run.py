@@ -14,7 +14,7 @@ from orchestrator.cli import main
 from orchestrator.inprocess import ModelBearings
 from orchestrator.results import read_results
 from orchestrator.run import RunError, build_master, run_case
-from tests.helpers import monolithic_structure
+from tests.helpers import fail_master_step, monolithic_structure
 
 SPUR = "baguet2010_spur"
 HELICAL = "baguet2010_helical"
@@ -168,18 +168,7 @@ def test_results_file_is_self_describing_and_complete(tmp_path):
 
 
 def test_a_failing_run_keeps_what_it_computed(tmp_path, monkeypatch):
-    from orchestrator import master as master_module
-
-    calls = {"n": 0}
-    real_step = master_module.Master.step
-
-    def failing(self, t, dt):
-        calls["n"] += 1
-        if calls["n"] == 40:
-            raise master_module.CouplingError("forced failure for the test")
-        return real_step(self, t, dt)
-
-    monkeypatch.setattr(master_module.Master, "step", failing)
+    fail_master_step(monkeypatch, at=40)
     with pytest.raises(RunError, match=r"step 40 of 64 .* the 39 steps computed are in"):
         run_case(paper_case(), periods=2, in_process=True, out_dir=tmp_path, progress=False,
                  figures=False)

@@ -12,7 +12,7 @@ from fmu_src.case import load_case
 from orchestrator.analysis import order_lines, resolved_lines, run_report
 from orchestrator.results import read_results
 from orchestrator.run import RunError, run_case
-from tests.helpers import run_isolated
+from tests.helpers import fail_master_step, run_isolated
 
 SPUR = "baguet2010_spur"
 Z1, Z2 = 26, 157
@@ -204,18 +204,7 @@ def test_gsb_run_stores_the_report_as_numeric_attributes(tmp_path):
 
 
 def test_a_failing_run_stores_the_report_of_what_it_kept(tmp_path, monkeypatch):
-    from orchestrator import master as master_module
-
-    calls = {"n": 0}
-    real_step = master_module.Master.step
-
-    def failing(self, t, dt):
-        calls["n"] += 1
-        if calls["n"] == 201:
-            raise master_module.CouplingError("forced failure for the test")
-        return real_step(self, t, dt)
-
-    monkeypatch.setattr(master_module.Master, "step", failing)
+    fail_master_step(monkeypatch, at=201)
     case = load_case(SPUR, {"bearings.model": "linear"})
     with pytest.raises(RunError, match="step 201 of 256"):
         run_case(case, periods=8, in_process=True, out_dir=tmp_path, figures=False,
