@@ -30,15 +30,16 @@ def static_mesh_load(torque: float, base_radius: float, base_helix_angle: float 
     return abs(torque) / (base_radius * math.cos(base_helix_angle))
 
 
-def stored_case(attrs: dict) -> Case:
+def stored_case(attrs: dict, source: str | None = None) -> Case:
     """The case a results file was run with (root attribute ``case_toml``, the effective case
-    after the overrides, bit for bit)."""
+    after the overrides, bit for bit); ``source`` names it in error messages (default: the
+    case file it was read from)."""
     import tomllib
 
     from fmu_src.case import parse_case
 
-    return parse_case(tomllib.loads(str(attrs["case_toml"])),
-                      f"{attrs.get('case_file', 'results')} (stored case)")
+    where = attrs.get("case_file", "results") if source is None else source
+    return parse_case(tomllib.loads(str(attrs["case_toml"])), f"{where} (stored case)")
 
 
 def _static_load(results: dict) -> float:

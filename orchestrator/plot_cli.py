@@ -33,6 +33,8 @@ def file_kind(path) -> str:
     missing, not HDF5 or neither."""
     import h5py
 
+    from orchestrator.results import open_results
+
     path = Path(path)
     if not path.exists():
         raise CaseError(f"{path}: no such file")
@@ -41,11 +43,7 @@ def file_kind(path) -> str:
     try:
         if not h5py.is_hdf5(path):
             raise CaseError(f"{path}: not an HDF5 results file")
-        try:
-            f = h5py.File(path, "r", swmr=True)
-        except OSError:
-            f = h5py.File(path, "r")
-        with f:
+        with open_results(path) as f:
             kind = f.attrs.get("kind", "")
             kind = kind.decode() if isinstance(kind, bytes) else str(kind)
             names = set(f.keys())

@@ -27,13 +27,16 @@ intact. :func:`read_checkpoint` returns it with the number of rows it belongs to
 from __future__ import annotations
 
 import json
+import os
+import socket
 import time
 from pathlib import Path
 
 import numpy as np
 
 __all__ = ["ResultsWriter", "add_attributes", "attribute_value", "clear_write_flags",
-           "export_csv", "live_writer", "read_checkpoint", "read_results"]
+           "export_csv", "live_writer", "open_results", "read_attributes", "read_checkpoint",
+           "read_results"]
 
 #: rows buffered at most between two writes (the time bound usually flushes first)
 CAPACITY = 4096
@@ -130,23 +133,13 @@ def _superblock(path) -> tuple[bytearray, int]:
     return head, size
 
 
-def _write_flags(path) -> int:
-    """HDF5's file consistency flags (bit 0: open for writing, bit 2: SWMR writing)."""
-    return _superblock(path)[0][11]
-
-
 def live_writer(path) -> int | None:
     """The id of a process on this machine that holds ``path`` open for writing, or None
     (the file was closed, or its writer is gone: killed, crashed)."""
-    import os
-    import socket
-
-    import h5py
-
     try:
-        if not _write_flags(path):
+        if not _superblock(path)[0][11]:  # HDF5's consistency flags: not open for writing
             return None
-        with h5py.File(path, "r", swmr=True) as f:
+        with open_results(path) as f:
             pid = int(f.attrs.get("writer_pid", -1))
             host = str(f.attrs.get("writer_host", ""))
     except OSError:
@@ -229,9 +222,6 @@ class ResultsWriter:
         for key, value in (attrs or {}).items():
             self.file.attrs[key] = attribute_value(value)
         self.file.attrs["complete"] = False
-        import os
-        import socket
-
         self.file.attrs["writer_pid"] = os.getpid()  # live_writer: is a run still writing it?
         self.file.attrs["writer_host"] = socket.gethostname()
         self.file.swmr_mode = True  # readers may open the file from now on
@@ -311,32 +301,43 @@ def add_attributes(path, **attrs) -> None:
             f.attrs[key] = attribute_value(value)
 
 
-def _open_read(path):
+def open_results(path):
+    """A results file (a run's or a sweep's) opened for reading, also while a run writes it
+    (SWMR); files HDF5 cannot open that way (written without SWMR) open normally."""
     import h5py
 
     try:
-        return h5py.File(path, "r", swmr=True)  # also while a run writes it
+        return h5py.File(path, "r", swmr=True)
     except OSError:
         return h5py.File(path, "r")
+
+
+def _attributes(f) -> dict:
+    return {k: (v.decode() if isinstance(v, bytes) else v) for k, v in f.attrs.items()}
+
+
+def read_attributes(path) -> dict:
+    """The root attributes of a results file (strings decoded), without its channels."""
+    with open_results(path) as f:
+        return _attributes(f)
 
 
 def read_results(path) -> dict:
     """All channels as numpy arrays, plus ``attrs`` (root) and ``units``; works while the
     file is being written (the rows flushed so far)."""
-    with _open_read(path) as f:
+    with open_results(path) as f:
         names = [n for n in f if n != "resume"]
         out = {name: f[name][()] for name in names}
         rows = min(len(out[n]) for n in names) if names else 0
         out = {name: v[:rows] for name, v in out.items()}  # channels flushed one by one
         out["units"] = {name: f[name].attrs["unit"] for name in names}
-        out["attrs"] = {k: (v.decode() if isinstance(v, bytes) else v)
-                        for k, v in f.attrs.items()}
+        out["attrs"] = _attributes(f)
     return out
 
 
 def read_checkpoint(path) -> tuple[int, bytes] | None:
     """``(rows, state)`` of the last checkpoint of a results file, None if it has none."""
-    with _open_read(path) as f:
+    with open_results(path) as f:
         if "resume" not in f:
             return None
         slot, nbytes, rows = (int(v) for v in f["resume/index"][()])

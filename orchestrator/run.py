@@ -50,11 +50,19 @@ from orchestrator import run_files
 from orchestrator.checks import overload_message, time_step_warnings, unbalance_warnings
 from orchestrator.inprocess import InProcessStructure, ModelBearings
 from orchestrator.master import Master
-from orchestrator.results import ResultsWriter, add_attributes, read_results
+from orchestrator.results import (
+    ResultsWriter,
+    add_attributes,
+    clear_write_flags,
+    live_writer,
+    read_attributes,
+    read_checkpoint,
+    read_results,
+)
 from orchestrator.run_files import results_name
 
 __all__ = ["ATTRIBUTE_UNITS", "CHANNELS", "Progress", "RunError", "RunInterrupted",
-           "RunSummary", "build_master", "resume_run", "run_case"]
+           "RunSummary", "build_master", "check_periods", "resume_run", "run_case"]
 
 #: results channels: name -> (shape per step, unit, description)
 CHANNELS = {
@@ -256,7 +264,7 @@ def _with_units(attrs: dict) -> dict:
 
 def _start(master: Master, case: Case, dt: float, stop_if_asked, echo: bool) -> tuple:
     """Static solution X0 and the end of initialisation; returns (static report, x0,
-    warnings, seconds)."""
+    (static mesh force [N], static transmission error [m]), warnings, seconds)."""
     t0 = time.perf_counter()
     try:
         static = master.solve_static()
@@ -312,12 +320,10 @@ def run_case(case: Case, bearing: str | None = None, periods: int | None = None,
     """
     model = case["bearings.model"] if bearing is None else bearing
     label = model if fmus is None else Path(fmus["bearings"][0]).stem
-    periods = case["simulation.mesh_periods"] if periods is None else periods
-    if isinstance(periods, bool) or not isinstance(periods, (int, np.integer)) or periods < 1:
-        raise RunError(f"--periods {periods!r}: need a whole number of mesh periods >= 1")
+    periods = check_periods(case["simulation.mesh_periods"] if periods is None else periods)
     if steps is not None and int(steps) < 1:
         raise RunError(f"steps = {steps!r}: need at least one step")
-    case = case.with_overrides({"bearings.model": model, "simulation.mesh_periods": int(periods)})
+    case = case.with_overrides({"bearings.model": model, "simulation.mesh_periods": periods})
     steps_per_period = case["simulation.steps_per_mesh_period"]
     n_steps = periods * steps_per_period if steps is None else int(steps)
     name = results_name(case, label, in_process, steps,
@@ -332,7 +338,7 @@ def run_case(case: Case, bearing: str | None = None, periods: int | None = None,
         "mode": "in-process" if in_process else "fmu",
         "bearing_fmu": "" if fmus is None else str(Path(fmus["bearings"][0]).resolve()),
         "dt": description.time_step(case), "steps_per_mesh_period": steps_per_period,
-        "mesh_periods": int(periods), "steps_total": n_steps, "speed": case["operation.speed"],
+        "mesh_periods": periods, "steps_total": n_steps, "speed": case["operation.speed"],
         "speeds": description.bearing_speeds(case), "teeth": list(case["gear_pair.teeth"]),
         "torque": case["operation.torque"], "unbalance": list(case["operation.unbalance"]),
         "clearance": _clearances(case), "tolerance": case["simulation.tolerance"],
@@ -340,6 +346,14 @@ def run_case(case: Case, bearing: str | None = None, periods: int | None = None,
     }
     return _run(case, attrs, where, 0, None, in_process, fmu_dir, fmus, progress, figures,
                 flush_seconds, echo=echo_warnings)
+
+
+def check_periods(periods) -> int:
+    """``periods`` (``--periods``, a case's ``simulation.mesh_periods``) as a whole number of
+    mesh periods >= 1; RunError naming the value otherwise."""
+    if isinstance(periods, bool) or not isinstance(periods, (int, np.integer)) or periods < 1:
+        raise RunError(f"--periods {periods!r}: need a whole number of mesh periods >= 1")
+    return int(periods)
 
 
 def resume_run(path: Path | str, periods: int | None = None, fmu_dir: Path | str | None = None,
@@ -353,10 +367,8 @@ def resume_run(path: Path | str, periods: int | None = None, fmu_dir: Path | str
     their serialised FMU states) and the steps go on in the same file: the trajectory is that
     of an uninterrupted run. ``periods`` extends the run (default: the file's own length).
     """
-    import tomllib
-
-    from fmu_src.case import CaseError, parse_case
-    from orchestrator.results import clear_write_flags, live_writer, read_checkpoint
+    from fmu_src.case import CaseError
+    from orchestrator.analysis import stored_case
 
     path = Path(path)
     if not path.is_file():
@@ -368,7 +380,7 @@ def resume_run(path: Path | str, periods: int | None = None, fmu_dir: Path | str
     state = run_files.describe_file(path)
     if state.startswith(("open for writing", "not a readable")):
         raise RunError(f"--resume {path}: {state}")
-    a = read_results(path)["attrs"]
+    a = read_attributes(path)
     if a.get("kind") != "run" or "case_toml" not in a:
         raise RunError(f"--resume {path}: not the results file of a gsb run of this version "
                        "(no stored case)")
@@ -376,7 +388,7 @@ def resume_run(path: Path | str, periods: int | None = None, fmu_dir: Path | str
         raise RunError(f"--resume {path}: a run of a bearing FMU of your own (or of an SSP) "
                        "cannot be resumed; run it again")
     try:
-        case = parse_case(tomllib.loads(str(a["case_toml"])), f"{path} (stored case)")
+        case = stored_case(a, str(path))
     except CaseError as exc:
         raise RunError(f"--resume {path}: the stored case does not load: {exc}") from None
     ckpt = read_checkpoint(path)
@@ -390,16 +402,15 @@ def resume_run(path: Path | str, periods: int | None = None, fmu_dir: Path | str
                   f"checkpoint (step {rows}) are computed again", file=sys.stderr, flush=True)
     steps_per_period = int(a["steps_per_mesh_period"])
     if periods is not None:
-        if isinstance(periods, bool) or int(periods) != periods or periods < 1:
-            raise RunError(f"--periods {periods!r}: need a whole number of mesh periods >= 1")
-        n_steps = int(periods) * steps_per_period
+        periods = check_periods(periods)
+        n_steps = periods * steps_per_period
     else:
         n_steps = int(a["steps_total"])
     if n_steps <= rows:
         raise RunError(f"--resume {path}: the file already holds {rows} steps "
                        f"({rows / steps_per_period:g} mesh periods); give --periods above "
                        f"{rows // steps_per_period} to extend it")
-    attrs = {"mesh_periods": n_steps // steps_per_period if periods else a["mesh_periods"],
+    attrs = {"mesh_periods": a["mesh_periods"] if periods is None else periods,
              "steps_total": n_steps, "interrupted": "", "stopped_by": "",
              "resumed_at_step": rows}
     where = run_files.Target(path, path, path.with_suffix(""))

@@ -251,12 +251,12 @@ def export(args) -> int:
 
 def _require_results(path: Path, command: str) -> None:
     """CaseError unless ``path`` is a readable results file of ``gsb run``."""
-    import h5py
+    from orchestrator.results import open_results
 
     if not path.is_file():
         raise CaseError(f"{path}: no such file")
     try:
-        with h5py.File(path, "r", swmr=True) as f:
+        with open_results(path) as f:
             if "time" not in f:
                 raise CaseError(f"{path}: not a results file of gsb run (no time channel)")
     except OSError as exc:

@@ -40,10 +40,10 @@ def results_name(case, label: str, in_process: bool, steps: int | None = None,
 
 def describe_file(path: Path) -> str:
     """What a results file holds, in a few words (complete, interrupted, being written)."""
-    import h5py
+    from orchestrator.results import open_results
 
     try:
-        with h5py.File(path, "r", swmr=True) as f:
+        with open_results(path) as f:
             n = f["time"].shape[0] if "time" in f else 0
             complete = bool(f.attrs.get("complete", False))
             why = str(f.attrs.get("stopped_by", ""))
@@ -76,11 +76,10 @@ class Target:
 
 
 def _is_complete(path: Path) -> bool:
-    import h5py
+    from orchestrator.results import read_attributes
 
     try:
-        with h5py.File(path, "r", swmr=True) as f:
-            return bool(f.attrs.get("complete", False))
+        return bool(read_attributes(path).get("complete", False))
     except OSError:
         return False
 
@@ -109,11 +108,12 @@ def target(out_dir: Path | str, name: str, overwrite: bool) -> Target:
         raise TargetError(f"{final} is being written by another run (process {pid}); wait for "
                           "it, stop it, or use another --out")
     state = describe_file(final)
+    complete = state.startswith("complete")
     if not overwrite:
-        hint = "" if state.startswith("complete") else f", --resume {final} to continue it"
+        hint = "" if complete else f", --resume {final} to continue it"
         raise TargetError(f"{final} exists ({state}): this run would overwrite it; "
                           f"--overwrite to replace it{hint}, or another --out")
-    if _is_complete(final):
+    if complete:
         partial = out_dir / f"{name}.partial.h5"
         partial.unlink(missing_ok=True)
         return Target(partial, final, figures)

@@ -195,6 +195,7 @@ def sweep_hash(case, vary: list, bearings: list, periods: int, steady: int) -> s
 def _plan(args):
     """The checked inputs: (case, vary [(key, values)], bearings, points, periods, steady)."""
     from fmu_src.case import load_case
+    from orchestrator.run import check_periods
     from orchestrator.sweep import SweepPoint, check_point
 
     case = load_case(args.case, dict(args.overrides))
@@ -216,9 +217,8 @@ def _plan(args):
     if n > MAX_POINTS:
         raise CaseError(f"--vary {' --vary '.join(args.vary)}: {n} points, must be <= "
                         f"{MAX_POINTS}")
-    periods = case["simulation.mesh_periods"] if args.periods is None else args.periods
-    if periods < 1:
-        raise CaseError(f"--periods {periods}: must be >= 1")
+    periods = check_periods(case["simulation.mesh_periods"] if args.periods is None
+                            else args.periods)
     z2 = int(case["gear_pair.teeth"][1])
     steady = args.steady_periods
     if steady is None:
