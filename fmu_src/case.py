@@ -238,15 +238,17 @@ class Case:
         """The case's name (``case.name``)."""
         return self.values["case.name"]
 
-    def to_toml(self) -> str:
-        """The case as a case file (SI numbers): reloads to the same values, bit for bit."""
+    def to_toml(self, header: bool = True) -> str:
+        """The case as a case file (SI numbers): reloads to the same values, bit for bit.
+        ``header=False``: without the comment naming the source file (the case's content
+        alone, e.g. to hash it)."""
         sections: dict[str, list[str]] = {}
         for key, value in self.values.items():
             if value is None:
                 continue
             section, name = key.split(".")
             sections.setdefault(section, []).append(f"{name} = {_toml_value(value)}")
-        parts = [f"# written by fmu_src.case from {self.source} (SI units)"]
+        parts = [f"# written by fmu_src.case from {self.source} (SI units)"] if header else []
         for section, lines in sections.items():
             parts.append(f"\n[{section}]")
             parts.extend(lines)

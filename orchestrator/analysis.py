@@ -14,8 +14,9 @@ import numpy as np
 from fmu_src.case import Case
 from fmu_src.description import gear_pair
 
-__all__ = ["fit_ellipse", "order_lines", "order_spectrum", "pinion_lines", "resolved_lines",
-           "run_metrics", "run_report", "static_mesh_load", "steady_window", "stored_case"]
+__all__ = ["fit_ellipse", "order_amplitude_spectrum", "order_lines", "order_spectrum",
+           "pinion_lines", "resolved_lines", "run_metrics", "run_report", "static_mesh_load",
+           "steady_window", "stored_case"]
 
 
 def steady_window(time: np.ndarray, duration: float) -> np.ndarray:
@@ -246,6 +247,26 @@ def run_report(results: dict) -> dict:
         "window_s": np.array([end_s - duration, end_s]),
         "window_kind": kind,
     }
+
+
+def order_amplitude_spectrum(signal, dt: float, rotation_hz: float, pad: int = 8):
+    """Peak-amplitude spectrum of uniformly sampled signals against order, for windows that
+    are not a whole number of periods: the mean removed, a Hann window, zero-padded ``pad``
+    times; amplitudes ``2 |X_k| / sum(w)``, so a line ``A cos(...)`` reads about ``A`` at its
+    peak (the padding bounds the scalloping loss).
+
+    Returns ``(orders, amplitudes)``, orders = f / ``rotation_hz``, amplitudes (m, ...) in the
+    unit of ``signal`` (trailing axes are independent signals).
+    """
+    x = np.asarray(signal, dtype=float)
+    n = x.shape[0]
+    if n < 2:
+        raise ValueError(f"a spectrum needs at least 2 samples, got {n}")
+    w = np.hanning(n + 2)[1:-1]  # no zero end points
+    x = (x - x.mean(axis=0)) * w.reshape((n,) + (1,) * (x.ndim - 1))
+    nfft = 1 << math.ceil(math.log2(max(pad, 1) * n))
+    amp = np.abs(np.fft.rfft(x, nfft, axis=0)) * (2.0 / w.sum())
+    return np.fft.rfftfreq(nfft, dt) / rotation_hz, amp
 
 
 def order_spectrum(signal, samples_per_revolution: float, max_order: float | None = None):

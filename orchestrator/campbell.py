@@ -238,7 +238,7 @@ def plot_campbell(data: dict, path, title: str, harmonics: int = HARMONICS,
     energy share; mesh-order and 1x lines; crossings marked (:func:`crossings`)."""
     from matplotlib.colors import LogNorm
 
-    from orchestrator.plots import pyplot
+    from orchestrator.plot_base import pyplot
 
     plt = pyplot()
     path = Path(path)

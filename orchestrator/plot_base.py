@@ -15,7 +15,7 @@ import numpy as np
 from orchestrator.analysis import steady_window
 
 __all__ = ["BEARING_STYLE", "DPI", "FIGSIZE", "SHAFTS", "UM", "RunData", "normalised_spectrum",
-           "num_attr", "order_amplitude_spectrum", "pyplot", "run_title", "text_attr",
+           "num_attr", "pyplot", "run_title", "text_attr",
            "titled_figure"]
 
 FIGSIZE = (11, 8)
@@ -48,26 +48,6 @@ def normalised_spectrum(signal, dt: float, rotation_frequency: float):
     amp = np.abs(np.fft.rfft(x)) * 2.0 / len(x)
     f = np.fft.rfftfreq(len(x), dt) / rotation_frequency
     return f, amp / max(amp.max(), 1e-300)
-
-
-def order_amplitude_spectrum(signal, dt: float, rotation_hz: float, pad: int = 8):
-    """Peak-amplitude spectrum of uniformly sampled signals against order, for windows that
-    are not a whole number of periods: the mean removed, a Hann window, zero-padded ``pad``
-    times; amplitudes ``2 |X_k| / sum(w)``, so a line ``A cos(...)`` reads about ``A`` at its
-    peak (the padding bounds the scalloping loss).
-
-    Returns ``(orders, amplitudes)``, orders = f / ``rotation_hz``, amplitudes (m, ...) in the
-    unit of ``signal`` (trailing axes are independent signals).
-    """
-    x = np.asarray(signal, dtype=float)
-    n = x.shape[0]
-    if n < 2:
-        raise ValueError(f"a spectrum needs at least 2 samples, got {n}")
-    w = np.hanning(n + 2)[1:-1]  # no zero end points
-    x = (x - x.mean(axis=0)) * w.reshape((n,) + (1,) * (x.ndim - 1))
-    nfft = 1 << math.ceil(math.log2(max(pad, 1) * n))
-    amp = np.abs(np.fft.rfft(x, nfft, axis=0)) * (2.0 / w.sum())
-    return np.fft.rfftfreq(nfft, dt) / rotation_hz, amp
 
 
 # ---------------------------------------------------------------------------- attributes

@@ -33,23 +33,24 @@ from pathlib import Path
 
 import numpy as np
 
-from orchestrator.analysis import order_lines, pinion_lines, resolved_lines
+from orchestrator.analysis import (
+    order_amplitude_spectrum,
+    order_lines,
+    pinion_lines,
+    resolved_lines,
+)
 from orchestrator.plot_base import (
     BEARING_STYLE,
     DPI,
     SHAFTS,
     UM,
     RunData,
-    normalised_spectrum,
-    order_amplitude_spectrum,
     pyplot,
-    run_title,
     titled_figure,
 )
 from orchestrator.results import read_results
 
-__all__ = ["RUN_FIGURES", "make_run_figures", "normalised_spectrum", "order_amplitude_spectrum",
-           "pyplot", "run_figures", "run_title"]
+__all__ = ["RUN_FIGURES", "make_run_figures", "run_figures"]
 
 #: the PNGs :func:`run_figures` writes (and removes first when stale)
 RUN_FIGURES = ("orbits.png", "bearing_forces.png", "spectra.png", "mesh.png")

@@ -29,8 +29,7 @@ class TargetError(RuntimeError):
 def results_name(case, label: str, in_process: bool, steps: int | None = None,
                  bearing_fmu: Path | str | None = None) -> str:
     """``<case>_<label>[_inprocess]_<hash>`` (module docstring)."""
-    text = case.to_toml().split("\n", 1)[1]  # without the comment naming the source file
-    h = hashlib.sha256(text.encode())
+    h = hashlib.sha256(case.to_toml(header=False).encode())
     h.update(f"\nlabel={label}\nin_process={bool(in_process)}\nsteps={steps}\n".encode())
     if bearing_fmu is not None:
         h.update(Path(bearing_fmu).read_bytes())

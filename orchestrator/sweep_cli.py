@@ -186,8 +186,7 @@ def _fmt(key: str, value) -> str:
 def sweep_hash(case, vary: list, bearings: list, periods: int, steady: int) -> str:
     """8 hex digits of the effective case, the varied values, the bearing models and the
     periods (the sweep file's name)."""
-    text = "\n".join(line for line in case.to_toml().splitlines() if not line.startswith("#"))
-    blob = json.dumps({"case": text, "vary": [[k, list(v)] for k, v in vary],
+    blob = json.dumps({"case": case.to_toml(header=False), "vary": [[k, list(v)] for k, v in vary],
                        "bearings": bearings, "periods": periods, "steady_periods": steady})
     return hashlib.sha256(blob.encode()).hexdigest()[:8]
 

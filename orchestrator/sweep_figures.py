@@ -106,7 +106,7 @@ def sweep_figures(path, out_dir=None) -> list[Path]:
     from matplotlib.colors import LogNorm
 
     from fmu_src.case import parse_case
-    from orchestrator.plots import pyplot
+    from orchestrator.plot_base import pyplot
     from orchestrator.sweep_file import read_sweep, read_sweep_attrs
 
     path = Path(path)

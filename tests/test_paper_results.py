@@ -13,7 +13,7 @@ import pytest
 from fmu_src.case import load_case
 from fmu_src.examples import HELICAL, SPUR
 from orchestrator.analysis import fit_ellipse, run_metrics, steady_window
-from orchestrator.plots import normalised_spectrum
+from orchestrator.plot_base import normalised_spectrum
 from orchestrator.reproduce.figures import has_line
 from orchestrator.results import read_results
 from orchestrator.run import build_master, run_case

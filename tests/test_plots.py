@@ -12,15 +12,10 @@ import h5py
 import numpy as np
 import pytest
 
+from orchestrator.analysis import order_amplitude_spectrum
 from orchestrator.cli import main
-from orchestrator.plots import (
-    RUN_FIGURES,
-    make_run_figures,
-    normalised_spectrum,
-    order_amplitude_spectrum,
-    pyplot,
-    run_title,
-)
+from orchestrator.plot_base import normalised_spectrum, pyplot, run_title
+from orchestrator.plots import RUN_FIGURES, make_run_figures
 from orchestrator.results import ResultsWriter, read_results
 
 SPEED, TEETH, TORQUE = 325.0, (26, 157), 220.0

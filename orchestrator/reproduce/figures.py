@@ -13,7 +13,7 @@ import numpy as np
 from fmu_src.case import load_case
 from fmu_src.examples import HELICAL, SPUR
 from orchestrator.analysis import fit_ellipse, steady_window
-from orchestrator.plots import normalised_spectrum, pyplot
+from orchestrator.plot_base import normalised_spectrum, pyplot
 from orchestrator.run import build_master
 
 __all__ = ["draw_all", "has_line"]
