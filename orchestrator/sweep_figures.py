@@ -18,20 +18,21 @@ keeps fixed.
 from __future__ import annotations
 
 import math
-import tomllib
 from pathlib import Path
 
 import numpy as np
 
+from orchestrator.plot_base import BEARING_STYLE
+
 __all__ = ["BEARING_STYLES", "sweep_figures"]
 
-#: matplotlib styles of bearings 1-4
-BEARING_STYLES = (
-    {"color": "C0", "ls": "-", "marker": "o", "mfc": "none", "ms": 9, "lw": 1.6},
-    {"color": "C1", "ls": "--", "marker": "x", "ms": 7, "lw": 1.4},
-    {"color": "C2", "ls": "-", "marker": "s", "mfc": "none", "ms": 9, "lw": 1.6},
-    {"color": "C3", "ls": ":", "marker": "+", "ms": 10, "lw": 1.8},
-)
+#: matplotlib styles of bearings 1-4: the colours, lines and markers of the run figures
+#: (:data:`orchestrator.plot_base.BEARING_STYLE`), the second bearing of each shaft with open
+#: markers, so that bearings that coincide both stay visible
+BEARING_STYLES = tuple(
+    {"color": colour, "ls": ls, "marker": marker, "ms": 8, "lw": 1.6,
+     "mfc": "none" if b % 2 else colour}
+    for b, (colour, ls, marker) in enumerate(BEARING_STYLE))
 
 _NAMES = {"operation.speed": "pinion speed", "operation.torque": "input torque",
           "operation.unbalance": "unbalance e_mu"}
@@ -105,7 +106,7 @@ def sweep_figures(path, out_dir=None) -> list[Path]:
     succeeded)."""
     from matplotlib.colors import LogNorm
 
-    from fmu_src.case import parse_case
+    from orchestrator.analysis import stored_case
     from orchestrator.plot_base import pyplot
     from orchestrator.sweep_file import read_sweep, read_sweep_attrs
 
@@ -118,7 +119,7 @@ def sweep_figures(path, out_dir=None) -> list[Path]:
     units = list(attrs["vary_units"])
     if not keys:
         raise ValueError(f"{path}: the sweep varies no field")
-    case = parse_case(tomllib.loads(attrs["case_toml"]), str(path))
+    case = stored_case(attrs, str(path))
     z1 = int(case["gear_pair.teeth"][0])
     ix = keys.index("operation.speed") if "operation.speed" in keys else 0
     points = read_sweep(path)

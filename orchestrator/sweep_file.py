@@ -175,10 +175,10 @@ def finish(path: Path, status: str, complete: bool, wall_time: float) -> None:
 def read_sweep(path) -> list[dict]:
     """The points of a sweep file: dicts with ``overrides``, ``values``, ``bearing``, ``label``,
     ``error`` and the datasets (absent for failed points), in point order."""
-    import h5py
+    from orchestrator.results import open_results
 
     out = []
-    with h5py.File(path, "r") as f:
+    with open_results(path) as f:
         for key in sorted(f["points"]):
             g = f["points"][key]
             d = {"overrides": json.loads(g.attrs["overrides"]), "bearing": g.attrs["bearing"],
@@ -192,17 +192,15 @@ def read_sweep(path) -> list[dict]:
 
 
 def read_sweep_attrs(path) -> dict:
-    """The root attributes of a sweep file (strings arrays as lists of str)."""
-    import h5py
+    """The root attributes of a sweep file (:func:`orchestrator.results.read_attributes`;
+    string arrays as lists of str, numpy scalars as Python numbers)."""
+    from orchestrator.results import read_attributes
 
-    with h5py.File(path, "r") as f:
-        out = {}
-        for key, value in f.attrs.items():
-            if isinstance(value, np.ndarray) and value.dtype.kind == "O":
-                value = [v.decode() if isinstance(v, bytes) else str(v) for v in value]
-            elif isinstance(value, bytes):
-                value = value.decode()
-            elif isinstance(value, np.generic):
-                value = value.item()
-            out[key] = value
+    out = {}
+    for key, value in read_attributes(path).items():
+        if isinstance(value, np.ndarray) and value.dtype.kind == "O":
+            value = [v.decode() if isinstance(v, bytes) else str(v) for v in value]
+        elif isinstance(value, np.generic):
+            value = value.item()
+        out[key] = value
     return out
