@@ -66,13 +66,14 @@ TIMED = [
 
 
 @contextlib.contextmanager
-def timed_calls():
-    """Wrap the :data:`TIMED` methods with timers; yields ``{label: seconds}``."""
+def timed_calls(targets=TIMED, counts: dict | None = None):
+    """Wrap the methods of ``targets`` ((label, class path, method), :data:`TIMED` by default)
+    with timers; yields ``{label: seconds}``, and counts the calls per label in ``counts``."""
     import importlib
 
     totals: dict[str, float] = {}
     saved = []
-    for label, path, name in TIMED:
+    for label, path, name in targets:
         module, cls_name = path.rsplit(".", 1)
         cls = getattr(importlib.import_module(module), cls_name)
         raw = cls.__dict__[name]
@@ -84,6 +85,8 @@ def timed_calls():
                 return _f(*a, **kw)
             finally:
                 totals[_label] = totals.get(_label, 0.0) + time.perf_counter() - t0
+                if counts is not None:
+                    counts[_label] = counts.get(_label, 0) + 1
 
         setattr(cls, name, classmethod(wrapper) if isinstance(raw, classmethod) else wrapper)
         saved.append((cls, name, raw))

@@ -12,51 +12,36 @@ from __future__ import annotations
 
 import argparse
 import tempfile
-import time
+
+from paper_case import timed_calls  # this folder: benchmarks/paper_case.py
 
 from fmu_src.case import load_case
-from orchestrator import results
+from orchestrator.master import Master
 from orchestrator.run import run_case
 
 
 def measure(in_process: bool, periods: int) -> dict:
-    stats = {"flushes": 0, "flush_s": 0.0, "checkpoint_s": 0.0, "bytes": 0}
-    flush, store = results.ResultsWriter.flush, results.ResultsWriter._store_checkpoint
+    counts: dict[str, int] = {}
+    sizes = []
+    targets = [("flush", "orchestrator.results.ResultsWriter", "flush"),
+               ("checkpoint", "orchestrator.master.Master", "checkpoint")]
+    original = Master.checkpoint
 
-    def timed_flush(self):
-        t0 = time.perf_counter()
-        flush(self)
-        stats["flushes"] += 1
-        stats["flush_s"] += time.perf_counter() - t0
-
-    def timed_checkpoint(self):
-        t0 = time.perf_counter()
-        state = self._checkpoint_source()
-        stats["checkpoint_s"] += time.perf_counter() - t0
-        stats["bytes"] = len(state)
+    def sized(self):  # the checkpoint's size, recorded by the wrapped call
+        state = original(self)
+        sizes.append(len(state))
         return state
 
-    results.ResultsWriter.flush = timed_flush
+    Master.checkpoint = sized
     try:
-        with tempfile.TemporaryDirectory() as tmp:
-            original = results.ResultsWriter.__init__
-
-            def init(self, *args, **kw):
-                original(self, *args, **kw)
-                if self.checkpoint is not None:
-                    self._checkpoint_source = self.checkpoint
-                    self.checkpoint = lambda: timed_checkpoint(self)
-
-            results.ResultsWriter.__init__ = init
-            try:
-                s = run_case(load_case("baguet2010_spur"), periods=periods, in_process=in_process,
-                             out_dir=tmp, progress=False, figures=False, echo_warnings=False)
-            finally:
-                results.ResultsWriter.__init__ = original
+        with tempfile.TemporaryDirectory() as tmp, timed_calls(targets, counts) as totals:
+            s = run_case(load_case("baguet2010_spur"), periods=periods, in_process=in_process,
+                         out_dir=tmp, progress=False, figures=False, echo_warnings=False)
     finally:
-        results.ResultsWriter.flush = flush
-        results.ResultsWriter._store_checkpoint = store
-    return stats | {"wall_s": s.wall_time, "steps": s.steps}
+        Master.checkpoint = original
+    return {"flushes": counts.get("flush", 0), "flush_s": totals.get("flush", 0.0),
+            "checkpoint_s": totals.get("checkpoint", 0.0), "bytes": sizes[-1] if sizes else 0,
+            "wall_s": s.wall_time, "steps": s.steps}
 
 
 def main() -> None:
