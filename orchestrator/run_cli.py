@@ -235,7 +235,10 @@ def export(args) -> int:
     from orchestrator.results import export_csv
 
     path = Path(args.file)
-    _require_results(path, "export")
+    from orchestrator.plot_cli import file_kind
+
+    if file_kind(path) != "run":
+        raise CaseError(f"{path}: a sweep file; gsb export writes the channels of a run's file")
     out = Path(args.csv) if args.csv else path.with_suffix(".csv")
     if out.resolve() == path.resolve():
         raise CaseError(f"--csv {out}: would overwrite the results file")
@@ -247,20 +250,6 @@ def export(args) -> int:
         raise CaseError(f"--csv {out}: cannot write ({exc.strerror or exc})") from None
     print(written)
     return 0
-
-
-def _require_results(path: Path, command: str) -> None:
-    """CaseError unless ``path`` is a readable results file of ``gsb run``."""
-    from orchestrator.results import open_results
-
-    if not path.is_file():
-        raise CaseError(f"{path}: no such file")
-    try:
-        with open_results(path) as f:
-            if "time" not in f:
-                raise CaseError(f"{path}: not a results file of gsb run (no time channel)")
-    except OSError as exc:
-        raise CaseError(f"{path}: not a readable HDF5 results file ({exc})") from None
 
 
 def run(args) -> int:
