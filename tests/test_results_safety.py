@@ -20,6 +20,7 @@ import numpy as np
 import pytest
 
 from orchestrator.results import read_results
+from tests.helpers import run_isolated
 
 GSB = [sys.executable, "-m", "orchestrator.cli"]
 ROOT = Path(__file__).resolve().parents[1]
@@ -295,3 +296,46 @@ def test_a_regular_install_runs_a_shipped_case_from_any_folder(fmu_dir, tmp_path
     assert r["attrs"]["complete"] and len(r["time"]) == 128 and r["attrs"]["mode"] == "fmu"
     listing = gsb("cases", cwd=elsewhere, env=env)
     assert listing.returncode == 0 and "baguet2010_helical" in listing.stdout
+
+
+RESUME_CODE = """
+import json, sys, tempfile
+sys.path.insert(0, {root!r})
+import numpy as np
+from bearing_fmu import MODELS
+from fmu_src.case import load_case
+from orchestrator.results import read_results
+from tests.helpers import run_isolated
+from orchestrator.run import resume_run, run_case
+out = {{}}
+# 8 steps per mesh period: 4 steps, then resumed to one period; against 8 steps in one go;
+# coarse film grids (the FD model's solves dominate otherwise)
+case = load_case("baguet2010_spur", {{"simulation.steps_per_mesh_period": 8,
+                                      "bearings.nodes": 48, "bearings.axial_intervals": 8}})
+kw = dict(in_process={in_process}, fmu_dir={fmu_dir!r}, progress=False, figures=False)
+with tempfile.TemporaryDirectory() as tmp:
+    for model in MODELS:
+        ref = run_case(case, bearing=model, periods=1, out_dir=tmp + "/ref_" + model, **kw)
+        part = run_case(case, bearing=model, periods=1, steps=4, out_dir=tmp + "/" + model,
+                        **kw)
+        resume_run(part.results, periods=1, fmu_dir={fmu_dir!r}, progress=False,
+                   figures=False)
+        a, b = read_results(ref.results), read_results(part.results)
+        out[model] = [len(b["time"]), float(np.abs(a["journal_position"]
+                                                    - b["journal_position"]).max())]
+print(json.dumps(out))
+"""
+
+
+@pytest.mark.parametrize("transport", ["in-process", "fmu"])
+def test_every_bearing_model_resumes_exactly(transport, fmu_dir):
+    """The warm starts of every registered model (hybrid, FD, ...) are in the checkpoint:
+    4 steps, resumed to 8, equal 8 steps in one go, in-process and through FMUs."""
+    from bearing_fmu import MODELS
+
+    out = run_isolated(RESUME_CODE.format(root=str(ROOT), in_process=transport == "in-process",
+                                          fmu_dir=str(fmu_dir)))
+    assert sorted(out) == sorted(MODELS)
+    for model, (steps, diff) in out.items():
+        assert steps == 8 and diff == 0.0, (transport, model, steps, diff)
+    print(f"\n{transport}: resumed = uninterrupted for {', '.join(out)}")
