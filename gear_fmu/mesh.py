@@ -302,6 +302,7 @@ class MeshElement:
                 raise ValueError(f"{name} pitch errors: {p.size} values for {z} teeth")
         self._mounting = np.asarray(d.mounting, dtype=float)
         self._runout = d.runout != (0.0, 0.0)
+        self._has_errors = bool(self._runout or self._mounting.any())
         n = self.n_lines * self.n_slices
         self._n = n
 
@@ -376,13 +377,24 @@ class MeshElement:
             q[7] += d.runout[1] * math.sin(-th2 + d.runout_phase[1])
         return q
 
+    @property
+    def has_errors(self) -> bool:
+        """True when runout or mounting errors displace the gear nodes seen by the mesh
+        (:meth:`error_displacement`)."""
+        return self._has_errors
+
+    def kernel_arrays(self) -> tuple:
+        """The constant arguments of the mesh kernel after (angle, q), in its order: what a
+        compiled caller (:mod:`gear_fmu.step_kernel`) passes on."""
+        return (self._geo, self.xi_table, self.k_table, self.z_slices, self.dl, self.n_lines,
+                self._dev, self._pitch[0], self._pitch[1])
+
     def evaluate(self, pinion_angle: float, q12) -> MeshState:
         """Mesh force, tangent and contact set at a pinion angle [rad] and gear-node DOFs (12,)."""
         q = np.asarray(q12, dtype=float)
         if q.shape != (12,):
             raise ValueError(f"q12 shape {q.shape}: expected (12,)")
-        qe = q + self.error_displacement(pinion_angle) if (
-            self._runout or self._mounting.any()) else q
+        qe = q + self.error_displacement(pinion_angle) if self.has_errors else q
         n = self._n
         force = np.empty(12)
         stiff = np.empty((12, 12))

@@ -57,8 +57,10 @@ from .loads import (
     unbalance_amplitudes,
     unbalance_force,
 )
-from .newmark import newmark_coefficients
+from .mesh import MeshElement, MeshState
+from .newmark import NewmarkConvergenceError, newmark_coefficients
 from .step_assembly import check_laws, check_laws_fast, finish_step, prepare_step
+from .step_kernel import CONVERGED, SINGULAR, advance
 from .system import GearShaftSystem
 
 __all__ = ["StepInfo", "Structure", "StructureLoads", "StructureState", "check_laws"]
@@ -71,6 +73,8 @@ EVENT_SIDE = 1e-8
 #: sub-step fractions of dt are rounded to multiples of 2**-30, so that the condensations of
 #: the recurring sub-steps are computed once (:meth:`Structure._dynamic`)
 _FRACTION = 2.0**30
+_NO_ERROR = np.zeros(12)  # no runout or mounting error
+_NO_SET = np.zeros(0, dtype=np.bool_)  # no contact set known
 
 
 @dataclass(frozen=True)
@@ -155,6 +159,9 @@ class Structure:
         self.locate_contact = bool(locate_contact) and hasattr(mesh, "event_angles")
         self._m_gear = None  # M^-1 restricted to the gear-node columns, when first needed
         self._event_phases = None  # (mesh period [rad], event angles in it), when first needed
+        #: the mesh's constant arrays for the compiled step (gear_fmu.step_kernel), or None:
+        #: the Python loop of gear_fmu.contact_loop serves any other mesh object
+        self._mesh_arrays = mesh.kernel_arrays() if isinstance(mesh, MeshElement) else None
         self._forces()
         # the state: at rest at t = 0, no contact known yet
         n = self._perm.size
@@ -397,6 +404,8 @@ class Structure:
         """One Newmark step of length h to t1 (mesh at ``angle``); updates X, Xd, Xdd and the
         contact state, not the time."""
         timing = self.timing
+        if self._mesh_arrays is not None and timing is None:
+            return self._advance_compiled(h, t1, angle, f0, kb, cb, what)
         t0 = time.perf_counter() if timing is not None else 0.0
         cond, hh, g_const = self._dynamic(h)
         x, v, a = self.x, self.v, self.a
@@ -416,6 +425,46 @@ class Structure:
         if timing is not None:
             timing["assembly"] += time.perf_counter() - t0
         return info
+
+    def _advance_compiled(self, h, t1, angle, f0, kb, cb, what) -> StepInfo:
+        """:meth:`_advance` in one compiled call (:func:`gear_fmu.step_kernel.advance`, the
+        same arithmetic as the Python loop)."""
+        cond, hh, g_const = self._dynamic(h)
+        mesh = self.mesh
+        n = mesh.n_lines * mesh.n_slices
+        force, stiff = np.empty(12), np.empty((12, 12))
+        active, inside = np.empty(n, dtype=np.bool_), np.empty(n, dtype=np.bool_)
+        delta, load, xi, z = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+        residuals = np.empty(self.max_iter + 1)
+        size = self.x.size
+        x1, v1, a1 = np.empty(size), np.empty(size), np.empty(size)
+        err = mesh.error_displacement(angle) if mesh.has_errors else _NO_ERROR
+        used = _NO_SET if self.active is None else self.active
+        unb = unbalance_force(self._unb, self._omega, t1)  # Eq. (10)
+        f_scale = max(self._f_scale, math.sqrt(float(np.sum(f0 * f0))))
+        status, k, total, length = advance(
+            hh, g_const, cond.s0, cond.w, self.x, self.v, self.a, self._f_c, unb, f0, kb, cb, h,
+            angle, err, mesh.has_errors, *self._mesh_arrays, used, self.active is not None,
+            f_scale, self.tol, self.max_iter, force, stiff, active, inside, delta, load, xi, z,
+            residuals, x1, v1, a1)
+        history = residuals[:k + 1].tolist()
+        if status == SINGULAR:
+            raise NewmarkConvergenceError(
+                f"{what} at t = {t1:.9g} s: singular tangent at iteration {k} "
+                f"({int(np.count_nonzero(active))} mesh slices in contact; with no tooth "
+                "contact the pinion is free in torsion - check the torque sign)")
+        if status != CONVERGED:
+            raise NewmarkConvergenceError(
+                f"{what} at t = {t1:.9g} s did not converge: relative residual "
+                f"{history[-1]:.3e} (tol {self.tol:.1e}) after {self.max_iter} iterations; "
+                f"last residuals {', '.join(f'{v:.2e}' for v in history[-5:])}")
+        rb1, rb2 = mesh.pair.base_radius
+        te = rb1 * x1[5] + rb2 * x1[11]
+        self.mesh_state = MeshState(force, stiff, active, delta, load, inside, xi, z, total, te,
+                                    {"contact_length": length})
+        self.x, self.v, self.a = x1, v1, a1
+        self.active = active
+        return StepInfo(t1, k, history[-1], history)
 
     # ------------------------------------------------------------------ state
     def get_state(self) -> StructureState:

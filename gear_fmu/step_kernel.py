@@ -1,0 +1,94 @@
+"""One Newmark (sub-)step of the condensed structure in one compiled call (the hot path).
+
+:meth:`gear_fmu.structure.Structure.step` with the distributed mesh element
+(:class:`gear_fmu.mesh.MeshElement`) spends most of its time between kernels when the pieces
+are called from Python: the right-hand side and tangent (:func:`gear_fmu.step_assembly.
+prepare_step`, Eq. 12, 14, 16), the Newton/contact loop of :func:`gear_fmu.contact_loop.
+solve_condensed` (a mesh evaluation, the residual and a 20 x 20 solve per pass, Fig. 4) and the
+recovery of the eliminated DOFs with the Newmark update (:func:`gear_fmu.step_assembly.
+finish_step`, Eq. 12). :func:`advance` runs the same kernels in the same order with the same
+arithmetic in one call, so it gives the Python loop's results bit for bit (the norms use
+``np.dot`` as the loop does); the loop stays the reference and serves any other mesh object
+and the benchmark timers (``Structure.timing``).
+
+The outcome is a status (0 converged, 1 not converged in ``max_iter`` passes, 2 singular
+tangent) with the residual history, from which the caller raises the loop's own errors.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from .condensation import N_GEAR, NC
+from .contact_loop import ROUNDOFF, _newton_solve, _residual_norm, _same_set
+from .mesh import _mesh_kernel
+from .newmark import newmark_kinematics
+from .step_assembly import prepare_step
+
+__all__ = ["CONVERGED", "NOT_CONVERGED", "SINGULAR", "advance"]
+
+CONVERGED, NOT_CONVERGED, SINGULAR = 0, 1, 2
+
+
+@njit(cache=True)
+def advance(hh, g_const, s0, w, x, v, a, f_c, unb, f0, kb, cb, h,  # step (Eq. 12-16)
+            angle, err, has_err, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1, pitch2,
+            used0, has_used, f_scale, tol, max_iter,  # contact loop (Fig. 4)
+            force, stiff, active, inside, delta, load, xis, zout, residuals,  # mesh state out
+            x1, v1, a1):  # state out
+    """One Newmark step of length ``h`` with the mesh element at pinion ``angle`` [rad].
+
+    Inputs as :func:`gear_fmu.step_assembly.prepare_step` (``hh``, ``g_const``, ``s0``, ``w``
+    from the condensation at h) and :func:`gear_fmu.contact_loop.solve_condensed`
+    (``used0`` / ``has_used``: the contact set the first iterate is consistent with); ``err``
+    the error displacement of the gear nodes added to the mesh's input (runout, mounting) when
+    ``has_err``. Writes the final mesh evaluation into ``force`` ... ``zout``, the residual of
+    each pass into ``residuals`` (max_iter + 1,) and the new state into ``x1, v1, a1``.
+
+    Returns ``(status, passes, total mesh load [N], contact length [m])``.
+    """
+    s_lin, z0, y = prepare_step(hh, g_const, x, v, a, f_c, unb, f0, kb, cb, s0, h, N_GEAR)
+    xc = x[:NC] + h * v[:NC]
+    used = used0.copy()
+    q = np.empty(N_GEAR)
+    z_norm = -1.0
+    total = 0.0
+    length = 0.0
+    for k in range(max_iter + 1):
+        for i in range(N_GEAR):
+            q[i] = xc[i] + err[i] if has_err else xc[i]
+        total, length = _mesh_kernel(angle, q, geo, xi_tab, k_tab, zs, dl, n_lines, dev,
+                                     pitch1, pitch2, force, stiff, active, inside, delta, load,
+                                     xis, zout)
+        ff = np.dot(force, force)
+        scale = max(f_scale, math.sqrt(ff))
+        scale = scale if scale > 0.0 else 1.0
+        r = _residual_norm(s_lin, z0, xc, force) / scale
+        residuals[k] = r
+        limit = tol
+        if r > tol:  # the round-off floor at this iterate (gear_fmu.contact_loop)
+            if z_norm < 0.0:
+                z_norm = math.sqrt(np.dot(z0, z0))
+            limit = max(tol, ROUNDOFF * (z_norm + math.sqrt(ff)) / scale)
+        if r <= limit and has_used and _same_set(active, used):
+            # X_r = y - W X_c, then Newmark velocities and accelerations (Eq. 12)
+            x1[:NC] = xc
+            x1[NC:] = y - w @ xc
+            vv, aa = newmark_kinematics(x1, x, v, a, h)
+            v1[:] = vv
+            a1[:] = aa
+            return CONVERGED, k, total, length
+        if k == max_iter:
+            break
+        xc, ok = _newton_solve(s_lin, z0, xc, force, stiff)
+        if not ok:
+            return SINGULAR, k, total, length
+        if used.shape == active.shape:
+            used[:] = active
+        else:
+            used = active.copy()
+        has_used = True
+    return NOT_CONVERGED, max_iter, total, length
