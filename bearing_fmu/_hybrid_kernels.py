@@ -305,3 +305,61 @@ def hybrid_kernel(state, x0, y0, xd0, yd0, want_jac, active, ws, iws, trig, coef
                 res[1 + r, c] = jx[r, c]
                 res[3 + r, c] = jv[r, c]
     return st.status
+
+
+#: :func:`hybrid_global` statuses for an input the kernel is not called with (the caller
+#: raises the checks' own errors, :func:`bearing_fmu.base.check_state`)
+BAD_STATE = -1
+
+
+@njit(cache=True)
+def hybrid_global(state, active, ws, iws, trig, coef, q, s, omega, clearance, fs, res, out):
+    """:func:`hybrid_kernel` in SI units and the global frame: one call per bearing.
+
+    ``q`` (2, 2) turns global components into local ones (:class:`bearing_fmu.frames.
+    LocalFrame`), ``s`` is the global journal state [s, t, sdot, tdot] [m, m/s], ``omega`` the
+    speed [rad/s], ``fs`` the force scale of Eq. (5) at omega [N]. Writes ``out`` (5, 2): row 0
+    the film force [N], rows 1-2 Kb = -dF/dX [N/m], rows 3-4 Cb = -dF/dXdot [N s/m], global
+    (F = Q^T F_loc, K = Q^T K_loc Q); ``res`` (5, 2) receives the dimensionless result. The
+    arithmetic is that of :meth:`bearing_fmu.base.FilmBearingModel.evaluate` and the frame
+    conversions, in the same order. Returns the kernel's status, or :data:`BAD_STATE` for a
+    non-finite state or an eccentricity ratio >= 1 (nothing evaluated).
+    """
+    x = q[0, 0] * s[0] + q[0, 1] * s[1]
+    y = q[1, 0] * s[0] + q[1, 1] * s[1]
+    xd = q[0, 0] * s[2] + q[0, 1] * s[3]
+    yd = q[1, 0] * s[2] + q[1, 1] * s[3]
+    cw = clearance * omega
+    xb = x / clearance
+    yb = y / clearance
+    xdb = xd / cw
+    ydb = yd / cw
+    if not (math.isfinite(xb) and math.isfinite(yb) and math.isfinite(xdb)
+            and math.isfinite(ydb)) or math.hypot(xb, yb) >= 1.0:
+        return BAD_STATE
+    status = hybrid_kernel(state, xb, yb, xdb, ydb, True, active, ws, iws, trig, coef, res)
+    if status != 0:
+        return status
+    sk = -(fs / clearance)
+    sc = -(fs / cw)
+    f0 = fs * res[0, 0]
+    f1 = fs * res[0, 1]
+    out[0, 0] = q[0, 0] * f0 + q[1, 0] * f1
+    out[0, 1] = q[0, 1] * f0 + q[1, 1] * f1
+    for blk in range(2):
+        scale = sk if blk == 0 else sc
+        r = 1 + 2 * blk
+        m00 = scale * res[r, 0]
+        m01 = scale * res[r, 1]
+        m10 = scale * res[r + 1, 0]
+        m11 = scale * res[r + 1, 1]
+        # Q^T M, then (Q^T M) Q
+        a00 = q[0, 0] * m00 + q[1, 0] * m10
+        a01 = q[0, 0] * m01 + q[1, 0] * m11
+        a10 = q[0, 1] * m00 + q[1, 1] * m10
+        a11 = q[0, 1] * m01 + q[1, 1] * m11
+        out[r, 0] = a00 * q[0, 0] + a01 * q[1, 0]
+        out[r, 1] = a00 * q[0, 1] + a01 * q[1, 1]
+        out[r + 1, 0] = a10 * q[0, 0] + a11 * q[1, 0]
+        out[r + 1, 1] = a10 * q[0, 1] + a11 * q[1, 1]
+    return 0

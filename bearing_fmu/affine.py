@@ -24,9 +24,11 @@ array([-2000.,  -100.])
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 __all__ = ["AffineLaws"]
 
@@ -64,6 +66,19 @@ class AffineLaws:
         f0 = force + (kb * x).sum(axis=-1) + (cb * v).sum(axis=-1)
         return cls(f0, np.array(kb, copy=True), np.array(cb, copy=True), states, force)
 
+    def relinearise(self, states, force, kb, cb) -> tuple[float, AffineLaws]:
+        """The master's test and update in one compiled call, for a set of bearings
+        (``states`` (nb, 4), ``force`` (nb, 2), ``kb``, ``cb`` (nb, 2, 2), as the bearings gave
+        them at ``states``): the relative mismatch ``||F - F_law|| / ||F||`` of this law
+        (2-norms over the whole set; :class:`orchestrator.master.Master`) and the law
+        :meth:`linearise` gives there (Eq. 17, the same arithmetic)."""
+        states = np.ascontiguousarray(states, dtype=float)
+        force = np.ascontiguousarray(force, dtype=float)
+        mismatch, f0, kb, cb = _relinearise(
+            states, force, np.ascontiguousarray(kb, dtype=float),
+            np.ascontiguousarray(cb, dtype=float), self.f0, self.kb, self.cb)
+        return mismatch, AffineLaws(f0, kb, cb, states.copy(), force.copy())
+
     def expansion(self):
         """``(states, force, kb, cb)``: the expansion point of the law and the bearing's output
         there, from which :meth:`linearise` rebuilds it exactly (a law given by ``f0`` alone
@@ -79,3 +94,29 @@ class AffineLaws:
         x = states[..., None, :2]
         v = states[..., None, 2:]
         return self.f0 - (self.kb * x).sum(axis=-1) - (self.cb * v).sum(axis=-1)
+
+
+@njit(cache=True)
+def _relinearise(states, force, kb, cb, f0_old, kb_old, cb_old):
+    """:meth:`AffineLaws.relinearise` on (nb, ...) arrays: the sums of two products in the
+    order of :meth:`AffineLaws.force` and :meth:`AffineLaws.linearise`; the two norms summed
+    bearing by bearing. Returns (mismatch, f0, copies of kb and cb)."""
+    nb = states.shape[0]
+    f0 = np.empty((nb, 2))
+    num = 0.0
+    den = 0.0
+    for b in range(nb):
+        x0 = states[b, 0]
+        x1 = states[b, 1]
+        v0 = states[b, 2]
+        v1 = states[b, 3]
+        for r in range(2):
+            law = (f0_old[b, r] - (kb_old[b, r, 0] * x0 + kb_old[b, r, 1] * x1)
+                   - (cb_old[b, r, 0] * v0 + cb_old[b, r, 1] * v1))
+            f = force[b, r]
+            d = f - law
+            num += d * d
+            den += f * f
+            f0[b, r] = f + (kb[b, r, 0] * x0 + kb[b, r, 1] * x1) + (cb[b, r, 0] * v0
+                                                                   + cb[b, r, 1] * v1)
+    return math.sqrt(num) / max(math.sqrt(den), 1e-300), f0, kb.copy(), cb.copy()

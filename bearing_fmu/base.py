@@ -265,6 +265,23 @@ class BearingModel(ABC):
     ) -> BearingResult:
         """Film force [N], Kb [N/m] and Cb [N s/m] at a journal state [m, m/s], speed [rad/s]."""
 
+    def evaluate_global(self, q: np.ndarray, state: np.ndarray, omega: float,
+                        out: np.ndarray) -> None:
+        """:meth:`evaluate` at a journal state given in another frame, results in that frame.
+
+        ``q`` (2, 2) turns its components into the model's local ones (``local = q global``,
+        :class:`bearing_fmu.frames.LocalFrame`), ``state`` is [s, t, sdot, tdot] [m, m/s].
+        Writes ``out`` (5, 2): row 0 the force [N], rows 1-2 Kb [N/m], rows 3-4 Cb [N s/m]
+        (``F = q^T F_loc``, ``K = q^T K_loc q``). What the bearing sets and FMUs call on the
+        hot path; a model may override it with one compiled call giving the same numbers.
+        """
+        loc = q @ np.reshape(state, (2, 2)).T
+        r = self.evaluate(loc[0, 0], loc[1, 0], loc[0, 1], loc[1, 1], omega)
+        qt = q.T
+        out[0] = qt @ r.force
+        out[1:3] = qt @ r.stiffness @ q
+        out[3:5] = qt @ r.damping @ q
+
     def end_initialization(self, x: float, y: float, omega: float) -> None:  # noqa: B027
         """Called once the static solution X0 is known, with the journal position there [m]
         and the speed [rad/s] (FMI: fmi2ExitInitializationMode). Nothing by default; the

@@ -99,6 +99,7 @@ class HybridBearing(FilmBearingModel):
         (self._state, self._active, self._ws, self._iws,
          self._trig) = _ws.new_workspace(self.n, bearing.lambda_, self.tol, self.maxit,
                                           self.pinned_start)
+        self._res = np.empty((5, 2))  # the dimensionless result of evaluate_global
 
     def reset(self) -> None:
         """Forget the warm start (active set, t, predictor): the next call starts cold."""
@@ -137,6 +138,22 @@ class HybridBearing(FilmBearingModel):
         if not jacobian:
             return FilmForce(res[0])
         return FilmForce(res[0], res[1:3], res[3:5])
+
+    def evaluate_global(self, q, state, omega, out):
+        """One compiled call (:func:`bearing_fmu._hybrid_kernels.hybrid_global`): the numbers
+        of :meth:`evaluate` and the frame conversions of the base class."""
+        if not (omega > 0.0 and math.isfinite(omega)):
+            super().evaluate_global(q, state, omega, out)  # raises the speed's error
+        status = _k.hybrid_global(self._state, self._active, self._ws, self._iws, self._trig,
+                                  AXIAL_COEF, q, state, omega, self.bearing.clearance,
+                                  self.bearing.force_scale(omega), self._res, out)
+        if status == 0:
+            return
+        if status == _k.BAD_STATE:
+            super().evaluate_global(q, state, omega, out)  # raises the state check's error
+        x, y, xd, yd = (q @ np.reshape(state, (2, 2)).T).T.ravel()
+        c = self.bearing.clearance
+        self._fail(x / c, y / c, xd / (c * omega), yd / (c * omega))
 
     def _fail(self, *state):
         code = int(self._state[0]["status"])

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from pythonfmu.enums import Fmi2Status
 
 from bearing_fmu import BearingData, model_class
@@ -38,6 +39,8 @@ from fmu_src.slave_support import ContractSlave, describe_exception, pin_namespa
 __all__ = ["BearingSlave", "pin_namespace"]
 
 _OUTPUT_NAMES = {v.name for v in BEARING_VARIABLES if v.causality == "output"}
+#: the law's outputs in the order of BearingModel.evaluate_global's rows (force, Kb, Cb)
+_LAW_NAMES = FORCE_NAMES + STIFFNESS_NAMES + DAMPING_NAMES
 
 
 class BearingSlave(ContractSlave):
@@ -57,6 +60,8 @@ class BearingSlave(ContractSlave):
         self._model = None
         self._frame = None
         self._failed = False
+        self._state = np.zeros(4)  # the journal state evaluated (global frame)
+        self._out = np.zeros((5, 2))  # force, Kb, Cb of the last evaluation (global frame)
         for v in BEARING_VARIABLES:
             setter = None
             if v.causality in ("parameter", "input"):
@@ -112,28 +117,27 @@ class BearingSlave(ContractSlave):
         except Exception as exc:  # anything raised here would be fatal for the host
             self._failed = True
             self.log(f"{self.instance_name}: {describe_exception(exc)}", Fmi2Status.error)
-            for name in FORCE_NAMES + STIFFNESS_NAMES + DAMPING_NAMES:
+            for name in _LAW_NAMES:
                 self._values[name] = math.nan
         self._dirty_outputs = False
 
     def _evaluate(self):
+        """Force, Kb, Cb in the global frame (the model's :meth:`~bearing_fmu.base.
+        BearingModel.evaluate_global`: one compiled call for the hybrid model)."""
         if self._dirty_model:
             self._build_model()
         v = self._values
-        x, y, xd, yd = self._local_state()
-        r = self._model.evaluate(x, y, xd, yd, v["omega"])
-        fr = self._frame
-        force = fr.to_global(r.force)
-        k = fr.matrix_to_global(r.stiffness)
-        c = fr.matrix_to_global(r.damping)
-        for name, val in zip(FORCE_NAMES, force, strict=True):
-            v[name] = float(val)
-        for name, val in zip(STIFFNESS_NAMES, k.ravel(), strict=True):
-            v[name] = float(val)
-        for name, val in zip(DAMPING_NAMES, c.ravel(), strict=True):
-            v[name] = float(val)
-        for name, state in zip(EVAL_NAMES, STATE_NAMES, strict=True):
-            v[name] = float(v[state])
+        state = self._state
+        for i, name in enumerate(STATE_NAMES):
+            state[i] = v[name]
+        q = self._frame.q
+        self._model.evaluate_global(q, state, v["omega"], self._out)
+        for name, val in zip(_LAW_NAMES, self._out.ravel().tolist(), strict=True):
+            v[name] = val
+        for name, val in zip(EVAL_NAMES, state.tolist(), strict=True):
+            v[name] = val
+        x = float(q[0, 0] * state[0] + q[0, 1] * state[1])
+        y = float(q[1, 0] * state[0] + q[1, 1] * state[1])
         v["eccentricity"] = math.hypot(x, y) / v["C"]
         v["n_solves"] = int(v["n_solves"]) + 1
 

@@ -113,25 +113,18 @@ class ModelBearings(BearingSet):
                 raise TypeError(f"{m!r} is not a BearingModel")
         self.models = list(models)
         self._q = np.array([f.q for f in self.frames])
-        self._local = None  # local states of the last evaluation
+        self._states = None  # global journal states of the last evaluation
         self.evaluations = 0
 
     def evaluate(self, states):
         nb = len(self.models)
-        q = self._q
-        loc = np.einsum("bij,bkj->bki", q, np.asarray(states, dtype=float).reshape(nb, 2, 2))
-        self._local = loc
-        force = np.empty((nb, 2))
-        kb = np.empty((nb, 2, 2))
-        cb = np.empty((nb, 2, 2))
-        for b, (model, om) in enumerate(zip(self.models, self.omegas, strict=True)):
-            (x, y), (xd, yd) = loc[b]
-            r = model.evaluate(x, y, xd, yd, om)
-            force[b], kb[b], cb[b] = r.force, r.stiffness, r.damping
+        states = np.asarray(states, dtype=float)
+        self._states = states.copy()
+        out = np.empty((nb, 5, 2))
+        for b in range(nb):
+            self.models[b].evaluate_global(self._q[b], states[b], self.omegas[b], out[b])
         self.evaluations += nb
-        # back to global components: f = Q^T f_loc, K = Q^T K_loc Q
-        qt = np.transpose(q, (0, 2, 1))
-        return (np.einsum("bij,bj->bi", qt, force), qt @ kb @ q, qt @ cb @ q)
+        return out[:, 0], out[:, 1:3], out[:, 3:5]
 
     def static_position(self, loads):
         pos = np.empty((len(self.models), 2))
@@ -149,7 +142,9 @@ class ModelBearings(BearingSet):
             model.set_state(state)
 
     def exit_initialization(self) -> None:
-        if self._local is None:
+        if self._states is None:
             raise RuntimeError("exit_initialization before any evaluation (no static state)")
-        for model, (pos, _), om in zip(self.models, self._local, self.omegas, strict=True):
-            model.end_initialization(float(pos[0]), float(pos[1]), om)
+        for model, frame, state, om in zip(self.models, self.frames, self._states, self.omegas,
+                                           strict=True):
+            x, y = frame.to_local(state[:2])
+            model.end_initialization(float(x), float(y), om)

@@ -177,11 +177,6 @@ class Master:
     total_iterations: int = 0
     total_bearing_evaluations: int = 0
 
-    def _mismatch(self, force, states, laws) -> float:
-        diff = force - laws.force(states)
-        scale = max(math.sqrt(float(np.sum(force * force))), 1e-300)
-        return math.sqrt(float(np.sum(diff * diff))) / scale
-
     def _evaluate(self, states):
         self.total_bearing_evaluations += 1
         return self.bearings.evaluate(states)
@@ -202,8 +197,7 @@ class Master:
             states = self.structure.journal_states().copy()
             states[:, 2:] = 0.0
             force, kb, cb = self._evaluate(states)
-            mismatch = self._mismatch(force, states, laws)
-            laws = AffineLaws.linearise(states, force, kb, cb)
+            mismatch, laws = laws.relinearise(states, force, kb, cb)
             if mismatch <= self.tol:
                 # leave the structure on the converged solution with the final laws
                 self.structure.set_bearing_laws(laws)
@@ -256,8 +250,7 @@ class Master:
             self.structure.do_step(t, dt)
             states = self.structure.journal_states()
             force, kb, cb = self._evaluate(states)
-            mismatch = self._mismatch(force, states, laws)
-            laws = AffineLaws.linearise(states, force, kb, cb)
+            mismatch, laws = laws.relinearise(states, force, kb, cb)
             self.total_iterations += 1
             if mismatch <= self.tol:
                 self.laws = laws

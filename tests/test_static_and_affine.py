@@ -70,3 +70,31 @@ def test_lumped_spring():
     assert sol.y0 == pytest.approx(-5e-6, rel=1e-12)
     with pytest.raises(ValueError, match="stiffness"):
         LumpedSpringBearing(BEARING, stiffness=-1.0)
+
+
+def test_relinearise_is_the_mismatch_and_linearisation_of_the_master():
+    """``AffineLaws.relinearise`` (one compiled call) against the numpy definitions: the law
+    of ``linearise`` bit for bit, and the mismatch ``||F - F_law(X)|| / ||F||`` written with
+    ``AffineLaws.force`` and ``np.linalg.norm`` to 4e-16 (two roundings: the sums of squares
+    may run in different orders; measured 0.0 over these 200 draws)."""
+    from bearing_fmu.affine import AffineLaws
+
+    rng = np.random.default_rng(7)
+    worst = 0.0
+    for _ in range(200):
+        states = rng.normal(size=(4, 4)) * [1e-5, 1e-5, 1e-3, 1e-3]
+        old = AffineLaws.linearise(rng.normal(size=(4, 4)) * 1e-5, rng.normal(size=(4, 2)) * 1e3,
+                                   rng.normal(size=(4, 2, 2)) * 1e8,
+                                   rng.normal(size=(4, 2, 2)) * 1e5)
+        force = rng.normal(size=(4, 2)) * 1e3
+        kb, cb = rng.normal(size=(4, 2, 2)) * 1e8, rng.normal(size=(4, 2, 2)) * 1e5
+        mismatch, new = old.relinearise(states, force, kb, cb)
+        ref = AffineLaws.linearise(states, force, kb, cb)
+        for got, want in ((new.f0, ref.f0), (new.kb, kb), (new.cb, cb), (new.states, states),
+                          (new.force_at, force)):
+            assert np.array_equal(got, want)
+        diff = force - old.force(states)
+        expected = np.linalg.norm(diff) / np.linalg.norm(force)
+        worst = max(worst, abs(mismatch - expected) / expected)
+    print(f"\nrelinearise: largest relative difference of the mismatch {worst:.2e}")
+    assert worst <= 4e-16, worst
