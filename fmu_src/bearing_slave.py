@@ -128,14 +128,11 @@ class BearingSlave(ContractSlave):
             self._build_model()
         v = self._values
         state = self._state
-        for i, name in enumerate(STATE_NAMES):
-            state[i] = v[name]
+        state[:] = [v[name] for name in STATE_NAMES]
         q = self._frame.q
         self._model.evaluate_global(q, state, v["omega"], self._out)
-        for name, val in zip(_LAW_NAMES, self._out.ravel().tolist(), strict=True):
-            v[name] = val
-        for name, val in zip(EVAL_NAMES, state.tolist(), strict=True):
-            v[name] = val
+        v.update(zip(_LAW_NAMES, self._out.ravel().tolist(), strict=True))
+        v.update(zip(EVAL_NAMES, state.tolist(), strict=True))
         x = float(q[0, 0] * state[0] + q[0, 1] * state[1])
         y = float(q[1, 0] * state[0] + q[1, 1] * state[1])
         v["eccentricity"] = math.hypot(x, y) / v["C"]

@@ -73,18 +73,26 @@ class FmiVar:
     def check(self, value) -> None:
         """Raise :class:`ValueRefused` (value, unit and limit in the message) for a value this
         variable does not accept: a non-finite number, one out of its bounds or choices."""
-        unit = f" {self.unit}" if self.unit and self.unit != "1" else ""
         if self.type in ("Real", "Integer") and not math.isfinite(value):
-            raise ValueRefused(f"{self.name} = {value!r}{unit} refused: not a finite number")
+            raise ValueRefused(f"{self.name} = {value!r}{self._unit_text()} refused: not a "
+                               "finite number")
         if self.choices and value not in self.choices:
             raise ValueRefused(f"{self.name} = {value!r} refused: must be one of "
                                f"{', '.join(map(str, self.choices))}")
+        if self.minimum is None and self.maximum is None:
+            return
         from fmu_src.case import bound_violation
 
         violated = bound_violation(value, self.minimum, self.maximum, self.exclusive_minimum)
         if violated:
+            unit = self._unit_text()
             raise ValueRefused(f"{self.name} = {value!r}{unit} refused: must be {violated[0]} "
                                f"{violated[1]:g}{unit}")
+
+    def _unit_text(self) -> str:
+        """" <unit>" for a message, "" for none or "1"."""
+        unit = self.unit
+        return f" {unit}" if unit and unit != "1" else ""
 
 
 _P, _CP, _I, _O = "parameter", "calculatedParameter", "input", "output"

@@ -146,13 +146,27 @@ class ContractSlave(Fmi2Slave):
         self._read_status = FMI_ERROR
         return msg
 
+    def _accessors(self, kind) -> dict:
+        """``{value reference: variable}`` of the variables of ``kind`` (built on first use:
+        the variables are all registered by then)."""
+        cache = self.__dict__.setdefault("_by_kind", {})
+        table = cache.get(kind)
+        if table is None:
+            table = cache[kind] = {vr: var for vr, var in self.vars.items()
+                                   if isinstance(var, kind)}
+        return table
+
+    def _wrong_kind(self, kind, vrs):
+        bad = next(vr for vr in vrs if vr not in self._accessors(kind))
+        return TypeError(f"variable with valueReference={bad} is not of type {kind.__name__}")
+
     def _set(self, kind, vrs, values):
         status = FMI_OK
+        table = self._accessors(kind)
         for vr, value in zip(vrs, values, strict=True):
-            var = self.vars[vr]
-            if not isinstance(var, kind):
-                raise TypeError(f"variable with valueReference={vr} is not of type "
-                                f"{kind.__name__}")
+            var = table.get(vr)
+            if var is None:
+                raise self._wrong_kind(kind, vrs)
             try:
                 var.setter(value)
             except ValueRefused as exc:
@@ -162,14 +176,12 @@ class ContractSlave(Fmi2Slave):
     def _get(self, kind, vrs):
         self._read_status = FMI_OK
         conv = _CONVERT[kind]
-        out = []
-        for vr in vrs:
-            var = self.vars[vr]
-            if not isinstance(var, kind):
-                raise TypeError(f"variable with valueReference={vr} is not of type "
-                                f"{kind.__name__}")
-            out.append(conv(var.getter()))
-        return self._with_status(out)
+        table = self._accessors(kind)
+        try:
+            getters = [table[vr].getter for vr in vrs]
+        except KeyError:
+            raise self._wrong_kind(kind, vrs) from None
+        return self._with_status([conv(get()) for get in getters])
 
     def _with_status(self, values):
         """``values``, or ``(values, status)`` after a failed output (patched library only)."""
