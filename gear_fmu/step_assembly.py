@@ -82,13 +82,11 @@ def check_laws(f0, kb, cb):
 
 
 def check_laws_fast(f0, kb, cb):
-    """Shape and finiteness check of the laws at the cost of one sum (hot path)."""
-    if not all(isinstance(m, np.ndarray) for m in (f0, kb, cb)) or (
-        f0.shape != (4, 2) or kb.shape != (4, 2, 2) or cb.shape != (4, 2, 2)
-    ):
-        return check_laws(f0, kb, cb)
-    if f0.dtype != np.float64 or kb.dtype != np.float64 or cb.dtype != np.float64:
-        return check_laws(f0, kb, cb)
-    if not _all_finite(f0, kb, cb):
-        return check_laws(f0, kb, cb)
-    return f0, kb, cb
+    """Shape and finiteness check of the laws at the cost of one compiled test (hot path)."""
+    nd = np.ndarray
+    if (type(f0) is nd and type(kb) is nd and type(cb) is nd
+            and f0.shape == (4, 2) and kb.shape == (4, 2, 2) and cb.shape == (4, 2, 2)
+            and f0.dtype == np.float64 and kb.dtype == np.float64 and cb.dtype == np.float64
+            and _all_finite(f0, kb, cb)):
+        return f0, kb, cb
+    return check_laws(f0, kb, cb)

@@ -175,8 +175,9 @@ class Structure:
         self._dyn_cache: dict[float, tuple] = {}
         self.damping_model = zeta if isinstance(zeta, DampingModel) else DampingModel(
             ratio=float(zeta))
-        self.reference_modes = None
-        self.reference_mesh_stiffness = None
+        self._reference_modes = None
+        self._reference_mesh_stiffness = None
+        self._pending_reference = None
         if damping is not None:
             damping = np.asarray(damping, dtype=float)
             if damping.shape != (system.n_dof, system.n_dof):
@@ -186,14 +187,46 @@ class Structure:
                 )
             self.set_damping(damping)
         else:
-            self.set_damping_reference(damping_bearing_stiffness)
+            # built when first needed (a step, the damping matrix): a runner replaces it by
+            # the static solution's reference before the first step, so it is never computed
+            self._pending_reference = damping_bearing_stiffness
+            self._c = None
 
     # ------------------------------------------------------------------ damping
     def set_damping(self, damping_full: np.ndarray) -> None:
         """Use the damping matrix C (full numbering) [N s/m] from now on."""
-        self.damping_full = damping_full
+        self._pending_reference = None
+        self._damping_full = damping_full
         self._c = self._permute(damping_full)
         self._dyn_cache.clear()
+
+    def _require_damping(self) -> None:
+        """Build the damping of the constructor's reference if nothing replaced it (at the
+        construction time t = 0, as if built then)."""
+        if self._pending_reference is not None:
+            t, self.t = self.t, 0.0
+            try:
+                self.set_damping_reference(self._pending_reference)
+            finally:
+                self.t = t
+
+    @property
+    def damping_full(self) -> np.ndarray:
+        """The damping matrix C (full numbering) [N s/m]."""
+        self._require_damping()
+        return self._damping_full
+
+    @property
+    def reference_modes(self):
+        """The modes of the modal damping's reference configuration (None if not modal)."""
+        self._require_damping()
+        return self._reference_modes
+
+    @property
+    def reference_mesh_stiffness(self):
+        """Mean mesh stiffness (12, 12) of the damping's reference configuration, or None."""
+        self._require_damping()
+        return self._reference_mesh_stiffness
 
     def set_damping_reference(self, bearing_stiffness) -> None:
         """(Re)build the modal damping C on the modes of the reference configuration.
@@ -203,9 +236,10 @@ class Structure:
         The master calls this with the bearings' stiffness at the static solution X0 before
         the transient.
         """
-        c, self.reference_modes, self.reference_mesh_stiffness = reference_damping(
-            self, self.damping_model, bearing_stiffness)
+        self._pending_reference = None
+        c, modes, k_mesh = reference_damping(self, self.damping_model, bearing_stiffness)
         self.set_damping(c)
+        self._reference_modes, self._reference_mesh_stiffness = modes, k_mesh
 
     # ------------------------------------------------------------------ set-up
     def _ordering(self) -> None:
@@ -249,6 +283,7 @@ class Structure:
             return hit
         if not (dt > 0.0 and math.isfinite(dt)):
             raise ValueError(f"time step dt = {dt!r} s must be finite and > 0")
+        self._require_damping()
         c0, c1, _ = newmark_coefficients(dt)
         cond = Condensation(c0 * self._m + c1 * self._c + self._k)
         mc = np.hstack([self._m, self._c])  # b = [M C] @ [p; q]

@@ -103,6 +103,12 @@ class StructureSlave(ABC):
     def gear_displacements(self) -> np.ndarray:
         """(2, 2) [u, v] of the pinion and gear nodes [m], global frame."""
 
+    def step_outputs(self) -> tuple[float, float, np.ndarray]:
+        """What the runner records after each step: :meth:`mesh_force`,
+        :meth:`transmission_error` and :meth:`gear_displacements` (one FMI call through the
+        FMU)."""
+        return self.mesh_force(), self.transmission_error(), self.gear_displacements()
+
     def checkpoint(self):
         """A picklable copy of the state after the last accepted step, from which
         :meth:`restore` continues bit for bit in another process (resumed runs)."""

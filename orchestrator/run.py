@@ -499,12 +499,11 @@ def _run(case, attrs, where, first, blob, in_process, fmu_dir, fmus, progress, f
                     raise RunError(
                         f"step {i + 1} of {n_steps} (t = {t + dt:.6e} s) failed: {exc}; "
                         f"the {i} steps computed are in {into}") from exc
+                mesh_force, te, gear_nodes = structure.step_outputs()
                 writer.append(time=(i + 1) * dt, journal_position=report.states[:, :2],
                               journal_velocity=report.states[:, 2:],
-                              bearing_force=report.bearing_force,
-                              mesh_force=structure.mesh_force(),
-                              transmission_error=structure.transmission_error(),
-                              gear_nodes=structure.gear_displacements(),
+                              bearing_force=report.bearing_force, mesh_force=mesh_force,
+                              transmission_error=te, gear_nodes=gear_nodes,
                               iterations=report.iterations)
                 if progress and (i & 63) == 0:
                     its = (master.total_iterations - start_iterations) / (i + 1 - first)

@@ -115,6 +115,9 @@ class FmuStructure(StructureSlave):
         self._ex_vr = (ctypes.c_uint * len(extra))(*[vr[n] for n in extra])
         self._ex_val = (ctypes.c_double * len(extra))()
         self._ex_index = {n: i for i, n in enumerate(extra)}
+        self._ex_np = np.frombuffer(self._ex_val, dtype=np.float64)
+        self._ex_gear = [self._ex_index[n] for n in ("u_pinion", "v_pinion", "u_gear",
+                                                      "v_gear")]
         self._one_vr = {n: (ctypes.c_uint * 1)(vr[n]) for n in extra}
         self._one_val = (ctypes.c_double * 1)()
         self._sup_vr = (ctypes.c_uint * 8)(*[vr[n] for n in support])
@@ -251,6 +254,17 @@ class FmuStructure(StructureSlave):
         n = len(self._ex_val)
         self._check(self._get_real(self._c, self._ex_vr, n, self._ex_val), "reading outputs")
         return {name: float(self._ex_val[i]) for name, i in self._ex_index.items()}
+
+    def step_outputs(self) -> tuple[float, float, np.ndarray]:
+        """Mesh force [N], transmission error [m] and the (2, 2) [u, v] of the pinion and gear
+        nodes [m] in one fmi2GetReal."""
+        self._live()
+        n = len(self._ex_val)
+        self._check(self._get_real(self._c, self._ex_vr, n, self._ex_val), "reading outputs")
+        v = self._ex_np
+        i = self._ex_index
+        return (float(v[i["mesh_force"]]), float(v[i["transmission_error"]]),
+                v[self._ex_gear].reshape(2, 2))
 
     def _extra(self, name: str) -> float:
         self._live()
