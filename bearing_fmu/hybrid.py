@@ -25,6 +25,7 @@ from bearing_fmu import _hybrid_workspace as _ws
 from bearing_fmu.axial import AXIAL_COEF, axial_shape
 from bearing_fmu.base import (
     BearingError,
+    BearingModel,
     FilmBearingModel,
     FilmForce,
     ModelOption,
@@ -140,17 +141,23 @@ class HybridBearing(FilmBearingModel):
         return FilmForce(res[0], res[1:3], res[3:5])
 
     def evaluate_global(self, q, state, omega, out):
-        """One compiled call (:func:`bearing_fmu._hybrid_kernels.hybrid_global`): the numbers
-        of :meth:`evaluate` and the frame conversions of the base class."""
+        """One compiled call (``bearing_fmu._hybrid_kernels.hybrid_global``): the numbers of
+        :meth:`~bearing_fmu.base.FilmBearingModel.evaluate` and the frame conversions of the
+        base class."""
         if not (omega > 0.0 and math.isfinite(omega)):
-            super().evaluate_global(q, state, omega, out)  # raises the speed's error
+            BearingModel.evaluate_global(self, q, state, omega, out)  # the speed's error
         status = _k.hybrid_global(self._state, self._active, self._ws, self._iws, self._trig,
                                   AXIAL_COEF, q, state, omega, self.bearing.clearance,
                                   self.bearing.force_scale(omega), self._res, out)
-        if status == 0:
-            return
+        if status != 0:
+            self.raise_status(status, q, state, omega)
+
+    def raise_status(self, status, q, state, omega):
+        """Raise the error of a failed :meth:`evaluate_global` (kernel status ``status`` at
+        the global state ``state`` [m, m/s] of the frame ``q``): the state check's error, or
+        :class:`HybridConvergenceError` (and a cold start next time)."""
         if status == _k.BAD_STATE:
-            super().evaluate_global(q, state, omega, out)  # raises the state check's error
+            BearingModel.evaluate_global(self, q, state, omega, np.empty((5, 2)))
         x, y, xd, yd = (q @ np.reshape(state, (2, 2)).T).T.ravel()
         c = self.bearing.clearance
         self._fail(x / c, y / c, xd / (c * omega), yd / (c * omega))

@@ -2,14 +2,14 @@
 
 :meth:`gear_fmu.structure.Structure.step` with the distributed mesh element
 (:class:`gear_fmu.mesh.MeshElement`) spends most of its time between kernels when the pieces
-are called from Python: the right-hand side and tangent (:func:`gear_fmu.step_assembly.
-prepare_step`, Eq. 12, 14, 16), the Newton/contact loop of :func:`gear_fmu.contact_loop.
-solve_condensed` (a mesh evaluation, the residual and a 20 x 20 solve per pass, Fig. 4) and the
-recovery of the eliminated DOFs with the Newmark update (:func:`gear_fmu.step_assembly.
-finish_step`, Eq. 12). :func:`advance` runs the same kernels in the same order with the same
-arithmetic in one call, so it gives the Python loop's results bit for bit (the norms use
-``np.dot`` as the loop does); the loop stays the reference and serves any other mesh object
-and the benchmark timers (``Structure.timing``).
+are called from Python: the right-hand side and tangent
+(:func:`~gear_fmu.step_assembly.prepare_step`, Eq. 12, 14, 16), the Newton/contact loop of
+:func:`~gear_fmu.contact_loop.solve_condensed` (a mesh evaluation, the residual and a 20 x 20
+solve per pass, Fig. 4) and the recovery of the eliminated DOFs with the Newmark update
+(:func:`~gear_fmu.step_assembly.finish_step`, Eq. 12). :func:`advance` runs the same kernels in
+the same order with the same arithmetic in one call, so it gives the Python loop's results bit
+for bit (the norms use ``np.dot`` as the loop does); the loop stays the reference and serves
+any other mesh object and the benchmark timers (``Structure.timing``).
 
 The outcome is a status (0 converged, 1 not converged in ``max_iter`` passes, 2 singular
 tangent) with the residual history, from which the caller raises the loop's own errors.

@@ -464,24 +464,35 @@ class Structure:
     def _advance_compiled(self, h, t1, angle, f0, kb, cb, what) -> StepInfo:
         """:meth:`_advance` in one compiled call (:func:`gear_fmu.step_kernel.advance`, the
         same arithmetic as the Python loop)."""
+        args = self.advance_arguments(h, t1, angle, f0, kb, cb)
+        return self.commit_advance(advance(*args), args, t1, what)
+
+    def advance_arguments(self, h, t1, angle, f0, kb, cb) -> tuple:
+        """The arguments of :func:`gear_fmu.step_kernel.advance` for a step of length h to
+        t1 (mesh at ``angle``, checked laws), with fresh output arrays: for a caller that runs
+        it inside a larger compiled call (the master's coupled iteration,
+        :mod:`orchestrator.fused`); :meth:`commit_advance` takes its outcome."""
         cond, hh, g_const = self._dynamic(h)
         mesh = self.mesh
         n = mesh.n_lines * mesh.n_slices
-        force, stiff = np.empty(12), np.empty((12, 12))
-        active, inside = np.empty(n, dtype=np.bool_), np.empty(n, dtype=np.bool_)
-        delta, load, xi, z = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-        residuals = np.empty(self.max_iter + 1)
         size = self.x.size
-        x1, v1, a1 = np.empty(size), np.empty(size), np.empty(size)
         err = mesh.error_displacement(angle) if mesh.has_errors else _NO_ERROR
         used = _NO_SET if self.active is None else self.active
         unb = unbalance_force(self._unb, self._omega, t1)  # Eq. (10)
         f_scale = max(self._f_scale, math.sqrt(float(np.sum(f0 * f0))))
-        status, k, total, length = advance(
-            hh, g_const, cond.s0, cond.w, self.x, self.v, self.a, self._f_c, unb, f0, kb, cb, h,
-            angle, err, mesh.has_errors, *self._mesh_arrays, used, self.active is not None,
-            f_scale, self.tol, self.max_iter, force, stiff, active, inside, delta, load, xi, z,
-            residuals, x1, v1, a1)
+        return (hh, g_const, cond.s0, cond.w, self.x, self.v, self.a, self._f_c, unb, f0, kb,
+                cb, h, angle, err, mesh.has_errors, *self._mesh_arrays, used,
+                self.active is not None, f_scale, self.tol, self.max_iter,
+                np.empty(12), np.empty((12, 12)), np.empty(n, dtype=np.bool_),
+                np.empty(n, dtype=np.bool_), np.empty(n), np.empty(n), np.empty(n), np.empty(n),
+                np.empty(self.max_iter + 1), np.empty(size), np.empty(size), np.empty(size))
+
+    def commit_advance(self, outcome, args, t1, what) -> StepInfo:
+        """Take the outcome ``(status, passes, total load, contact length)`` of
+        :func:`gear_fmu.step_kernel.advance` run on ``args`` (:meth:`advance_arguments`): the
+        new X, Xd, Xdd and mesh state, or the contact loop's error."""
+        status, k, total, length = outcome
+        force, stiff, active, inside, delta, load, xi, z, residuals, x1, v1, a1 = args[-12:]
         history = residuals[:k + 1].tolist()
         if status == SINGULAR:
             raise NewmarkConvergenceError(
@@ -493,13 +504,20 @@ class Structure:
                 f"{what} at t = {t1:.9g} s did not converge: relative residual "
                 f"{history[-1]:.3e} (tol {self.tol:.1e}) after {self.max_iter} iterations; "
                 f"last residuals {', '.join(f'{v:.2e}' for v in history[-5:])}")
-        rb1, rb2 = mesh.pair.base_radius
+        rb1, rb2 = self.mesh.pair.base_radius
         te = rb1 * x1[5] + rb2 * x1[11]
         self.mesh_state = MeshState(force, stiff, active, delta, load, inside, xi, z, total, te,
                                     {"contact_length": length})
         self.x, self.v, self.a = x1, v1, a1
         self.active = active
         return StepInfo(t1, k, history[-1], history)
+
+    def single_piece(self, dt: float) -> bool:
+        """True when the step of length dt from the current time is one Newmark step with
+        the compiled kernel (no contact event inside it, no benchmark timers)."""
+        return (self._mesh_arrays is not None and self.timing is None and self.active is not None
+                and dt > 0.0 and math.isfinite(dt)
+                and not (self.locate_contact and self._sub_steps(dt)))
 
     # ------------------------------------------------------------------ state
     def get_state(self) -> StructureState:

@@ -58,12 +58,12 @@ P. Velex, O. Duverger, J. Mech. Des. 126 (2004) 748-752.
 
 from __future__ import annotations
 
-import itertools
 import math
 
 import numpy as np
+from numba import njit
 
-from .geometry import GearPair
+from .geometry import GearPair, involute
 
 __all__ = ["ToothPairCompliance", "mesh_stiffness_table", "tooth_compliance"]
 
@@ -90,18 +90,35 @@ def _beam_integrals(pair: GearPair, gear: int, r_p: float, y_c: float, n_panels:
         t = 2.0 * x_low
         i_b += 12.0 / t**3 * ((y_c - y0) ** 3 - (y_c - y1) ** 3) / 3.0
         i_a += (y1 - y0) / t
-    # involute part, Gauss-Legendre in r on panels; dy/dr = cos psi + sin psi tan(alpha_r)
-    # (d psi / dr = -tan(alpha_r) / r)
-    edges = np.linspace(r_low, r_p, n_panels + 1)
-    for r0, r1 in itertools.pairwise(edges):
-        rs = 0.5 * (r0 + r1) + 0.5 * (r1 - r0) * _GAUSS_X
-        ws = 0.5 * (r1 - r0) * _GAUSS_W
-        for r, w in zip(rs, ws, strict=True):
-            psi = pair.half_tooth_angle(gear, r)
-            y, x = r * math.cos(psi) - rf, r * math.sin(psi)
+    # psi(r) = psi0 - inv(alpha_r) (GearPair.half_tooth_angle)
+    psi0 = (pair.transverse_tooth_thickness[gear] / (2.0 * pair.pitch_radius[gear])
+            + involute(pair.transverse_pressure_angle))
+    return _involute_integrals(np.linspace(r_low, r_p, n_panels + 1), rb, rf, psi0, y_c,
+                               _GAUSS_X, _GAUSS_W, i_b, i_a, 2.0, 3.0)
+
+
+@njit(cache=True)
+def _involute_integrals(edges, rb, rf, psi0, y_c, gauss_x, gauss_w, i_b, i_a, two, three):
+    """The involute part of :func:`_beam_integrals`: Gauss-Legendre in r on the panels
+    between ``edges``, added to ``(i_b, i_a)``; dy/dr = cos psi + sin psi tan(alpha_r)
+    (d psi / dr = -tan(alpha_r) / r). The powers are calls of ``pow`` with the exponents
+    ``two`` = 2 and ``three`` = 3 passed at run time, as Python's ``**`` computes them (the
+    compiler would turn a constant square into a product, which rounds differently)."""
+    for p in range(edges.size - 1):
+        r0 = edges[p]
+        r1 = edges[p + 1]
+        mid = 0.5 * (r0 + r1)
+        half = 0.5 * (r1 - r0)
+        for k in range(gauss_x.size):
+            r = mid + half * gauss_x[k]
+            w = half * gauss_w[k]
+            alpha_r = math.acos(min(1.0, rb / r))
+            psi = psi0 - (math.tan(alpha_r) - alpha_r)
+            y = r * math.cos(psi) - rf
+            x = r * math.sin(psi)
             dy_dr = math.cos(psi) + math.sin(psi) * math.sqrt(max(r * r - rb * rb, 0.0)) / rb
             t = 2.0 * x
-            i_b += w * dy_dr * 12.0 * (y_c - y) ** 2 / t**3
+            i_b += w * dy_dr * 12.0 * math.pow(y_c - y, two) / math.pow(t, three)
             i_a += w * dy_dr / t
     return i_b, i_a
 

@@ -123,8 +123,9 @@ def test_signals_and_a_kill_keep_the_steps_and_the_run_resumes_exactly(transport
     exit 130 / 143, no traceback, the steps kept with the reason; the file is readable while
     the run writes it; ``gsb run --resume`` then finishes it, equal to an uninterrupted run."""
     # long enough that the signal lands in the transient: the first rows appear with the first
-    # flush, after 1 s (about 350 steps in-process, 120 through FMUs, on a 2-core machine)
-    periods = "48" if transport == "in-process" else "16"
+    # flush, after 1 s (about 2000 steps in-process, 650 through FMUs, on a 2-core machine);
+    # the runs last about 2.1 s and 2.4 s
+    periods = "128" if transport == "in-process" else "48"
     opts = ["--no-figures", "--quiet", "--fmu-dir", str(fmu_dir)]
     if transport == "in-process":  # the uninterrupted reference: in this process
         from fmu_src.case import load_case
