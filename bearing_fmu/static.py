@@ -12,7 +12,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import brentq
 
 from bearing_fmu.base import (
     BearingError,
@@ -50,6 +49,8 @@ def _film_ray_guess(model: FilmBearingModel, load_bar: float, direction: float, 
             f"the film cannot carry the load: dimensionless load {load_bar:.6g} exceeds the "
             f"force {top + load_bar:.6g} at the eccentricity limit {eps_max}"
         )
+    from scipy.optimize import brentq  # here: importing scipy.optimize costs 0.3 s
+
     eps = brentq(excess, 1e-9, eps_max, xtol=1e-14, rtol=1e-13)
     fx, fy = model.dimensionless(eps, 0.0, jacobian=False).force
     rot = direction + math.pi - math.atan2(fy, fx)  # force must point against the load
