@@ -101,6 +101,7 @@ class HybridBearing(FilmBearingModel):
          self._trig) = _ws.new_workspace(self.n, bearing.lambda_, self.tol, self.maxit,
                                           self.pinned_start)
         self._res = np.empty((5, 2))  # the dimensionless result of evaluate_global
+        self._scale = (math.nan, math.nan)  # (omega, force scale of Eq. 5) of the last call
 
     def reset(self) -> None:
         """Forget the warm start (active set, t, predictor): the next call starts cold."""
@@ -146,9 +147,11 @@ class HybridBearing(FilmBearingModel):
         base class."""
         if not (omega > 0.0 and math.isfinite(omega)):
             BearingModel.evaluate_global(self, q, state, omega, out)  # the speed's error
+        if omega != self._scale[0]:
+            self._scale = (omega, self.bearing.force_scale(omega))
         status = _k.hybrid_global(self._state, self._active, self._ws, self._iws, self._trig,
                                   AXIAL_COEF, q, state, omega, self.bearing.clearance,
-                                  self.bearing.force_scale(omega), self._res, out)
+                                  self._scale[1], self._res, out)
         if status != 0:
             self.raise_status(status, q, state, omega)
 

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from bearing_fmu.affine import AffineLaws
+from bearing_fmu.affine import AffineLaws, affine_global
 from bearing_fmu.base import BearingModel, BearingResult, _check_omega
 from bearing_fmu.hybrid import HybridBearing
 
@@ -81,16 +81,27 @@ class LinearBearing(BearingModel):
         r = model.evaluate(x0, y0, 0.0, 0.0, omega)
         return cls(model.bearing, (x0, y0), r.force, r.stiffness, r.damping, omega)
 
-    def evaluate(self, x, y, xdot, ydot, omega) -> BearingResult:
+    def _check_speed(self, omega) -> float:
         omega = _check_omega(omega)
-        if not np.isclose(omega, self.omega, rtol=1e-12, atol=0.0):
+        if not abs(omega - self.omega) <= 1e-12 * abs(self.omega):
             raise ValueError(
                 f"linear bearing coefficients hold at omega = {self.omega} rad/s, "
                 f"evaluated at omega = {omega} rad/s"
             )
+        return omega
+
+    def evaluate(self, x, y, xdot, ydot, omega) -> BearingResult:
+        self._check_speed(omega)
         force = self.law.force(np.array([x, y, xdot, ydot], dtype=float))
         return BearingResult(force=force, stiffness=self.law.kb.copy(),
                              damping=self.law.cb.copy())
+
+    def evaluate_global(self, q, state, omega, out) -> None:
+        """The law of Eq. (17) in the frame of ``q`` in one compiled call (the arithmetic
+        of :meth:`evaluate` and the base class's frame conversions)."""
+        self._check_speed(omega)
+        law = self.law
+        affine_global(q, state, law.f0, law.kb, law.cb, out)
 
 
 class LinearisedBearing(BearingModel):
@@ -135,6 +146,10 @@ class LinearisedBearing(BearingModel):
     def evaluate(self, x, y, xdot, ydot, omega) -> BearingResult:
         law = self.film if self.frozen is None else self.frozen
         return law.evaluate(x, y, xdot, ydot, omega)
+
+    def evaluate_global(self, q, state, omega, out) -> None:
+        law = self.film if self.frozen is None else self.frozen
+        law.evaluate_global(q, state, omega, out)
 
     def get_state(self):
         """The film model's warm start and the frozen law (X0, F0, Kb, Cb, speed; None before

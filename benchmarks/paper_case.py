@@ -50,7 +50,6 @@ TIMED = [
     ("laws in / journals out", "orchestrator.fmi.structure.FmuStructure", "set_bearing_laws"),
     ("laws in / journals out", "orchestrator.fmi.structure.FmuStructure", "journal_states"),
     ("master: linearise + mismatch", "bearing_fmu.affine.AffineLaws", "relinearise"),
-    ("fused iteration (in-process)", "orchestrator.fused.FusedIteration", "__call__"),
     ("outputs + results writer", "orchestrator.results.ResultsWriter", "append"),
     ("outputs + results writer", "orchestrator.master.StructureSlave", "step_outputs"),
     ("outputs + results writer", "orchestrator.fmi.structure.FmuStructure", "step_outputs"),

@@ -60,7 +60,6 @@ class BearingSlave(ContractSlave):
         self._model = None
         self._frame = None
         self._failed = False
-        self._state = np.zeros(4)  # the journal state evaluated (global frame)
         self._out = np.zeros((5, 2))  # force, Kb, Cb of the last evaluation (global frame)
         for v in BEARING_VARIABLES:
             setter = None
@@ -124,6 +123,7 @@ class BearingSlave(ContractSlave):
         cls = model_class(self.model_name)
         self._model = cls.from_parameters(bearing, **{o.key: v[o.key] for o in cls.options})
         self._frame = LocalFrame(v["frame_angle"], int(v["rotation_sign"]))
+        self._frame_entries = self._frame.q.tolist()
         self._dirty_model = False
 
     def _local_state(self):
@@ -152,14 +152,15 @@ class BearingSlave(ContractSlave):
         if self._dirty_model:
             self._build_model()
         v = self._values
-        state = self._state
-        state[:] = [v[name] for name in STATE_NAMES]
+        s = [v[name] for name in STATE_NAMES]
+        state = np.array(s)
         q = self._frame.q
         self._model.evaluate_global(q, state, v["omega"], self._out)
         v.update(zip(_LAW_NAMES, self._out.ravel().tolist(), strict=True))
-        v.update(zip(EVAL_NAMES, state.tolist(), strict=True))
-        x = float(q[0, 0] * state[0] + q[0, 1] * state[1])
-        y = float(q[1, 0] * state[0] + q[1, 1] * state[1])
+        v.update(zip(EVAL_NAMES, s, strict=True))
+        (q00, q01), (q10, q11) = self._frame_entries
+        x = q00 * s[0] + q01 * s[1]
+        y = q10 * s[0] + q11 * s[1]
         v["eccentricity"] = math.hypot(x, y) / v["C"]
         v["n_solves"] = int(v["n_solves"]) + 1
 

@@ -464,14 +464,12 @@ class Structure:
     def _advance_compiled(self, h, t1, angle, f0, kb, cb, what) -> StepInfo:
         """:meth:`_advance` in one compiled call (:func:`gear_fmu.step_kernel.advance`, the
         same arithmetic as the Python loop)."""
-        args = self.advance_arguments(h, t1, angle, f0, kb, cb)
-        return self.commit_advance(advance(*args), args, t1, what)
+        args = self._advance_arguments(h, t1, angle, f0, kb, cb)
+        return self._commit_advance(advance(*args), args, t1, what)
 
-    def advance_arguments(self, h, t1, angle, f0, kb, cb) -> tuple:
+    def _advance_arguments(self, h, t1, angle, f0, kb, cb) -> tuple:
         """The arguments of :func:`gear_fmu.step_kernel.advance` for a step of length h to
-        t1 (mesh at ``angle``, checked laws), with fresh output arrays: for a caller that runs
-        it inside a larger compiled call (the master's coupled iteration,
-        :mod:`orchestrator.fused`); :meth:`commit_advance` takes its outcome."""
+        t1 (mesh at ``angle``, checked laws), with fresh output arrays."""
         cond, hh, g_const = self._dynamic(h)
         mesh = self.mesh
         n = mesh.n_lines * mesh.n_slices
@@ -487,9 +485,9 @@ class Structure:
                 np.empty(n, dtype=np.bool_), np.empty(n), np.empty(n), np.empty(n), np.empty(n),
                 np.empty(self.max_iter + 1), np.empty(size), np.empty(size), np.empty(size))
 
-    def commit_advance(self, outcome, args, t1, what) -> StepInfo:
+    def _commit_advance(self, outcome, args, t1, what) -> StepInfo:
         """Take the outcome ``(status, passes, total load, contact length)`` of
-        :func:`gear_fmu.step_kernel.advance` run on ``args`` (:meth:`advance_arguments`): the
+        :func:`gear_fmu.step_kernel.advance` run on ``args`` (:meth:`_advance_arguments`): the
         new X, Xd, Xdd and mesh state, or the contact loop's error."""
         status, k, total, length = outcome
         force, stiff, active, inside, delta, load, xi, z, residuals, x1, v1, a1 = args[-12:]
@@ -511,13 +509,6 @@ class Structure:
         self.x, self.v, self.a = x1, v1, a1
         self.active = active
         return StepInfo(t1, k, history[-1], history)
-
-    def single_piece(self, dt: float) -> bool:
-        """True when the step of length dt from the current time is one Newmark step with
-        the compiled kernel (no contact event inside it, no benchmark timers)."""
-        return (self._mesh_arrays is not None and self.timing is None and self.active is not None
-                and dt > 0.0 and math.isfinite(dt)
-                and not (self.locate_contact and self._sub_steps(dt)))
 
     # ------------------------------------------------------------------ state
     def get_state(self) -> StructureState:

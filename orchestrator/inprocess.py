@@ -65,11 +65,6 @@ class InProcessStructure(StructureSlave):
         kb = self._require_laws().kb
         self.structure.set_damping_reference(0.5 * (kb + np.transpose(kb, (0, 2, 1))))
 
-    def fused_iteration(self, bearings):
-        from orchestrator.fused import FusedIteration
-
-        return FusedIteration.build(self, bearings)
-
     def checkpoint(self):
         return self.structure.get_state()
 

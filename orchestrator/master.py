@@ -121,13 +121,6 @@ class StructureSlave(ABC):
     def close(self) -> None:  # noqa: B027 - optional: nothing to release by default
         """Release what the slave holds (FMU instances, files); idempotent."""
 
-    def fused_iteration(self, bearings):
-        """A callable doing the master's whole coupled iteration with ``bearings`` at once,
-        ``(t, dt, laws) -> (mismatch, new laws, bearing force, journal states)`` or None for
-        a step it does not serve; None (the default) when there is none
-        (:mod:`orchestrator.fused`)."""
-        return None
-
 
 class BearingSet(ABC):
     """What the master and the runner need from the bearing slaves (in-process or FMUs)."""
@@ -189,9 +182,6 @@ class Master:
     laws: AffineLaws | None = None
     total_iterations: int = 0
     total_bearing_evaluations: int = 0
-
-    def __post_init__(self):
-        self._fused = self.structure.fused_iteration(self.bearings)
 
     def _evaluate(self, states):
         self.total_bearing_evaluations += 1
@@ -261,18 +251,12 @@ class Master:
         saved = self.structure.get_state()
         laws = self.laws
         mismatch = math.inf
-        fused = self._fused
         for it in range(1, self.max_iterations + 1):
-            done = None if fused is None else fused(t, dt, laws)
-            if done is None:
-                self.structure.set_bearing_laws(laws)
-                self.structure.do_step(t, dt)
-                states = self.structure.journal_states()
-                force, kb, cb = self._evaluate(states)
-                mismatch, laws = laws.relinearise(states, force, kb, cb)
-            else:  # the same in one compiled call (orchestrator.fused)
-                self.total_bearing_evaluations += 1
-                mismatch, laws, force, states = done
+            self.structure.set_bearing_laws(laws)
+            self.structure.do_step(t, dt)
+            states = self.structure.journal_states()
+            force, kb, cb = self._evaluate(states)
+            mismatch, laws = laws.relinearise(states, force, kb, cb)
             self.total_iterations += 1
             if mismatch <= self.tol:
                 self.laws = laws

@@ -331,8 +331,11 @@ def _gather(client, base, points, todo, periods, steady_periods, store, bar, don
     poll = min(1.0, max(0.05, worker_timeout / 10))
     alone_since = None
     where = f"the scheduler {scheduler}" if scheduler else "the LocalCluster's scheduler"
+    asked = _SigintHold()
     try:
         while pending:
+            if asked:  # Ctrl-C, taken here: Dask's waits may swallow a KeyboardInterrupt
+                raise KeyboardInterrupt
             try:
                 finished, pending = wait(pending, timeout=poll, return_when="FIRST_COMPLETED")
             except TimeoutError:
@@ -372,9 +375,36 @@ def _gather(client, base, points, todo, periods, steady_periods, store, bar, don
         bar.update(done, f"{len(failed)} failed")
         return "complete", "", done
     finally:
+        asked.restore()
         if pending:
             with contextlib.suppress(Exception):
                 client.cancel(list(pending))
+
+
+class _SigintHold(list):
+    """SIGINT recorded in this list (in the main thread) instead of raised where it lands; a
+    second one raises at once. :meth:`restore` puts the previous handler back."""
+
+    def __init__(self):
+        import signal
+        import threading
+
+        super().__init__()
+        self._previous = None
+        if threading.current_thread() is threading.main_thread():
+            self._previous = signal.signal(signal.SIGINT, self._hold)
+
+    def _hold(self, signum, frame):
+        if self:
+            raise KeyboardInterrupt
+        self.append(signum)
+
+    def restore(self) -> None:
+        import signal
+
+        if self._previous is not None:
+            signal.signal(signal.SIGINT, self._previous)
+            self._previous = None
 
 
 @contextlib.contextmanager

@@ -91,7 +91,7 @@ def test_force_and_jacobians_against_central_differences(name):
 #: frames of FRAMES (relative to the largest entry): the two routes round the local state
 #: differently in the last bit, which the iterative film solvers carry to their own tolerance;
 #: asserted with a margin of 3
-MEASURED_FRAME = {"hybrid": 1.6e-14, "short": 1.5e-15, "fd": 1.4e-10, "linear": 1.1e-15,
+MEASURED_FRAME = {"hybrid": 2.3e-14, "short": 1.5e-15, "fd": 1.4e-10, "linear": 1.1e-15,
                   "lumped": 3.8e-16}
 FRAMES = [LocalFrame(float(a), sign) for a in np.linspace(0.1, 6.2, 8) for sign in (1, -1)]
 

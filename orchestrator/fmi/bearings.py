@@ -87,6 +87,7 @@ class FmuBearings(BearingSet):
             *[s.vr[n] for n in (FORCE_NAMES if fo else self._OUTPUTS)])
             for s, fo in zip(self.slaves, self.force_only, strict=True)]
         self._in_val = (ctypes.c_double * 4)()
+        self._in_np = np.frombuffer(self._in_val, dtype=np.float64)
         self._out_val = (ctypes.c_double * 10)()
         self._out_np = np.frombuffer(self._out_val, dtype=np.float64)
 
@@ -111,8 +112,7 @@ class FmuBearings(BearingSet):
     def _force(self, b: int, s: FmuInstance, state, n: int) -> np.ndarray:
         """Set the journal state of bearing b, read its first ``n`` outputs."""
         f = s.fmu
-        for i in range(4):
-            self._in_val[i] = state[i]
+        self._in_np[:] = state
         self._call(b, s, f.dll.fmi2SetReal(f.component, self._in_vr[b], 4, self._in_val),
                    "fmi2SetReal", state)
         self._call(b, s, f.dll.fmi2GetReal(f.component, self._out_vr[b], n, self._out_val),
