@@ -18,7 +18,9 @@ kernels; through FMUs: the fmi2DoStep call, the FMU's Python included), the bear
 evaluation, state saves and restores, the law linearisation and mismatch of the master, the
 results writer, and the rest (the loop, the progress test); and the ratio of the total to the
 sum of the timed calls. The timers add about 0.5 us per call (measured by the ratio of the
-runs with and without them).
+runs with and without them). A third run times the compiled kernels alone (:data:`KERNELS`:
+the structure's step, the hybrid bearing, the master's update) and prints the ratio of the
+total to their sum: what is left is Python and, through FMUs, the FMI layer.
 """
 
 from __future__ import annotations
@@ -54,6 +56,44 @@ TIMED = [
     ("outputs + results writer", "orchestrator.master.StructureSlave", "step_outputs"),
     ("outputs + results writer", "orchestrator.fmi.structure.FmuStructure", "step_outputs"),
 ]
+
+
+#: (module, function) of the compiled kernels of a coupled iteration, as the code calls them
+#: (module attributes): the structure's step, the hybrid bearing, the master's update
+KERNELS = [
+    ("gear_fmu.structure", "advance"),
+    ("bearing_fmu._hybrid_kernels", "hybrid_global"),
+    ("bearing_fmu.affine", "_relinearise"),
+]
+
+
+@contextlib.contextmanager
+def timed_kernels(targets=KERNELS):
+    """Wrap the compiled kernels of ``targets`` with timers (through FMUs too: pythonfmu runs
+    the slaves in this interpreter); yields ``{"seconds": s, "calls": n}``."""
+    import importlib
+
+    total = {"seconds": 0.0, "calls": 0}
+    saved = []
+    for module_name, name in targets:
+        module = importlib.import_module(module_name)
+        kernel = getattr(module, name)
+
+        def wrapper(*a, _k=kernel):
+            t0 = time.perf_counter()
+            try:
+                return _k(*a)
+            finally:
+                total["seconds"] += time.perf_counter() - t0
+                total["calls"] += 1
+
+        setattr(module, name, wrapper)
+        saved.append((module, name, kernel))
+    try:
+        yield total
+    finally:
+        for module, name, kernel in saved:
+            setattr(module, name, kernel)
 
 
 @contextlib.contextmanager
@@ -97,6 +137,8 @@ def breakdown(periods: int, in_process: bool) -> None:
         plain = run_case(case, periods=periods, out_dir=tmp + "/p", **kw)
         with timed_calls() as totals:
             s = run_case(case, periods=periods, out_dir=tmp + "/t", **kw)
+        with timed_kernels() as kernels:
+            k = run_case(case, periods=periods, out_dir=tmp + "/k", **kw)
     n = s.iterations
     us = 1e6 / n
     where = "in-process" if in_process else "FMUs (fmpy)"
@@ -110,6 +152,10 @@ def breakdown(periods: int, in_process: bool) -> None:
           f"{100 * rest / s.wall_time:5.1f} %")
     print(f"  {'total':30s} {s.wall_time * us:8.1f} us/iteration; total / timed calls "
           f"{s.wall_time / sum(totals.values()):.3f}")
+    kus = 1e6 / k.iterations
+    print(f"  compiled kernels (a third run, kernels timed alone: {k.wall_time:.2f} s): "
+          f"{kernels['seconds'] * kus:.1f} us/iteration in {kernels['calls'] / k.iterations:.2f} "
+          f"calls; total / kernels {k.wall_time / kernels['seconds']:.2f}")
 
 
 def main() -> None:
