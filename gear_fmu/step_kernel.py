@@ -39,7 +39,8 @@ def advance(hh, g_const, s0, w, x, v, a, f_c, unb, f0, kb, cb, h,  # step (Eq. 1
             used0, has_used, f_scale, tol, max_iter,  # contact loop (Fig. 4)
             force, stiff, active, inside, delta, load, xis, zout, residuals,  # mesh state out
             x1, v1, a1):  # state out
-    """One Newmark step of length ``h`` with the mesh element at pinion ``angle`` [rad].
+    """One Newmark step of length ``h`` with the mesh element at pinion ``angle`` [rad]:
+    Eq. (12), (14), (16) assembled, Newton-Raphson with the contact loop, Eq. (13), (15).
 
     Inputs as :func:`gear_fmu.step_assembly.prepare_step` (``hh``, ``g_const``, ``s0``, ``w``
     from the condensation at h) and :func:`gear_fmu.contact_loop.solve_condensed`
