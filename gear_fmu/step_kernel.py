@@ -28,9 +28,21 @@ from .mesh import _mesh_kernel
 from .newmark import newmark_kinematics
 from .step_assembly import prepare_step
 
-__all__ = ["CONVERGED", "NOT_CONVERGED", "SINGULAR", "advance"]
+__all__ = ["CONVERGED", "NOT_CONVERGED", "SINGULAR", "advance", "sum_squares"]
 
 CONVERGED, NOT_CONVERGED, SINGULAR = 0, 1, 2
+
+
+@njit(cache=True)
+def sum_squares(f0):
+    """Sum of the squares of the (4, 2) bearing forces, added in numpy's pairwise order for
+    eight contiguous values (``((s0 + s1) + (s2 + s3)) + ((s4 + s5) + (s6 + s7))``): the value
+    of ``np.sum(f0 * f0)``, bit for bit."""
+    s = np.empty(8)
+    for b in range(4):
+        for r in range(2):
+            s[2 * b + r] = f0[b, r] * f0[b, r]
+    return ((s[0] + s[1]) + (s[2] + s[3])) + ((s[4] + s[5]) + (s[6] + s[7]))
 
 
 @njit(cache=True)
@@ -46,12 +58,15 @@ def advance(hh, g_const, s0, w, x, v, a, f_c, unb, f0, kb, cb, h,  # step (Eq. 1
     from the condensation at h) and :func:`gear_fmu.contact_loop.solve_condensed`
     (``used0`` / ``has_used``: the contact set the first iterate is consistent with); ``err``
     the error displacement of the gear nodes added to the mesh's input (runout, mounting) when
-    ``has_err``. Writes the final mesh evaluation into ``force`` ... ``zout``, the residual of
-    each pass into ``residuals`` (max_iter + 1,) and the new state into ``x1, v1, a1``.
+    ``has_err``; ``f_scale`` the largest external load [N], raised to the norm of the bearing
+    forces ``f0`` when larger (the residual's scale). Writes the final mesh evaluation into
+    ``force`` ... ``zout``, the residual of each pass into ``residuals`` (max_iter + 1,) and
+    the new state into ``x1, v1, a1``.
 
     Returns ``(status, passes, total mesh load [N], contact length [m])``.
     """
     s_lin, z0, y = prepare_step(hh, g_const, x, v, a, f_c, unb, f0, kb, cb, s0, h, N_GEAR)
+    f_scale = max(f_scale, math.sqrt(sum_squares(f0)))
     xc = x[:NC] + h * v[:NC]
     used = used0.copy()
     q = np.empty(N_GEAR)

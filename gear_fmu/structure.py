@@ -477,10 +477,9 @@ class Structure:
         err = mesh.error_displacement(angle) if mesh.has_errors else _NO_ERROR
         used = _NO_SET if self.active is None else self.active
         unb = unbalance_force(self._unb, self._omega, t1)  # Eq. (10)
-        f_scale = max(self._f_scale, math.sqrt(float(np.sum(f0 * f0))))
         return (hh, g_const, cond.s0, cond.w, self.x, self.v, self.a, self._f_c, unb, f0, kb,
                 cb, h, angle, err, mesh.has_errors, *self._mesh_arrays, used,
-                self.active is not None, f_scale, self.tol, self.max_iter,
+                self.active is not None, self._f_scale, self.tol, self.max_iter,
                 np.empty(12), np.empty((12, 12)), np.empty(n, dtype=np.bool_),
                 np.empty(n, dtype=np.bool_), np.empty(n), np.empty(n), np.empty(n), np.empty(n),
                 np.empty(self.max_iter + 1), np.empty(size), np.empty(size), np.empty(size))
@@ -527,7 +526,10 @@ class Structure:
     # ------------------------------------------------------------------ outputs
     def journal_states(self) -> np.ndarray:
         """(4, 4) [u, v, udot, vdot] at bearing nodes 1-4, global (s, t) frame [m, m/s]."""
-        return np.hstack([self.x[N_GEAR:NC].reshape(4, 2), self.v[N_GEAR:NC].reshape(4, 2)])
+        out = np.empty((4, 4))
+        out[:, :2] = self.x[N_GEAR:NC].reshape(4, 2)
+        out[:, 2:] = self.v[N_GEAR:NC].reshape(4, 2)
+        return out
 
     def gear_displacements(self) -> np.ndarray:
         """(2, 6) DOFs (u, v, w, phi, psi, theta) of the pinion and gear nodes."""
