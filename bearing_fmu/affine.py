@@ -99,12 +99,13 @@ class AffineLaws:
 @njit(cache=True)
 def _relinearise(states, force, kb, cb, f0_old, kb_old, cb_old):
     """:meth:`AffineLaws.relinearise` on (nb, ...) arrays: the sums of two products in the
-    order of :meth:`AffineLaws.force` and :meth:`AffineLaws.linearise`; the two norms summed
-    bearing by bearing. Returns (mismatch, f0, copies of kb and cb)."""
+    order of :meth:`AffineLaws.force` and :meth:`AffineLaws.linearise`; the squares of the
+    two norms added as ``np.sum`` adds them (:func:`_sum`). Returns (mismatch, f0, copies of
+    kb and cb)."""
     nb = states.shape[0]
     f0 = np.empty((nb, 2))
-    num = 0.0
-    den = 0.0
+    d2 = np.empty(2 * nb)
+    f2 = np.empty(2 * nb)
     for b in range(nb):
         x0 = states[b, 0]
         x1 = states[b, 1]
@@ -115,11 +116,26 @@ def _relinearise(states, force, kb, cb, f0_old, kb_old, cb_old):
                    - (cb_old[b, r, 0] * v0 + cb_old[b, r, 1] * v1))
             f = force[b, r]
             d = f - law
-            num += d * d
-            den += f * f
+            d2[2 * b + r] = d * d
+            f2[2 * b + r] = f * f
             f0[b, r] = f + (kb[b, r, 0] * x0 + kb[b, r, 1] * x1) + (cb[b, r, 0] * v0
                                                                    + cb[b, r, 1] * v1)
-    return math.sqrt(num) / max(math.sqrt(den), 1e-300), f0, kb.copy(), cb.copy()
+    mismatch = math.sqrt(_sum(d2)) / max(math.sqrt(_sum(f2)), 1e-300)
+    return mismatch, f0, kb.copy(), cb.copy()
+
+
+@njit(cache=True)
+def _sum(a):
+    """``np.sum`` of a short contiguous vector in numpy's order: pairwise for 8 values
+    (``((a0 + a1) + (a2 + a3)) + ((a4 + a5) + (a6 + a7))``, the four bearings of the gear
+    system), left to right below 8 (numpy adds the first value to the sum of the rest)."""
+    n = a.size
+    if n == 8:
+        return ((a[0] + a[1]) + (a[2] + a[3])) + ((a[4] + a[5]) + (a[6] + a[7]))
+    acc = 0.0
+    for i in range(1, n):
+        acc += a[i]
+    return a[0] + acc if n > 0 else 0.0
 
 
 @njit(cache=True)
