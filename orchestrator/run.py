@@ -95,13 +95,16 @@ class RunInterrupted(RuntimeError):
 
 
 @contextlib.contextmanager
-def deferred_signals(signals=(signal.SIGINT, signal.SIGTERM)):
+def deferred_signals(signals=(signal.SIGINT, signal.SIGTERM),
+                     stopping: str = "stopping after the current step"):
     """Hold SIGINT and SIGTERM in a list instead of raising where they land.
 
     A KeyboardInterrupt raised inside an FMU's Python code (pythonfmu runs it in this
-    interpreter) is fatal for that FMU and often for the process; the run checks the list
-    between steps instead and stops cleanly there. Only the main thread can install handlers:
-    elsewhere (a Dask worker thread) the list stays empty and signals keep their handlers."""
+    interpreter) is fatal for that FMU and often for the process, and Dask's waits can swallow
+    one; the run (and a sweep's gather loop) checks the list between steps instead and stops
+    cleanly there. ``stopping`` is what the first signal's message says happens next. Only the
+    main thread can install handlers: elsewhere (a Dask worker thread) the list stays empty and
+    signals keep their handlers."""
     received: list[int] = []
     if threading.current_thread() is not threading.main_thread():
         yield received
@@ -109,8 +112,8 @@ def deferred_signals(signals=(signal.SIGINT, signal.SIGTERM)):
 
     def hold(signum, frame):
         if not received:
-            print(f"\n{signal.Signals(signum).name} received: stopping after the current step "
-                  "(again to stop at once)", file=sys.stderr, flush=True)
+            print(f"\n{signal.Signals(signum).name} received: {stopping} (again to stop at "
+                  "once)", file=sys.stderr, flush=True)
         elif signum == signal.SIGINT:  # a second Ctrl-C: the user insists
             raise KeyboardInterrupt
         received.append(signum)

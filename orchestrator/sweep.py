@@ -24,6 +24,7 @@ import asyncio
 import concurrent.futures
 import contextlib
 import math
+import signal
 import sys
 import tempfile
 import threading
@@ -37,7 +38,7 @@ import numpy as np
 
 from fmu_src.case import Case, CaseError, load_case, parse_case
 from orchestrator import sweep_file
-from orchestrator.run import RunError, RunInterrupted
+from orchestrator.run import RunError, RunInterrupted, deferred_signals
 from orchestrator.sweep_file import DATASETS, field_unit, read_sweep, read_sweep_attrs
 
 __all__ = ["DATASETS", "SweepInterrupted", "SweepPoint", "SweepResult", "as_case",
@@ -294,10 +295,11 @@ def run_sweep(case, points, path: str | Path, periods: int, steady_periods: int 
                     store(i, run_point(base, points[i], periods, steady_periods))
                     done += 1
                     bar.update(done, f"{len(failed)} failed")
-            else:
-                status, message, done = _gather(client, base, points, todo, periods,
-                                                steady_periods, store, bar, done, failed,
-                                                scheduler, worker_timeout, progress)
+            else:  # Ctrl-C taken between polls: Dask's waits may swallow a KeyboardInterrupt
+                with deferred_signals((signal.SIGINT,), "stopping the sweep") as asked:
+                    status, message, done = _gather(client, base, points, todo, periods,
+                                                    steady_periods, store, bar, done, failed,
+                                                    scheduler, worker_timeout, progress, asked)
                 if message:
                     give_up(message)
         except (KeyboardInterrupt, RunInterrupted):
@@ -320,9 +322,10 @@ def run_sweep(case, points, path: str | Path, periods: int, steady_periods: int 
 
 
 def _gather(client, base, points, todo, periods, steady_periods, store, bar, done, failed,
-            scheduler, worker_timeout, progress):
+            scheduler, worker_timeout, progress, asked):
     """Submit the points, store them as they complete; stop when no worker is connected for
-    ``worker_timeout`` s. Returns (status, message, done)."""
+    ``worker_timeout`` s, and with KeyboardInterrupt once ``asked`` (the signals received,
+    :func:`orchestrator.run.deferred_signals`) is not empty. Returns (status, message, done)."""
     from dask.distributed import wait
 
     futures = {client.submit(run_point, base, points[i], periods, steady_periods,
@@ -331,10 +334,9 @@ def _gather(client, base, points, todo, periods, steady_periods, store, bar, don
     poll = min(1.0, max(0.05, worker_timeout / 10))
     alone_since = None
     where = f"the scheduler {scheduler}" if scheduler else "the LocalCluster's scheduler"
-    asked = _SigintHold()
     try:
         while pending:
-            if asked:  # Ctrl-C, taken here: Dask's waits may swallow a KeyboardInterrupt
+            if asked:
                 raise KeyboardInterrupt
             try:
                 finished, pending = wait(pending, timeout=poll, return_when="FIRST_COMPLETED")
@@ -375,36 +377,9 @@ def _gather(client, base, points, todo, periods, steady_periods, store, bar, don
         bar.update(done, f"{len(failed)} failed")
         return "complete", "", done
     finally:
-        asked.restore()
         if pending:
             with contextlib.suppress(Exception):
                 client.cancel(list(pending))
-
-
-class _SigintHold(list):
-    """SIGINT recorded in this list (in the main thread) instead of raised where it lands; a
-    second one raises at once. :meth:`restore` puts the previous handler back."""
-
-    def __init__(self):
-        import signal
-        import threading
-
-        super().__init__()
-        self._previous = None
-        if threading.current_thread() is threading.main_thread():
-            self._previous = signal.signal(signal.SIGINT, self._hold)
-
-    def _hold(self, signum, frame):
-        if self:
-            raise KeyboardInterrupt
-        self.append(signum)
-
-    def restore(self) -> None:
-        import signal
-
-        if self._previous is not None:
-            signal.signal(signal.SIGINT, self._previous)
-            self._previous = None
 
 
 @contextlib.contextmanager
