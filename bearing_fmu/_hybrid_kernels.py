@@ -37,6 +37,7 @@ from bearing_fmu._hybrid_workspace import (
     Z,
 )
 from bearing_fmu.axial import T_MAX, axial_integrals
+from bearing_fmu.frames import law_to_global, state_to_local
 from bearing_fmu.reynolds import nodal_force, source, source_coefficients
 
 #: a last Newton step on t below CORRECTOR * tol (1 + |t|) is taken without a new solve
@@ -325,10 +326,7 @@ def hybrid_global(state, active, ws, iws, trig, coef, q, s, omega, clearance, fs
     conversions, in the same order. Returns the kernel's status, or :data:`BAD_STATE` for a
     non-finite state or an eccentricity ratio >= 1 (nothing evaluated).
     """
-    x = q[0, 0] * s[0] + q[0, 1] * s[1]
-    y = q[1, 0] * s[0] + q[1, 1] * s[1]
-    xd = q[0, 0] * s[2] + q[0, 1] * s[3]
-    yd = q[1, 0] * s[2] + q[1, 1] * s[3]
+    x, y, xd, yd = state_to_local(q, s)
     cw = clearance * omega
     xb = x / clearance
     yb = y / clearance
@@ -340,26 +338,15 @@ def hybrid_global(state, active, ws, iws, trig, coef, q, s, omega, clearance, fs
     status = hybrid_kernel(state, xb, yb, xdb, ydb, True, active, ws, iws, trig, coef, res)
     if status != 0:
         return status
+    # SI, local frame (FilmBearingModel.evaluate): F = fs Fbar, Kb = -fs/C dFbar/dxbar,
+    # Cb = -fs/(C omega) dFbar/dxbar_dot; then back to global components
+    loc = np.empty((5, 2))
     sk = -(fs / clearance)
     sc = -(fs / cw)
-    f0 = fs * res[0, 0]
-    f1 = fs * res[0, 1]
-    out[0, 0] = q[0, 0] * f0 + q[1, 0] * f1
-    out[0, 1] = q[0, 1] * f0 + q[1, 1] * f1
-    for blk in range(2):
-        scale = sk if blk == 0 else sc
-        r = 1 + 2 * blk
-        m00 = scale * res[r, 0]
-        m01 = scale * res[r, 1]
-        m10 = scale * res[r + 1, 0]
-        m11 = scale * res[r + 1, 1]
-        # Q^T M, then (Q^T M) Q
-        a00 = q[0, 0] * m00 + q[1, 0] * m10
-        a01 = q[0, 0] * m01 + q[1, 0] * m11
-        a10 = q[0, 1] * m00 + q[1, 1] * m10
-        a11 = q[0, 1] * m01 + q[1, 1] * m11
-        out[r, 0] = a00 * q[0, 0] + a01 * q[1, 0]
-        out[r, 1] = a00 * q[0, 1] + a01 * q[1, 1]
-        out[r + 1, 0] = a10 * q[0, 0] + a11 * q[1, 0]
-        out[r + 1, 1] = a10 * q[0, 1] + a11 * q[1, 1]
+    for c in range(2):
+        loc[0, c] = fs * res[0, c]
+        for r in (1, 2):
+            loc[r, c] = sk * res[r, c]
+            loc[r + 2, c] = sc * res[r + 2, c]
+    law_to_global(q, loc, out)
     return 0

@@ -30,6 +30,8 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from bearing_fmu.frames import law_to_global, state_to_local
+
 __all__ = ["AffineLaws"]
 
 
@@ -142,26 +144,14 @@ def _sum(a):
 def affine_global(q, s, f0, kb, cb, out):
     """One law ``F = f0 - kb X - cb Xdot`` given in a local frame (``local = q global``),
     evaluated at the global state ``s`` [s, t, sdot, tdot]; ``out`` (5, 2) receives the
-    force, kb and cb in global components (``q^T F``, ``q^T kb q``, ``q^T cb q``): the
+    force, kb and cb in global components (:func:`bearing_fmu.frames.law_to_global`): the
     arithmetic of :meth:`AffineLaws.force` and of
     :meth:`bearing_fmu.base.BearingModel.evaluate_global`, in their order."""
-    x = q[0, 0] * s[0] + q[0, 1] * s[1]
-    y = q[1, 0] * s[0] + q[1, 1] * s[1]
-    xd = q[0, 0] * s[2] + q[0, 1] * s[3]
-    yd = q[1, 0] * s[2] + q[1, 1] * s[3]
-    f = np.empty(2)
+    x, y, xd, yd = state_to_local(q, s)
+    loc = np.empty((5, 2))
     for r in range(2):
-        f[r] = f0[r] - (kb[r, 0] * x + kb[r, 1] * y) - (cb[r, 0] * xd + cb[r, 1] * yd)
-    out[0, 0] = q[0, 0] * f[0] + q[1, 0] * f[1]
-    out[0, 1] = q[0, 1] * f[0] + q[1, 1] * f[1]
-    for blk in range(2):
-        m = kb if blk == 0 else cb
-        r = 1 + 2 * blk
-        a00 = q[0, 0] * m[0, 0] + q[1, 0] * m[1, 0]
-        a01 = q[0, 0] * m[0, 1] + q[1, 0] * m[1, 1]
-        a10 = q[0, 1] * m[0, 0] + q[1, 1] * m[1, 0]
-        a11 = q[0, 1] * m[0, 1] + q[1, 1] * m[1, 1]
-        out[r, 0] = a00 * q[0, 0] + a01 * q[1, 0]
-        out[r, 1] = a00 * q[0, 1] + a01 * q[1, 1]
-        out[r + 1, 0] = a10 * q[0, 0] + a11 * q[1, 0]
-        out[r + 1, 1] = a10 * q[0, 1] + a11 * q[1, 1]
+        loc[0, r] = f0[r] - (kb[r, 0] * x + kb[r, 1] * y) - (cb[r, 0] * xd + cb[r, 1] * yd)
+        for c in range(2):
+            loc[1 + r, c] = kb[r, c]
+            loc[3 + r, c] = cb[r, c]
+    law_to_global(q, loc, out)

@@ -17,8 +17,9 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from numba import njit
 
-__all__ = ["LocalFrame"]
+__all__ = ["LocalFrame", "law_to_global", "state_to_local"]
 
 
 @dataclass(frozen=True)
@@ -66,3 +67,30 @@ class LocalFrame:
     def matrix_to_global(self, mat) -> np.ndarray:
         """A local 2x2 law (e.g. Kb, Cb) expressed in global components."""
         return self.q.T @ np.asarray(mat, dtype=float) @ self.q
+
+
+@njit(cache=True)
+def state_to_local(q, s):
+    """A global journal state ``s`` [s, t, sdot, tdot] in the local frame of ``q`` (``local = q
+    global``): ``(x, y, xdot, ydot)``, compiled, for the models' ``evaluate_global``."""
+    return (q[0, 0] * s[0] + q[0, 1] * s[1], q[1, 0] * s[0] + q[1, 1] * s[1],
+            q[0, 0] * s[2] + q[0, 1] * s[3], q[1, 0] * s[2] + q[1, 1] * s[3])
+
+
+@njit(cache=True)
+def law_to_global(q, loc, out):
+    """A local law ``loc`` (5, 2: force, then the rows of Kb and of Cb) in global components
+    into ``out``: ``q^T F``, ``q^T Kb q``, ``q^T Cb q``, each product in the order of
+    :meth:`LocalFrame.to_global` and :meth:`LocalFrame.matrix_to_global` (``(q^T M) q``);
+    compiled, for the models' ``evaluate_global``."""
+    out[0, 0] = q[0, 0] * loc[0, 0] + q[1, 0] * loc[0, 1]
+    out[0, 1] = q[0, 1] * loc[0, 0] + q[1, 1] * loc[0, 1]
+    for r in (1, 3):
+        a00 = q[0, 0] * loc[r, 0] + q[1, 0] * loc[r + 1, 0]
+        a01 = q[0, 0] * loc[r, 1] + q[1, 0] * loc[r + 1, 1]
+        a10 = q[0, 1] * loc[r, 0] + q[1, 1] * loc[r + 1, 0]
+        a11 = q[0, 1] * loc[r, 1] + q[1, 1] * loc[r + 1, 1]
+        out[r, 0] = a00 * q[0, 0] + a01 * q[1, 0]
+        out[r, 1] = a00 * q[0, 1] + a01 * q[1, 1]
+        out[r + 1, 0] = a10 * q[0, 0] + a11 * q[1, 0]
+        out[r + 1, 1] = a10 * q[0, 1] + a11 * q[1, 1]
