@@ -63,7 +63,7 @@ import math
 import numpy as np
 from numba import njit
 
-from .geometry import GearPair, involute
+from .geometry import GearPair
 
 __all__ = ["ToothPairCompliance", "mesh_stiffness_table", "tooth_compliance"]
 
@@ -90,9 +90,8 @@ def _beam_integrals(pair: GearPair, gear: int, r_p: float, y_c: float, n_panels:
         t = 2.0 * x_low
         i_b += 12.0 / t**3 * ((y_c - y0) ** 3 - (y_c - y1) ** 3) / 3.0
         i_a += (y1 - y0) / t
-    # psi(r) = psi0 - inv(alpha_r) (GearPair.half_tooth_angle)
-    psi0 = (pair.transverse_tooth_thickness[gear] / (2.0 * pair.pitch_radius[gear])
-            + involute(pair.transverse_pressure_angle))
+    # psi(r) = psi0 - inv(alpha_r) (GearPair.half_tooth_angle), psi0 its value at r_b
+    psi0 = pair.half_tooth_angle(gear, rb)
     return _involute_integrals(np.linspace(r_low, r_p, n_panels + 1), rb, rf, psi0, y_c,
                                _GAUSS_X, _GAUSS_W, i_b, i_a, 2.0, 3.0)
 
