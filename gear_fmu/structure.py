@@ -464,32 +464,23 @@ class Structure:
     def _advance_compiled(self, h, t1, angle, f0, kb, cb, what) -> StepInfo:
         """:meth:`_advance` in one compiled call (:func:`gear_fmu.step_kernel.advance`, the
         same arithmetic as the Python loop)."""
-        args = self._advance_arguments(h, t1, angle, f0, kb, cb)
-        return self._commit_advance(advance(*args), args, t1, what)
-
-    def _advance_arguments(self, h, t1, angle, f0, kb, cb) -> tuple:
-        """The arguments of :func:`gear_fmu.step_kernel.advance` for a step of length h to
-        t1 (mesh at ``angle``, checked laws), with fresh output arrays."""
         cond, hh, g_const = self._dynamic(h)
         mesh = self.mesh
         n = mesh.n_lines * mesh.n_slices
         size = self.x.size
+        force, stiff = np.empty(12), np.empty((12, 12))
+        active, inside = np.empty(n, dtype=np.bool_), np.empty(n, dtype=np.bool_)
+        delta, load, xi, z = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+        residuals = np.empty(self.max_iter + 1)
+        x1, v1, a1 = np.empty(size), np.empty(size), np.empty(size)
         err = mesh.error_displacement(angle) if mesh.has_errors else _NO_ERROR
         used = _NO_SET if self.active is None else self.active
         unb = unbalance_force(self._unb, self._omega, t1)  # Eq. (10)
-        return (hh, g_const, cond.s0, cond.w, self.x, self.v, self.a, self._f_c, unb, f0, kb,
-                cb, h, angle, err, mesh.has_errors, *self._mesh_arrays, used,
-                self.active is not None, self._f_scale, self.tol, self.max_iter,
-                np.empty(12), np.empty((12, 12)), np.empty(n, dtype=np.bool_),
-                np.empty(n, dtype=np.bool_), np.empty(n), np.empty(n), np.empty(n), np.empty(n),
-                np.empty(self.max_iter + 1), np.empty(size), np.empty(size), np.empty(size))
-
-    def _commit_advance(self, outcome, args, t1, what) -> StepInfo:
-        """Take the outcome ``(status, passes, total load, contact length)`` of
-        :func:`gear_fmu.step_kernel.advance` run on ``args`` (:meth:`_advance_arguments`): the
-        new X, Xd, Xdd and mesh state, or the contact loop's error."""
-        status, k, total, length = outcome
-        force, stiff, active, inside, delta, load, xi, z, residuals, x1, v1, a1 = args[-12:]
+        status, k, total, length = advance(
+            hh, g_const, cond.s0, cond.w, self.x, self.v, self.a, self._f_c, unb, f0, kb, cb, h,
+            angle, err, mesh.has_errors, *self._mesh_arrays, used, self.active is not None,
+            self._f_scale, self.tol, self.max_iter, force, stiff, active, inside, delta, load,
+            xi, z, residuals, x1, v1, a1)
         history = residuals[:k + 1].tolist()
         if status == SINGULAR:
             raise NewmarkConvergenceError(
@@ -501,7 +492,7 @@ class Structure:
                 f"{what} at t = {t1:.9g} s did not converge: relative residual "
                 f"{history[-1]:.3e} (tol {self.tol:.1e}) after {self.max_iter} iterations; "
                 f"last residuals {', '.join(f'{v:.2e}' for v in history[-5:])}")
-        rb1, rb2 = self.mesh.pair.base_radius
+        rb1, rb2 = mesh.pair.base_radius
         te = rb1 * x1[5] + rb2 * x1[11]
         self.mesh_state = MeshState(force, stiff, active, delta, load, inside, xi, z, total, te,
                                     {"contact_length": length})
