@@ -123,7 +123,6 @@ class BearingSlave(ContractSlave):
         cls = model_class(self.model_name)
         self._model = cls.from_parameters(bearing, **{o.key: v[o.key] for o in cls.options})
         self._frame = LocalFrame(v["frame_angle"], int(v["rotation_sign"]))
-        self._frame_entries = self._frame.q.tolist()
         self._dirty_model = False
 
     def _local_state(self):
@@ -158,9 +157,7 @@ class BearingSlave(ContractSlave):
         self._model.evaluate_global(q, state, v["omega"], self._out)
         v.update(zip(_LAW_NAMES, self._out.ravel().tolist(), strict=True))
         v.update(zip(EVAL_NAMES, s, strict=True))
-        (q00, q01), (q10, q11) = self._frame_entries
-        x = q00 * s[0] + q01 * s[1]
-        y = q10 * s[0] + q11 * s[1]
+        x, y = self._frame.to_local(s[:2])
         v["eccentricity"] = math.hypot(x, y) / v["C"]
         v["n_solves"] = int(v["n_solves"]) + 1
 

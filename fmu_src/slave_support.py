@@ -108,6 +108,7 @@ class ContractSlave(Fmi2Slave):
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
         self._read_status = FMI_OK
+        self._by_kind = {}  # {variable type: {value reference: variable}}, see _accessors
         release_python_state_at_exit(self.resources, type(self).__name__)
 
     # --- registration -------------------------------------------------------------------------
@@ -149,11 +150,10 @@ class ContractSlave(Fmi2Slave):
     def _accessors(self, kind) -> dict:
         """``{value reference: variable}`` of the variables of ``kind`` (built on first use:
         the variables are all registered by then)."""
-        cache = self.__dict__.setdefault("_by_kind", {})
-        table = cache.get(kind)
+        table = self._by_kind.get(kind)
         if table is None:
-            table = cache[kind] = {vr: var for vr, var in self.vars.items()
-                                   if isinstance(var, kind)}
+            table = self._by_kind[kind] = {vr: var for vr, var in self.vars.items()
+                                           if isinstance(var, kind)}
         return table
 
     def _wrong_kind(self, kind, vrs):

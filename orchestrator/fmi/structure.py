@@ -115,9 +115,6 @@ class FmuStructure(StructureSlave):
         self._ex_vr = (ctypes.c_uint * len(extra))(*[vr[n] for n in extra])
         self._ex_val = (ctypes.c_double * len(extra))()
         self._ex_index = {n: i for i, n in enumerate(extra)}
-        self._ex_np = np.frombuffer(self._ex_val, dtype=np.float64)
-        self._ex_gear = [self._ex_index[n] for n in ("u_pinion", "v_pinion", "u_gear",
-                                                      "v_gear")]
         self._one_vr = {n: (ctypes.c_uint * 1)(vr[n]) for n in extra}
         self._one_val = (ctypes.c_double * 1)()
         self._sup_vr = (ctypes.c_uint * 8)(*[vr[n] for n in support])
@@ -257,14 +254,9 @@ class FmuStructure(StructureSlave):
 
     def step_outputs(self) -> tuple[float, float, np.ndarray]:
         """Mesh force [N], transmission error [m] and the (2, 2) [u, v] of the pinion and gear
-        nodes [m] in one fmi2GetReal."""
-        self._live()
-        n = len(self._ex_val)
-        self._check(self._get_real(self._c, self._ex_vr, n, self._ex_val), "reading outputs")
-        v = self._ex_np
-        i = self._ex_index
-        return (float(v[i["mesh_force"]]), float(v[i["transmission_error"]]),
-                v[self._ex_gear].reshape(2, 2))
+        nodes [m] in one fmi2GetReal (:meth:`outputs`)."""
+        o = self.outputs()
+        return o["mesh_force"], o["transmission_error"], _gear_nodes(o)
 
     def _extra(self, name: str) -> float:
         self._live()
@@ -283,8 +275,7 @@ class FmuStructure(StructureSlave):
     def gear_displacements(self) -> np.ndarray:
         """(2, 2) [u, v] of the pinion and gear nodes [m] (the in-process Structure gives all
         six DOFs per node; the FMU outputs these two)."""
-        o = self.outputs()
-        return np.array([[o["u_pinion"], o["v_pinion"]], [o["u_gear"], o["v_gear"]]])
+        return _gear_nodes(self.outputs())
 
     def iterations(self) -> int:
         """Newton/contact iterations of the last step or static solution."""
@@ -317,3 +308,7 @@ class FmuStructure(StructureSlave):
             pass
 
 
+def _gear_nodes(outputs: dict) -> np.ndarray:
+    """(2, 2) [u, v] of the pinion and gear nodes from :meth:`FmuStructure.outputs`."""
+    o = outputs
+    return np.array([[o["u_pinion"], o["v_pinion"]], [o["u_gear"], o["v_gear"]]])
