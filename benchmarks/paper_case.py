@@ -58,56 +58,32 @@ TIMED = [
 ]
 
 
-#: (module, function) of the compiled kernels of a coupled iteration, as the code calls them
-#: (module attributes): the structure's step, the hybrid bearing, the master's update
+#: the compiled kernels of a coupled iteration, as the code calls them (module attributes):
+#: the structure's step, the hybrid bearing, the master's update
 KERNELS = [
-    ("gear_fmu.structure", "advance"),
-    ("bearing_fmu._hybrid_kernels", "hybrid_global"),
-    ("bearing_fmu.affine", "_relinearise"),
+    ("compiled kernels", "gear_fmu.structure", "advance"),
+    ("compiled kernels", "bearing_fmu._hybrid_kernels", "hybrid_global"),
+    ("compiled kernels", "bearing_fmu.affine", "_relinearise"),
 ]
 
 
 @contextlib.contextmanager
-def timed_kernels(targets=KERNELS):
-    """Wrap the compiled kernels of ``targets`` with timers (through FMUs too: pythonfmu runs
-    the slaves in this interpreter); yields ``{"seconds": s, "calls": n}``."""
-    import importlib
-
-    total = {"seconds": 0.0, "calls": 0}
-    saved = []
-    for module_name, name in targets:
-        module = importlib.import_module(module_name)
-        kernel = getattr(module, name)
-
-        def wrapper(*a, _k=kernel):
-            t0 = time.perf_counter()
-            try:
-                return _k(*a)
-            finally:
-                total["seconds"] += time.perf_counter() - t0
-                total["calls"] += 1
-
-        setattr(module, name, wrapper)
-        saved.append((module, name, kernel))
-    try:
-        yield total
-    finally:
-        for module, name, kernel in saved:
-            setattr(module, name, kernel)
-
-
-@contextlib.contextmanager
 def timed_calls(targets=TIMED, counts: dict | None = None):
-    """Wrap the methods of ``targets`` ((label, class path, method), :data:`TIMED` by default)
-    with timers; yields ``{label: seconds}``, and counts the calls per label in ``counts``."""
+    """Wrap the callables of ``targets`` ((label, path, name), :data:`TIMED` by default; the
+    path names a class, whose method ``name`` is wrapped, or a module, whose function is)
+    with timers; yields ``{label: seconds}``, and counts the calls per label in ``counts``.
+    Through FMUs the slaves' calls are timed too: pythonfmu runs them in this interpreter."""
     import importlib
 
     totals: dict[str, float] = {}
     saved = []
     for label, path, name in targets:
-        module, cls_name = path.rsplit(".", 1)
-        cls = getattr(importlib.import_module(module), cls_name)
-        raw = cls.__dict__[name]
+        try:
+            owner = importlib.import_module(path)
+        except ModuleNotFoundError:  # "module.Class"
+            module, cls_name = path.rsplit(".", 1)
+            owner = getattr(importlib.import_module(module), cls_name)
+        raw = owner.__dict__[name]
         func = raw.__func__ if isinstance(raw, classmethod) else raw
 
         def wrapper(*a, _f=func, _label=label, **kw):
@@ -119,13 +95,13 @@ def timed_calls(targets=TIMED, counts: dict | None = None):
                 if counts is not None:
                     counts[_label] = counts.get(_label, 0) + 1
 
-        setattr(cls, name, classmethod(wrapper) if isinstance(raw, classmethod) else wrapper)
-        saved.append((cls, name, raw))
+        setattr(owner, name, classmethod(wrapper) if isinstance(raw, classmethod) else wrapper)
+        saved.append((owner, name, raw))
     try:
         yield totals
     finally:
-        for cls, name, raw in reversed(saved):
-            setattr(cls, name, raw)
+        for owner, name, raw in reversed(saved):
+            setattr(owner, name, raw)
 
 
 def breakdown(periods: int, in_process: bool) -> None:
@@ -137,7 +113,8 @@ def breakdown(periods: int, in_process: bool) -> None:
         plain = run_case(case, periods=periods, out_dir=tmp + "/p", **kw)
         with timed_calls() as totals:
             s = run_case(case, periods=periods, out_dir=tmp + "/t", **kw)
-        with timed_kernels() as kernels:
+        calls: dict[str, int] = {}
+        with timed_calls(KERNELS, calls) as kernels:
             k = run_case(case, periods=periods, out_dir=tmp + "/k", **kw)
     n = s.iterations
     us = 1e6 / n
@@ -153,9 +130,10 @@ def breakdown(periods: int, in_process: bool) -> None:
     print(f"  {'total':30s} {s.wall_time * us:8.1f} us/iteration; total / timed calls "
           f"{s.wall_time / sum(totals.values()):.3f}")
     kus = 1e6 / k.iterations
+    seconds, n_calls = kernels["compiled kernels"], calls["compiled kernels"]
     print(f"  compiled kernels (a third run, kernels timed alone: {k.wall_time:.2f} s): "
-          f"{kernels['seconds'] * kus:.1f} us/iteration in {kernels['calls'] / k.iterations:.2f} "
-          f"calls; total / kernels {k.wall_time / kernels['seconds']:.2f}")
+          f"{seconds * kus:.1f} us/iteration in {n_calls / k.iterations:.2f} calls; "
+          f"total / kernels {k.wall_time / seconds:.2f}")
 
 
 def main() -> None:
