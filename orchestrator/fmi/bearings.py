@@ -16,6 +16,7 @@ with the FMU's log.
 from __future__ import annotations
 
 import ctypes
+import math
 
 import numpy as np
 
@@ -90,6 +91,19 @@ class FmuBearings(BearingSet):
         self._in_np = np.frombuffer(self._in_val, dtype=np.float64)
         self._out_val = (ctypes.c_double * 10)()
         self._out_np = np.frombuffer(self._out_val, dtype=np.float64)
+        # the laws of one evaluation, bearing by bearing in the FMUs' output order (force,
+        # Kb, Cb: rows of ModelBearings.evaluate's (nb, 5, 2)), and each bearing's journal
+        # state, read and written by the FMI calls in place
+        nb = len(self.slaves)
+        self._laws = (ctypes.c_double * (10 * nb))()
+        self._laws_np = np.frombuffer(self._laws, dtype=np.float64).reshape(nb, 5, 2)
+        self._states = (ctypes.c_double * (4 * nb))()
+        self._states_np = np.frombuffer(self._states, dtype=np.float64).reshape(nb, 4)
+        size = ctypes.sizeof(ctypes.c_double)
+        self._law_at = [ctypes.cast(ctypes.addressof(self._laws) + 10 * size * b,
+                                    ctypes.POINTER(ctypes.c_double)) for b in range(nb)]
+        self._state_at = [ctypes.cast(ctypes.addressof(self._states) + 4 * size * b,
+                                      ctypes.POINTER(ctypes.c_double)) for b in range(nb)]
 
     @staticmethod
     def _check_contract(b: int, s: FmuInstance) -> bool:
@@ -138,19 +152,26 @@ class FmuBearings(BearingSet):
         return self._force(b, s, state, 2), jac[:, :2], jac[:, 2:]
 
     def evaluate(self, states):
-        nb = len(self.slaves)
-        force = np.empty((nb, 2))
-        kb = np.empty((nb, 2, 2))
-        cb = np.empty((nb, 2, 2))
+        laws = self._laws_np
+        self._states_np[:] = states
         for b, s in enumerate(self.slaves):
             if self.force_only[b]:
-                force[b], kb[b], cb[b] = self._fd_jacobian(b, s, states[b])
-            else:
-                out = self._force(b, s, states[b], 10)
-                force[b] = out[:2]
-                kb[b] = out[2:6].reshape(2, 2)
-                cb[b] = out[6:].reshape(2, 2)
-        return force, kb, cb
+                laws[b, 0], laws[b, 1:3], laws[b, 3:5] = self._fd_jacobian(b, s, states[b])
+            else:  # as _force, the state and the law in place
+                f = s.fmu
+                self._call(b, s, f.dll.fmi2SetReal(f.component, self._in_vr[b], 4,
+                                                   self._state_at[b]), "fmi2SetReal", states[b])
+                self._call(b, s, f.dll.fmi2GetReal(f.component, self._out_vr[b], 10,
+                                                   self._law_at[b]), "fmi2GetReal", states[b])
+                # a non-finite output makes the sum non-finite (an overflowing sum of finite
+                # outputs is told apart by the second test)
+                if not (math.isfinite(sum(self._laws[10 * b:10 * b + 10]))
+                        or np.isfinite(laws[b]).all()):
+                    raise FmuError(f"bearing {b + 1} ({s.path.name}) failed at state "
+                                   f"{np.asarray(states[b]).tolist()}: non-finite outputs; FMU "
+                                   f"log: {s.log_tail()}")
+        out = laws.copy()
+        return out[:, 0], out[:, 1:3], out[:, 3:5]
 
     def static_position(self, loads):
         """Per-bearing Newton on F(X) + W = 0 through the FMU, from the centre, kept inside
