@@ -61,6 +61,7 @@ class BearingSlave(ContractSlave):
         self._frame = None
         self._failed = False
         self._out = np.zeros((5, 2))  # force, Kb, Cb of the last evaluation (global frame)
+        self._out_flat = self._out.reshape(10)  # the same memory in the outputs' order
         for v in BEARING_VARIABLES:
             setter = None
             if v.causality in ("parameter", "input"):
@@ -123,6 +124,7 @@ class BearingSlave(ContractSlave):
         cls = model_class(self.model_name)
         self._model = cls.from_parameters(bearing, **{o.key: v[o.key] for o in cls.options})
         self._frame = LocalFrame(v["frame_angle"], int(v["rotation_sign"]))
+        self._q = tuple(self._frame.q.ravel().tolist())  # (q00, q01, q10, q11)
         self._dirty_model = False
 
     def _local_state(self):
@@ -152,13 +154,12 @@ class BearingSlave(ContractSlave):
             self._build_model()
         v = self._values
         s = [v[name] for name in STATE_NAMES]
-        q = self._frame.q
-        self._model.evaluate_global(q, np.array(s), v["omega"], self._out)
-        v.update(zip(_LAW_NAMES, self._out.ravel().tolist(), strict=True))
+        self._model.evaluate_global(self._frame.q, np.array(s), v["omega"], self._out)
+        v.update(zip(_LAW_NAMES, self._out_flat.tolist(), strict=True))
         v.update(zip(EVAL_NAMES, s, strict=True))
         # the local position as bearing_fmu.frames.state_to_local forms it (a numpy product
         # of a 2 x 2 matrix costs 10 us here: a third of a hybrid evaluation)
-        (q00, q01), (q10, q11) = q.tolist()
+        q00, q01, q10, q11 = self._q
         x, y = q00 * s[0] + q01 * s[1], q10 * s[0] + q11 * s[1]
         v["eccentricity"] = math.hypot(x, y) / v["C"]
         v["n_solves"] = int(v["n_solves"]) + 1

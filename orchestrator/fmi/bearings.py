@@ -100,6 +100,8 @@ class FmuBearings(BearingSet):
         self._states = (ctypes.c_double * (4 * nb))()
         self._states_np = np.frombuffer(self._states, dtype=np.float64).reshape(nb, 4)
         size = ctypes.sizeof(ctypes.c_double)
+        self._calls = [(s.fmu.dll.fmi2SetReal, s.fmu.dll.fmi2GetReal, s.fmu.component)
+                       for s in self.slaves]  # valid while self.slaves is (close empties it)
         self._law_at = [ctypes.cast(ctypes.addressof(self._laws) + 10 * size * b,
                                     ctypes.POINTER(ctypes.c_double)) for b in range(nb)]
         self._state_at = [ctypes.cast(ctypes.addressof(self._states) + 4 * size * b,
@@ -152,17 +154,19 @@ class FmuBearings(BearingSet):
         return self._force(b, s, state, 2), jac[:, :2], jac[:, 2:]
 
     def evaluate(self, states):
+        if not self.slaves:
+            raise FmuError("the bearing FMUs are closed")
         laws = self._laws_np
         self._states_np[:] = states
-        for b, s in enumerate(self.slaves):
+        calls = zip(self.slaves, self._calls, strict=True)
+        for b, (s, (set_real, get_real, c)) in enumerate(calls):
             if self.force_only[b]:
                 laws[b, 0], laws[b, 1:3], laws[b, 3:5] = self._fd_jacobian(b, s, states[b])
             else:  # as _force, the state and the law in place
-                f = s.fmu
-                self._call(b, s, f.dll.fmi2SetReal(f.component, self._in_vr[b], 4,
-                                                   self._state_at[b]), "fmi2SetReal", states[b])
-                self._call(b, s, f.dll.fmi2GetReal(f.component, self._out_vr[b], 10,
-                                                   self._law_at[b]), "fmi2GetReal", states[b])
+                self._call(b, s, set_real(c, self._in_vr[b], 4, self._state_at[b]),
+                           "fmi2SetReal", states[b])
+                self._call(b, s, get_real(c, self._out_vr[b], 10, self._law_at[b]),
+                           "fmi2GetReal", states[b])
                 # a non-finite output makes the sum non-finite (an overflowing sum of finite
                 # outputs is told apart by the second test)
                 if not (math.isfinite(sum(self._laws[10 * b:10 * b + 10]))
