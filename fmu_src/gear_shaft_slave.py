@@ -252,11 +252,10 @@ class GearShaftSlave(ContractSlave):
             if st.mesh_state is None:
                 raise RuntimeError("the structure has no solution yet (no static solution)")
             ms = st.mesh_state
-            g = st.gear_displacements()
             self._outputs = [*st.journal_states().ravel().tolist(),
                              *self._speeds,
                              float(ms.total_load), float(ms.transmission_error),
-                             float(g[0, 0]), float(g[0, 1]), float(g[1, 0]), float(g[1, 1])]
+                             *st.gear_displacements()[:, :2].ravel().tolist()]  # u, v of each
             self._failed = False
         except Exception as exc:  # anything raised here would be fatal for the host
             what = "static solution" if not self._stepping else "outputs"
