@@ -13,6 +13,11 @@ paper's spur case (the shipped ``baguet2010_spur``) two ways with the same affin
 
 Prints µs per cycle (best of 5 blocks, after warm-up), the per-call cost of the FMI layer alone
 (set + get with no step, state get/set), and the FMU's share of a cycle.
+
+Then the bearing side: the four hybrid bearings of the case after its static solution, through
+their FMUs (``FmuBearings``, FMUs from the per-user cache) and in-process (``ModelBearings``),
+evaluated at journal states that move by about 1e-7 m from call to call as in a run (a
+repeated state would find the hybrid solver's warm start exact). Best of 5 alternating blocks.
 """
 
 from __future__ import annotations
@@ -76,6 +81,33 @@ def measure(slave, law, dt: float, n: int) -> dict:
     return out
 
 
+def bearing_sets(n: int) -> tuple[float, float]:
+    """µs per evaluation of the four bearings (FMUs, in-process), best of 5 alternating blocks."""
+    from fmu_src.case import load_case
+    from orchestrator.run import build_master
+
+    case = load_case("baguet2010_spur")
+    masters = [build_master(case, in_process=flag) for flag in (False, True)]
+    try:
+        for m in masters:
+            m.solve_static()
+        base = masters[1].laws.states
+        rng = np.random.default_rng(0)
+        moves = 1e-7 * rng.standard_normal((200, 4, 4)) * [1.0, 1.0, 0.0, 0.0]
+        states = [base + d for d in moves]
+        best = [float("inf"), float("inf")]
+        for _ in range(5):
+            for i, m in enumerate(masters):
+                t0 = time.perf_counter()
+                for k in range(n):
+                    m.bearings.evaluate(states[k % 200])
+                best[i] = min(best[i], (time.perf_counter() - t0) / n * 1e6)
+        return best[0], best[1]
+    finally:
+        for m in masters:
+            m.close()
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--steps", type=int, default=1000, help="cycles per timed block")
@@ -105,6 +137,9 @@ def main() -> None:
         print(f"{label:44s} {a:9.1f} {b:11.1f} {a - b:17.1f}")
     share = (viafmu["cycle"] - inproc["cycle"]) / viafmu["cycle"]
     print(f"FMI layer share of an FMU cycle: {100 * share:.1f} %")
+    a, b = bearing_sets(args.steps)
+    print(f"{'four hybrid bearings, moving states':44s} {a:9.1f} {b:11.1f} {a - b:17.1f}")
+    print(f"bearing FMUs / in-process: {a / b:.2f}")
 
 
 if __name__ == "__main__":
