@@ -90,6 +90,13 @@ class AffineLaws:
             return zeros, np.array(self.f0, copy=True), self.kb, self.cb
         return self.states, self.force_at, self.kb, self.cb
 
+    def blend(self, other: AffineLaws, weight: float) -> AffineLaws:
+        """The law ``weight * other + (1 - weight) * self``, coefficient by coefficient (the
+        master's relaxation, :mod:`orchestrator.master`); given by ``f0`` alone."""
+        w, r = weight, 1.0 - weight
+        return AffineLaws(w * other.f0 + r * self.f0, w * other.kb + r * self.kb,
+                          w * other.cb + r * self.cb)
+
     def force(self, states) -> np.ndarray:
         """Force of the laws at journal states ``[x, y, xdot, ydot]`` (..., 4) [N]."""
         states = np.asarray(states)
