@@ -141,6 +141,7 @@ class RunSummary:
     figures: list = field(default_factory=list)
     report: dict | None = None  # orchestrator.analysis.run_report, None below 2 steps
     warnings: list = field(default_factory=list)  # sentences of the checks before the transient
+    relaxed_steps: int = 0  # steps whose coupled iteration was relaxed (orchestrator.master)
 
     @property
     def iterations_per_step(self) -> float:
@@ -154,7 +155,9 @@ class RunSummary:
         return (f"{self.steps} steps in {self.wall_time:.1f} s ({self.steps_per_second:.0f} "
                 f"steps/s), {self.iterations_per_step:.2f} coupled iterations per step, "
                 f"{4 * self.bearing_evaluations} bearing evaluations; static solution in "
-                f"{self.static_iterations} iterations ({self.static_time:.2f} s)")
+                f"{self.static_iterations} iterations ({self.static_time:.2f} s)"
+                + (f"; {self.relaxed_steps} step(s) relaxed at a kink of a bearing law"
+                   if self.relaxed_steps else ""))
 
     def report_text(self) -> str:
         """The report (``report``) in a few lines: R, bearing-force peak-to-peak [N] and a
@@ -480,6 +483,7 @@ def _run(case, attrs, where, first, blob, in_process, fmu_dir, fmus, progress, f
             bar = Progress(n_steps, name, enabled=progress)
             start_iterations = master.total_iterations
             start_evals = master.total_bearing_evaluations
+            start_relaxed = master.relaxed_steps
             t_start = time.perf_counter()
             try:
                 if blob is None:
@@ -532,7 +536,7 @@ def _run(case, attrs, where, first, blob, in_process, fmu_dir, fmus, progress, f
     summary = RunSummary(path, n_steps - first, wall, static_time,
                          master.total_iterations - start_iterations,
                          master.total_bearing_evaluations - start_evals, static.iterations, x0,
-                         warnings=warnings)
+                         warnings=warnings, relaxed_steps=master.relaxed_steps - start_relaxed)
     summary.report = _store_report(path)
     if figures:
         from orchestrator.plots import run_figures
