@@ -115,6 +115,29 @@ def test_a_bearing_fmu_without_the_minimal_contract_is_refused(fmu_dir):
     assert "bearing 1 (GearShaft.fmu) lacks the minimal bearing contract: input s" in r
 
 
+def test_closed_bearing_fmus_refuse_to_evaluate(fmu_dir):
+    """The bearing set reads each law into a buffer of its own: once its FMUs are freed, an
+    evaluation is an FmuError, not the last laws read (nor empty arrays, as before)."""
+    r = run_isolated(f"""
+        import json
+        import numpy as np
+        from fmu_src.case import load_case
+        from orchestrator.fmi import FmuError
+        from orchestrator.run import build_master
+        master = build_master(load_case("baguet2010_spur"), fmu_dir=r"{fmu_dir}")
+        master.solve_static()
+        states = master.laws.states
+        force = master.bearings.evaluate(states)[0]
+        master.close()
+        try:
+            master.bearings.evaluate(states)
+            print(json.dumps("evaluated"))
+        except FmuError as exc:
+            print(json.dumps([str(exc), bool(np.isfinite(force).all())]))
+    """)
+    assert r == ["the bearing FMUs are closed", True]
+
+
 def test_the_ssp_archive_holds_the_system(ssp_file):
     from fmu_src.contract import connections
     from fmu_src.ssp import NS
