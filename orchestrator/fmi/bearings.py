@@ -16,7 +16,6 @@ with the FMU's log.
 from __future__ import annotations
 
 import ctypes
-import math
 
 import numpy as np
 
@@ -27,7 +26,7 @@ from fmu_src.contract import (
     STATE_NAMES,
     STIFFNESS_NAMES,
 )
-from orchestrator.fmi.instance import FmuError, FmuInstance, status_name
+from orchestrator.fmi.instance import FmuError, FmuInstance, all_finite, status_name
 from orchestrator.master import BearingSet
 
 __all__ = ["MINIMAL_INPUTS", "MINIMAL_OUTPUTS", "FmuBearings"]
@@ -87,13 +86,9 @@ class FmuBearings(BearingSet):
         self._out_vr = [(ctypes.c_uint * (2 if fo else 10))(
             *[s.vr[n] for n in (FORCE_NAMES if fo else self._OUTPUTS)])
             for s, fo in zip(self.slaves, self.force_only, strict=True)]
-        self._in_val = (ctypes.c_double * 4)()
-        self._in_np = np.frombuffer(self._in_val, dtype=np.float64)
-        self._out_val = (ctypes.c_double * 10)()
-        self._out_np = np.frombuffer(self._out_val, dtype=np.float64)
         # the laws of one evaluation, bearing by bearing in the FMUs' output order (force,
         # Kb, Cb: rows of ModelBearings.evaluate's (nb, 5, 2)), and each bearing's journal
-        # state, read and written by the FMI calls in place
+        # state, read and written by the FMI calls in place (_exchange)
         nb = len(self.slaves)
         self._laws = (ctypes.c_double * (10 * nb))()
         self._laws_np = np.frombuffer(self._laws, dtype=np.float64).reshape(nb, 5, 2)
@@ -125,20 +120,25 @@ class FmuBearings(BearingSet):
                            f"{np.asarray(states).tolist()}: {what} returned "
                            f"{status_name(status)}; FMU log: {s.log_tail()}")
 
+    def _exchange(self, b: int, s: FmuInstance, n: int) -> None:
+        """Set the journal state of bearing b from its row of the state buffer, read its first
+        ``n`` outputs into its row of the law buffer (FmuError on a failed call or a
+        non-finite output)."""
+        set_real, get_real, c = self._calls[b]
+        state = self._states_np[b]
+        self._call(b, s, set_real(c, self._in_vr[b], 4, self._state_at[b]), "fmi2SetReal",
+                   state)
+        self._call(b, s, get_real(c, self._out_vr[b], n, self._law_at[b]), "fmi2GetReal",
+                   state)
+        if not all_finite(self._laws[10 * b:10 * b + n]):
+            raise FmuError(f"bearing {b + 1} ({s.path.name}) failed at state "
+                           f"{state.tolist()}: non-finite outputs; FMU log: {s.log_tail()}")
+
     def _force(self, b: int, s: FmuInstance, state, n: int) -> np.ndarray:
         """Set the journal state of bearing b, read its first ``n`` outputs."""
-        f = s.fmu
-        self._in_np[:] = state
-        self._call(b, s, f.dll.fmi2SetReal(f.component, self._in_vr[b], 4, self._in_val),
-                   "fmi2SetReal", state)
-        self._call(b, s, f.dll.fmi2GetReal(f.component, self._out_vr[b], n, self._out_val),
-                   "fmi2GetReal", state)
-        out = self._out_np[:n]
-        if not np.isfinite(out).all():
-            raise FmuError(f"bearing {b + 1} ({s.path.name}) failed at state "
-                           f"{np.asarray(state).tolist()}: non-finite outputs; FMU log: "
-                           f"{s.log_tail()}")
-        return out.copy()
+        self._states_np[b] = state
+        self._exchange(b, s, n)
+        return self._laws_np[b].reshape(10)[:n].copy()
 
     def _fd_jacobian(self, b: int, s: FmuInstance, state):
         """Kb = -dF/dX, Cb = -dF/dXdot of a force-only FMU by central differences (steps
@@ -158,22 +158,11 @@ class FmuBearings(BearingSet):
             raise FmuError("the bearing FMUs are closed")
         laws = self._laws_np
         self._states_np[:] = states
-        calls = zip(self.slaves, self._calls, strict=True)
-        for b, (s, (set_real, get_real, c)) in enumerate(calls):
+        for b, s in enumerate(self.slaves):
             if self.force_only[b]:
                 laws[b, 0], laws[b, 1:3], laws[b, 3:5] = self._fd_jacobian(b, s, states[b])
-            else:  # as _force, the state and the law in place
-                self._call(b, s, set_real(c, self._in_vr[b], 4, self._state_at[b]),
-                           "fmi2SetReal", states[b])
-                self._call(b, s, get_real(c, self._out_vr[b], 10, self._law_at[b]),
-                           "fmi2GetReal", states[b])
-                # a non-finite output makes the sum non-finite (an overflowing sum of finite
-                # outputs is told apart by the second test)
-                if not (math.isfinite(sum(self._laws[10 * b:10 * b + 10]))
-                        or np.isfinite(laws[b]).all()):
-                    raise FmuError(f"bearing {b + 1} ({s.path.name}) failed at state "
-                                   f"{np.asarray(states[b]).tolist()}: non-finite outputs; FMU "
-                                   f"log: {s.log_tail()}")
+            else:
+                self._exchange(b, s, 10)
         out = laws.copy()
         return out[:, 0], out[:, 1:3], out[:, 3:5]
 
