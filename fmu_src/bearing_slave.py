@@ -25,7 +25,7 @@ import numpy as np
 from pythonfmu.enums import Fmi2Status
 
 from bearing_fmu import BearingData, model_class
-from bearing_fmu.frames import LocalFrame
+from bearing_fmu.frames import LocalFrame, state_to_local
 from fmu_src.contract import (
     BEARING_VARIABLES,
     DAMPING_NAMES,
@@ -124,7 +124,6 @@ class BearingSlave(ContractSlave):
         cls = model_class(self.model_name)
         self._model = cls.from_parameters(bearing, **{o.key: v[o.key] for o in cls.options})
         self._frame = LocalFrame(v["frame_angle"], int(v["rotation_sign"]))
-        self._q = tuple(self._frame.q.ravel().tolist())  # (q00, q01, q10, q11)
         self._dirty_model = False
 
     def _local_state(self):
@@ -154,13 +153,13 @@ class BearingSlave(ContractSlave):
             self._build_model()
         v = self._values
         s = [v[name] for name in STATE_NAMES]
-        self._model.evaluate_global(self._frame.q, np.array(s), v["omega"], self._out)
+        q, state = self._frame.q, np.array(s)
+        self._model.evaluate_global(q, state, v["omega"], self._out)
         v.update(zip(_LAW_NAMES, self._out_flat.tolist(), strict=True))
         v.update(zip(EVAL_NAMES, s, strict=True))
-        # the local position as bearing_fmu.frames.state_to_local forms it (a numpy product
-        # of a 2 x 2 matrix costs 10 us here: a third of a hybrid evaluation)
-        q00, q01, q10, q11 = self._q
-        x, y = q00 * s[0] + q01 * s[1], q10 * s[0] + q11 * s[1]
+        # the local position as the models form it (a numpy product of a 2 x 2 matrix cost
+        # 10 us here, a third of a hybrid evaluation, and rounded differently through BLAS)
+        x, y, _, _ = state_to_local(q, state)
         v["eccentricity"] = math.hypot(x, y) / v["C"]
         v["n_solves"] = int(v["n_solves"]) + 1
 
