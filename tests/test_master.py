@@ -34,7 +34,23 @@ def external_force(t):
     return LOADS + rot
 
 
-class TwoJournals(StructureSlave):
+class QuietStructure(StructureSlave):
+    """What the runner reads from a structure slave, which these tests do not use."""
+
+    def exit_initialization(self):
+        pass
+
+    def mesh_force(self):
+        return 0.0
+
+    def transmission_error(self):
+        return 0.0
+
+    def gear_displacements(self):
+        return np.zeros((2, 2))
+
+
+class TwoJournals(QuietStructure):
     """Linear structure, Newmark (gamma 1/2, beta 1/4), affine bearing laws at both nodes."""
 
     n_bearings = 2
@@ -97,18 +113,6 @@ class TwoJournals(StructureSlave):
     def support_loads(self):
         return LOADS.copy()
 
-    # what the runner reads (not used by these tests)
-    def exit_initialization(self):
-        pass
-
-    def mesh_force(self):
-        return 0.0
-
-    def transmission_error(self):
-        return 0.0
-
-    def gear_displacements(self):
-        return np.zeros((2, 2))
 
 
 def monolithic(models, dt, n_steps, x0):
@@ -240,7 +244,7 @@ def test_non_convergence_names_step_time_and_mismatch():
 W_KINK, S_KINK, X_KINK = 1000.0, 1e8, 1e-6  # load [N], support stiffness [N/m], kink scale [m]
 
 
-class OneSpring(StructureSlave):
+class OneSpring(QuietStructure):
     """A journal on a spring S along s: S x = W + F_law(x) (velocities and t left out)."""
 
     n_bearings = 1
@@ -269,18 +273,6 @@ class OneSpring(StructureSlave):
 
     def support_loads(self):
         return np.array([[W_KINK, 0.0]])
-
-    def exit_initialization(self):
-        pass
-
-    def mesh_force(self):
-        return 0.0
-
-    def transmission_error(self):
-        return 0.0
-
-    def gear_displacements(self):
-        return np.zeros((2, 2))
 
 
 class KinkedBearing(BearingSet):
