@@ -36,7 +36,7 @@ from bearing_fmu._hybrid_workspace import (
 )
 
 
-@njit(cache=True, fastmath=True)
+@njit(cache=True)
 def film_jacobian(ws, active, order, runs, nr, g, jss, dsig, sc, ss, jx, jv, st):
     """dFbar/d(x, y, xdot, ydot) into jx, jv (row = force component) with P frozen, through
     t (section 6); dt/dq into the state record ``st`` (the predictor of the next call)."""

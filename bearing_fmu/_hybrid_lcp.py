@@ -88,7 +88,7 @@ def substitute(ws, active, order, runs, nr, rhs, out):
             out[i] = nxt
 
 
-@njit(cache=True, fastmath=True)
+@njit(cache=True)
 def substitute4(ws, active, order, runs, nr, r0, o0):
     """Four solves at once (rows r0..r0+3 -> rows o0..o0+3), as :func:`substitute`."""
     n = active.shape[0]

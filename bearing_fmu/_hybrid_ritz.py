@@ -37,7 +37,7 @@ from bearing_fmu._hybrid_workspace import (
 from bearing_fmu.reynolds import film_thickness
 
 
-@njit(cache=True, fastmath=True)
+@njit(cache=True)
 def element_integrals(x, y, trig, ws, delta, jac):
     """Element stiffness k_e = int w l'^2 and mass moments int w l_a l_b, 3-point Gauss, for
     w = h^3 (Eq. 3) and (with ``jac``) w = dh^3/dx = -3h^2 cos, dh^3/dy = -3h^2 sin; then the
@@ -104,7 +104,7 @@ def element_integrals(x, y, trig, ws, delta, jac):
         im = i
 
 
-@njit(cache=True, fastmath=True)
+@njit(cache=True)
 def km_apply(ws, r0, a, ka, ma):
     """ka = K_r a, ma = M_r a for the element rows r0..r0+3; returns (a.K_r a, a.M_r a)."""
     n = a.shape[0]
