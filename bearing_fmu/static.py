@@ -57,60 +57,68 @@ def _film_ray_guess(model: FilmBearingModel, load_bar: float, direction: float, 
     return eps * math.cos(rot), eps * math.sin(rot)
 
 
-def newton_equilibrium(law, load, x, radius_limit: float, *, tol: float, maxit: int,
+def newton_equilibrium(law, loads, x, radius_limit, *, tol: float, maxit: int,
                        what: str = ""):
-    """Newton on ``F(X) + W = 0`` (Eq. 8) with the law's own stiffness ``Kb = -dF/dX``.
+    """Newton on ``F(X) + W = 0`` (Eq. 8) with the law's own stiffness ``Kb = -dF/dX``, for
+    one journal or several at once (each its own Newton, all evaluated together).
 
     Parameters
     ----------
     law : callable
-        ``law(X) -> (force (2,) [N], Kb (2, 2) [N/m], anything)`` at the position X [m], zero
-        velocity; the third item is returned with the solution.
-    load : (2,) array
-        External static load W [N].
-    x : (2,) array
-        First iterate [m].
-    radius_limit : float
+        ``law(X) -> (force (nb, 2) [N], Kb (nb, 2, 2) [N/m], anything)`` at the positions X
+        (nb, 2) [m], zero velocity; the third item is returned with the solution. A journal
+        that has converged keeps its position while the others iterate.
+    loads : (nb, 2) array
+        External static loads W [N].
+    x : (nb, 2) array
+        First iterates [m].
+    radius_limit : float or (nb,) array
         Every iterate stays inside the circle ``|X| < radius_limit`` [m] (step halving).
     tol : float
-        Convergence on ``|F + W|`` relative to ``|W|``.
+        Convergence on ``|F + W|`` relative to ``|W|``, journal by journal.
     maxit : int
         Newton iterations.
     what : str
-        Appended to the error message (speed, bearing).
+        Appended to the error message (speed, bearings).
 
     Returns
     -------
-    (X, third item of ``law`` at X, iterations)
+    (X (nb, 2), third item of ``law`` at X, iterations)
 
     Raises
     ------
     BearingError
-        If Newton does not converge (iterations and residual in the message).
+        If a journal does not converge (its index, the iterations and residual in the message).
     """
-    w = np.asarray(load, dtype=float)
-    wnorm = float(np.hypot(*w))
-    scale = max(wnorm, 1e-300)
-    x = np.array(x, dtype=float)
+    w = np.array(loads, dtype=float).reshape(-1, 2)
+    x = np.array(x, dtype=float).reshape(w.shape)
+    limit = np.broadcast_to(np.asarray(radius_limit, dtype=float), len(w))
+    scale = np.maximum(np.hypot(w[:, 0], w[:, 1]), 1e-300)
     iterations = 0
-    res = np.full(2, np.inf)
+    residual = np.full(len(w), np.inf)
     out = None
     while iterations < maxit:
         iterations += 1
         force, kb, out = law(x)
-        res = force + w
-        if np.hypot(*res) <= tol * scale:
+        res = np.asarray(force, dtype=float).reshape(w.shape) + w
+        residual = np.hypot(res[:, 0], res[:, 1])
+        moving = ~(residual <= tol * scale)
+        if not moving.any():
             break
-        step = np.linalg.solve(kb, res)  # F(x + dx) ~ F - Kb dx = -W
-        # keep the iterate inside the circle
-        alpha = 1.0
-        while math.hypot(*(x + alpha * step)) >= radius_limit and alpha > 1e-6:
-            alpha *= 0.5
-        x = x + alpha * step
-    if not np.hypot(*res) <= tol * scale:
+        kb = np.asarray(kb, dtype=float).reshape(-1, 2, 2)
+        for b in np.flatnonzero(moving):
+            step = np.linalg.solve(kb[b], res[b])  # F(x + dx) ~ F - Kb dx = -W
+            alpha = 1.0  # keep the iterate inside the circle
+            while math.hypot(*(x[b] + alpha * step)) >= limit[b] and alpha > 1e-6:
+                alpha *= 0.5
+            x[b] = x[b] + alpha * step
+    failed = np.flatnonzero(~(residual <= tol * scale))
+    if failed.size:
+        b = int(failed[0])
+        which = f"journal {b + 1} of {len(w)}: " if len(w) > 1 else ""
         raise BearingError(
-            f"static equilibrium did not converge in {maxit} iterations: residual "
-            f"{np.hypot(*res):.3e} N for load {wnorm:.6g} N {what}".rstrip()
+            f"static equilibrium did not converge in {maxit} iterations: {which}residual "
+            f"{residual[b]:.3e} N for load {float(np.hypot(*w[b])):.6g} N {what}".rstrip()
         )
     return x, out, iterations
 
@@ -163,11 +171,12 @@ def static_equilibrium(
         x = np.zeros(2)
 
     def law(pos):
-        r = model.evaluate(pos[0], pos[1], 0.0, 0.0, omega)
+        r = model.evaluate(pos[0, 0], pos[0, 1], 0.0, 0.0, omega)
         return r.force, r.stiffness, r
 
     x, r, iterations = newton_equilibrium(law, w, x, eps_max * c, tol=tol, maxit=maxit,
                                           what=f"at omega = {omega} rad/s")
+    x = x[0]
     eps = math.hypot(x[0], x[1]) / c
     if eps >= eps_max:
         raise EccentricityError(f"static eccentricity ratio {eps:.6g} >= limit {eps_max}")

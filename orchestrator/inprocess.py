@@ -14,7 +14,6 @@ import numpy as np
 from bearing_fmu.affine import AffineLaws
 from bearing_fmu.base import BearingModel
 from bearing_fmu.frames import LocalFrame
-from bearing_fmu.static import static_equilibrium
 from gear_fmu.analyses import support_loads
 from gear_fmu.structure import Structure
 from orchestrator.master import BearingSet, StructureSlave
@@ -112,6 +111,7 @@ class ModelBearings(BearingSet):
             if not isinstance(m, BearingModel):
                 raise TypeError(f"{m!r} is not a BearingModel")
         self.models = list(models)
+        self.clearances = np.array([m.bearing.clearance for m in self.models])
         self._q = np.array([f.q for f in self.frames])
         self._states = None  # global journal states of the last evaluation
         self.evaluations = 0
@@ -125,14 +125,6 @@ class ModelBearings(BearingSet):
             self.models[b].evaluate_global(self._q[b], states[b], self.omegas[b], out[b])
         self.evaluations += nb
         return out[:, 0], out[:, 1:3], out[:, 3:5]
-
-    def static_position(self, loads):
-        pos = np.empty((len(self.models), 2))
-        for b, (model, fr, om) in enumerate(zip(self.models, self.frames, self.omegas,
-                                                strict=True)):
-            sol = static_equilibrium(model, fr.to_local(loads[b]), om)
-            pos[b] = fr.to_global((sol.x0, sol.y0))
-        return pos
 
     def checkpoint(self):
         return [model.get_state() for model in self.models]

@@ -26,7 +26,9 @@ the new iterate), so a relaxed step is still the monolithic step to ``tol``.
 
 The static solution X0 is the same iteration with the structure's static solve and the
 velocities zero. Its first linearisation point comes from a per-bearing static equilibrium
-under the loads a stiff support would carry (so no iterate starts outside the clearance).
+under the loads a stiff support would carry (so no iterate starts outside the clearance),
+solved by :meth:`BearingSet.static_position` through the bearings' own ``evaluate``, the same
+calls whatever the transport.
 
 The slaves are reached only through :class:`StructureSlave` and :class:`BearingSet`, which
 declare everything the master and the runner use; :mod:`orchestrator.inprocess` (the physics
@@ -43,6 +45,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from bearing_fmu.affine import AffineLaws
+from bearing_fmu.static import newton_equilibrium
 
 __all__ = [
     "BearingSet",
@@ -145,9 +148,30 @@ class BearingSet(ABC):
     def evaluate(self, states: np.ndarray):
         """Film force (nb, 2), Kb (nb, 2, 2), Cb (nb, 2, 2) at journal states (nb, 4)."""
 
-    @abstractmethod
+    #: (nb,) radial clearance of each bearing [m] (bounds the first guess of X0)
+    clearances: np.ndarray
+
     def static_position(self, loads: np.ndarray) -> np.ndarray:
-        """(nb, 2) journal positions balancing static loads (nb, 2) [N] (first guess)."""
+        """(nb, 2) journal positions [m] balancing static loads (nb, 2) [N]: the first guess
+        of X0.
+
+        One Newton per journal from the centre, kept inside 0.95 C, every iterate evaluating
+        the whole set (:func:`bearing_fmu.static.newton_equilibrium`). It is written once,
+        here, for every transport: a bearing with memory (the hybrid solver's warm start)
+        remembers the sequence of states it was evaluated at, so in-process and FMU runs give
+        the same bits only if they evaluate the same sequence."""
+        loads = np.asarray(loads, dtype=float)
+        states = np.zeros((len(loads), 4))
+
+        def law(x):
+            states[:, :2] = x
+            force, kb, _ = self.evaluate(states)
+            return force, kb, None
+
+        positions, _, _ = newton_equilibrium(
+            law, loads, np.zeros_like(loads), 0.95 * np.asarray(self.clearances, dtype=float),
+            tol=1e-10, maxit=100, what="(bearings' first guess of X0)")
+        return positions
 
     @abstractmethod
     def exit_initialization(self) -> None:

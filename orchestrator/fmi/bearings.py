@@ -19,7 +19,6 @@ import ctypes
 
 import numpy as np
 
-from bearing_fmu.static import newton_equilibrium
 from fmu_src.contract import (
     DAMPING_NAMES,
     FORCE_NAMES,
@@ -60,7 +59,7 @@ class FmuBearings(BearingSet):
     def __init__(self, fmus, parameters, omegas):
         self.slaves = []
         self.force_only = []  # per bearing: stiffness and damping by finite differences
-        self._clearances = []  # per bearing [m]: FD steps, the first guess's bound
+        self.clearances = []  # per bearing [m]: FD steps, the first guess's bound
         self._omegas = [float(w) for w in omegas]
         try:
             for b, (path, params) in enumerate(zip(fmus, parameters, strict=True)):
@@ -77,7 +76,7 @@ class FmuBearings(BearingSet):
                 s.set({k: v for k, v in params.items() if k in s.vr}, f"bearing {b + 1}")
                 if "omega" in s.vr:
                     s.set({"omega": float(omegas[b])}, f"bearing {b + 1}")
-                self._clearances.append(float(params.get("C", 1e-4)))
+                self.clearances.append(self._clearance(b, s, params))
         except BaseException:
             self.close()
             raise
@@ -143,7 +142,7 @@ class FmuBearings(BearingSet):
     def _fd_jacobian(self, b: int, s: FmuInstance, state):
         """Kb = -dF/dX, Cb = -dF/dXdot of a force-only FMU by central differences (steps
         :data:`FD_STEP`), then the force at ``state`` itself (its evaluation state last)."""
-        hx = FD_STEP * self._clearances[b]
+        hx = FD_STEP * self.clearances[b]
         hv = hx * self._omegas[b]
         jac = np.empty((2, 4))
         for j, h in enumerate((hx, hx, hv, hv)):
@@ -152,6 +151,18 @@ class FmuBearings(BearingSet):
             minus[j] -= h
             jac[:, j] = -(self._force(b, s, plus, 2) - self._force(b, s, minus, 2)) / (2 * h)
         return self._force(b, s, state, 2), jac[:, :2], jac[:, 2:]
+
+    @staticmethod
+    def _clearance(b, s, params) -> float:
+        """Radial clearance C [m] of bearing ``b``: the FMU's own value when it declares one
+        (what the film uses), else the case's (a force-only FMU)."""
+        if "C" in s.vr:
+            return float(s.fmu.getReal([s.vr["C"]])[0])
+        if "C" in params:
+            return float(params["C"])
+        raise FmuError(f"bearing {b + 1} ({s.path.name}): neither the FMU nor the case gives "
+                       "the radial clearance C [m] (it scales the finite-difference steps and "
+                       "bounds the first guess of X0)")
 
     def evaluate(self, states):
         if not self.slaves:
@@ -165,28 +176,6 @@ class FmuBearings(BearingSet):
                 self._exchange(b, s, 10)
         out = laws.copy()
         return out[:, 0], out[:, 1:3], out[:, 3:5]
-
-    def static_position(self, loads):
-        """Per-bearing Newton on F(X) + W = 0 through the FMU, from the centre, kept inside
-        0.95 C (:func:`bearing_fmu.static.newton_equilibrium`).
-
-        Each iterate evaluates the whole set with the other journals at the centre, as this
-        transport always has: the hybrid FMUs' warm starts, and so the run's last digits,
-        depend on that sequence."""
-        pos = np.zeros((len(self.slaves), 2))
-        for b in range(len(self.slaves)):
-            clearance = self._clearances[b]
-            states = np.zeros((len(self.slaves), 4))
-
-            def law(x, b=b, states=states):
-                states[b, :2] = x
-                f, k, _ = self.evaluate(states)
-                return f[b], k[b], None
-
-            pos[b], _, _ = newton_equilibrium(law, loads[b], np.zeros(2), 0.95 * clearance,
-                                              tol=1e-10, maxit=100,
-                                              what=f"(bearing {b + 1}, first guess of X0)")
-        return pos
 
     def exit_initialization(self) -> None:
         """Leave initialisation mode (the linear FMU freezes its coefficients here)."""
