@@ -9,7 +9,11 @@ from it.
 
 from importlib import import_module
 
-from bearing_fmu.base import (
+from bearing_fmu import _numba_cache
+
+_numba_cache.install()  # before any kernel is defined: numba's cache per version of the code
+
+from bearing_fmu.base import (  # noqa: E402
     BearingData,
     BearingError,
     BearingModel,

@@ -23,17 +23,18 @@ ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "tests" / "data"
 
 
-def run_isolated(code: str, timeout: float = 600, fresh_numba: bool = False) -> dict:
+def run_isolated(code: str, timeout: float = 600, numba_cache: Path | None = None,
+                 python_args: tuple = ()) -> dict:
     """Run ``code`` (dedented) in a fresh interpreter started in an empty temporary folder;
     it prints one JSON object on its last line and exits normally. Returns that object.
 
-    ``fresh_numba``: compile every numba kernel anew (an empty ``NUMBA_CACHE_DIR``), for
-    comparisons to the last digit (see ``tests/data/generate_golden.py``)."""
+    ``numba_cache``: numba's cache folder for that interpreter (``NUMBA_CACHE_DIR``; an empty
+    one compiles every kernel anew). ``python_args``: options of the interpreter (``-S``)."""
     with tempfile.TemporaryDirectory(prefix="gsb_test_") as cwd:
         env = dict(os.environ)
-        if fresh_numba:
-            env["NUMBA_CACHE_DIR"] = str(Path(cwd) / "numba")
-        proc = subprocess.run([sys.executable, "-c", textwrap.dedent(code)],
+        if numba_cache is not None:
+            env["NUMBA_CACHE_DIR"] = str(numba_cache)
+        proc = subprocess.run([sys.executable, *python_args, "-c", textwrap.dedent(code)],
                               capture_output=True, text=True, timeout=timeout, cwd=cwd, env=env)
     assert proc.returncode == 0, f"exit code {proc.returncode}: {proc.stderr[-3000:]}"
     return json.loads(proc.stdout.strip().splitlines()[-1])

@@ -1,0 +1,150 @@
+"""Same inputs, same bits on one machine: whatever numba's cache holds, whatever the transport.
+
+The hybrid kernels once compiled with fastmath, which lets LLVM choose the rounding by context
+(what it inlines, the vector width); and the two transports reached the static solution along
+different sequences of bearing evaluations (the hybrid solver remembers its last solution).
+Here the paper's spur case runs in fresh interpreters with numba's cache empty (every kernel
+compiled in the process), full (every kernel loaded) and half full (the bearing kernels loaded,
+their callers compiled), each in-process and through the FMUs: every channel of every run,
+and the static solution, must be the same bits.
+"""
+
+import hashlib
+
+import numpy as np
+
+from tests.helpers import ROOT, run_isolated
+
+PERIODS = 2
+
+
+def _runs(fmu_dir) -> str:
+    return f"""
+        import hashlib, json, sys, tempfile
+        sys.path.insert(0, {str(ROOT)!r})
+        import numpy as np
+        from tests.helpers import run_paper_case
+        out = {{}}
+        for transport in ("in-process", "fmu"):
+            with tempfile.TemporaryDirectory() as tmp:
+                r, s = run_paper_case(tmp, periods={PERIODS}, in_process=transport == "in-process",
+                                      fmu_dir={str(fmu_dir)!r})
+            h = hashlib.sha256(np.ascontiguousarray(s.static_positions).tobytes())
+            for name in sorted(r):
+                if name not in ("units", "attrs"):
+                    h.update(name.encode() + np.ascontiguousarray(r[name]).tobytes())
+            out[transport] = h.hexdigest()
+            out[transport + " rows"] = len(r["time"])
+        print(json.dumps(out))
+    """
+
+
+BEARINGS_ONLY = f"""
+    import json, sys
+    sys.path.insert(0, {str(ROOT)!r})
+    from bearing_fmu import BearingData
+    from bearing_fmu.hybrid import HybridBearing
+    from bearing_fmu.static import static_equilibrium
+    sol = static_equilibrium(HybridBearing(BearingData(0.07, 0.05, 150e-6, 0.0288), n=192),
+                             (0.0, -2251.0), 325.0)
+    print(json.dumps({{"eccentricity": sol.eccentricity}}))
+"""
+
+
+def test_same_bits_with_a_cold_a_warm_and_a_half_warm_numba_cache(fmu_dir, tmp_path):
+    cold = run_isolated(_runs(fmu_dir), numba_cache=tmp_path / "a")
+    warm = run_isolated(_runs(fmu_dir), numba_cache=tmp_path / "a")
+    run_isolated(BEARINGS_ONLY, numba_cache=tmp_path / "b")
+    half = run_isolated(_runs(fmu_dir), numba_cache=tmp_path / "b")
+    assert cold["in-process rows"] == cold["fmu rows"] == 32 * PERIODS
+    assert cold["in-process"] == cold["fmu"], "FMUs and in-process differ"
+    assert warm == cold, "a warm numba cache changes the results"
+    assert half == cold, "callees loaded from numba's cache change the results"
+
+
+def test_a_bearing_fmu_in_a_host_without_the_package_gives_the_same_bits(fmu_dir, tmp_path):
+    """``python -S`` with only the dependencies on its path: the FMU runs the code it carries,
+    compiled apart from the package's, in its own numba cache; along a sequence of states (the
+    hybrid solver warm-starts from its last solution) its force, Kb and Cb equal the
+    in-process model's bit for bit."""
+    import site
+
+    from bearing_fmu import BearingData
+    from bearing_fmu.frames import LocalFrame
+    from bearing_fmu.hybrid import HybridBearing
+    from orchestrator.inprocess import ModelBearings
+
+    params = {"D": 0.09, "L": 0.065, "C": 110e-6, "mu": 0.0288, "frame_angle": 0.3}
+    states = [[4e-5 + 1e-6 * k, -6e-5 + 2e-6 * k, 1e-4 * k, -2e-4] for k in range(8)]
+    ref = ModelBearings([HybridBearing(BearingData(0.09, 0.065, 110e-6, 0.0288), n=96)],
+                        [LocalFrame(0.3, -1)], [54.0])
+    expected = hashlib.sha256()
+    for st in states:
+        f, k, c = ref.evaluate(np.array([st]))
+        expected.update(np.concatenate([f.ravel(), k.ravel(), c.ravel()]).tobytes())
+    paths = [p for p in site.getsitepackages() if "site-packages" in p]
+    out = run_isolated(f"""
+        import sys
+        sys.path[:0] = {paths!r}
+        import hashlib, json
+        import numpy as np
+        from fmpy import extract, read_model_description
+        from fmpy.fmi2 import FMU2Slave
+        path = {str(fmu_dir / "BearingHybrid.fmu")!r}
+        md = read_model_description(path)
+        vr = {{v.name: v.valueReference for v in md.modelVariables}}
+        fmu = FMU2Slave(guid=md.guid, unzipDirectory=extract(path), instanceName="b",
+                        modelIdentifier=md.coSimulation.modelIdentifier)
+        fmu.instantiate()
+        fmu.setupExperiment(startTime=0.0)
+        fmu.enterInitializationMode()
+        params = {params!r}
+        fmu.setReal([vr[n] for n in params], list(params.values()))
+        fmu.setInteger([vr["rotation_sign"], vr["nodes"]], [-1, 96])
+        fmu.setReal([vr["omega"]], [54.0])
+        names = ["F_s", "F_t", "K_ss", "K_st", "K_ts", "K_tt", "C_ss", "C_st", "C_ts", "C_tt"]
+        h = hashlib.sha256()
+        for st in {states!r}:
+            fmu.setReal([vr[n] for n in ("s", "t", "s_dot", "t_dot")], st)
+            h.update(np.array(fmu.getReal([vr[n] for n in names])).tobytes())
+        module = sys.modules["bearing_fmu"].__file__
+        fmu.terminate()
+        fmu.freeInstance()
+        print(json.dumps({{"hash": h.hexdigest(), "module": module}}))
+    """, python_args=["-S"], numba_cache=tmp_path / "numba")
+    assert not out["module"].startswith(str(ROOT)), out["module"]  # the FMU's own code
+    assert out["hash"] == expected.hexdigest()
+
+
+def test_a_change_in_a_callee_file_recompiles_its_callers(tmp_path):
+    """numba checks only a kernel's own file for changes; the short-bearing kernel inlines the
+    source coefficients of Eq. (3) from :mod:`bearing_fmu.reynolds`. In a copy of the code with a warm cache,
+    a change of ``reynolds.py`` alone must change the force (it did not: the stale kernel was
+    loaded), and the cache must not change a result of the same code."""
+    import shutil
+
+    from bearing_fmu._numba_cache import PACKAGES
+
+    root = tmp_path / "code"
+    for pkg in PACKAGES:
+        shutil.copytree(ROOT / pkg, root / pkg,
+                        ignore=shutil.ignore_patterns("__pycache__", "native"))
+    code = f"""
+        import json, sys
+        sys.path.insert(0, {str(root)!r})
+        from bearing_fmu import BearingData
+        from bearing_fmu.short_bearing import ShortBearing
+        r = ShortBearing(BearingData(0.07, 0.05, 150e-6, 0.0288)).evaluate(
+            60e-6, -60e-6, 0.0, 0.0, 325.0)
+        print(json.dumps({{"force": r.force.tolist(), "file": ShortBearing.__module__}}))
+    """
+    cache = tmp_path / "numba"
+    first = run_isolated(code, numba_cache=cache)
+    assert run_isolated(code, numba_cache=cache) == first
+    reynolds = root / "bearing_fmu" / "reynolds.py"
+    text = reynolds.read_text()
+    old = "return y + 2.0 * x_dot, 2.0 * y_dot - x"
+    assert old in text
+    reynolds.write_text(text.replace(old, "return y + 2.0 * x_dot, 2.0 * y_dot - 1.001 * x"))
+    changed = run_isolated(code, numba_cache=cache)
+    assert changed["force"] != first["force"]
