@@ -118,9 +118,9 @@ def test_a_bearing_fmu_in_a_host_without_the_package_gives_the_same_bits(fmu_dir
 
 def test_a_change_in_a_callee_file_recompiles_its_callers(tmp_path):
     """numba checks only a kernel's own file for changes; the short-bearing kernel inlines the
-    source coefficients of Eq. (3) from :mod:`bearing_fmu.reynolds`. In a copy of the code with a warm cache,
-    a change of ``reynolds.py`` alone must change the force (it did not: the stale kernel was
-    loaded), and the cache must not change a result of the same code."""
+    source coefficients of Eq. (3) from :mod:`bearing_fmu.reynolds`. In a copy of the code
+    with a warm cache, a change of ``reynolds.py`` alone must change the force (it did not: the
+    stale kernel was loaded), and the cache must not change a result of the same code."""
     import shutil
 
     from bearing_fmu._numba_cache import PACKAGES

@@ -126,8 +126,8 @@ def jacobi(steps: int, lag: int = 1) -> np.ndarray:
 def test_ecos_runs_the_ssp_as_a_jacobi_master_would(ecos_python):
     """ecos's trajectories equal the emulated Jacobi scheme's to round-off over 64 steps
     (measured 1.9e-13 and 1.2e-12 relative to the largest position, 8.4e-11 velocities, in two
-    sessions: numba's last digits depend on its cache, see tests/data/generate_golden.py;
-    asserted with a margin of 3 on the larger)."""
+    sessions before the kernels' arithmetic was made deterministic; asserted with a margin of
+    3 on the larger)."""
     x, _ = ecos_python
     ref = jacobi(STEPS)
     scale = np.abs(ref[:, :, :2]).max()

@@ -1,66 +1,80 @@
-"""Record golden trajectories for tests/test_golden.py (run from the repository root).
+"""Re-record the golden run of tests/test_golden.py, on purpose (the reason goes in the commit).
 
-A fixture pins the journal trajectories of the paper's spur case (hybrid bearings, 4 mesh
-periods = 128 steps, in-process and through the FMUs) as computed by a named commit, so that a
-refactor, or speed work (issue 13), can show it changes no result (1e-12 relative). Re-record
-only for a change that is meant to move results, and say so in the commit message.
+    python tests/data/generate_golden.py
 
-Two fixtures:
-
-* ``golden_spur_hybrid.json``: the time-integration refinements off (``consistent_start``,
-  ``locate_contact`` false), recorded at 34318c3 by an earlier version of this script; kept as
-  it is (the refinements-off path must still give it);
-* ``golden_spur_hybrid_default.json``: the shipped case as it runs by default (refinements on),
-  recorded by this script before the speed work of issue 13.
-
-Each is computed in a fresh interpreter with an empty numba cache folder (``NUMBA_CACHE_DIR``):
-the last digits of the fastmath kernels depend on whether numba compiled a kernel's callees in
-the same process or loaded them from its cache (LLVM optimises across the calls only in the
-first case; measured: 2e-12 on positions, 2e-10 on velocities over these 128 steps), so the
-fixture is the all-fresh compilation and ``tests/test_golden.py`` compiles the same way. Both
-transports run one after the other in that interpreter, as the test runs them.
-
-Usage: ``python tests/data/generate_golden.py COMMIT`` (COMMIT: the commit the code is at).
+(from any folder, in the environment the tests run in; about 4 minutes on 2 cores). It writes
+``tests/data/golden_spur.json`` (:mod:`tests.golden`): the paper's spur case with hybrid
+bearings, in-process, over 4 mesh periods at T/32 and T/64, shipped settings and refinements
+off, and the report of the whole 2048-period run at T/32 (and at T/64, to show how much
+halving the step moves it). It records the commit and the versions it ran with.
 """
 
+from __future__ import annotations
+
 import json
-import os
+import platform
 import subprocess
 import sys
 import tempfile
 from pathlib import Path
 
-HERE = Path(__file__).resolve().parent
-ROOT = HERE.parents[1]
-PERIODS = 4
+ROOT = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT))
+
+from tests.golden import (  # noqa: E402 - the repository first on the path
+    FIXTURE,
+    PERIODS,
+    SETTINGS,
+    STEPS,
+    channel_tolerances,
+    summary,
+    summary_deviation,
+    trajectories,
+)
+from tests.helpers import run_paper_case  # noqa: E402
 
 
-def main(commit: str) -> None:
-    out = {"commit": commit, "case": "baguet2010_spur", "bearing": "hybrid", "periods": PERIODS,
-           "settings": "the shipped case's defaults (consistent_start, locate_contact on)",
-           "note": "journal [s, t, s_dot, t_dot] of bearings 1-4 at every step, m and m/s"}
-    code = f"""
-import json, sys, tempfile
-sys.path.insert(0, {str(ROOT)!r})
-import numpy as np
-from tests.helpers import run_paper_case
-out = {{}}
-with tempfile.TemporaryDirectory() as tmp:
-    for transport in ("in-process", "fmu"):
-        r, s = run_paper_case(tmp + "/" + transport, periods={PERIODS},
-                              in_process=transport == "in-process", fmu_dir=tmp + "/fmus")
-        journal = np.concatenate([r["journal_position"], r["journal_velocity"]], axis=2)
-        out[transport] = {{"time": r["time"].tolist(), "journal": journal.tolist(),
-                          "static": s.static_positions.tolist()}}
-print(json.dumps(out))
-"""
-    with tempfile.TemporaryDirectory() as tmp:
-        env = {**os.environ, "NUMBA_CACHE_DIR": tmp + "/numba"}
-        res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                             check=True, cwd=tmp, env=env)
-    out |= json.loads(res.stdout.strip().splitlines()[-1])
-    (HERE / "golden_spur_hybrid_default.json").write_text(json.dumps(out) + "\n")
+def _provenance() -> dict:
+    import numba
+    import numpy
+    import scipy
+
+    def git(*args):
+        return subprocess.run(["git", *args], capture_output=True, text=True, cwd=ROOT
+                              ).stdout.strip()
+
+    dirty = bool(git("status", "--porcelain", "--", "bearing_fmu", "gear_fmu", "fmu_src",
+                     "orchestrator"))
+    return {"commit": git("rev-parse", "--short", "HEAD") + (" (modified)" if dirty else ""),
+            "python": platform.python_version(), "numpy": numpy.__version__,
+            "scipy": scipy.__version__, "numba": numba.__version__,
+            "machine": platform.machine()}
+
+
+def main() -> None:
+    out = {**_provenance(), "case": "baguet2010_spur", "bearing": "hybrid",
+           "periods": PERIODS, "steps_per_mesh_period": list(STEPS),
+           "note": "channels as the results file names them, SI units (m, m/s, N); "
+                   "'runs' by setting then steps per mesh period"}
+    out["runs"] = {}
+    for setting, overrides in SETTINGS.items():
+        runs = {str(n): trajectories(PERIODS, n, **overrides) for n in STEPS}
+        tol = channel_tolerances(runs["64"], runs["32"])
+        print(f"{setting}: tolerances " + ", ".join(
+            f"{k} {v.min():.2e}..{v.max():.2e}" for k, v in tol.items()), flush=True)
+        out["runs"][setting] = runs
+    out["summary"] = {}
+    for n in STEPS:
+        with tempfile.TemporaryDirectory() as tmp:
+            _, s = run_paper_case(tmp, periods=2048,
+                                  **{"simulation.steps_per_mesh_period": n})
+        out["summary"][str(n)] = summary(s.report)
+        print(f"2048 periods at T/{n}: R = {s.report['dynamic_factor']:.6f}", flush=True)
+    print("halving the step moves the summary by "
+          f"{summary_deviation(out['summary']['64'], out['summary']['32']):.2%}")
+    FIXTURE.write_text(json.dumps(out) + "\n")
+    print(f"wrote {FIXTURE}")
 
 
 if __name__ == "__main__":
-    main(sys.argv[1])
+    main()
