@@ -61,7 +61,7 @@ def _prune(folder: Path) -> None:
 
 
 def _impl_class():
-    """numba's class holding the list of locators (``_CacheImpl`` in older numba)."""
+    """numba's class holding the list of locators (``_CacheImpl`` in some releases)."""
     from numba.core import caching
 
     return getattr(caching, "CacheImpl", None) or caching._CacheImpl

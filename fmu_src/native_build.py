@@ -23,9 +23,16 @@ forwards every FMI call to the library above (:func:`export_library` returns bot
 
 :func:`export_library` compiles it with CMake (a dependency of fmpy) into the per-user cache
 (:func:`fmu_src.fmu_bootstrap.cache_dir`) the first time and returns the cached file
-afterwards; the cache key is a hash of the sources, the Python version and the platform.
-Without a C++ compiler it returns None and the FMUs keep pythonfmu's library (bad values are
-then reported when they are used: NaN outputs, a discarded step).
+afterwards; the cache key is a hash of the sources, the Python version and the platform. The
+Python it builds against is the running interpreter, described by its own ``sysconfig``
+(:func:`python_build_config`), never what CMake's FindPython finds on PATH (under pyenv, a
+shim's ``python3.X-config`` of another version).
+
+Where it cannot be built (no C++ compiler, no CMake, no Python headers), :func:`export_library`
+says why and how to fix it, once, records the reason in the cache (:data:`UNAVAILABLE`; ``gsb
+doctor --rebuild`` tries again) and returns None: the FMUs then keep pythonfmu's own library,
+with which a refused value is only logged (the call returns fmi2OK), an output that cannot be
+computed reads NaN, and a C/C++ host must preload libpython.
 """
 
 from __future__ import annotations
@@ -44,8 +51,9 @@ from pathlib import Path
 
 from fmu_src.fmu_bootstrap import cache_dir
 
-__all__ = ["NATIVE_SOURCE", "NativeLibraries", "cache_dir", "export_library",
-           "python_host_config"]
+__all__ = ["NATIVE_SOURCE", "UNAVAILABLE", "VENDORED_PYTHONFMU", "NativeBuildError",
+           "NativeLayerWarning", "NativeLibraries", "cache_dir", "export_library", "find_cmake",
+           "native_status", "python_build_config", "python_host_config"]
 
 #: the patched pythonfmu-export sources
 NATIVE_SOURCE = Path(__file__).resolve().parent / "native" / "pythonfmu_export"
@@ -97,37 +105,151 @@ def python_host_config() -> str:
             f"GSB_PYTHON override)\nlibpython={libpython}\nexecutable={sys.executable}\n")
 
 
-def export_library(quiet: bool = True) -> NativeLibraries | None:
-    """The patched FMU library and the loader for this machine (built on first use), or None
-    if they cannot be built here (a warning says why)."""
-    folder = cache_dir() / "native" / _key()
+#: the pythonfmu release whose native library is vendored (pyproject.toml pins it)
+VENDORED_PYTHONFMU = "0.7.0"
+#: in a native cache folder: why the library could not be built there (and the fix)
+UNAVAILABLE = "UNAVAILABLE.txt"
+
+
+class NativeBuildError(RuntimeError):
+    """The native layer cannot be built here: ``reason`` and ``fix`` in words."""
+
+    def __init__(self, reason: str, fix: str):
+        super().__init__(f"{reason}; fix: {fix}")
+        self.reason, self.fix = reason, fix
+
+
+class NativeLayerWarning(RuntimeWarning):
+    """The FMUs are built with pythonfmu's own library (the reason and the fix in the text)."""
+
+
+def python_build_config() -> dict:
+    """What the native layer is compiled against, from this interpreter's own ``sysconfig``:
+    ``include`` (the folder of ``Python.h``) and ``library`` (the import library a module
+    must link on Windows; empty elsewhere, where the host process provides Python's
+    symbols)."""
+    include = sysconfig.get_paths()["include"]
+    library = ""
+    if sys.platform == "win32":
+        library = str(Path(sys.base_prefix) / "libs" / "python3.lib")
+    return {"include": include, "library": library}
+
+
+def find_cmake() -> str | None:
+    """CMake beside this interpreter (the ``cmake`` wheel fmpy installs), else on PATH."""
+    scripts = Path(sysconfig.get_path("scripts"))
+    for candidate in (scripts / "cmake", scripts / "cmake.exe"):
+        if candidate.is_file():
+            return str(candidate)
+    return shutil.which("cmake")
+
+
+def _diagnose(output: str) -> NativeBuildError:
+    """The reason and the fix from CMake's output."""
+    tail = " ".join(line.strip() for line in output.strip().splitlines()[-6:])[-400:]
+    if "CMAKE_CXX_COMPILER" in output or "CMAKE_C_COMPILER" in output:
+        return NativeBuildError("no C/C++ compiler found (CMake: " + tail + ")",
+                                "install one (Debian/Ubuntu: apt install g++; macOS: "
+                                "xcode-select --install; Windows: Visual Studio Build Tools)")
+    return NativeBuildError(f"CMake failed: {tail}",
+                            "run `gsb doctor --rebuild` to see the whole output")
+
+
+def build_library(folder: Path, quiet: bool = True) -> NativeLibraries:
+    """Compile the patched library (and, on Linux, the loader) into ``folder``; raises
+    :class:`NativeBuildError`."""
+    config = python_build_config()
+    version = f"{sys.version_info.major}.{sys.version_info.minor}"
+    if not (Path(config["include"]) / "Python.h").is_file():
+        raise NativeBuildError(
+            f"the C headers of this Python ({sys.executable}, {version}) are not installed "
+            f"({config['include']}/Python.h is missing)",
+            f"install them (Debian/Ubuntu: apt install python{version}-dev; pyenv and the "
+            "python.org installers include them)")
+    cmake = find_cmake()
+    if cmake is None:
+        raise NativeBuildError("CMake not found (beside this Python or on PATH)",
+                               "pip install cmake")
     target = folder / _library_name()
     loader = folder / LOADER_NAME if sys.platform.startswith("linux") else None
-    if target.is_file() and (loader is None or loader.is_file()):
-        return NativeLibraries(target, loader)
-    cmake = shutil.which("cmake") or str(Path(sysconfig.get_path("scripts")) / "cmake")
-    target.parent.mkdir(parents=True, exist_ok=True)
-    with tempfile.TemporaryDirectory(prefix="build-", dir=target.parent) as tmp:
+    folder.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(prefix="build-", dir=folder) as tmp:
         out = Path(tmp) / "out"
         commands = [
             [cmake, "-S", str(NATIVE_SOURCE), "-B", str(Path(tmp) / "build"),
-             "-DCMAKE_BUILD_TYPE=Release", f"-DPython3_EXECUTABLE={sys.executable}",
-             f"-DGSB_OUTPUT_DIR={out}"],
+             "-DCMAKE_BUILD_TYPE=Release", f"-DGSB_PYTHON_INCLUDE_DIR={config['include']}",
+             f"-DGSB_PYTHON_LIBRARY={config['library']}", f"-DGSB_OUTPUT_DIR={out}"],
             [cmake, "--build", str(Path(tmp) / "build"), "--config", "Release"],
         ]
-        try:
-            for cmd in commands:
-                subprocess.run(cmd, check=True, capture_output=quiet, text=True, timeout=900)
-            built = next(out.glob(_library_name()))
-            built_loader = None if loader is None else next(out.glob(LOADER_NAME))
-        except (OSError, subprocess.SubprocessError, StopIteration) as exc:
-            detail = getattr(exc, "stderr", "") or str(exc)
-            warnings.warn(f"cannot build the patched FMU library ({detail.strip()[-500:]}); the "
-                          "FMUs use pythonfmu's own library: bad values are reported when "
-                          "used (NaN outputs, discarded steps), not refused when set",
-                          RuntimeWarning, stacklevel=2)
-            return None
+        for cmd in commands:
+            try:
+                proc = subprocess.run(cmd, capture_output=True, text=True, timeout=900)
+            except (OSError, subprocess.SubprocessError) as exc:
+                raise NativeBuildError(f"{cmd[0]} could not run: {exc}",
+                                       "check the CMake installation (pip install cmake)"
+                                       ) from None
+            if not quiet:
+                print(proc.stdout + proc.stderr, flush=True)
+            if proc.returncode != 0:
+                raise _diagnose((proc.stdout or "") + (proc.stderr or ""))
+        built = next(out.glob(_library_name()), None)
+        built_loader = None if loader is None else next(out.glob(LOADER_NAME), None)
+        if built is None or (loader is not None and built_loader is None):
+            raise NativeBuildError(f"CMake built no {_library_name()} / {LOADER_NAME}",
+                                   "run `gsb doctor --rebuild` to see the whole output")
         if loader is not None:  # atomic: concurrent builders leave complete files
             os.replace(built_loader, loader)
         os.replace(built, target)  # last: its presence means both are there
     return NativeLibraries(target, loader)
+
+
+def native_folder() -> Path:
+    """This machine's folder of the native layer for these sources and this Python."""
+    return cache_dir() / "native" / _key()
+
+
+def native_status() -> tuple[NativeLibraries | None, str | None]:
+    """(the built files, None) or (None, why they are not there: the recorded reason, or
+    "not built yet")."""
+    folder = native_folder()
+    target = folder / _library_name()
+    loader = folder / LOADER_NAME if sys.platform.startswith("linux") else None
+    if target.is_file() and (loader is None or loader.is_file()):
+        return NativeLibraries(target, loader), None
+    marker = folder / UNAVAILABLE
+    if marker.is_file():
+        return None, marker.read_text().strip()
+    return None, "not built yet (it is built with the first FMU)"
+
+
+_WARNED: set = set()
+
+
+def export_library(quiet: bool = True, retry: bool = False) -> NativeLibraries | None:
+    """The patched FMU library and the loader for this machine (built on first use), or None
+    if they cannot be built here: then a :class:`NativeLayerWarning` (once per process) says
+    why and how to fix it, and the reason is recorded so that later calls do not try again
+    (``retry`` does: ``gsb doctor --rebuild``)."""
+    folder = native_folder()
+    built, _ = native_status()
+    if built is not None:
+        return built
+    marker = folder / UNAVAILABLE
+    if marker.is_file() and not retry:
+        reason = marker.read_text().strip()
+    else:
+        try:
+            return build_library(folder, quiet)
+        except NativeBuildError as exc:
+            reason = str(exc)
+            folder.mkdir(parents=True, exist_ok=True)
+            marker.write_text(reason + "\n")
+    if reason not in _WARNED:
+        _WARNED.add(reason)
+        warnings.warn(
+            f"the FMUs' native layer cannot be built on this machine: {reason}; then `gsb "
+            "doctor --rebuild`. Until then the FMUs carry pythonfmu's own library: a value "
+            "out of bounds is only logged (the call returns fmi2OK), an output that cannot be "
+            "computed reads NaN, and a C/C++ host must preload libpython (README, 'pythonfmu "
+            "notes')", NativeLayerWarning, stacklevel=2)
+    return None

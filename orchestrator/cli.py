@@ -13,7 +13,7 @@ from orchestrator.run import RunError, RunInterrupted
 
 
 def make_parser() -> argparse.ArgumentParser:
-    from orchestrator import bearing_calc, plot_cli, run_cli, sweep_cli
+    from orchestrator import bearing_calc, doctor, plot_cli, run_cli, sweep_cli
 
     parser = argparse.ArgumentParser(
         prog="gsb",
@@ -24,6 +24,7 @@ def make_parser() -> argparse.ArgumentParser:
     run_cli.add_parsers(sub)
     sweep_cli.add_parser(sub)
     plot_cli.add_parser(sub)
+    doctor.add_parser(sub)
     return parser
 
 

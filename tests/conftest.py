@@ -9,7 +9,11 @@ import pytest
 def fmu_dir(tmp_path_factory):
     """A folder with every FMU of :data:`fmu_src.build.FMUS`, built once per session."""
     from fmu_src.build import build_fmus
+    from fmu_src.native_build import export_library, native_status
 
+    if export_library() is None:  # the FMUs would behave as pythonfmu's own, not as specified
+        pytest.fail(f"the FMUs' native layer cannot be built here: {native_status()[1]}",
+                    pytrace=False)
     dest = tmp_path_factory.mktemp("fmus")
     build_fmus(dest)
     return dest
