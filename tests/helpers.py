@@ -40,6 +40,29 @@ def run_isolated(code: str, timeout: float = 600, numba_cache: Path | None = Non
     return json.loads(proc.stdout.strip().splitlines()[-1])
 
 
+#: a paced run's coupled steps last at least this long [s]: the run it interrupts cannot end
+#: before the test has read its file and signalled it, however fast the machine
+PACE = 0.004
+
+
+def paced_gsb(*args) -> list[str]:
+    """The command line of ``gsb *args`` whose coupled steps each last at least :data:`PACE`
+    (a sleep before the step), with everything else as in ``gsb``."""
+    code = textwrap.dedent(f"""
+        import sys, time
+        from orchestrator import master
+        step = master.Master.step
+        def paced(self, t, dt):
+            time.sleep({PACE!r})
+            return step(self, t, dt)
+        master.Master.step = paced
+        from orchestrator.cli import main
+        sys.exit(main(sys.argv[1:]))
+    """)
+    return [sys.executable, "-c", code, *map(str, args)]
+
+
+
 def numeric_jacobian(model, state, h=1e-6):
     """(2, 4) central-difference dFbar/d(xbar, ybar, xbar_dot, ybar_dot) of a film model's
     force at ``state``: the independent check of analytic Jacobians."""

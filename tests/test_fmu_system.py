@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tests.helpers import run_isolated
+from tests.helpers import paced_gsb, run_isolated
 
 GSB = [sys.executable, "-m", "orchestrator.cli"]
 
@@ -272,9 +272,9 @@ def test_ctrl_c_and_sigterm_stop_a_fmu_run_cleanly(fmu_dir, tmp_path):
     for k in range(INTERRUPT_TRIES):
         sig = (signal.SIGINT, signal.SIGTERM)[k % 2]
         out = tmp_path / f"run{k}"
-        proc = subprocess.Popen([*GSB, "run", "baguet2010_spur", "--periods", "64",
-                                 "--no-figures", "--quiet", "--out", str(out),
-                                 "--fmu-dir", str(fmu_dir)],
+        proc = subprocess.Popen(paced_gsb("run", "baguet2010_spur", "--periods", "64",
+                                          "--no-figures", "--quiet", "--out", out,
+                                          "--fmu-dir", fmu_dir),  # lasts >= 8 s
                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                                 cwd=tmp_path)
         deadline = time.time() + 300

@@ -22,7 +22,7 @@ import numpy as np
 import pytest
 
 from orchestrator.results import read_results
-from tests.helpers import run_isolated
+from tests.helpers import paced_gsb, run_isolated
 
 GSB = [sys.executable, "-m", "orchestrator.cli"]
 ROOT = Path(__file__).resolve().parents[1]
@@ -94,8 +94,9 @@ def test_a_failing_run_leaves_a_complete_file_untouched(tmp_path):
 
 
 def _interrupt(cmd, out: Path, sig, cwd) -> tuple[subprocess.CompletedProcess, dict]:
-    """Start ``cmd``, wait until its results file has rows (read while it is written: SWMR),
-    send ``sig``; returns the finished process and what the reader saw."""
+    """Start ``cmd`` (paced: :func:`paced_gsb`), wait until its results file has rows (read
+    while it is written: SWMR), send ``sig``; returns the finished process and what the
+    reader saw."""
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             cwd=cwd)
     seen = {}
@@ -122,10 +123,10 @@ def test_signals_and_a_kill_keep_the_steps_and_the_run_resumes_exactly(transport
     """SIGINT and SIGTERM in the middle of a run (hybrid bearings: warm-started solvers):
     exit 130 / 143, no traceback, the steps kept with the reason; the file is readable while
     the run writes it; ``gsb run --resume`` then finishes it, equal to an uninterrupted run."""
-    # long enough that the signal lands in the transient: the first rows appear with the first
-    # flush, after 1 s (about 2000 steps in-process, 650 through FMUs, on a 2-core machine);
-    # the runs last about 2.1 s and 2.4 s
-    periods = "128" if transport == "in-process" else "48"
+    # the interrupted runs are paced (at least PACE s a step: 3 s for the run) so that the
+    # signal lands in the transient whatever the machine's speed: the first rows appear with
+    # the first flush, after 1 s of steps
+    periods = "24"
     opts = ["--no-figures", "--quiet", "--fmu-dir", str(fmu_dir)]
     if transport == "in-process":  # the uninterrupted reference: in this process
         from fmu_src.case import load_case
@@ -146,8 +147,8 @@ def test_signals_and_a_kill_keep_the_steps_and_the_run_resumes_exactly(transport
     kill = (signal.SIGKILL,) if transport == "in-process" else ()
     for sig in (signal.SIGINT, signal.SIGTERM, *kill):
         out = tmp_path / sig.name
-        proc, seen = _interrupt([*GSB, "run", "baguet2010_spur", "--periods", periods, *opts,
-                                 "--out", str(out)], out, sig, tmp_path)
+        proc, seen = _interrupt(paced_gsb("run", "baguet2010_spur", "--periods", periods,
+                                          *opts, "--out", out), out, sig, tmp_path)
         assert seen and not seen["complete"], "the file could not be read during the run"
         path = only(out)
         r = read_results(path)
@@ -308,7 +309,7 @@ import numpy as np
 from bearing_fmu import MODELS
 from fmu_src.case import load_case
 from orchestrator.results import read_results
-from tests.helpers import run_isolated
+from tests.helpers import paced_gsb, run_isolated
 from orchestrator.run import resume_run, run_case
 out = {{}}
 # 8 steps per mesh period: 4 steps, then resumed to one period; against 8 steps in one go;
