@@ -235,13 +235,27 @@ def patch_fmu(fmu: Path | str, out: Path | str) -> Path:
     return out
 
 
+def _pythonfmu_builder():
+    """pythonfmu's FmuBuilder, from pythonfmu's installation: an FMU instantiated in this
+    process before pythonfmu was imported leaves its own copy of pythonfmu's modules (without
+    the binaries the builder copies) as the one imported."""
+    import pythonfmu
+    from pythonfmu.builder import FmuBuilder
+
+    binaries = Path(pythonfmu.__file__).parent / "resources" / "binaries"
+    if not any(binaries.rglob("*.so")) and not any(binaries.rglob("*.dll")):
+        raise RuntimeError(f"pythonfmu was imported from {Path(pythonfmu.__file__).parent}, "
+                           "which has no binaries (an FMU's copy, imported when an FMU was "
+                           "instantiated first): build FMUs in a fresh process, or import "
+                           "pythonfmu before instantiating one")
+    return FmuBuilder
+
+
 def build_fmus(dest: Path | str, names=None, case=None) -> list[Path]:
     """Build the FMUs named (default: all of :data:`FMUS`) into ``dest``; return their paths.
 
     ``case`` (a :class:`fmu_src.case.Case`): the case the gear-shaft FMU carries (its
     parameters' start values; default: the shipped paper case)."""
-    from pythonfmu.builder import FmuBuilder
-
     from fmu_src.case import load_case
     from fmu_src.contract import GEAR_DEFAULT_CASE
     from fmu_src.gear_shaft_slave import CASE_RESOURCE
@@ -252,6 +266,7 @@ def build_fmus(dest: Path | str, names=None, case=None) -> list[Path]:
     unknown = [n for n in (names or ()) if n not in FMUS]
     if unknown:
         raise ValueError(f"unknown FMU {unknown[0]!r}; available: {', '.join(FMUS)}")
+    FmuBuilder = _pythonfmu_builder()
     native = export_library()
     case = load_case(GEAR_DEFAULT_CASE.removesuffix(".toml")) if case is None else case
     built = []

@@ -293,3 +293,37 @@ def test_ctrl_c_and_sigterm_stop_a_fmu_run_cleanly(fmu_dir, tmp_path):
         outcomes.append(len(r["time"]))
     print(f"\n{INTERRUPT_TRIES} interrupted FMU runs: exit codes as expected, steps kept "
           f"{outcomes}")
+
+
+def test_fmus_built_after_an_fmu_was_loaded_carry_their_binaries(fmu_dir, tmp_path):
+    """pythonfmu's library puts an instantiated FMU's resources first on sys.path, where a
+    pythonfmu FMU carries a copy of pythonfmu's modules without binaries: once an FMU had been
+    loaded in a process that had not imported pythonfmu, FMUs built there had no binary.
+    Through this package's FMU instances they build whole; after an FMU loaded by fmpy alone,
+    the build stops with the reason instead."""
+    out = run_isolated(f"""
+        import json, sys, zipfile
+        from fmpy import extract, read_model_description
+        from fmpy.fmi2 import FMU2Slave
+        from orchestrator.fmi import FmuBearings
+        path = r"{fmu_dir / 'BearingLumped.fmu'}"
+        FmuBearings([path], [dict()], [325.0]).close()
+        from fmu_src.build import build_fmus
+        (built,) = build_fmus(r"{tmp_path / 'a'}", ["BearingShort"])
+        whole = any(n.startswith("binaries/linux64/") for n in zipfile.ZipFile(built).namelist())
+        for name in [m for m in sys.modules if m == "pythonfmu" or m.startswith("pythonfmu.")]:
+            del sys.modules[name]  # as in a process whose first pythonfmu came from an FMU
+        md = read_model_description(path)
+        fmu = FMU2Slave(guid=md.guid, unzipDirectory=extract(path), instanceName="x",
+                        modelIdentifier=md.coSimulation.modelIdentifier)
+        fmu.instantiate()
+        try:
+            build_fmus(r"{tmp_path / 'b'}", ["BearingShort"])
+            refused = ""
+        except RuntimeError as exc:
+            refused = str(exc)
+        fmu.freeInstance()
+        print(json.dumps({{"whole": whole, "refused": refused}}))
+    """)
+    assert out["whole"]
+    assert "has no binaries" in out["refused"] and "fresh process" in out["refused"]

@@ -38,6 +38,11 @@ class FmuInstance:
     """One instantiated FMI 2.0 co-simulation slave with a message log."""
 
     def __init__(self, path: Path | str, instance_name: str):
+        # pythonfmu's library puts the FMU's resources first on sys.path, and a pythonfmu FMU
+        # carries a copy of pythonfmu's Python modules there (no binaries): imported now, the
+        # installed pythonfmu is the one the FMU's slave and later imports in this process
+        # (fmu_src.build) get, not the copy of the first FMU instantiated
+        import pythonfmu  # noqa: F401
         from fmpy import extract, read_model_description
         from fmpy.fmi2 import FMU2Slave
 
