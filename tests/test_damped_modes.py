@@ -236,7 +236,9 @@ def test_full_bearing_blocks_enter_unsymmetrised():
     scale = np.max([np.abs(t).max(axis=0) for t in terms], axis=0)
     rel = np.abs(sum(terms)).max(axis=0) / scale
     print(f"\nlargest relative residual {rel.max():.1e}")
-    assert rel.max() < 2e-10  # round-off of the eigensolver: measured 1.6e-10 (25 % margin)
+    # round-off of the eigensolver: measured 1.6e-10 (numpy 2.4, scipy 1.17) and 2.9e-10 (numpy
+    # 1.26, scipy 1.11: the oldest allowed); 35 % margin on the larger
+    assert rel.max() < 4e-10
     # the roots with symmetrised blocks do not solve it (so the skew parts are used)
     sym = damped_modes(SYSTEM, c, mesh_k, 0.5 * (kb + kb.transpose(0, 2, 1)),
                        0.5 * (cb + cb.transpose(0, 2, 1)))
