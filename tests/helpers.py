@@ -63,6 +63,19 @@ def paced_gsb(*args) -> list[str]:
 
 
 
+def run_here(code: str) -> dict:
+    """Run ``code`` (dedented, written for :func:`run_isolated`) in this process and return the
+    JSON object it prints last. FMUs may load here: the patched native layer the test FMUs
+    carry keeps instances independent and the host alive; a fresh host process is tested where
+    it is the point (exit, staging, ``python -S``), and a start-up saved everywhere else."""
+    import contextlib
+    import io
+
+    with contextlib.redirect_stdout(io.StringIO()) as printed:
+        exec(textwrap.dedent(code), {"__name__": "__run_here__"})
+    return json.loads(printed.getvalue().strip().splitlines()[-1])
+
+
 def numeric_jacobian(model, state, h=1e-6):
     """(2, 4) central-difference dFbar/d(xbar, ybar, xbar_dot, ybar_dot) of a film model's
     force at ``state``: the independent check of analytic Jacobians."""

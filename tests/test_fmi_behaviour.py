@@ -9,7 +9,8 @@
   bearing models' warm starts included, and a system checkpointed to bytes restarts in a new
   process exactly where it stopped.
 
-Everything that loads an FMU runs in a fresh interpreter (tests.helpers.run_isolated).
+The FMUs load in the test's process (tests.helpers.run_here), but for the restart in a new
+process.
 """
 
 import zipfile
@@ -19,7 +20,7 @@ import pytest
 
 from bearing_fmu import MODELS, fmu_name
 from fmu_src.contract import BEARING_VARIABLES
-from tests.helpers import run_isolated
+from tests.helpers import run_here, run_isolated
 
 BEARING_FMUS = [fmu_name(m) for m in MODELS]
 #: models whose film has a clearance (the lumped spring has none: any state is valid)
@@ -28,7 +29,7 @@ FILM_MODELS = [m for m in MODELS if m != "lumped"]
 
 @pytest.mark.parametrize("model", list(MODELS))
 def test_bearing_fmus_refuse_bad_values_when_set(fmu_dir, model):
-    out = run_isolated(f"""
+    out = run_here(f"""
         import json, math
         from fmpy.fmi1 import FMICallException
         from orchestrator.fmi import FmuInstance
@@ -68,7 +69,7 @@ def test_bearing_fmus_refuse_bad_values_when_set(fmu_dir, model):
 
 @pytest.mark.parametrize("model", FILM_MODELS)
 def test_a_journal_outside_the_clearance_fails_the_read_not_nan(fmu_dir, model):
-    out = run_isolated(f"""
+    out = run_here(f"""
         import json
         from fmpy.fmi1 import FMICallException
         from orchestrator.fmi import FmuInstance
@@ -112,7 +113,7 @@ def test_bounds_are_declared_in_the_model_description(fmu_dir):
 def test_bearing_fmu_state_round_trip_is_bit_exact(fmu_dir, model):
     """A saved state, restored after evaluations that moved the warm start elsewhere, gives
     the same outputs to the last bit as the first time; so does a serialised one."""
-    out = run_isolated(f"""
+    out = run_here(f"""
         import json
         from orchestrator.fmi import FmuInstance
         s = FmuInstance(r"{fmu_dir / (fmu_name(model) + '.fmu')}", "b")

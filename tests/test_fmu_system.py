@@ -1,8 +1,8 @@
 """The FMUs as a system engineer uses them: a bearing FMU of one's own, the SSP archive, the
 command line, Ctrl-C, several runs at once and an environment without this package.
 
-Everything that loads an FMU runs in a fresh interpreter (tests.helpers.run_isolated) or a
-``gsb`` / ``fmpy`` subprocess.
+FMUs load in the test's process (tests.helpers.run_here) unless the process is the point: a
+fresh interpreter (tests.helpers.run_isolated), a ``gsb`` / ``fmpy`` subprocess.
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tests.helpers import paced_gsb, run_isolated
+from tests.helpers import paced_gsb, run_here, run_isolated
 
 GSB = [sys.executable, "-m", "orchestrator.cli"]
 
@@ -74,7 +74,7 @@ def test_a_force_only_bearing_fmu_matches_the_built_in_lumped_model(fmu_dir, spr
     """Bring your own bearing: the master gets Kb and Cb by central differences of the FMU's
     force (steps 1e-5 C and 1e-5 C omega) and the run equals the in-process lumped model
     (exact Kb, Cb) over 64 steps, with lumped damping so that Cb matters too."""
-    r = run_isolated(f"""
+    r = run_here(f"""
         import json
         import numpy as np
         from fmu_src.case import load_case
@@ -104,7 +104,7 @@ def test_a_force_only_bearing_fmu_matches_the_built_in_lumped_model(fmu_dir, spr
 
 
 def test_a_bearing_fmu_without_the_minimal_contract_is_refused(fmu_dir):
-    r = run_isolated(f"""
+    r = run_here(f"""
         import json
         from orchestrator.fmi import FmuBearings, FmuError
         try:
@@ -118,7 +118,7 @@ def test_a_bearing_fmu_without_the_minimal_contract_is_refused(fmu_dir):
 def test_closed_bearing_fmus_refuse_to_evaluate(fmu_dir):
     """The bearing set reads each law into a buffer of its own: once its FMUs are freed, an
     evaluation is an FmuError, not the last laws read (nor empty arrays, as before)."""
-    r = run_isolated(f"""
+    r = run_here(f"""
         import json
         import numpy as np
         from fmu_src.case import load_case

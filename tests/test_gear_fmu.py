@@ -1,11 +1,10 @@
 """Gear-shaft FMU: built by pythonfmu, valid for fmpy, equal to the in-process structure.
 
-As in test_bearing_fmus.py, everything that loads the FMU runs in a fresh interpreter that exits
-normally (how a user's host runs it; checks the pythonfmu 0.7.0 workarounds). The FMU is driven
+The FMU loads in the test's process (as in test_bearing_fmus.py; ``fmpy simulate`` runs it in a
+fresh host process that must exit cleanly). The FMU is driven
 through :class:`orchestrator.fmi.FmuStructure` and compared with the in-process structure of
 the same case (:class:`orchestrator.inprocess.InProcessStructure`) driven with the same laws:
-the FMU runs the same code on the same numbers, so the results agree bit for bit (asserted to
-1e-12).
+the FMU runs the same code on the same numbers, so the results agree bit for bit.
 """
 
 import math
@@ -17,12 +16,12 @@ import numpy as np
 import pytest
 
 from fmu_src.contract import GEAR_VARIABLES
-from tests.helpers import run_isolated as _run_isolated
+from tests.helpers import run_here
 
 CASE = "baguet2010_spur"
 
-# laws used by the comparisons: anisotropic, cross-coupled, non-zero F0 (numbers as text so the
-# fresh interpreters build exactly the same arrays)
+# laws used by the comparisons: anisotropic, cross-coupled, non-zero F0 (as text, run before each
+# comparison's code)
 LAWS = """
 import numpy as np
 from bearing_fmu.affine import AffineLaws
@@ -44,8 +43,8 @@ def gear_fmu(fmu_dir):
 
 
 def run_isolated(code: str) -> dict:
-    """Run ``code`` in a fresh interpreter after the laws' definitions (tests.helpers)."""
-    return _run_isolated(textwrap.dedent(LAWS) + textwrap.dedent(code))
+    """Run ``code`` after the laws' definitions (:func:`tests.helpers.run_here`)."""
+    return run_here(textwrap.dedent(LAWS) + textwrap.dedent(code))
 
 
 def test_gear_fmu_passes_fmpy_validation_with_units_and_descriptions(gear_fmu):
@@ -152,7 +151,7 @@ def test_bad_values_are_refused_by_the_call_that_sets_them(gear_fmu):
 
 @pytest.fixture(scope="module")
 def comparison(gear_fmu):
-    """One fresh interpreter: the FMU and the in-process structure driven side by side.
+    """The FMU and the in-process structure driven side by side.
 
     Static solutions, 50 Newmark steps with alternating laws, the outputs, a rollback, a
     serialised state, then a second instance coupled by the master with short-bearing models.
@@ -233,14 +232,14 @@ def comparison(gear_fmu):
 
 
 def test_fmu_static_solution_equals_in_process(comparison):
-    assert comparison["support"] < 1e-12
-    assert comparison["static"] < 1e-12 and comparison["static_mesh"] < 1e-12
+    assert comparison["support"] == 0.0
+    assert comparison["static"] == 0.0 and comparison["static_mesh"] == 0.0
     its = comparison["static_iterations"]
     assert its[0] == its[1]
 
 
 def test_fmu_newmark_steps_equal_in_process(comparison):
-    assert comparison["steps"] < 1e-12 and comparison["outputs"] < 1e-12
+    assert comparison["steps"] == 0.0 and comparison["outputs"] == 0.0
     assert comparison["moved"] > 1e-6  # the journals really move (unbalance): not trivial
 
 
@@ -250,7 +249,7 @@ def test_fmu_state_round_trip_is_exact(comparison):
 
 
 def test_master_through_the_fmu_equals_master_in_process(comparison):
-    assert comparison["master"] < 1e-12
+    assert comparison["master"] == 0.0
     its = comparison["master_iterations"]
     assert its[0] == its[1] and max(its[0]) >= 2  # rollbacks (set_state) happened
 

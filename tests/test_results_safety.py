@@ -7,8 +7,6 @@ process: the two trajectories must be equal to 1e-12 (relative; they are in fact
 
 from __future__ import annotations
 
-import contextlib
-import io
 import json
 import os
 import signal
@@ -22,7 +20,7 @@ import numpy as np
 import pytest
 
 from orchestrator.results import read_results
-from tests.helpers import paced_gsb, run_isolated
+from tests.helpers import paced_gsb, run_here
 
 GSB = [sys.executable, "-m", "orchestrator.cli"]
 ROOT = Path(__file__).resolve().parents[1]
@@ -128,17 +126,15 @@ def test_signals_and_a_kill_keep_the_steps_and_the_run_resumes_exactly(transport
     # the first flush, after 1 s of steps
     periods = "24"
     opts = ["--no-figures", "--quiet", "--fmu-dir", str(fmu_dir)]
-    if transport == "in-process":  # the uninterrupted reference: in this process
-        from fmu_src.case import load_case
-        from orchestrator.run import run_case
+    from fmu_src.case import load_case
+    from orchestrator.run import run_case
 
+    if transport == "in-process":
         opts.append("--in-process")
-        run_case(load_case("baguet2010_spur"), periods=int(periods), in_process=True,
-                 out_dir=tmp_path / "ref", progress=False, figures=False)
-    else:  # FMUs are loaded in fresh processes only (tests/helpers.py)
-        ref = gsb("run", "baguet2010_spur", "--periods", periods, *opts, "--out",
-                  tmp_path / "ref", cwd=tmp_path)
-        assert ref.returncode == 0, ref.stderr[-2000:]
+    # the uninterrupted reference, in this process
+    run_case(load_case("baguet2010_spur"), periods=int(periods),
+             in_process=transport == "in-process", fmu_dir=fmu_dir, out_dir=tmp_path / "ref",
+             progress=False, figures=False)
     reference = read_results(only(tmp_path / "ref"))
     n = len(reference["time"])
     # SIGKILL (a crash, a power cut): no clean-up at all; the rows up to the last flush and
@@ -170,7 +166,7 @@ def test_signals_and_a_kill_keep_the_steps_and_the_run_resumes_exactly(transport
             from orchestrator.cli import main
 
             assert main(resume) == 0
-        else:  # FMUs are loaded in fresh processes only
+        else:  # a new process restores the FMUs' serialised states from the file
             res = gsb(*resume, cwd=tmp_path)
             assert res.returncode == 0 and "Traceback" not in res.stderr, res.stderr[-2000:]
         r = read_results(path)
@@ -309,7 +305,7 @@ import numpy as np
 from bearing_fmu import MODELS
 from fmu_src.case import load_case
 from orchestrator.results import read_results
-from tests.helpers import paced_gsb, run_isolated
+from tests.helpers import paced_gsb, run_here, run_isolated
 from orchestrator.run import resume_run, run_case
 out = {{}}
 # 8 steps per mesh period: 4 steps, then resumed to one period; against 8 steps in one go;
@@ -339,12 +335,7 @@ def test_every_bearing_model_resumes_exactly(transport, fmu_dir):
 
     code = RESUME_CODE.format(root=str(ROOT), in_process=transport == "in-process",
                               fmu_dir=str(fmu_dir))
-    if transport == "fmu":  # FMUs are loaded in fresh processes only
-        out = run_isolated(code)
-    else:  # in this process (the interpreter's start-up saved)
-        with contextlib.redirect_stdout(io.StringIO()) as printed:
-            exec(textwrap.dedent(code), {})
-        out = json.loads(printed.getvalue().strip().splitlines()[-1])
+    out = run_here(code)
     assert sorted(out) == sorted(MODELS)
     for model, (steps, diff) in out.items():
         assert steps == 8 and diff == 0.0, (transport, model, steps, diff)

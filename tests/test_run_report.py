@@ -12,7 +12,7 @@ from fmu_src.case import load_case
 from orchestrator.analysis import order_lines, resolved_lines, run_report
 from orchestrator.results import read_results
 from orchestrator.run import RunError, run_case
-from tests.helpers import fail_master_step, run_isolated
+from tests.helpers import fail_master_step, run_here
 
 SPUR = "baguet2010_spur"
 Z1, Z2 = 26, 157
@@ -225,9 +225,8 @@ def test_a_single_step_has_no_report(tmp_path):
 
 
 def test_the_fmu_transport_stores_the_report(fmu_dir, tmp_path):
-    """The same through the FMUs (gear-shaft FMU + four linear bearing FMUs), in a fresh
-    interpreter as tests/test_fmu_run.py runs them."""
-    r = run_isolated(f"""
+    """The same through the FMUs (gear-shaft FMU + four linear bearing FMUs)."""
+    r = run_here(f"""
         import json
         import numpy as np
         from fmu_src.case import load_case
