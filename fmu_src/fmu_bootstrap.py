@@ -12,13 +12,14 @@ modules keeps them (one copy of a module per process).
 
 from __future__ import annotations
 
+import contextlib
 import os
 import shutil
 import sys
 import tempfile
 from pathlib import Path
 
-__all__ = ["cache_dir", "stage_code"]
+__all__ = ["cache_dir", "locked", "stage_code"]
 
 #: folder of the FMU's resources holding its code, and the file with the code's hash
 CODE_DIR = "gsb_code"
@@ -39,6 +40,26 @@ def cache_dir() -> Path:
     else:
         base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
     return base / "gear-shaft-bearing"
+
+
+@contextlib.contextmanager
+def locked(folder: Path):
+    """An exclusive lock on ``folder/.build.lock`` while the block runs, for the builds into a
+    cache folder (POSIX ``flock``; elsewhere none: the builds' atomic moves still leave
+    complete files)."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover - Windows
+        yield
+        return
+    with open(folder / ".build.lock", "a") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(lock, fcntl.LOCK_UN)
 
 
 def stage_code(resources: str | Path) -> Path | None:

@@ -49,7 +49,7 @@ import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
-from fmu_src.fmu_bootstrap import cache_dir
+from fmu_src.fmu_bootstrap import cache_dir, locked
 
 __all__ = ["NATIVE_SOURCE", "UNAVAILABLE", "VENDORED_PYTHONFMU", "NativeBuildError",
            "NativeLayerWarning", "NativeLibraries", "cache_dir", "export_library", "find_cmake",
@@ -235,15 +235,18 @@ def export_library(quiet: bool = True, retry: bool = False) -> NativeLibraries |
     if built is not None:
         return built
     marker = folder / UNAVAILABLE
-    if marker.is_file() and not retry:
-        reason = marker.read_text().strip()
-    else:
-        try:
-            return build_library(folder, quiet)
-        except NativeBuildError as exc:
-            reason = str(exc)
-            folder.mkdir(parents=True, exist_ok=True)
-            marker.write_text(reason + "\n")
+    with locked(folder):  # processes that start at once: one builds, the others wait
+        built, _ = native_status()
+        if built is not None:
+            return built
+        if marker.is_file() and not retry:
+            reason = marker.read_text().strip()
+        else:
+            try:
+                return build_library(folder, quiet)
+            except NativeBuildError as exc:
+                reason = str(exc)
+                marker.write_text(reason + "\n")
     if reason not in _WARNED:
         _WARNED.add(reason)
         warnings.warn(

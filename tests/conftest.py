@@ -8,12 +8,13 @@ workers load the kernels instead of each compiling all of them.
 
 from __future__ import annotations
 
-import contextlib
 import os
 import subprocess
 import sys
 
 import pytest
+
+from fmu_src.fmu_bootstrap import locked
 
 
 def _shared(tmp_path_factory, name: str):
@@ -24,22 +25,6 @@ def _shared(tmp_path_factory, name: str):
     folder = root / name
     folder.mkdir(parents=True, exist_ok=True)
     return folder
-
-
-@contextlib.contextmanager
-def _locked(folder):
-    """An exclusive lock on ``folder/.lock`` (POSIX; elsewhere none: xdist is then unused)."""
-    try:
-        import fcntl
-    except ImportError:  # pragma: no cover - Windows
-        yield
-        return
-    with open(folder / ".lock", "a") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)
-        try:
-            yield
-        finally:
-            fcntl.flock(lock, fcntl.LOCK_UN)
 
 
 @pytest.fixture(scope="session")
@@ -62,7 +47,7 @@ def ssp_file(tmp_path_factory):
     """``gsb export-ssp baguet2010_spur``: the paper's system as an SSP archive."""
     folder = _shared(tmp_path_factory, "ssp")
     path = folder / "baguet2010_spur.ssp"
-    with _locked(folder):
+    with locked(folder):
         if not path.is_file():
             proc = subprocess.run([sys.executable, "-m", "orchestrator.cli", "export-ssp",
                                    "baguet2010_spur", "--dest", str(folder)],

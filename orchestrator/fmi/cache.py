@@ -10,11 +10,11 @@ four bearing FMUs of a case behind the master's interfaces.
 
 from __future__ import annotations
 
-import contextlib
 from pathlib import Path
 
 from bearing_fmu import fmu_name
 from fmu_src import description
+from fmu_src.fmu_bootstrap import locked
 from orchestrator.fmi.bearings import FmuBearings
 from orchestrator.fmi.structure import FmuStructure
 
@@ -28,24 +28,6 @@ def default_fmu_dir() -> Path:
     from fmu_src.fmu_bootstrap import cache_dir
 
     return cache_dir() / "fmus" / code_hash()
-
-
-@contextlib.contextmanager
-def _locked(folder: Path):
-    """An exclusive lock on ``folder/.build.lock`` (POSIX ``flock``; elsewhere no lock: the
-    builds' atomic moves still leave complete files)."""
-    folder.mkdir(parents=True, exist_ok=True)
-    try:
-        import fcntl
-    except ImportError:  # pragma: no cover - Windows
-        yield
-        return
-    with open(folder / ".build.lock", "a") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)
-        try:
-            yield
-        finally:
-            fcntl.flock(lock, fcntl.LOCK_UN)
 
 
 def _stale(name: str, path: Path, current_hash: str) -> bool:
@@ -76,7 +58,7 @@ def ensure_fmus(names, fmu_dir=None) -> dict[str, Path]:
     current = code_hash()
     if not any(_stale(n, p, current) for n, p in paths.items()):
         return paths
-    with _locked(fmu_dir):
+    with locked(fmu_dir):
         stale = [n for n, p in paths.items() if _stale(n, p, current)]  # another run built?
         if stale:
             build_fmus(fmu_dir, stale)
