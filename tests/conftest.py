@@ -16,6 +16,27 @@ import pytest
 
 from fmu_src.fmu_bootstrap import locked
 
+#: the modules that take longest (CPU seconds of a run on a 2-core machine), run first
+#: so that no worker is left alone with one of them at the end (xdist keeps this order with
+#: --no-loadscope-reorder; it would otherwise send the modules with most tests first)
+LONGEST_FIRST = (
+    "tests/test_determinism.py",  # 43: three fresh compilations of the kernels
+    "tests/test_results_safety.py",  # 41
+    "tests/test_ecos.py",  # 14
+    "tests/test_fmu_system.py",  # 12
+    "tests/test_fmu_run.py",  # 11
+    "tests/test_paper_results.py",  # 10
+    "tests/test_sweep_cli.py",  # 10
+    "tests/test_api_docs.py",  # 9
+    "tests/test_native_build.py",  # 9
+)
+
+
+def pytest_collection_modifyitems(config, items):
+    """:data:`LONGEST_FIRST`, then the rest in collection order."""
+    rank = {path: k for k, path in enumerate(LONGEST_FIRST)}
+    items.sort(key=lambda item: rank.get(item.nodeid.split("::")[0], len(rank)))
+
 
 def _shared(tmp_path_factory, name: str):
     """A folder of this test run shared by all xdist workers (the run's own otherwise)."""
