@@ -16,6 +16,47 @@ import pytest
 
 from fmu_src.fmu_bootstrap import locked
 
+#: what the xdist controller runs before the workers start, in two processes at once: the
+#: native layer and every bearing model's kernels; the structure's and the master's (short
+#: in-process runs)
+WARM_UP = (
+    """
+import numpy as np
+from bearing_fmu import MODELS, BearingData, model_class
+from bearing_fmu.static import static_equilibrium
+from fmu_src.native_build import export_library
+from orchestrator.inprocess import ModelBearings
+export_library()
+b = BearingData(0.07, 0.05, 150e-6, 0.0288)
+for name in MODELS:
+    model = model_class(name).from_parameters(b)
+    model.evaluate(6e-5, -6e-5, 1e-3, -1e-3, 325.0)
+    ModelBearings([model], [(0.3, -1)], [325.0]).evaluate(np.array([[6e-5, -6e-5, 0.0, 0.0]]))
+static_equilibrium(model_class("hybrid").from_parameters(b), (0.0, -2251.0), 325.0)
+""",
+    """
+import tempfile
+from fmu_src.case import load_case
+from orchestrator.run import run_case
+with tempfile.TemporaryDirectory() as tmp:
+    for case, model in (("baguet2010_spur", "lumped"), ("baguet2010_helical", "lumped")):
+        run_case(load_case(case), bearing=model, steps=2, in_process=True,
+                 out_dir=tmp + "/" + case, progress=False, figures=False)
+""",
+)
+
+
+def pytest_configure(config):
+    """In the xdist controller (not in a worker, not in a run without xdist): :data:`WARM_UP`.
+    A failure there is not reported: the tests that need the same things report it."""
+    if hasattr(config, "workerinput") or not getattr(config.option, "numprocesses", None):
+        return
+    procs = [subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.DEVNULL,
+                              stderr=subprocess.DEVNULL) for code in WARM_UP]
+    for proc in procs:
+        proc.wait(timeout=900)
+
+
 #: the modules that take longest (CPU seconds of a run on a 2-core machine), run first
 #: so that no worker is left alone with one of them at the end (xdist keeps this order with
 #: --no-loadscope-reorder; it would otherwise send the modules with most tests first)
