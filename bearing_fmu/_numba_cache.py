@@ -1,4 +1,5 @@
-"""Numba's cache for this project's kernels, kept per version of the whole code.
+"""Numba's cache for this project's kernels: one per version of the whole code, shared by every
+copy of that code.
 
 numba caches a compiled kernel beside its source and, to decide whether the entry is stale,
 looks at that one file only. A kernel that calls or inlines functions of other files (the
@@ -8,11 +9,14 @@ those files changed: a run then computed with code that was no longer there, and
 digits depended on what the cache held.
 
 :func:`install` (called first by each package's ``__init__``) puts a locator in front of
-numba's own: a kernel of ``bearing_fmu``, ``gear_fmu`` or ``fmu_src`` is cached where numba
-would cache it (``NUMBA_CACHE_DIR``, else beside the source, else the user-wide folder), in a
-subfolder ``gsb-<code hash>`` named by the content of every module of those packages
-(:func:`code_hash`). Any change of the code starts an empty folder; the eight most recent
-ones are kept. Everything else numba caches is left alone.
+numba's own: a kernel of ``bearing_fmu``, ``gear_fmu`` or ``fmu_src`` is cached in
+``<numba's cache>/gsb-<code hash>/<package folder>/``, where numba's cache is
+``NUMBA_CACHE_DIR`` or numba's user-wide folder (``~/.cache/numba`` on Linux) and the code hash
+covers every module of those packages (:func:`code_hash`). Any change of the code starts an
+empty folder (the eight most recent are kept), and every copy of one version shares it: the
+installed package and the code an FMU carries (staged by :mod:`fmu_src.fmu_bootstrap`) load
+each other's kernels, so an FMU in another tool's process starts without compiling what
+``gsb run`` compiled. Everything else numba caches is left alone.
 """
 
 from __future__ import annotations
@@ -43,6 +47,16 @@ def code_hash(root: str) -> str:
     return digest.hexdigest()[:16]
 
 
+def cache_base() -> Path:
+    """``NUMBA_CACHE_DIR``, else numba's user-wide cache folder."""
+    from numba.core import config
+    from numba.misc.appdirs import AppDirs
+
+    if config.CACHE_DIR:
+        return Path(config.CACHE_DIR)
+    return Path(AppDirs(appname="numba", appauthor=False).user_cache_dir)
+
+
 def _root_of(py_file: str) -> str | None:
     """The folder holding the package of ``py_file`` if it is one of :data:`PACKAGES`."""
     path = Path(py_file).resolve()
@@ -71,46 +85,41 @@ def _locator_class():
     from numba.core import caching
 
     class CodeVersionLocator(caching._CacheLocator):
-        """numba's own choice of folder for a kernel of this project, plus ``gsb-<hash>``."""
+        """``<numba's cache>/gsb-<code hash>/<package folder>`` for a kernel of this project,
+        with the code hash as its source stamp (the same for every copy of the code)."""
 
-        def __init__(self, inner, root: str):
-            self._inner = inner
-            self._parent = Path(inner.get_cache_path())
-            self._path = str(self._parent / (PREFIX + code_hash(root)))
+        def __init__(self, py_func, py_file: str, root: str):
+            self._lineno = py_func.__code__.co_firstlineno
+            rel = Path(py_file).resolve().relative_to(root)
+            self._version = PREFIX + code_hash(root)
+            self._stamp = (self._version, rel.as_posix())
+            self._path = str(cache_base() / self._version / rel.parent)
 
         def ensure_cache_path(self):
             fresh = not os.path.isdir(self._path)
             os.makedirs(self._path, exist_ok=True)
             tempfile.TemporaryFile(dir=self._path).close()  # writable, as numba checks
             if fresh:
-                _prune(self._parent)
+                _prune(cache_base())
 
         def get_cache_path(self):
             return self._path
 
         def get_source_stamp(self):
-            return self._inner.get_source_stamp()
+            return self._stamp
 
         def get_disambiguator(self):
-            return self._inner.get_disambiguator()
+            return str(self._lineno)
 
         @classmethod
         def from_function(cls, py_func, py_file):
             root = _root_of(py_file) if os.path.exists(py_file) else None
             if root is None:
                 return None
-            for other in _impl_class()._locator_classes:
-                if other is cls:
-                    continue
-                inner = other.from_function(py_func, py_file)
-                if inner is not None:
-                    break
-            else:
-                return None
-            self = cls(inner, root)
+            self = cls(py_func, py_file, root)
             try:
                 self.ensure_cache_path()
-            except OSError:
+            except OSError:  # not writable: numba's own locators decide
                 return None
             return self
 

@@ -4,10 +4,11 @@ Copied to the root of every FMU's resources and imported by its slave script bef
 else, so it uses the standard library only. :func:`stage_code` copies the FMU's code
 (``resources/gsb_code``, written by :mod:`fmu_src.build` with a content hash) once into the
 per-user cache and puts it first on ``sys.path``: the FMU then runs in any Python with numpy,
-scipy and numba, without this package installed, and numba's compiled kernels are cached next
-to that stable copy, so they compile once per machine and code version, not at every
-instantiation from a freshly extracted FMU. A host that has already imported the package's
-modules keeps them (one copy of a module per process).
+scipy and numba, without this package installed. Its numba kernels are cached per version of
+the code, whatever copy of the code compiled them (:mod:`bearing_fmu._numba_cache`), so they
+compile once per machine and code version, not at every instantiation from a freshly
+extracted FMU. A host that has already imported the package's modules keeps them (one copy of
+a module per process).
 """
 
 from __future__ import annotations
