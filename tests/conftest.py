@@ -2,8 +2,9 @@
 
 With pytest-xdist the workers share it: the FMUs are built once, under a lock, into a folder
 of the run's base temporary directory that every worker sees. Before the workers start, the
-controller fills numba's cache (:data:`WARM_UP`, two processes side by side), so that the
-workers load the kernels instead of each compiling all of them.
+controller builds the native layer and fills numba's cache (:data:`WARM_UP`, two processes side
+by side): the workers, and the processes the tests start, then load the kernels instead of
+each compiling them at the same time at the start of a run from a fresh clone.
 """
 
 from __future__ import annotations
