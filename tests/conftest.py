@@ -17,17 +17,15 @@ import pytest
 
 from fmu_src.fmu_bootstrap import locked
 
-#: what the xdist controller runs before the workers start, in two processes at once: the
-#: native layer and every bearing model's kernels; the structure's and the master's (short
+#: what the xdist controller runs before the workers start, in two processes at once: every
+#: bearing model's kernels; the native layer, the structure's and the master's kernels (short
 #: in-process runs)
 WARM_UP = (
     """
 import numpy as np
 from bearing_fmu import MODELS, BearingData, model_class
 from bearing_fmu.static import static_equilibrium
-from fmu_src.native_build import export_library
 from orchestrator.inprocess import ModelBearings
-export_library()
 b = BearingData(0.07, 0.05, 150e-6, 0.0288)
 for name in MODELS:
     model = model_class(name).from_parameters(b)
@@ -38,7 +36,9 @@ static_equilibrium(model_class("hybrid").from_parameters(b), (0.0, -2251.0), 325
     """
 import tempfile
 from fmu_src.case import load_case
+from fmu_src.native_build import export_library
 from orchestrator.run import run_case
+export_library()
 with tempfile.TemporaryDirectory() as tmp:
     for case, model in (("baguet2010_spur", "lumped"), ("baguet2010_helical", "lumped")):
         run_case(load_case(case), bearing=model, steps=2, in_process=True,
