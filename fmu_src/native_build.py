@@ -243,7 +243,9 @@ def export_library(quiet: bool = True, retry: bool = False) -> NativeLibraries |
             reason = marker.read_text().strip()
         else:
             try:
-                return build_library(folder, quiet)
+                built = build_library(folder, quiet)
+                marker.unlink(missing_ok=True)  # a retry that succeeded
+                return built
             except NativeBuildError as exc:
                 reason = str(exc)
                 marker.write_text(reason + "\n")

@@ -56,20 +56,10 @@ def _kernel_cache() -> str:
     return str(path) if path else "unknown (numba's internals changed)"
 
 
-def report() -> tuple[list[str], list[str]]:
-    """(lines to print, problems with their fix)."""
-    from fmu_src.build import code_hash
-    from fmu_src.fmu_bootstrap import cache_dir
-    from fmu_src.native_build import (
-        VENDORED_PYTHONFMU,
-        find_cmake,
-        native_status,
-        python_build_config,
-        python_host_config,
-    )
-    from orchestrator.fmi.cache import default_fmu_dir
+def _python(lines: list, problems: list) -> None:
+    """The interpreter, its headers and the packages."""
+    from fmu_src.native_build import VENDORED_PYTHONFMU, python_build_config
 
-    lines, problems = [], []
     venv = sys.prefix != sys.base_prefix
     lines.append(f"Python       {platform.python_version()} ({platform.python_implementation()}"
                  f", {platform.machine()}) {sys.executable}"
@@ -86,6 +76,14 @@ def report() -> tuple[list[str], list[str]]:
         problems.append(f"pythonfmu {versions['pythonfmu']} is installed; the FMUs' native "
                         f"layer is pythonfmu {VENDORED_PYTHONFMU}'s: pip install "
                         f"pythonfmu=={VENDORED_PYTHONFMU}")
+
+
+def _caches(lines: list, problems: list) -> None:
+    """The per-user cache, the FMUs of this code version, numba's kernels, the staged code."""
+    from fmu_src.build import code_hash
+    from fmu_src.fmu_bootstrap import cache_dir
+    from orchestrator.fmi.cache import default_fmu_dir
+
     lines.append(f"caches       per-user {cache_dir()}"
                  + ("  (GSB_CACHE_DIR)" if os.environ.get("GSB_CACHE_DIR") else ""))
     fmu_dir = default_fmu_dir()
@@ -96,10 +94,13 @@ def report() -> tuple[list[str], list[str]]:
     lines.append(f"  kernels    {_kernel_cache()}"
                  + ("  (NUMBA_CACHE_DIR)" if os.environ.get("NUMBA_CACHE_DIR") else ""))
     lines.append(f"  FMU code   {cache_dir() / 'code'} (what a host without this package runs)")
+
+
+def _native(lines: list, problems: list) -> None:
+    """The native layer, and the tools that build it."""
+    from fmu_src.native_build import find_cmake, native_status
+
     native, reason = native_status()
-    cmake = find_cmake()
-    cxx = shutil.which(os.environ.get("CXX", "c++")) or shutil.which("g++") or \
-        shutil.which("clang++")
     if native is not None:
         lines.append(f"native layer built: {native.library}"
                      + (f"\n  loader     {native.loader}" if native.loader else ""))
@@ -107,10 +108,19 @@ def report() -> tuple[list[str], list[str]]:
         lines.append(f"native layer NOT BUILT: {reason}")
         if not reason.startswith("not built yet"):
             problems.append(f"the FMUs' native layer: {reason}; then gsb doctor --rebuild")
+    cmake = find_cmake()
+    cxx = shutil.which(os.environ.get("CXX", "c++")) or shutil.which("g++") or \
+        shutil.which("clang++")
     lines.append(f"  cmake      {cmake or 'MISSING (pip install cmake)'}"
                  + (f" ({_tool_version([cmake, '--version'])})" if cmake else ""))
     lines.append(f"  compiler   {cxx or 'MISSING (Debian/Ubuntu: apt install g++)'}"
                  + (f" ({_tool_version([cxx, '--version'])})" if cxx else ""))
+
+
+def _hosts(lines: list, problems: list) -> None:
+    """What an FMU host starts: its own Python (fmpy), or the loader's (a C/C++ host)."""
+    from fmu_src.native_build import python_host_config
+
     host = dict(line.split("=", 1) for line in python_host_config().splitlines()
                 if "=" in line and not line.startswith("#"))
     lines.append("FMU hosts    a Python host (fmpy) runs the FMUs in its own interpreter, which "
@@ -131,6 +141,13 @@ def report() -> tuple[list[str], list[str]]:
         last = (check.stderr.strip().splitlines() or ["?"])[-1]
         problems.append(f"the FMU hosts' Python {host.get('executable')} cannot import the "
                         f"FMUs' dependencies ({last}): install numpy, scipy and numba there")
+
+
+def report() -> tuple[list[str], list[str]]:
+    """(lines to print, problems with their fix)."""
+    lines, problems = [], []
+    for part in (_python, _caches, _native, _hosts):
+        part(lines, problems)
     return lines, problems
 
 
