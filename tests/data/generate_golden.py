@@ -2,7 +2,7 @@
 
     python tests/data/generate_golden.py
 
-(from any folder, in the environment the tests run in; about 4 minutes on 2 cores). It writes
+(from any folder, in the environment the tests run in; about a minute on 2 cores). It writes
 ``tests/data/golden_spur.json`` (:mod:`tests.golden`): the paper's spur case with hybrid
 bearings, in-process, over 4 mesh periods at T/32 and T/64, shipped settings and refinements
 off, and the report of the whole 2048-period run at T/32 (and at T/64, to show how much
