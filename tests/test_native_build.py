@@ -93,3 +93,17 @@ def test_gsb_doctor_names_the_python_the_caches_and_the_native_layer(fmu_dir, tm
         assert "nothing missing" in out
     else:
         assert proc.returncode == 1 and "to fix:\n- " in out, out + proc.stderr
+
+
+def test_pythonfmu_is_pinned_to_the_release_whose_library_is_vendored():
+    """The native layer is pythonfmu 0.7.0's library, patched: its Python side (the builder,
+    Fmi2Slave, the setup_experiment signature the library calls) must be that release."""
+    import importlib.metadata
+    import tomllib
+
+    from fmu_src.native_build import VENDORED_PYTHONFMU
+
+    root = Path(__file__).resolve().parents[1]
+    deps = tomllib.loads((root / "pyproject.toml").read_text())["project"]["dependencies"]
+    assert f"pythonfmu=={VENDORED_PYTHONFMU}" in deps
+    assert importlib.metadata.version("pythonfmu") == VENDORED_PYTHONFMU
