@@ -62,7 +62,7 @@ def pytest_configure(config):
 #: so that no worker is left alone with one of them at the end (xdist keeps this order with
 #: --no-loadscope-reorder; it would otherwise send the modules with most tests first)
 LONGEST_FIRST = (
-    "tests/test_determinism.py",  # 43: three fresh compilations of the kernels
+    "tests/test_determinism.py",  # 35: the kernels compiled from an empty cache, then in part
     "tests/test_results_safety.py",  # 41
     "tests/test_ecos.py",  # 14
     "tests/test_fmu_system.py",  # 12
