@@ -1,8 +1,9 @@
 """Same inputs, same bits on one machine: whatever numba's cache holds, whatever the transport.
 
-The hybrid kernels once compiled with fastmath, which lets LLVM choose the rounding by context
-(what it inlines, the vector width); and the two transports reached the static solution along
-different sequences of bearing evaluations (the hybrid solver remembers its last solution).
+What would break it: a kernel compiled with fastmath (LLVM then chooses the rounding by
+context: what it inlines, the vector width, the CPU's FMA), a kernel loaded from numba's cache
+with a stale callee compiled in (:mod:`bearing_fmu._numba_cache`), or two transports evaluating
+the bearings along different sequences (the hybrid solver starts from its last solution).
 Here the paper's spur case runs in fresh interpreters with numba's cache empty (every kernel
 compiled in the process), full (every kernel loaded) and half full (callees loaded, their
 callers compiled), each in-process and through the FMUs: every channel of every run,
