@@ -170,8 +170,8 @@ def build_library(folder: Path, quiet: bool = True) -> NativeLibraries:
     if cmake is None:
         raise NativeBuildError("CMake not found (beside this Python or on PATH)",
                                "pip install cmake")
-    target = folder / _library_name()
-    loader = folder / LOADER_NAME if sys.platform.startswith("linux") else None
+    files = _files(folder)
+    target, loader = files.library, files.loader
     folder.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix="build-", dir=folder) as tmp:
         out = Path(tmp) / "out"
@@ -200,7 +200,13 @@ def build_library(folder: Path, quiet: bool = True) -> NativeLibraries:
         if loader is not None:  # atomic: concurrent builders leave complete files
             os.replace(built_loader, loader)
         os.replace(built, target)  # last: its presence means both are there
-    return NativeLibraries(target, loader)
+    return files
+
+
+def _files(folder: Path) -> NativeLibraries:
+    """Where the library and (on Linux) the loader of ``folder`` are, built or not."""
+    loader = folder / LOADER_NAME if sys.platform.startswith("linux") else None
+    return NativeLibraries(folder / _library_name(), loader)
 
 
 def native_folder() -> Path:
@@ -212,10 +218,9 @@ def native_status() -> tuple[NativeLibraries | None, str | None]:
     """(the built files, None) or (None, why they are not there: the recorded reason, or
     "not built yet")."""
     folder = native_folder()
-    target = folder / _library_name()
-    loader = folder / LOADER_NAME if sys.platform.startswith("linux") else None
-    if target.is_file() and (loader is None or loader.is_file()):
-        return NativeLibraries(target, loader), None
+    files = _files(folder)
+    if files.library.is_file() and (files.loader is None or files.loader.is_file()):
+        return files, None
     marker = folder / UNAVAILABLE
     if marker.is_file():
         return None, marker.read_text().strip()

@@ -62,7 +62,6 @@ def paced_gsb(*args) -> list[str]:
     return [sys.executable, "-c", code, *map(str, args)]
 
 
-
 def run_here(code: str) -> dict:
     """Run ``code`` (dedented, written for :func:`run_isolated`) in this process and return the
     JSON object it prints last. FMUs may load here: the patched native layer the test FMUs
