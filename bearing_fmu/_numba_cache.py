@@ -14,7 +14,7 @@ numba's own: a kernel of ``bearing_fmu``, ``gear_fmu`` or ``fmu_src`` is cached 
 ``NUMBA_CACHE_DIR`` or numba's user-wide folder (``~/.cache/numba`` on Linux) and the code hash
 covers every module of those packages (:func:`code_hash`). Any change of the code starts an
 empty folder (the eight most recent are kept), and every copy of one version shares it: the
-installed package and the code an FMU carries (staged by :mod:`fmu_src.fmu_bootstrap`) load
+installed package and the code an FMU carries (staged by :mod:`fmu_src.slaves.bootstrap`) load
 each other's kernels, so an FMU in another tool's process starts without compiling what
 ``gsb run`` compiled. Everything else numba caches is left alone.
 """
@@ -30,6 +30,10 @@ from pathlib import Path
 
 #: the packages whose kernels share one code version
 PACKAGES = ("bearing_fmu", "gear_fmu", "fmu_src")
+#: folders of those packages that an FMU does not carry (fmu_src's build tools): left out of
+#: the hash, so that the installed package and an FMU's copy of the code agree on it
+SKIP = ("__pycache__", "build")
+SKIP_PARTS = frozenset(SKIP)
 #: code versions kept side by side in one cache folder
 KEEP = 8
 PREFIX = "gsb-"
@@ -37,11 +41,12 @@ PREFIX = "gsb-"
 
 @functools.cache
 def code_hash(root: str) -> str:
-    """sha256 (16 hex digits) of every ``.py`` file of :data:`PACKAGES` under ``root``."""
+    """sha256 (16 hex digits) of every ``.py`` file of :data:`PACKAGES` under ``root``
+    (outside :data:`SKIP`)."""
     digest = hashlib.sha256()
     for pkg in PACKAGES:
         for path in sorted((Path(root) / pkg).rglob("*.py")):
-            if "__pycache__" not in path.parts:
+            if not SKIP_PARTS.intersection(path.relative_to(root).parts):
                 digest.update(path.relative_to(root).as_posix().encode() + b"\0"
                               + path.read_bytes())
     return digest.hexdigest()[:16]

@@ -9,7 +9,7 @@ serves three uses:
 * the bearing terms of the structure's Newmark step (Eq. 14, 16): the tangent ``Kb + 2/dt Cb``
   and the force at the new state (:mod:`gear_fmu.structure`);
 * the master's Newton on the coupled system: each bearing linearised at the last iterate
-  (:mod:`orchestrator.master`), and the same arrays packed into the gear-shaft FMU's inputs
+  (:mod:`orchestrator.coupling.master`), and the same arrays packed into the gear-shaft FMU's inputs
   (:func:`fmu_src.contract.pack_laws`).
 
 Arrays have any leading shape (one bearing: ``(2,)``, ``(2, 2)``; four bearings: ``(4, 2)``,
@@ -72,7 +72,7 @@ class AffineLaws:
         """The master's test and update in one compiled call, for a set of bearings
         (``states`` (nb, 4), ``force`` (nb, 2), ``kb``, ``cb`` (nb, 2, 2), as the bearings gave
         them at ``states``): the relative mismatch ``||F - F_law|| / ||F||`` of this law
-        (2-norms over the whole set; :class:`orchestrator.master.Master`) and the law
+        (2-norms over the whole set; :class:`orchestrator.coupling.master.Master`) and the law
         :meth:`linearise` gives there (Eq. 17, the same arithmetic)."""
         states = np.ascontiguousarray(states, dtype=float)
         force = np.ascontiguousarray(force, dtype=float)
@@ -92,7 +92,7 @@ class AffineLaws:
 
     def blend(self, other: AffineLaws, weight: float) -> AffineLaws:
         """The law ``weight * other + (1 - weight) * self``, coefficient by coefficient (the
-        master's relaxation, :mod:`orchestrator.master`); given by ``f0`` alone."""
+        master's relaxation, :mod:`orchestrator.coupling.master`); given by ``f0`` alone."""
         w, r = weight, 1.0 - weight
         return AffineLaws(w * other.f0 + r * self.f0, w * other.kb + r * self.kb,
                           w * other.cb + r * self.cb)

@@ -6,7 +6,7 @@ Builds ``GearShaft.fmu`` into a temporary folder (unless ``--fmu`` names one) an
 paper's spur case (the shipped ``baguet2010_spur``) two ways with the same affine bearing laws
 (Kb 1e8 N/m with a cross-coupled part, Cb 1e4 N s/m, dt = mesh period / 32):
 
-* ``FmuStructure`` (:mod:`orchestrator.fmi`): fmi2SetReal of the 56 law inputs, fmi2DoStep,
+* ``FmuStructure`` (:mod:`orchestrator.coupling.fmi`): fmi2SetReal of the 56 law inputs, fmi2DoStep,
   fmi2GetReal of the 16 journal outputs; fmi2GetFMUstate + fmi2SetFMUstate (+ free);
 * ``InProcessStructure`` (the same master interface on the in-process structure):
   ``set_bearing_laws`` + ``do_step`` + ``journal_states``; ``get_state`` + ``set_state``.
@@ -30,8 +30,8 @@ import numpy as np
 
 from bearing_fmu.affine import AffineLaws
 from fmu_src.examples import paper_structure
-from orchestrator.fmi import FmuStructure
-from orchestrator.inprocess import InProcessStructure
+from orchestrator.coupling.fmi import FmuStructure
+from orchestrator.coupling.inprocess import InProcessStructure
 
 
 def laws() -> AffineLaws:
@@ -84,7 +84,7 @@ def measure(slave, law, dt: float, n: int) -> dict:
 def bearing_sets(n: int) -> tuple[float, float]:
     """µs per evaluation of the four bearings (FMUs, in-process), best of 5 alternating blocks."""
     from fmu_src.case import load_case
-    from orchestrator.run import build_master
+    from orchestrator.run.runner import build_master
 
     case = load_case("baguet2010_spur")
     masters = [build_master(case, in_process=flag) for flag in (False, True)]
@@ -117,7 +117,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory(prefix="gsb_bench_") as tmp:
         path = args.fmu
         if path is None:
-            from fmu_src.build import build_fmus
+            from fmu_src.build.fmus import build_fmus
 
             path = build_fmus(tmp, ["GearShaft"])[0]
         ref = InProcessStructure(paper_structure())

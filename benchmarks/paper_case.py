@@ -32,29 +32,31 @@ import tempfile
 import time
 
 from fmu_src.case import load_case
-from orchestrator.run import run_case
+from orchestrator.run.runner import run_case
 
 CASE = "baguet2010_spur"
 
 
+INPROCESS = "orchestrator.coupling.inprocess.InProcessStructure"
+FMU_STRUCTURE = "orchestrator.coupling.fmi.structure.FmuStructure"
 #: (label, class path, method) of the calls timed by --breakdown
 TIMED = [
-    ("structure step", "orchestrator.inprocess.InProcessStructure", "do_step"),
-    ("structure step", "orchestrator.fmi.structure.FmuStructure", "do_step"),
-    ("bearing evaluation", "orchestrator.inprocess.ModelBearings", "evaluate"),
-    ("bearing evaluation", "orchestrator.fmi.bearings.FmuBearings", "evaluate"),
-    ("state save / restore", "orchestrator.inprocess.InProcessStructure", "get_state"),
-    ("state save / restore", "orchestrator.inprocess.InProcessStructure", "set_state"),
-    ("state save / restore", "orchestrator.fmi.structure.FmuStructure", "get_state"),
-    ("state save / restore", "orchestrator.fmi.structure.FmuStructure", "set_state"),
-    ("laws in / journals out", "orchestrator.inprocess.InProcessStructure", "set_bearing_laws"),
-    ("laws in / journals out", "orchestrator.inprocess.InProcessStructure", "journal_states"),
-    ("laws in / journals out", "orchestrator.fmi.structure.FmuStructure", "set_bearing_laws"),
-    ("laws in / journals out", "orchestrator.fmi.structure.FmuStructure", "journal_states"),
+    ("structure step", INPROCESS, "do_step"),
+    ("structure step", FMU_STRUCTURE, "do_step"),
+    ("bearing evaluation", "orchestrator.coupling.inprocess.ModelBearings", "evaluate"),
+    ("bearing evaluation", "orchestrator.coupling.fmi.bearings.FmuBearings", "evaluate"),
+    ("state save / restore", INPROCESS, "get_state"),
+    ("state save / restore", INPROCESS, "set_state"),
+    ("state save / restore", FMU_STRUCTURE, "get_state"),
+    ("state save / restore", FMU_STRUCTURE, "set_state"),
+    ("laws in / journals out", INPROCESS, "set_bearing_laws"),
+    ("laws in / journals out", INPROCESS, "journal_states"),
+    ("laws in / journals out", FMU_STRUCTURE, "set_bearing_laws"),
+    ("laws in / journals out", FMU_STRUCTURE, "journal_states"),
     ("master: linearise + mismatch", "bearing_fmu.affine.AffineLaws", "relinearise"),
-    ("outputs + results writer", "orchestrator.results.ResultsWriter", "append"),
-    ("outputs + results writer", "orchestrator.master.StructureSlave", "step_outputs"),
-    ("outputs + results writer", "orchestrator.fmi.structure.FmuStructure", "step_outputs"),
+    ("outputs + results writer", "orchestrator.run.results.ResultsWriter", "append"),
+    ("outputs + results writer", "orchestrator.coupling.master.StructureSlave", "step_outputs"),
+    ("outputs + results writer", FMU_STRUCTURE, "step_outputs"),
 ]
 
 

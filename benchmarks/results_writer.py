@@ -16,15 +16,15 @@ import tempfile
 from paper_case import timed_calls  # this folder: benchmarks/paper_case.py
 
 from fmu_src.case import load_case
-from orchestrator.master import Master
-from orchestrator.run import run_case
+from orchestrator.coupling.master import Master
+from orchestrator.run.runner import run_case
 
 
 def measure(in_process: bool, periods: int) -> dict:
     counts: dict[str, int] = {}
     sizes = []
-    targets = [("flush", "orchestrator.results.ResultsWriter", "flush"),
-               ("checkpoint", "orchestrator.master.Master", "checkpoint")]
+    targets = [("flush", "orchestrator.run.results.ResultsWriter", "flush"),
+               ("checkpoint", "orchestrator.coupling.master.Master", "checkpoint")]
     original = Master.checkpoint
 
     def sized(self):  # the checkpoint's size, recorded by the wrapped call

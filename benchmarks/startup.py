@@ -26,8 +26,8 @@ import json, sys, time
 t0 = float(sys.argv[1])
 marks = {"interpreter": time.time() - t0}
 from orchestrator.cli import main
-import orchestrator.run as run
-from orchestrator.master import Master
+import orchestrator.run.runner as run
+from orchestrator.coupling.master import Master
 marks["imports"] = time.time() - t0
 build, step, init = run.build_master, Master.step, Master.exit_initialization
 

@@ -17,9 +17,9 @@ import numpy as np
 
 from fmu_src import description
 from fmu_src.examples import paper_case
-from orchestrator.analysis import run_metrics, steady_window
-from orchestrator.results import read_results
-from orchestrator.run import run_case
+from orchestrator.analysis.metrics import run_metrics, steady_window
+from orchestrator.run.results import read_results
+from orchestrator.run.runner import run_case
 
 
 def main(periods: int = 64, bearing: str = "hybrid", **overrides) -> dict:

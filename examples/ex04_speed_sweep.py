@@ -3,7 +3,7 @@
 Each point is a full coupled run (hybrid bearings, in-process) at another input speed, reduced
 to the dynamic tooth load factor R and the peak-to-peak of the bearing forces over its last two
 pinion revolutions. ``scheduler="none"`` runs the points one after the other here; without it
-they go to a Dask LocalCluster (``orchestrator.sweep``), or to any cluster by address.
+they go to a Dask LocalCluster (``orchestrator.sweep.runner``), or to any cluster by address.
 
 Run: ``python examples/ex04_speed_sweep.py``
 """
@@ -13,7 +13,7 @@ from __future__ import annotations
 import tempfile
 from pathlib import Path
 
-from orchestrator.sweep import SweepPoint, read_sweep, run_sweep
+from orchestrator.sweep.runner import SweepPoint, read_sweep, run_sweep
 
 SPEEDS = (250.0, 325.0, 400.0)  # rad/s
 

@@ -7,7 +7,7 @@ models declare (:class:`bearing_fmu.base.ModelOption`). The loader converts quan
 ``docs/case-files.md`` is rendered from the same table.
 
 A quantity is a number in SI units or a string ``"value unit"`` (``"4 mm"``, ``"20 deg"``).
-The paper's cases ship with the package (``fmu_src/cases``) and load by name
+The paper's cases ship with the package (``models``) and load by name
 (:func:`load_case`, :func:`shipped_cases`), from any working directory.
 """
 
@@ -26,12 +26,10 @@ from fmu_src.units import UnitError, parse_quantity, symbol
 from gear_fmu.damping import BASES, DAMPING_KINDS
 from gear_fmu.drivetrain import OUTPUT_ENDS
 
-__all__ = ["BEARING_MODELS", "CASES_DIR", "FIELDS", "Case", "CaseError", "Field", "load_case",
+__all__ = ["BEARING_MODELS", "FIELDS", "Case", "CaseError", "Field", "load_case",
            "model_option_fields", "schema_markdown", "shipped_cases"]
 
 BEARING_MODELS = tuple(_BEARING_TABLE)
-#: the case files shipped with the package (the paper's spur and helical cases)
-CASES_DIR = Path(__file__).resolve().parent / "cases"
 
 
 class CaseError(ValueError):
@@ -416,8 +414,12 @@ def _geometry_message(v: dict, exc: Exception) -> str:
 
 
 def shipped_cases() -> dict[str, Path]:
-    """The case files shipped with the package: ``{name: path}``."""
-    return {p.stem: p for p in sorted(CASES_DIR.glob("*.toml"))}
+    """The case files shipped with the package (the folder ``models/``, installed as the
+    package ``gsb_models``): ``{name: path}``."""
+    from importlib.resources import files
+
+    folder = Path(str(files("gsb_models")))
+    return {p.stem: p for p in sorted(folder.glob("*.toml"))}
 
 
 def resolve_case(path_or_name: str | Path) -> Path:
@@ -485,7 +487,7 @@ def document() -> str:
         "after `viscosity` are generated from the options the registered bearing models "
         "declare (`bearing_fmu.base.ModelOption`). Examples: the shipped cases "
         + ", ".join(f"`{n}`" for n in shipped_cases())
-        + " (`fmu_src/cases/`; `gsb run <name>` runs one by name).\n\n" + schema_markdown() + "\n"
+        + " (`models/`; `gsb run <name>` runs one by name).\n\n" + schema_markdown() + "\n"
     )
 
 

@@ -19,8 +19,8 @@ written as ``min``/``max`` into modelDescription.xml) and checked by the FMUs wh
 set (:meth:`FmiVar.check`). The layouts of the 56 law inputs and the 16 journal outputs are
 defined once (:func:`law_input_names`, :func:`pack_laws`, :func:`unpack_law_arrays`,
 :func:`unpack_journal`). Units are the dimensions of :mod:`fmu_src.units`. The tables are
-rendered into ``docs/fmu-variables.md`` by :mod:`fmu_src.contract_doc` and into each FMU's
-modelDescription.xml by :mod:`fmu_src.build`.
+rendered into ``docs/fmu-variables.md`` by :mod:`fmu_src.build.variables_doc` and into each FMU's
+modelDescription.xml by :mod:`fmu_src.build.fmus`.
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """Ready-made objects of the paper's system, built from the shipped case files.
 
 The paper's data (Tables 1-3, Sec. 4.1) live in one place, the case files of
-``fmu_src/cases`` (``baguet2010_spur``, ``baguet2010_helical``); these factories build physics
+``models`` (``baguet2010_spur``, ``baguet2010_helical``); these factories build physics
 objects from them for tests, benchmarks, examples and doctests (the ``*_example()`` pattern of
 ROSS), so no module repeats the numbers.
 

@@ -15,7 +15,7 @@ import sys
 
 import pytest
 
-from fmu_src.fmu_bootstrap import locked
+from fmu_src.slaves.bootstrap import locked
 
 #: what the xdist controller runs before the workers start, in two processes at once: every
 #: bearing model's kernels; the native layer, the structure's and the master's kernels (short
@@ -25,7 +25,7 @@ WARM_UP = (
 import numpy as np
 from bearing_fmu import MODELS, BearingData, model_class
 from bearing_fmu.static import static_equilibrium
-from orchestrator.inprocess import ModelBearings
+from orchestrator.coupling.inprocess import ModelBearings
 b = BearingData(0.07, 0.05, 150e-6, 0.0288)
 for name in MODELS:
     model = model_class(name).from_parameters(b)
@@ -36,8 +36,8 @@ static_equilibrium(model_class("hybrid").from_parameters(b), (0.0, -2251.0), 325
     """
 import tempfile
 from fmu_src.case import load_case
-from fmu_src.native_build import export_library
-from orchestrator.run import run_case
+from fmu_src.build.native import export_library
+from orchestrator.run.runner import run_case
 export_library()
 with tempfile.TemporaryDirectory() as tmp:
     for case, model in (("baguet2010_spur", "lumped"), ("baguet2010_helical", "lumped")):
@@ -92,10 +92,10 @@ def _shared(tmp_path_factory, name: str):
 
 @pytest.fixture(scope="session")
 def fmu_dir(tmp_path_factory):
-    """A folder with every FMU of :data:`fmu_src.build.FMUS`, built once per test run."""
-    from fmu_src.build import FMUS
-    from fmu_src.native_build import export_library, native_status
-    from orchestrator.fmi.cache import ensure_fmus
+    """A folder with every FMU of :data:`fmu_src.build.fmus.FMUS`, built once per test run."""
+    from fmu_src.build.fmus import FMUS
+    from fmu_src.build.native import export_library, native_status
+    from orchestrator.coupling.fmi.cache import ensure_fmus
 
     if export_library() is None:  # the FMUs would behave as pythonfmu's own, not as specified
         pytest.fail(f"the FMUs' native layer cannot be built here: {native_status()[1]}",

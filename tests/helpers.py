@@ -50,7 +50,7 @@ def paced_gsb(*args) -> list[str]:
     (a sleep before the step), with everything else as in ``gsb``."""
     code = textwrap.dedent(f"""
         import sys, time
-        from orchestrator import master
+        from orchestrator.coupling import master
         step = master.Master.step
         def paced(self, t, dt):
             time.sleep({PACE!r})
@@ -98,8 +98,8 @@ def run_paper_case(out_dir, periods, in_process=True, fmu_dir=None, bearing="hyb
                    case="baguet2010_spur", steps=None, **overrides):
     """A short run of a shipped case (no figures, no progress): (results dict, summary)."""
     from fmu_src.case import load_case
-    from orchestrator.results import read_results
-    from orchestrator.run import run_case
+    from orchestrator.run.results import read_results
+    from orchestrator.run.runner import run_case
 
     s = run_case(load_case(case, overrides or None), bearing=bearing, periods=periods,
                  in_process=in_process, out_dir=out_dir, fmu_dir=fmu_dir, progress=False,
@@ -109,7 +109,7 @@ def run_paper_case(out_dir, periods, in_process=True, fmu_dir=None, bearing="hyb
 
 def fail_master_step(monkeypatch, at: int) -> None:
     """Make the master's ``at``-th coupled step raise a CouplingError (a run failing midway)."""
-    from orchestrator import master as master_module
+    from orchestrator.coupling import master as master_module
 
     calls = {"n": 0}
     real_step = master_module.Master.step

@@ -26,7 +26,7 @@ KEY_OBJECTS = [
     ("bearing_fmu.html", "bearing_fmu.base.BearingModel"),
     ("gear_fmu.html", "gear_fmu.structure.Structure"),
     ("fmu_src.html", "fmu_src.case.FIELDS"),
-    ("orchestrator.html", "orchestrator.master.Master"),
+    ("orchestrator.html", "orchestrator.coupling.master.Master"),
 ]
 
 

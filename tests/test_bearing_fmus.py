@@ -46,8 +46,8 @@ def test_fmu_equals_in_process_model_in_global_frame(fmu_dir, model):
 
     from bearing_fmu import BearingData, model_class
     from bearing_fmu.frames import LocalFrame
-    from orchestrator.fmi import FmuBearings
-    from orchestrator.inprocess import ModelBearings
+    from orchestrator.coupling.fmi import FmuBearings
+    from orchestrator.coupling.inprocess import ModelBearings
 
     b = BearingData(0.09, 0.065, 110e-6, 0.0288)
     options = dict(nodes=96, axial_intervals=16, lumped_stiffness=3e8, lumped_damping=2e3)
@@ -69,7 +69,7 @@ def test_fmu_equals_in_process_model_in_global_frame(fmu_dir, model):
 def test_fmu_error_is_reported_not_fatal_and_state_round_trips(fmu_dir):
     out = run_here(f"""
         import json, numpy as np
-        from orchestrator.fmi import FmuBearings, FmuError
+        from orchestrator.coupling.fmi import FmuBearings, FmuError
         fmu = FmuBearings([r"{fmu_dir / 'BearingShort.fmu'}"], [dict()], [325.0])
         good = np.array([[6e-5, -6e-5, 0.0, 0.0]])
         f_good = fmu.evaluate(good)[0]
@@ -93,7 +93,7 @@ def test_linear_fmu_freezes_at_initialisation_exit(fmu_dir):
     """Hybrid until initialisation ends, then exactly affine with the coefficients at X0."""
     out = run_here(f"""
         import json, numpy as np
-        from orchestrator.fmi import FmuBearings
+        from orchestrator.coupling.fmi import FmuBearings
         fmu = FmuBearings([r"{fmu_dir / 'BearingLinear.fmu'}"], [dict()], [325.0])
         x0 = np.array([[6e-5, -6e-5, 0.0, 0.0]])
         f0, k0, c0 = fmu.evaluate(x0)
@@ -130,7 +130,7 @@ def test_fmpy_simulate_from_a_fresh_process(fmu_dir, tmp_path):
 def test_many_instances_of_one_fmu_in_one_process(fmu_dir):
     out = run_here(f"""
         import json, numpy as np
-        from orchestrator.fmi import FmuBearings
+        from orchestrator.coupling.fmi import FmuBearings
         path = r"{fmu_dir / 'BearingShort.fmu'}"
         sets = [FmuBearings([path] * 4, [dict()] * 4, [325.0] * 4) for _ in range(5)]
         st = np.tile([6e-5, -6e-5, 0.0, 0.0], (4, 1))
@@ -143,11 +143,11 @@ def test_many_instances_of_one_fmu_in_one_process(fmu_dir):
 
 
 def test_variable_docs_are_generated_from_the_contract():
-    from fmu_src.contract_doc import document
+    from fmu_src.build.variables_doc import document
 
     doc = ROOT / "docs" / "fmu-variables.md"
     assert doc.read_text() == document(), \
-        "run: python -m fmu_src.contract_doc > docs/fmu-variables.md"
+        "run: python -m fmu_src.build.variables_doc > docs/fmu-variables.md"
 
 
 def test_unit_definitions_come_from_the_unit_table(fmu_dir):

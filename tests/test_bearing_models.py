@@ -26,7 +26,7 @@ from bearing_fmu import (
     model_class,
 )
 from bearing_fmu.frames import LocalFrame
-from fmu_src.build import FMUS
+from fmu_src.build.fmus import FMUS
 from tests.helpers import relative
 
 BEARING = BearingData(diameter=0.070, length=0.050, clearance=150e-6, viscosity=0.0288)
@@ -128,7 +128,7 @@ def test_one_coupled_step_through_its_fmu_equals_in_process(name, fmu_dir):
     same bits (the same code, the same calls)."""
     from fmu_src.case import load_case
     from fmu_src.description import time_step
-    from orchestrator.run import build_master
+    from orchestrator.run.runner import build_master
 
     case = load_case("baguet2010_spur")
     res = {}

@@ -75,7 +75,7 @@ def test_a_bearing_fmu_in_a_host_without_the_package_gives_the_same_bits(fmu_dir
     from bearing_fmu import BearingData
     from bearing_fmu.frames import LocalFrame
     from bearing_fmu.hybrid import HybridBearing
-    from orchestrator.inprocess import ModelBearings
+    from orchestrator.coupling.inprocess import ModelBearings
 
     params = {"D": 0.09, "L": 0.065, "C": 110e-6, "mu": 0.0288, "frame_angle": 0.3}
     states = [[4e-5 + 1e-6 * k, -6e-5 + 2e-6 * k, 1e-4 * k, -2e-4] for k in range(8)]

@@ -102,10 +102,10 @@ def ecos_python(ssp_file):
 def jacobi(steps: int, lag: int = 1) -> np.ndarray:
     """(steps + 1, 4, 4) journal states of a non-iterative master with the in-process physics:
     X0 from the static solution, then each step with the laws linearised ``lag`` steps
-    back (ecos: 1). Independent of ecos and of orchestrator.master's stepping."""
+    back (ecos: 1). Independent of ecos and of orchestrator.coupling.master's stepping."""
     from bearing_fmu.affine import AffineLaws
     from fmu_src.case import load_case
-    from orchestrator.run import build_master
+    from orchestrator.run.runner import build_master
 
     master = build_master(load_case(CASE), in_process=True)
     master.solve_static()
@@ -145,8 +145,8 @@ def test_the_non_iterative_coupling_error_at_the_papers_step(ecos_python, tmp_pa
     the explicit coupling's; measured 0.80 % of the largest journal displacement at step 64
     (asserted below 1.2 %), after agreeing to round-off at step 1."""
     from fmu_src.case import load_case
-    from orchestrator.results import read_results
-    from orchestrator.run import run_case
+    from orchestrator.run.results import read_results
+    from orchestrator.run.runner import run_case
 
     x, _ = ecos_python
     s = run_case(load_case(CASE), steps=STEPS, in_process=True, out_dir=tmp_path,

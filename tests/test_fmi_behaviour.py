@@ -32,7 +32,7 @@ def test_bearing_fmus_refuse_bad_values_when_set(fmu_dir, model):
     out = run_here(f"""
         import json, math
         from fmpy.fmi1 import FMICallException
-        from orchestrator.fmi import FmuInstance
+        from orchestrator.coupling.fmi import FmuInstance
         s = FmuInstance(r"{fmu_dir / (fmu_name(model) + '.fmu')}", "b")
         s.fmu.setupExperiment(startTime=0.0)
         s.fmu.enterInitializationMode()
@@ -72,7 +72,7 @@ def test_a_journal_outside_the_clearance_fails_the_read_not_nan(fmu_dir, model):
     out = run_here(f"""
         import json
         from fmpy.fmi1 import FMICallException
-        from orchestrator.fmi import FmuInstance
+        from orchestrator.coupling.fmi import FmuInstance
         s = FmuInstance(r"{fmu_dir / (fmu_name(model) + '.fmu')}", "b")
         s.fmu.setupExperiment(startTime=0.0)
         s.fmu.enterInitializationMode()
@@ -115,7 +115,7 @@ def test_bearing_fmu_state_round_trip_is_bit_exact(fmu_dir, model):
     the same outputs to the last bit as the first time; so does a serialised one."""
     out = run_here(f"""
         import json
-        from orchestrator.fmi import FmuInstance
+        from orchestrator.coupling.fmi import FmuInstance
         s = FmuInstance(r"{fmu_dir / (fmu_name(model) + '.fmu')}", "b")
         f, vr = s.fmu, s.vr
         f.setupExperiment(startTime=0.0)
@@ -160,7 +160,7 @@ def test_a_checkpointed_system_restarts_exactly_in_a_new_process(fmu_dir, tmp_pa
         import numpy as np
         from fmu_src import description
         from fmu_src.case import load_case
-        from orchestrator.run import build_master
+        from orchestrator.run.runner import build_master
         case = load_case("baguet2010_spur")
         dt = description.time_step(case)
         m = build_master(case, fmu_dir=r"{fmu_dir}")

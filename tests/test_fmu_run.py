@@ -2,7 +2,7 @@
 in-process master, which tests/test_run.py checks against a monolithic Newton-Raphson.
 
 Both transports run the same code on the same numbers along the same sequence of calls (one
-static first guess, :meth:`orchestrator.master.BearingSet.static_position`), so every
+static first guess, :meth:`orchestrator.coupling.master.BearingSet.static_position`), so every
 registered bearing model gives the same bits through its FMU as in-process: every channel of
 the results file, the iterations, the static solution. The FMUs load in the test's own
 process (a fresh host process is tested in test_bearing_fmus.py and test_fmu_system.py).
@@ -22,8 +22,8 @@ def compare(fmu_dir, model, periods, tmp, steps=None, overrides=None) -> dict:
     """Both transports of one run: the channels that differ (an empty list when every bit is
     the same), the iterations per step of each, the FMU run's mode, the steps."""
     from fmu_src.case import load_case
-    from orchestrator.results import read_results
-    from orchestrator.run import run_case
+    from orchestrator.run.results import read_results
+    from orchestrator.run.runner import run_case
 
     case = load_case("baguet2010_spur", overrides or None)
     out = {}
@@ -69,7 +69,7 @@ def test_swapping_the_bearing_fmu_is_a_file_name(fmu_dir):
     r = run_isolated(f"""
         import json
         from fmu_src.case import load_case
-        from orchestrator.fmi import system_from_case
+        from orchestrator.coupling.fmi import system_from_case
         case = load_case("baguet2010_spur")
         out = {{}}
         for model in ("hybrid", "lumped"):

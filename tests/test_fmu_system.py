@@ -60,7 +60,7 @@ def spring_fmu(tmp_path_factory):
     """The force-only FMU, built with pythonfmu and given this package's native layer."""
     from pythonfmu.builder import FmuBuilder
 
-    from fmu_src.build import patch_fmu
+    from fmu_src.build.fmus import patch_fmu
 
     folder = tmp_path_factory.mktemp("byo")
     script = folder / "springbearing.py"
@@ -78,8 +78,8 @@ def test_a_force_only_bearing_fmu_matches_the_built_in_lumped_model(fmu_dir, spr
         import json
         import numpy as np
         from fmu_src.case import load_case
-        from orchestrator.results import read_results
-        from orchestrator.run import run_case
+        from orchestrator.run.results import read_results
+        from orchestrator.run.runner import run_case
         case = load_case("baguet2010_spur", {{"bearings.model": "lumped",
                                                "bearings.lumped_damping": 2000.0}})
         ref = run_case(case, steps=64, in_process=True, out_dir=r"{tmp_path}", progress=False,
@@ -106,7 +106,7 @@ def test_a_force_only_bearing_fmu_matches_the_built_in_lumped_model(fmu_dir, spr
 def test_a_bearing_fmu_without_the_minimal_contract_is_refused(fmu_dir):
     r = run_here(f"""
         import json
-        from orchestrator.fmi import FmuBearings, FmuError
+        from orchestrator.coupling.fmi import FmuBearings, FmuError
         try:
             FmuBearings([r"{fmu_dir / 'GearShaft.fmu'}"], [dict()], [325.0])
         except FmuError as exc:
@@ -122,8 +122,8 @@ def test_closed_bearing_fmus_refuse_to_evaluate(fmu_dir):
         import json
         import numpy as np
         from fmu_src.case import load_case
-        from orchestrator.fmi import FmuError
-        from orchestrator.run import build_master
+        from orchestrator.coupling.fmi import FmuError
+        from orchestrator.run.runner import build_master
         master = build_master(load_case("baguet2010_spur"), fmu_dir=r"{fmu_dir}")
         master.solve_static()
         states = master.laws.states
@@ -139,8 +139,8 @@ def test_closed_bearing_fmus_refuse_to_evaluate(fmu_dir):
 
 
 def test_the_ssp_archive_holds_the_system(ssp_file):
+    from fmu_src.build.ssp import NS
     from fmu_src.contract import connections
-    from fmu_src.ssp import NS
 
     with zipfile.ZipFile(ssp_file) as z:
         names = set(z.namelist())
@@ -164,7 +164,7 @@ def test_the_ssp_archive_holds_the_system(ssp_file):
     clearance = load_case("baguet2010_spur")["bearings.clearance"]
     assert [float(values[(f"bearing{j}", "C")]) for j in range(1, 5)] == clearance  # exact
     # the static solution X0 as start values: a non-iterative master starts in equilibrium
-    from orchestrator.run import build_master
+    from orchestrator.run.runner import build_master
 
     master = build_master(load_case("baguet2010_spur"), in_process=True)
     x0 = master.solve_static().states
@@ -176,7 +176,7 @@ def test_the_ssp_archive_holds_the_system(ssp_file):
 def test_gsb_run_of_the_ssp_equals_gsb_run_of_the_case(fmu_dir, ssp_file, tmp_path):
     """The archive's FMUs and values, run by the iterative master, give the case's run through
     the built FMUs bit for bit (the same code on the same numbers)."""
-    from orchestrator.results import read_results
+    from orchestrator.run.results import read_results
 
     out = {}
     for source, extra in ((str(ssp_file), []),
@@ -214,7 +214,7 @@ def test_two_runs_building_the_fmus_at_once_build_once(tmp_path):
     one build and the other wait; both get the same complete files."""
     code = textwrap.dedent(f"""
         import json, time
-        from orchestrator.fmi import ensure_fmus
+        from orchestrator.coupling.fmi import ensure_fmus
         from fmpy.validation import validate_fmu
         while time.time() < {time.time() + 3.0}:  # start together
             time.sleep(0.001)
@@ -265,7 +265,7 @@ def test_ctrl_c_and_sigterm_stop_a_fmu_run_cleanly(fmu_dir, tmp_path):
     or traceback, and the results file closed, marked interrupted, with the steps done.
     (Ten random moments: slow; tests/test_results_safety.py interrupts each transport once
     per signal in the default run and resumes the runs.)"""
-    from orchestrator.results import read_results
+    from orchestrator.run.results import read_results
 
     rng = random.Random(10)
     outcomes = []
@@ -305,10 +305,10 @@ def test_fmus_built_after_an_fmu_was_loaded_carry_their_binaries(fmu_dir, tmp_pa
         import json, sys, zipfile
         from fmpy import extract, read_model_description
         from fmpy.fmi2 import FMU2Slave
-        from orchestrator.fmi import FmuBearings
+        from orchestrator.coupling.fmi import FmuBearings
         path = r"{fmu_dir / 'BearingLumped.fmu'}"
         FmuBearings([path], [dict()], [325.0]).close()
-        from fmu_src.build import build_fmus
+        from fmu_src.build.fmus import build_fmus
         (built,) = build_fmus(r"{tmp_path / 'a'}", ["BearingShort"])
         whole = any(n.startswith("binaries/linux64/") for n in zipfile.ZipFile(built).namelist())
         for name in [m for m in sys.modules if m == "pythonfmu" or m.startswith("pythonfmu.")]:

@@ -2,8 +2,10 @@
 
 The FMU loads in the test's process (as in test_bearing_fmus.py; ``fmpy simulate`` runs it in a
 fresh host process that must exit cleanly). The FMU is driven
-through :class:`orchestrator.fmi.FmuStructure` and compared with the in-process structure of
-the same case (:class:`orchestrator.inprocess.InProcessStructure`) driven with the same laws:
+through :class:`orchestrator.coupling.fmi.FmuStructure` and compared with the in-process structure
+of
+the same case (:class:`orchestrator.coupling.inprocess.InProcessStructure`) driven with the same
+laws:
 the FMU runs the same code on the same numbers, so the results agree bit for bit.
 """
 
@@ -75,7 +77,7 @@ def test_gear_fmu_passes_fmpy_validation_with_units_and_descriptions(gear_fmu):
 
 def test_slave_registers_exactly_the_contract():
     """The slave class (no FMI layer) exposes the contract's variables in its order."""
-    from fmu_src.gear_shaft_slave import GearShaftSlave
+    from fmu_src.slaves.gear_shaft import GearShaftSlave
 
     slave = GearShaftSlave(instance_name="t")
     names = [(v.name, v.causality.name) for v in slave.vars.values()]
@@ -87,7 +89,7 @@ def test_a_case_that_does_not_fit_is_logged_not_raised():
     literally: the tips touch the mating root circle): the getters never raise into
     pythonfmu; NaN outputs with the read's status fmi2Error, the reason in the log, and doStep
     discards."""
-    from fmu_src.gear_shaft_slave import GearShaftSlave
+    from fmu_src.slaves.gear_shaft import GearShaftSlave
 
     slave = GearShaftSlave(instance_name="t")
     slave._fmi_status_protocol = True  # as the patched library sets it
@@ -112,7 +114,7 @@ def test_bad_values_are_refused_by_the_call_that_sets_them(gear_fmu):
     out = run_isolated(f"""
         import json, math
         from fmpy.fmi1 import FMICallException
-        from orchestrator.fmi import FmuError, FmuStructure
+        from orchestrator.coupling.fmi import FmuError, FmuStructure
         fmu = FmuStructure(r"{gear_fmu}")
         s, vr = fmu.slave, fmu.slave.vr
         r = {{}}
@@ -160,9 +162,9 @@ def comparison(gear_fmu):
         import json
         from fmu_src import description
         from fmu_src.case import load_case
-        from orchestrator.fmi import FmuStructure
-        from orchestrator.inprocess import InProcessStructure, ModelBearings
-        from orchestrator.master import Master
+        from orchestrator.coupling.fmi import FmuStructure
+        from orchestrator.coupling.inprocess import InProcessStructure, ModelBearings
+        from orchestrator.coupling.master import Master
         case = load_case({CASE!r})
         ref = InProcessStructure(description.structure(case))
         fmu = FmuStructure(r"{gear_fmu}")
@@ -267,7 +269,7 @@ def test_a_checked_case_reaches_the_fmu_unchanged(tmp_path):
 
 
 def test_ensure_fmus_builds_missing_fmus_once(tmp_path):
-    from orchestrator.fmi import ensure_fmus
+    from orchestrator.coupling.fmi import ensure_fmus
 
     path = ensure_fmus(["GearShaft"], tmp_path)["GearShaft"]
     stamp = path.stat().st_mtime_ns
@@ -280,7 +282,7 @@ def test_failures_are_reported_and_the_process_survives(gear_fmu):
     out = run_isolated(f"""
         import json
         import numpy as np
-        from orchestrator.fmi import FmuError, FmuStructure
+        from orchestrator.coupling.fmi import FmuError, FmuStructure
         fmu = FmuStructure(r"{gear_fmu}")
         msgs = {{}}
         # static solution that does not converge (almost no bearing stiffness)

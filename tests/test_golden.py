@@ -77,7 +77,7 @@ def test_the_golden_check_fails_on_a_real_change(monkeypatch):
 def test_the_golden_check_passes_a_change_in_the_last_bit(monkeypatch):
     """Every film force rounded up by one ulp, as a change of summation order would move it:
     the run stays within the tolerance by orders of magnitude."""
-    from orchestrator.inprocess import ModelBearings
+    from orchestrator.coupling.inprocess import ModelBearings
 
     evaluate = ModelBearings.evaluate
 

@@ -17,8 +17,8 @@ from bearing_fmu.linear import LinearBearing
 from bearing_fmu.lumped import LumpedSpringBearing
 from bearing_fmu.short_bearing import ShortBearing
 from bearing_fmu.static import static_equilibrium
-from orchestrator.inprocess import ModelBearings
-from orchestrator.master import BearingSet, CouplingError, Master, StructureSlave
+from orchestrator.coupling.inprocess import ModelBearings
+from orchestrator.coupling.master import BearingSet, CouplingError, Master, StructureSlave
 
 OMEGA = 325.0
 BEARING = BearingData(diameter=0.070, length=0.050, clearance=150e-6, viscosity=0.0288)
@@ -240,7 +240,7 @@ def test_non_convergence_names_step_time_and_mismatch():
         master.step(0.0, DT)
 
 
-# --- relaxation at a kink of a bearing law (orchestrator.master) -------------------------------
+# --- relaxation at a kink of a bearing law (orchestrator.coupling.master) ---------------
 W_KINK, S_KINK, X_KINK = 1000.0, 1e8, 1e-6  # load [N], support stiffness [N/m], kink scale [m]
 
 
@@ -307,7 +307,7 @@ def test_a_two_cycle_at_a_kink_is_relaxed_onto_the_root(monkeypatch):
     matches F to tol |F|, so |S x + S X0 sqrt(|x|/X0)| <= tol |F|, |x| <= X0 (tol |F| / (S X0))^2
     (|F| = W at the root; 1 % margin on it). Measured: 23 iterations, x = 4.2e-17 m against a
     bound of 1.0e-16 m."""
-    import orchestrator.master as master_module
+    import orchestrator.coupling.master as master_module
 
     tol = 1e-6
     master = _kinked_master(tol)

@@ -61,7 +61,7 @@ def test_a_machine_without_the_headers_is_told_why_and_how_once(tmp_path, monkey
     the FMUs' build goes on with pythonfmu's library; a second call says nothing more."""
     import warnings
 
-    from fmu_src import native_build
+    from fmu_src.build import native as native_build
 
     monkeypatch.setenv("GSB_CACHE_DIR", str(tmp_path / "cache"))
     monkeypatch.setattr(native_build, "python_build_config",
@@ -101,7 +101,7 @@ def test_pythonfmu_is_pinned_to_the_release_whose_library_is_vendored():
     import importlib.metadata
     import tomllib
 
-    from fmu_src.native_build import VENDORED_PYTHONFMU
+    from fmu_src.build.native import VENDORED_PYTHONFMU
 
     root = Path(__file__).resolve().parents[1]
     deps = tomllib.loads((root / "pyproject.toml").read_text())["project"]["dependencies"]

@@ -12,11 +12,11 @@ import pytest
 
 from fmu_src.case import load_case
 from fmu_src.examples import HELICAL, SPUR
-from orchestrator.analysis import fit_ellipse, run_metrics, steady_window
-from orchestrator.plot_base import normalised_spectrum
-from orchestrator.reproduce.figures import has_line
-from orchestrator.results import read_results
-from orchestrator.run import build_master, run_case
+from orchestrator.analysis.metrics import fit_ellipse, run_metrics, steady_window
+from orchestrator.figures.base import normalised_spectrum
+from orchestrator.run.results import read_results
+from orchestrator.run.runner import build_master, run_case
+from orchestrator.studies.reproduce.figures import has_line
 
 
 def short_run(tmp_path, path=SPUR, model="hybrid", periods=192, **overrides):
@@ -122,7 +122,7 @@ def test_helical_pair_lowers_the_dynamic_tooth_load(tmp_path, spur):
 def test_quick_reproduction_end_to_end(tmp_path):
     """``gsb reproduce --quick``: every figure and the report, the checks that hold on short
     runs pass (the full-length checks are quoted from ``gsb reproduce``)."""
-    from orchestrator.reproduce import reproduce
+    from orchestrator.studies.reproduce import reproduce
 
     report = reproduce(tmp_path, quick=True, progress=False)
     text = report.read_text()

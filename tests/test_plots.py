@@ -1,6 +1,6 @@
-"""Figures of a run (orchestrator.plots), ``gsb plot``, and the normalised spectrum of Fig. 7.
+"""Figures of a run (orchestrator.figures.run), ``gsb plot``, and the normalised spectrum of Fig. 7.
 
-The results files are synthetic, in the format orchestrator.run writes (channels with a
+The results files are synthetic, in the format orchestrator.run.runner writes (channels with a
 ``unit`` attribute, numeric root attributes): the paper's spur case (pinion 325 rad/s,
 z = 26 / 157, clearances 150 / 150 / 110 / 110 um), orbits as ellipses around the static
 point, bearing-force norms with known lines at 1x, gear 1x and 26x.
@@ -12,11 +12,11 @@ import h5py
 import numpy as np
 import pytest
 
-from orchestrator.analysis import order_amplitude_spectrum
+from orchestrator.analysis.metrics import order_amplitude_spectrum
 from orchestrator.cli import main
-from orchestrator.plot_base import normalised_spectrum, pyplot, run_title
-from orchestrator.plots import RUN_FIGURES, make_run_figures
-from orchestrator.results import ResultsWriter, read_results
+from orchestrator.figures.base import normalised_spectrum, pyplot, run_title
+from orchestrator.figures.run import RUN_FIGURES, make_run_figures
+from orchestrator.run.results import ResultsWriter, read_results
 
 SPEED, TEETH, TORQUE = 325.0, (26, 157), 220.0
 F1 = SPEED / (2 * math.pi)  # pinion rotation [Hz]

@@ -7,7 +7,7 @@ import textwrap
 import numpy as np
 import pytest
 
-from orchestrator.results import ResultsWriter, export_csv, read_results
+from orchestrator.run.results import ResultsWriter, export_csv, read_results
 
 
 def test_units_and_attributes_are_stored(tmp_path):
@@ -45,7 +45,7 @@ def test_killed_process_keeps_flushed_blocks(tmp_path):
     path = tmp_path / "r.h5"
     code = textwrap.dedent(f"""
         import os
-        from orchestrator.results import ResultsWriter
+        from orchestrator.run.results import ResultsWriter
         w = ResultsWriter(r"{path}", {{"x": ((), "m", "x")}}, capacity=5, flush_seconds=1e9)
         for k in range(12):
             w.append(time=float(k), x=float(k))

@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from orchestrator.results import read_checkpoint, read_results
+from orchestrator.run.results import read_checkpoint, read_results
 from tests.helpers import paced_gsb, run_here
 
 GSB = [sys.executable, "-m", "orchestrator.cli"]
@@ -129,7 +129,7 @@ def test_signals_and_a_kill_keep_the_steps_and_the_run_resumes_exactly(transport
     periods = "24"
     opts = ["--no-figures", "--quiet", "--fmu-dir", str(fmu_dir)]
     from fmu_src.case import load_case
-    from orchestrator.run import run_case
+    from orchestrator.run.runner import run_case
 
     if transport == "in-process":
         opts.append("--in-process")
@@ -283,7 +283,7 @@ def test_a_regular_install_runs_a_shipped_case_from_any_folder(fmu_dir, tmp_path
                           "--target", str(site), str(ROOT)],
                          capture_output=True, text=True, timeout=600, cwd=tmp_path)
     assert pip.returncode == 0, pip.stderr[-3000:]
-    assert (site / "fmu_src" / "cases" / "baguet2010_spur.toml").is_file()
+    assert (site / "gsb_models" / "baguet2010_spur.toml").is_file()
     elsewhere = tmp_path / "elsewhere"
     elsewhere.mkdir()
     env = dict(os.environ, PYTHONPATH=str(site))  # ahead of the editable checkout
@@ -306,8 +306,8 @@ sys.path.insert(0, {root!r})
 import numpy as np
 from bearing_fmu import MODELS
 from fmu_src.case import load_case
-from orchestrator.results import read_results
-from orchestrator.run import resume_run, run_case
+from orchestrator.run.results import read_results
+from orchestrator.run.runner import resume_run, run_case
 out = {{}}
 # 8 steps per mesh period: 4 steps, then resumed to one period; against 8 steps in one go;
 # coarse film grids (the FD model's solves dominate otherwise)

@@ -11,9 +11,9 @@ from fmu_src.case import CaseError, load_case, shipped_cases
 from gear_fmu.newmark import newmark_step
 from gear_fmu.structure import EVENT_SIDE
 from orchestrator.cli import main
-from orchestrator.inprocess import ModelBearings
-from orchestrator.results import read_results
-from orchestrator.run import RunError, build_master, run_case
+from orchestrator.coupling.inprocess import ModelBearings
+from orchestrator.run.results import read_results
+from orchestrator.run.runner import RunError, build_master, run_case
 from tests.helpers import fail_master_step, monolithic_structure
 
 SPUR = "baguet2010_spur"

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from fmu_src.case import load_case
-from orchestrator.analysis import order_lines, resolved_lines, run_report
-from orchestrator.results import read_results
-from orchestrator.run import RunError, run_case
+from orchestrator.analysis.metrics import order_lines, resolved_lines, run_report
+from orchestrator.run.results import read_results
+from orchestrator.run.runner import RunError, run_case
 from tests.helpers import fail_master_step, run_here
 
 SPUR = "baguet2010_spur"
@@ -230,8 +230,8 @@ def test_the_fmu_transport_stores_the_report(fmu_dir, tmp_path):
         import json
         import numpy as np
         from fmu_src.case import load_case
-        from orchestrator.results import read_results
-        from orchestrator.run import run_case
+        from orchestrator.run.results import read_results
+        from orchestrator.run.runner import run_case
         case = load_case("baguet2010_spur", {{"bearings.model": "linear"}})
         s = run_case(case, periods=8, out_dir={str(tmp_path)!r}, fmu_dir={str(fmu_dir)!r},
                      progress=False, figures=False)

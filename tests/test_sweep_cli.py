@@ -21,7 +21,7 @@ import pytest
 
 from fmu_src.case import load_case, parse_case, shipped_cases
 from orchestrator.cli import main
-from orchestrator.sweep import DATASETS, point_spectrum, read_sweep_attrs
+from orchestrator.sweep.runner import DATASETS, point_spectrum, read_sweep_attrs
 
 SPUR = "baguet2010_spur"
 TINY = ["--periods", "2", "--set", "simulation.steps_per_mesh_period=16", "--bearing", "linear"]
@@ -167,7 +167,7 @@ def test_order_spectrum_of_a_synthetic_force_recovers_its_lines():
 def test_a_worker_takes_the_case_content_never_a_path():
     """What a worker runs: a Case or its TOML text (reloaded bit for bit); a path, which would
     name the client's folders, is refused as the point's error."""
-    from orchestrator.sweep import SweepPoint, as_case, run_point
+    from orchestrator.sweep.runner import SweepPoint, as_case, run_point
 
     case = load_case(SPUR, {"simulation.steps_per_mesh_period": 16})
     assert as_case(case.to_toml()).values == case.values
@@ -290,7 +290,7 @@ def test_serial_sweep_refuses_to_overwrite_without_the_option(capsys, tmp_path):
 def test_sweep_figures_of_a_two_speed_sweep(dask_sweep, tmp_path, monkeypatch):
     """R / peak-to-peak and the waterfall, titled with the case, the bearing model and the
     fixed operating values, axes labelled with units."""
-    from orchestrator import sweep_figures as sf
+    from orchestrator.figures import sweep as sf
 
     _, files, _, _ = dask_sweep
     seen = {}

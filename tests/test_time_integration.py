@@ -15,7 +15,7 @@ import pytest
 from fmu_src import description
 from fmu_src.case import load_case
 from gear_fmu.newmark import newmark_step
-from orchestrator.run import build_master
+from orchestrator.run.runner import build_master
 
 
 def observed_order(steps, errors) -> float:
@@ -119,7 +119,7 @@ def test_run_warns_when_a_damped_mesh_mode_gets_under_10_steps(steps, warned, tm
     (f_mesh = 1345 Hz): ``gsb run`` says so, names the field to raise, and stores it."""
     import h5py
 
-    from orchestrator.run import run_case
+    from orchestrator.run.runner import run_case
 
     case = load_case("baguet2010_spur", {"bearings.model": "linear",
                                          "simulation.steps_per_mesh_period": steps})

@@ -1,0 +1,177 @@
+"""``docs/fmu-variables.md``, rendered from the contract (:mod:`fmu_src.contract`).
+
+``python -m fmu_src.build.variables_doc > docs/fmu-variables.md``; a test keeps the two in sync.
+"""
+
+from __future__ import annotations
+
+from bearing_fmu import MODELS, fmu_name
+from fmu_src.contract import BEARING_VARIABLES, GEAR_VARIABLES, connections
+
+__all__ = ["document", "markdown_table"]
+
+
+def _start(v) -> str:
+    if v.causality in ("output", "calculatedParameter"):
+        return "-"
+    if v.type == "String":
+        return f'"{v.start}"'
+    if v.type == "Boolean":
+        return str(v.start).lower()
+    return f"{v.start:g}"
+
+
+def _bounds(v) -> str:
+    parts = []
+    if v.minimum is not None:
+        parts.append(f"{'>' if v.exclusive_minimum else '>='} {v.minimum:g}")
+    if v.maximum is not None:
+        parts.append(f"<= {v.maximum:g}")
+    if v.choices:
+        parts.append(" or ".join(map(str, v.choices)))
+    return ", ".join(parts) or "-"
+
+
+def markdown_table(variables=BEARING_VARIABLES) -> str:
+    """A contract as a Markdown table."""
+    lines = ["| name | causality | type | unit | start | allowed | description |",
+             "| --- | --- | --- | --- | --- | --- | --- |"]
+    for v in variables:
+        lines.append(f"| `{v.name}` | {v.causality} | {v.type} | {v.unit or '-'} | {_start(v)} "
+                     f"| {_bounds(v)} | {v.description} |")
+    return "\n".join(lines)
+
+
+_HEADER = """# FMU variables
+
+Generated from `fmu_src/contract.py` (`python -m fmu_src.build.variables_doc > docs/fmu-variables.md`);
+a test keeps the two in sync. Global frame (s, t, z) of the gear system (s from the pinion
+centre to the gear centre, z along the shafts, t = z x s), SI units. Build the FMUs with
+`gsb build-fmus [CASE]` (`fmu_src/build/fmus.py`); every built FMU passes `fmpy validate`.
+
+## Conventions and wiring
+
+- The pinion shaft (bearings 1, 2) turns about +z at the input speed omega; the gear shaft
+  (bearings 3, 4) about -z at omega z1 / z2. A bearing FMU works in its own local frame: its
+  parameter `rotation_sign` is +1 on the pinion shaft and -1 on the gear shaft (the local frame
+  is mirrored so that the film model always sees the journal turning about its +z), and
+  `frame_angle` is 0 (local x along s). The gear-shaft FMU publishes both per bearing
+  (`rotation_sign_j`, `frame_angle_j`, calculated parameters) and the shaft speeds as outputs
+  (`omega_j`).
+- The system is wired by plain output -> input connections, nothing computed in between
+  (`fmu_src.contract.connections`; `gsb export-ssp` writes them into an SSP file). For bearing
+  1 (bearings 2-4 alike, with the suffix `_2` ... `_4`):
+
+| from | output | to | input |
+| --- | --- | --- | --- |
+{wiring}
+
+- The gear-shaft FMU builds each bearing's affine law (paper Eq. 17) from those inputs:
+  `F(X, Xdot) = F - Kb (X - X_eval) - Cb (Xdot - Xdot_eval)`, the force, stiffness and damping
+  the bearing FMU gave at the journal state `X_eval` it echoes (`s_eval`, ...). Whatever the
+  master, the law is a correct linearisation about a state the structure passed through; how
+  far that state lags is the master's coupling error (next section).
+- Values are checked when set: a value out of its bounds (column "allowed"), a non-finite
+  number or a choice not listed is refused by fmi2SetReal/SetInteger with fmi2Error, the value
+  and the limit in the log, and the variable keeps its previous value. An output that cannot be
+  computed (a journal outside the clearance, a static solution that does not converge) makes
+  the read return fmi2Error, the reason in the log (the values read are NaN).
+- Every FMU's state (fmi2GetFMUstate, fmi2SerializeFMUstate) holds everything its next outputs
+  depend on, the hybrid solver's warm start included: a restored state reproduces the outputs
+  bit for bit.
+
+## Masters
+
+- Iterative, with rollback (`gsb run`, `orchestrator.coupling.master`): each step, the gear-shaft FMU
+  steps with the laws linearised at the last iterate, the bearings are evaluated at the new
+  journal states, and the step is redone from a saved FMU state (fmi2GetFMUstate /
+  fmi2SetFMUstate) until film force and law agree to the case's tolerance: Newton-Raphson on
+  the bearing nonlinearity, equal to a monolithic solution to that tolerance.
+- Non-iterative, Jacobi type (ecos, and most fixed-step masters): every FMU steps with the
+  inputs of the last exchange, then outputs are exchanged. The bearing outputs exchanged after
+  step n were evaluated at the journal states of step n - 1, so the gear-shaft FMU steps from
+  X_n with laws linearised at X_n-1. `tests/test_ecos.py` reproduces ecos's trajectories to
+  1e-12 with an emulation of exactly this scheme. At the paper's time step (mesh period / 32)
+  the coupling error is large: over 1024 steps of the paper's spur case, ecos's journal
+  positions differ from the iterative solution by up to 5.2 % of the largest displacement,
+  26 % of the orbit's peak-to-peak amplitude (2.0e-5 m); the difference grows over the first
+  8 mesh periods and then stays there (23 % at step 1024). Use a master with rollback, or
+  much smaller communication steps, when the orbit matters.
+- Initialisation: in initialisation mode the gear-shaft FMU's outputs are the static solution
+  for its current law inputs, so a master's initialisation loop is a Newton iteration on X0;
+  from the law inputs' start values (journals at the centre) it overshoots the clearance. The
+  SSP archive of `gsb export-ssp` therefore carries the static solution X0 that `gsb`'s master
+  found as start values of the connected inputs: a non-iterative master starts in equilibrium
+  (ecos reproduces X0 to 6e-15).
+
+## A bearing FMU of your own
+
+`gsb run CASE --bearing-fmu MY.fmu` (or `orchestrator.coupling.fmi.FmuBearings`) accepts any
+algebraic FMU (outputs follow inputs without a doStep) with this minimal contract:
+
+- Real inputs `s`, `t` [m] and `s_dot`, `t_dot` [m/s]: the journal-centre state, global frame;
+- Real outputs `F_s`, `F_t` [N]: the film force on the journal, global frame.
+
+Optional: an input `omega` gets the shaft speed magnitude [rad/s]; parameters named as in the
+table below (`D`, `L`, `C`, `mu`, `frame_angle`, `rotation_sign`, the model options) get the
+case's values (mirror your model for `rotation_sign` -1: the gear shaft turns about -z). With
+all eight outputs `K_ss` ... `C_tt` they are used as they are; without them the master takes
+Kb and Cb by central differences of the force (steps 1e-5 C on positions and 1e-5 C omega on
+velocities: 8 more evaluations per call; round-off about 1e-12 of Kb). An FMU built with
+pythonfmu gets this package's native layer (statuses, a clean exit, the loader for C/C++
+hosts) from `fmu_src.build.fmus.patch_fmu`. Direct wiring (an SSP, ecos) needs the full bearing
+contract below: the gear-shaft FMU reads Kb, Cb and the evaluation state as inputs.
+
+## Bearing FMUs
+
+Every bearing FMU ({fmus}) has exactly these variables; the model options (`nodes`, ...)
+are generated from the options the registered models declare, and each FMU ignores the
+options of the other models. Outputs are computed when read, so they follow new inputs
+without a doStep (algebraic FMUs: every output depends on every input). `BearingLinear` runs
+the hybrid model until fmi2ExitInitializationMode and then freezes its 8 coefficients at the
+journal state it has then (the static position; paper Sec. 3.3).
+
+"""
+
+_GEAR = """
+## Gear-shaft FMU (GearShaft)
+
+The structural slave (`fmu_src/slaves/gear_shaft.py` around `gear_fmu.structure.Structure`):
+Timoshenko shafts, the gear pair's distributed mesh element and the Newmark/Newton/contact step.
+It carries its case (`resources/case.toml`, the shipped paper case unless `gsb build-fmus CASE`
+built it for another); the case's structural fields are its parameters, starting at the
+case's values. It imports nothing from the master package `orchestrator`.
+
+Behaviour:
+
+- Initialisation mode: outputs are the STATIC solution (velocities zero, constant loads) for
+  the current inputs, solved when an output is read after an input changed. The support loads
+  (calculated parameters) are the loads on stiff supports, a first guess of the static
+  solution. The start values of the law inputs (isotropic 1e8 N/m and 1e4 N s/m, no force,
+  about the centre) make a stand-alone `fmpy simulate` run sensible; in a system, start from
+  X0 (previous section).
+- `fmi2ExitInitializationMode`: if no static solution was computed yet, it is computed for the
+  current inputs; the modal damping is rebuilt on the modes with the symmetric part of the
+  current Kb (`Structure.set_damping_reference`).
+- `fmi2DoStep(t, dt)`: one Newmark step from t (the FMU's time) to t + dt with the current
+  laws. The outputs do not depend directly on the inputs in step mode (no feedthrough): they
+  change at doStep. A step that does not converge returns fmi2Discard (reason in the log);
+  `fmi2SetFMUstate` returns to a saved state.
+- `fmi2GetFMUstate` / `fmi2SetFMUstate` / `fmi2SerializeFMUstate` save and restore the
+  structural state (t, X, Xdot, Xddot, contact set, mesh outputs), the inputs, the parameters
+  and the outputs exactly (pickle).
+
+"""
+
+
+def document() -> str:
+    """The text of docs/fmu-variables.md."""
+    fmus = ", ".join(fmu_name(m) for m in MODELS)
+    wiring = "\n".join(f"| `{a}` | `{o}` | `{b}` | `{i}` |" for a, o, b, i in connections()
+                       if "bearing1" in (a, b))
+    return (_HEADER.format(fmus=fmus, wiring=wiring) + markdown_table(BEARING_VARIABLES) + "\n"
+            + _GEAR + markdown_table(GEAR_VARIABLES) + "\n")
+
+
+if __name__ == "__main__":
+    print(document(), end="")

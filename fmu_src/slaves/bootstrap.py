@@ -1,0 +1,87 @@
+"""First code an FMU of this package runs: the per-user cache and the FMU's own code.
+
+Copied to the root of every FMU's resources and imported by its slave script before anything
+else, so it uses the standard library only. :func:`stage_code` copies the FMU's code
+(``resources/gsb_code``, written by :mod:`fmu_src.build.fmus` with a content hash) once into the
+per-user cache and puts it first on ``sys.path``: the FMU then runs in any Python with numpy,
+scipy and numba, without this package installed. Its numba kernels are cached per version of
+the code, whatever copy of the code compiled them (:mod:`bearing_fmu._numba_cache`), so they
+compile once per machine and code version, not at every instantiation from a freshly
+extracted FMU. A host that has already imported the package's modules keeps them (one copy of
+a module per process).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import shutil
+import sys
+import tempfile
+from pathlib import Path
+
+__all__ = ["cache_dir", "locked", "stage_code"]
+
+#: folder of the FMU's resources holding its code, and the file with the code's hash
+CODE_DIR = "gsb_code"
+HASH_FILE = "HASH"
+
+
+def cache_dir() -> Path:
+    """The per-user cache folder: ``GSB_CACHE_DIR``, else the platform's user cache folder
+    (``$XDG_CACHE_HOME`` or ``~/.cache`` on Linux, ``~/Library/Caches`` on macOS,
+    ``%LOCALAPPDATA%`` on Windows) + ``gear-shaft-bearing``."""
+    env = os.environ.get("GSB_CACHE_DIR")
+    if env:
+        return Path(env)
+    if sys.platform == "win32":
+        base = Path(os.environ.get("LOCALAPPDATA", Path.home() / "AppData" / "Local"))
+    elif sys.platform == "darwin":
+        base = Path.home() / "Library" / "Caches"
+    else:
+        base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
+    return base / "gear-shaft-bearing"
+
+
+@contextlib.contextmanager
+def locked(folder: Path):
+    """An exclusive lock on ``folder/.build.lock`` while the block runs, for the builds into a
+    cache folder (POSIX ``flock``; elsewhere none: the builds' atomic moves still leave
+    complete files)."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover - Windows
+        yield
+        return
+    with open(folder / ".build.lock", "a") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(lock, fcntl.LOCK_UN)
+
+
+def stage_code(resources: str | Path) -> Path | None:
+    """Copy ``resources/gsb_code`` to ``<cache>/code/<hash>`` (once; atomic) and put it first on
+    ``sys.path``. Returns the staged folder, or None for an FMU without packaged code."""
+    src = Path(resources) / CODE_DIR
+    if not (src / HASH_FILE).is_file():
+        return None
+    target = cache_dir() / "code" / (src / HASH_FILE).read_text().strip()
+    if not (target / HASH_FILE).is_file():
+        target.parent.mkdir(parents=True, exist_ok=True)
+        tmp = Path(tempfile.mkdtemp(prefix=".staging-", dir=target.parent))
+        try:
+            shutil.copytree(src, tmp / "code")
+            try:
+                os.replace(tmp / "code", target)  # atomic; a concurrent stager may have won
+            except OSError:
+                if not (target / HASH_FILE).is_file():
+                    raise
+        finally:
+            shutil.rmtree(tmp, ignore_errors=True)
+    if str(target) not in sys.path:
+        sys.path.insert(0, str(target))
+    return target

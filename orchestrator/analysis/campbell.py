@@ -1,0 +1,305 @@
+"""Linearised modes of a case about its static solution and its Campbell diagram (``gsb modal``).
+
+:func:`linearise` builds the case's master in-process, solves the static solution X0 with the
+bearings (:meth:`orchestrator.coupling.master.Master.solve_static`), ends the static phase so that
+the
+structure builds the damping C the transient uses
+(:meth:`~orchestrator.coupling.master.Master.exit_initialization`), and computes at X0 (paper Eq.
+20):
+
+* the exact mean mesh stiffness (:func:`gear_fmu.analyses.exact_mean_mesh_stiffness`);
+* the undamped modes of K0 with the symmetric part of the bearings' Kb
+  (:func:`gear_fmu.analyses.modes`);
+* the damped modes of M, C0 = C + Cb(X0), K0 = K_shaft + K_mesh,mean + Kb(X0), the bearings'
+  Kb and Cb full 2x2 (:func:`gear_fmu.damped_modes.damped_modes`).
+
+:func:`campbell_data` repeats it over pinion speeds (the bearings' equilibrium, Kb and Cb
+depend on the speed); :func:`plot_campbell` draws the damped frequencies against the speed
+with the mesh-order lines ``f = k z1 omega / (2 pi)`` and the 1x line ``f = omega / (2 pi)``,
+and marks where a mode crosses them. Modes are followed from one speed to the next by their
+shapes (largest modal assurance criterion ``|phi_a^H M phi_b|^2``, one-to-one); a crossing is
+interpolated linearly along such a segment.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import scipy.optimize
+
+from bearing_fmu.base import BearingError
+from fmu_src.case import Case
+from gear_fmu.analyses import exact_mean_mesh_stiffness, line_of_action_stiffness, modes
+from gear_fmu.damped_modes import MESH_MODE_FRACTION, DampedModes, damped_modes
+from gear_fmu.modal import Modes
+from orchestrator.coupling.master import CouplingError
+from orchestrator.run.runner import build_master
+
+__all__ = ["Linearised", "campbell_data", "crossings", "linearise", "plot_campbell"]
+
+#: mesh harmonics drawn and searched, k = 1 .. HARMONICS
+HARMONICS = 4
+#: a mode is followed to the next speed when the MAC of the two shapes is at least this [-]
+MAC_LIMIT = 0.5
+
+
+@dataclass
+class Linearised:
+    """The linearised system of a case at X0 (module docstring).
+
+    Attributes
+    ----------
+    case : Case
+    bearings : str
+        Where Kb and Cb come from (for printing).
+    kb, cb : (4, 2, 2) arrays
+        Bearing stiffness [N/m] and damping [N s/m] at X0, global frame.
+    mesh_stiffness : (12, 12) array
+        Exact mean mesh stiffness [N/m, N, N m].
+    mesh_stiffness_loa : float
+        Its value along the line of action [N/m]
+        (:func:`gear_fmu.analyses.line_of_action_stiffness`).
+    reference_mesh_stiffness_loa : float or None
+        The same of the 16-angle mean the damping C was built on [N/m] (None without).
+    contact_width : float
+        Common face width [m] (stiffness per unit width = ``mesh_stiffness_loa / width``).
+    mass : (n_dof, n_dof) array
+        M (to compare mode shapes).
+    modes : Modes or None
+        Undamped modes of K0 (symmetric part of Kb).
+    damped : DampedModes
+    z1 : int
+        Pinion teeth.
+    """
+
+    case: Case
+    bearings: str
+    kb: np.ndarray
+    cb: np.ndarray
+    mesh_stiffness: np.ndarray
+    mesh_stiffness_loa: float
+    reference_mesh_stiffness_loa: float | None
+    contact_width: float
+    mass: np.ndarray
+    modes: Modes | None
+    damped: DampedModes
+    z1: int
+
+
+def linearise(case: Case, bearing_stiffness: float | None = None, n_gauss: int = 8,
+              undamped: bool = True) -> Linearised:
+    """Modes of a case linearised about X0 (module docstring).
+
+    Parameters
+    ----------
+    case : Case
+    bearing_stiffness : float, optional
+        Isotropic bearing stiffness [N/m] instead of the bearings' film at X0; then Cb = 0
+        and the damping C is built on the reference configuration with this stiffness.
+    n_gauss : int
+        Gauss-Legendre points per event-free interval of the mean mesh stiffness.
+    undamped : bool
+        Also the undamped modes (``Linearised.modes``).
+    """
+    master = build_master(case, in_process=True)
+    try:
+        st = master.structure.structure
+        if bearing_stiffness is None:
+            master.solve_static()
+            master.exit_initialization()  # C as in the transient: built with the static Kb
+            kb = np.array(master.laws.kb, dtype=float)
+            cb = np.array(master.laws.cb, dtype=float)
+            kb_ref = 0.5 * (kb + np.transpose(kb, (0, 2, 1)))
+            source = (f"{case['bearings.model']} film at the static solution X0 (damped modes: "
+                      "Kb and Cb full 2x2; undamped modes: symmetric part of Kb)")
+        else:
+            k = float(bearing_stiffness)
+            kb = np.broadcast_to(k * np.eye(2), (4, 2, 2)).copy()
+            cb = np.zeros((4, 2, 2))
+            kb_ref = k
+            st.set_damping_reference(k)
+            source = f"isotropic {k:g} N/m, no bearing damping (Cb = 0)"
+        k_mesh = exact_mean_mesh_stiffness(st, kb_ref, n_gauss)
+        ref = st.reference_mesh_stiffness
+        found = modes(st, kb_ref, mesh_stiffness=k_mesh) if undamped else None
+        damped = damped_modes(st.system, st.damping_full, k_mesh, kb, cb)
+        return Linearised(
+            case, source, kb, cb, k_mesh, line_of_action_stiffness(st, k_mesh),
+            None if ref is None else line_of_action_stiffness(st, ref),
+            st.mesh.pair.contact_width, st.system.mass, found, damped,
+            int(st.system.teeth[0]))
+    finally:
+        master.close()
+
+
+def campbell_data(case: Case, speeds, bearing_stiffness: float | None = None,
+                  n_gauss: int = 8, max_frequency: float = 6000.0) -> dict:
+    """Damped modes at each pinion speed, each with its own static solution X0.
+
+    Parameters
+    ----------
+    case : Case
+    speeds : array_like
+        Pinion speeds [rad/s], > 0.
+    bearing_stiffness : float, optional
+        Isotropic bearings without damping (:func:`linearise`): the modes then do not depend on
+        the speed.
+    n_gauss : int
+    max_frequency : float
+        Modes above ``1.5 max_frequency`` [Hz] are not kept.
+
+    Returns
+    -------
+    dict
+        ``speeds`` (kept speeds, rad/s), ``modes`` (per speed: dict of ``frequency_hz``,
+        ``damping_ratio``, ``mesh_energy_fraction``, ``shapes`` of the oscillating modes
+        below the limit), ``mass``, ``z1``, ``skipped`` (list of (speed, message) where the
+        static solution failed), ``segments`` (``(speed index a, mode at a, mode at a + 1)``:
+        the same mode at neighbouring speeds).
+    """
+    kept, per_speed, skipped = [], [], []
+    mass, z1 = None, None
+    for w in np.asarray(speeds, dtype=float):
+        try:
+            lin = linearise(case.with_overrides({"operation.speed": float(w)}),
+                            bearing_stiffness, n_gauss, undamped=False)
+        except (BearingError, CouplingError) as exc:
+            skipped.append((float(w), str(exc)))
+            continue
+        d = lin.damped
+        f = d.frequency_hz
+        sel = (~d.overdamped) & (f <= 1.5 * max_frequency)
+        per_speed.append({"frequency_hz": f[sel], "damping_ratio": d.damping_ratio[sel],
+                          "mesh_energy_fraction": d.mesh_energy_fraction[sel],
+                          "shapes": d.shapes[:, sel]})
+        kept.append(float(w))
+        mass, z1 = lin.mass, lin.z1
+    data = {"speeds": np.array(kept), "modes": per_speed, "mass": mass, "z1": z1,
+            "skipped": skipped, "max_frequency": float(max_frequency)}
+    data["segments"] = _segments(data)
+    return data
+
+
+def _segments(data: dict) -> list[tuple[int, int, int]]:
+    """``(speed index a, mode at a, mode at a + 1)``: the same mode at two neighbouring speeds
+    (one-to-one assignment maximising the MAC, kept when MAC >= :data:`MAC_LIMIT`)."""
+    out = []
+    m = data["mass"]
+    for a in range(len(data["modes"]) - 1):
+        pa, pb = data["modes"][a]["shapes"], data["modes"][a + 1]["shapes"]
+        if pa.shape[1] == 0 or pb.shape[1] == 0:
+            continue
+        mac = np.abs(pa.conj().T @ (m @ pb)) ** 2  # shapes have phi^H M phi = 1
+        rows, cols = scipy.optimize.linear_sum_assignment(-mac)
+        out += [(a, int(i), int(j)) for i, j in zip(rows, cols, strict=True)
+                if mac[i, j] >= MAC_LIMIT]
+    return out
+
+
+def crossings(data: dict, harmonics: int = HARMONICS,
+              min_mesh_fraction: float = MESH_MODE_FRACTION) -> list[dict]:
+    """Where a followed mode crosses an excitation line between two speeds.
+
+    Lines: mesh orders ``f = k z1 omega / (2 pi)``, k = 1 .. harmonics (``order`` k), for modes
+    with a mesh strain energy share ``>= min_mesh_fraction`` at either speed; the 1x line
+    ``f = omega / (2 pi)`` (``order`` 0) for every mode. Linear interpolation along the
+    segment. Returns dicts with ``order``, ``speed_rad_s``, ``speed_rpm``, ``frequency_hz``,
+    ``damping_ratio``, ``mesh_energy_fraction``, sorted by order then speed.
+    """
+    out = []
+    w, z1 = data["speeds"], data["z1"]
+    for a, i, j in data["segments"]:
+        ma, mb = data["modes"][a], data["modes"][a + 1]
+        fa, fb = ma["frequency_hz"][i], mb["frequency_hz"][j]
+        share = max(ma["mesh_energy_fraction"][i], mb["mesh_energy_fraction"][j])
+        orders = [0] + (list(range(1, harmonics + 1)) if share >= min_mesh_fraction else [])
+        for k in orders:
+            slope = (1.0 if k == 0 else k * z1) / (2.0 * math.pi)
+            ga, gb = fa - slope * w[a], fb - slope * w[a + 1]
+            if ga * gb > 0.0 or ga == gb:
+                continue
+            s = ga / (ga - gb)
+            speed = w[a] + s * (w[a + 1] - w[a])
+            zeta, mesh = ((1 - s) * ma[key][i] + s * mb[key][j]
+                          for key in ("damping_ratio", "mesh_energy_fraction"))
+            out.append({"order": k, "speed_rad_s": float(speed),
+                        "speed_rpm": float(speed * 30.0 / math.pi),
+                        "frequency_hz": float(slope * speed), "damping_ratio": float(zeta),
+                        "mesh_energy_fraction": float(mesh)})
+    out.sort(key=lambda c: (c["order"], c["speed_rad_s"]))
+    return out
+
+
+def plot_campbell(data: dict, path, title: str, harmonics: int = HARMONICS,
+                  min_mesh_fraction: float = MESH_MODE_FRACTION) -> Path:
+    """Campbell diagram PNG (module docstring): damped frequencies [Hz] against pinion speed
+    [rad/s] up to ``data["max_frequency"]``, coloured by damping ratio, marker area by mesh
+    energy share; mesh-order and 1x lines; crossings marked (:func:`crossings`)."""
+    from matplotlib.colors import LogNorm
+
+    from orchestrator.figures.base import pyplot
+
+    plt = pyplot()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    w, z1, f_max = data["speeds"], data["z1"], data["max_frequency"]
+    fig, ax = plt.subplots(figsize=(10, 7), constrained_layout=True)
+    if w.size:
+        x = np.linspace(0.0, w.max() * 1.05, 2)
+        for k in range(1, harmonics + 1):
+            ax.plot(x, k * z1 * x / (2 * math.pi), "--", color="tab:red", lw=1.0, alpha=0.8,
+                    label="mesh orders f = k z1 ω / 2π" if k == 1 else None)
+            at = min(0.95 * f_max, k * z1 * w.max() / (2 * math.pi))  # label inside the axes
+            ax.annotate(f"k = {k}", (at * 2 * math.pi / (k * z1), at),
+                        textcoords="offset points", xytext=(-3, 0), ha="right", va="center",
+                        color="tab:red", fontsize=9)
+        ax.plot(x, x / (2 * math.pi), ":", color="k", lw=1.0, label="1× pinion speed")
+        ax.annotate("1× pinion speed", (w.max(), w.max() / (2 * math.pi)),
+                    textcoords="offset points", xytext=(-4, 4), ha="right", fontsize=9)
+    for a, i, j in data["segments"]:
+        ax.plot([w[a], w[a + 1]], [data["modes"][a]["frequency_hz"][i],
+                                   data["modes"][a + 1]["frequency_hz"][j]],
+                "-", color="0.6", lw=0.8, zorder=1)
+    norm = LogNorm(vmin=0.01, vmax=1.0)
+    sc = None
+    for wi, m in zip(w, data["modes"], strict=True):
+        share = np.nan_to_num(m["mesh_energy_fraction"], nan=0.0).clip(0.0, 1.0)
+        sc = ax.scatter(np.full(m["frequency_hz"].size, wi), m["frequency_hz"],
+                        c=m["damping_ratio"].clip(0.01, 1.0), cmap="viridis_r", norm=norm,
+                        s=12 + 110 * share, edgecolors="k", linewidths=0.3, zorder=3)
+    if sc is not None:
+        fig.colorbar(sc, ax=ax, label="damping ratio ζ [-]")
+    cross = crossings(data, harmonics, min_mesh_fraction)
+    mesh = [c for c in cross if c["order"] > 0 and c["frequency_hz"] <= f_max]
+    once = [c for c in cross if c["order"] == 0 and c["frequency_hz"] <= f_max]
+    if mesh:
+        ax.plot([c["speed_rad_s"] for c in mesh], [c["frequency_hz"] for c in mesh], "x",
+                color="tab:red", ms=11, mew=2.2, zorder=4,
+                label=f"mesh order × mode with ≥ {min_mesh_fraction:.0%} mesh energy "
+                      "(ω in rad/s)")
+        for c in mesh:
+            ax.annotate(f"{c['speed_rad_s']:.0f}", (c["speed_rad_s"], c["frequency_hz"]),
+                        textcoords="offset points", xytext=(0, 9), ha="center",
+                        va="bottom", rotation=90, color="tab:red", fontsize=8)
+    if once:
+        ax.plot([c["speed_rad_s"] for c in once], [c["frequency_hz"] for c in once], "o",
+                mfc="none", mec="k", ms=8, zorder=4, label="1× line × mode")
+    ax.set_xlim(0.0, (w.max() if w.size else 1.0) * 1.05)
+    ax.set_ylim(0.0, f_max)
+    ax.set_xlabel("pinion speed ω [rad/s]")
+    ax.set_ylabel("damped natural frequency f_d [Hz]")
+    rpm = ax.secondary_xaxis("top", functions=(lambda v: v * 30 / math.pi,
+                                               lambda v: v * math.pi / 30))
+    rpm.set_xlabel("pinion speed [rpm]")
+    ax.grid(True, alpha=0.3)
+    ax.set_title(title, fontsize=11)
+    handles, labels = ax.get_legend_handles_labels()
+    handles.append(plt.Line2D([], [], ls="none", marker="o", mfc="0.7", mec="k", ms=10))
+    labels.append("damped mode (marker area: mesh strain energy share)")
+    fig.legend(handles, labels, loc="outside lower center", ncols=2, fontsize=9)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path

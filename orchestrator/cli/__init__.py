@@ -1,0 +1,57 @@
+"""The ``gsb`` command line."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+
+from bearing_fmu.base import BearingError
+from fmu_src.case import CaseError
+from gear_fmu.geometry import GearGeometryError
+from orchestrator.run.runner import RunError, RunInterrupted
+
+
+def make_parser() -> argparse.ArgumentParser:
+    from orchestrator.cli import bearing as bearing_calc
+    from orchestrator.cli import doctor
+    from orchestrator.cli import plot as plot_cli
+    from orchestrator.cli import run as run_cli
+    from orchestrator.cli import sweep as sweep_cli
+
+    parser = argparse.ArgumentParser(
+        prog="gsb",
+        description="Gear-shaft-bearing nonlinear dynamics (Baguet & Jacquenot 2010).",
+    )
+    sub = parser.add_subparsers(dest="command", required=True)
+    bearing_calc.add_parser(sub)
+    run_cli.add_parsers(sub)
+    sweep_cli.add_parser(sub)
+    plot_cli.add_parser(sub)
+    doctor.add_parser(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = make_parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except RunInterrupted as exc:
+        print(f"gsb {args.command}: {exc}", file=sys.stderr)
+        return exc.exit_code
+    except (BearingError, CaseError, GearGeometryError, RunError) as exc:
+        print(f"gsb {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"gsb {args.command}: interrupted", file=sys.stderr)
+        return 130
+    except Exception as exc:  # a bug, not the user's input: one line, the traceback on demand
+        if os.environ.get("GSB_TRACEBACK"):
+            raise
+        print(f"gsb {args.command}: internal error: {type(exc).__name__}: {exc} (please "
+              "report it; GSB_TRACEBACK=1 shows the traceback)", file=sys.stderr)
+        return 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

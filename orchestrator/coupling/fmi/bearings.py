@@ -1,0 +1,207 @@
+"""The bearing FMUs behind the master's :class:`~orchestrator.coupling.master.BearingSet` interface.
+
+Two kinds of bearing FMU are accepted, told apart by their variables:
+
+* this package's bearing FMUs (:data:`fmu_src.contract.BEARING_VARIABLES`): force, stiffness
+  and damping are outputs;
+* any algebraic FMU with the minimal contract (:data:`MINIMAL_INPUTS`, :data:`MINIMAL_OUTPUTS`:
+  the journal state in, the film force out, global frame, SI units): the stiffness and damping
+  are then central finite differences of its force (steps :data:`FD_STEP`). Of the parameters a
+  case gives a bearing, those the FMU declares are set; an input ``omega`` gets the shaft speed.
+
+Every call's status is checked; a failure raises
+:class:`~orchestrator.coupling.fmi.instance.FmuError`
+with the FMU's log.
+"""
+
+from __future__ import annotations
+
+import ctypes
+
+import numpy as np
+
+from fmu_src.contract import (
+    DAMPING_NAMES,
+    FORCE_NAMES,
+    STATE_NAMES,
+    STIFFNESS_NAMES,
+)
+from orchestrator.coupling.fmi.instance import FmuError, FmuInstance, all_finite, status_name
+from orchestrator.coupling.master import BearingSet
+
+__all__ = ["MINIMAL_INPUTS", "MINIMAL_OUTPUTS", "FmuBearings"]
+
+#: what any bearing FMU must have: Real inputs (journal state, global frame [m, m/s]) ...
+MINIMAL_INPUTS = STATE_NAMES
+#: ... and Real outputs (film force on the journal, global frame [N])
+MINIMAL_OUTPUTS = FORCE_NAMES
+#: relative finite-difference steps for force-only FMUs: h = FD_STEP * C on positions and
+#: FD_STEP * C * omega on velocities (central differences: truncation ~ FD_STEP^2, round-off
+#: ~ eps / FD_STEP, both near 1e-10 of the stiffness)
+FD_STEP = 1e-5
+
+
+class FmuBearings(BearingSet):
+    """Bearing FMUs, one instance per bearing (swap a model by naming another file).
+
+    Parameters
+    ----------
+    fmus : sequence of path
+        FMU file of each bearing.
+    parameters : sequence of dict
+        Parameter values of each bearing (names of :data:`fmu_src.contract.BEARING_VARIABLES`).
+        This package's FMUs must accept all of them; a force-only FMU gets those it declares.
+    omegas : sequence of float
+        Shaft speed magnitude at each bearing [rad/s].
+    """
+
+    _OUTPUTS = FORCE_NAMES + STIFFNESS_NAMES + DAMPING_NAMES
+
+    def __init__(self, fmus, parameters, omegas):
+        self.slaves = []
+        self.force_only = []  # per bearing: stiffness and damping by finite differences
+        self.clearances = []  # per bearing [m]: FD steps, the first guess's bound
+        self._omegas = [float(w) for w in omegas]
+        try:
+            for b, (path, params) in enumerate(zip(fmus, parameters, strict=True)):
+                s = FmuInstance(path, f"bearing{b + 1}")
+                self.slaves.append(s)
+                self.force_only.append(self._check_contract(b, s))
+                if not self.force_only[-1]:
+                    unknown = sorted(set(params) - set(s.vr))
+                    if unknown:
+                        raise FmuError(f"bearing {b + 1} ({s.path.name}): unknown FMU "
+                                       f"parameters {unknown}")
+                s.fmu.setupExperiment(startTime=0.0)
+                s.fmu.enterInitializationMode()
+                s.set({k: v for k, v in params.items() if k in s.vr}, f"bearing {b + 1}")
+                if "omega" in s.vr:
+                    s.set({"omega": float(omegas[b])}, f"bearing {b + 1}")
+                self.clearances.append(self._clearance(b, s, params))
+        except BaseException:
+            self.close()
+            raise
+        self.in_init = True
+        self._in_vr = [(ctypes.c_uint * 4)(*[s.vr[n] for n in STATE_NAMES]) for s in self.slaves]
+        self._out_vr = [(ctypes.c_uint * (2 if fo else 10))(
+            *[s.vr[n] for n in (FORCE_NAMES if fo else self._OUTPUTS)])
+            for s, fo in zip(self.slaves, self.force_only, strict=True)]
+        # the laws of one evaluation, bearing by bearing in the FMUs' output order (force,
+        # Kb, Cb: rows of ModelBearings.evaluate's (nb, 5, 2)), and each bearing's journal
+        # state, read and written by the FMI calls in place (_exchange)
+        nb = len(self.slaves)
+        self._laws = (ctypes.c_double * (10 * nb))()
+        self._laws_np = np.frombuffer(self._laws, dtype=np.float64).reshape(nb, 5, 2)
+        self._states = (ctypes.c_double * (4 * nb))()
+        self._states_np = np.frombuffer(self._states, dtype=np.float64).reshape(nb, 4)
+        size = ctypes.sizeof(ctypes.c_double)
+        self._calls = [(s.fmu.dll.fmi2SetReal, s.fmu.dll.fmi2GetReal, s.fmu.component)
+                       for s in self.slaves]  # valid while self.slaves is (close empties it)
+        self._law_at = [ctypes.cast(ctypes.addressof(self._laws) + 10 * size * b,
+                                    ctypes.POINTER(ctypes.c_double)) for b in range(nb)]
+        self._state_at = [ctypes.cast(ctypes.addressof(self._states) + 4 * size * b,
+                                      ctypes.POINTER(ctypes.c_double)) for b in range(nb)]
+
+    @staticmethod
+    def _check_contract(b: int, s: FmuInstance) -> bool:
+        """True for a force-only FMU; FmuError naming what is missing for anything else."""
+        kinds = {v.name: (v.causality, v.type) for v in s.md.modelVariables}
+        missing = [f"input {n}" for n in MINIMAL_INPUTS if kinds.get(n) != ("input", "Real")]
+        missing += [f"output {n}" for n in MINIMAL_OUTPUTS if kinds.get(n) != ("output", "Real")]
+        if missing:
+            raise FmuError(f"bearing {b + 1} ({s.path.name}) lacks the minimal bearing "
+                           f"contract: {', '.join(missing)} (docs/fmu-variables.md)")
+        jac = STIFFNESS_NAMES + DAMPING_NAMES
+        return not all(kinds.get(n) == ("output", "Real") for n in jac)
+
+    def _call(self, b: int, s: FmuInstance, status: int, what: str, states) -> None:
+        if status > 1:  # discard, error, fatal
+            raise FmuError(f"bearing {b + 1} ({s.path.name}) failed at state "
+                           f"{np.asarray(states).tolist()}: {what} returned "
+                           f"{status_name(status)}; FMU log: {s.log_tail()}")
+
+    def _exchange(self, b: int, s: FmuInstance, n: int) -> None:
+        """Set the journal state of bearing b from its row of the state buffer, read its first
+        ``n`` outputs into its row of the law buffer (FmuError on a failed call or a
+        non-finite output)."""
+        set_real, get_real, c = self._calls[b]
+        state = self._states_np[b]
+        self._call(b, s, set_real(c, self._in_vr[b], 4, self._state_at[b]), "fmi2SetReal",
+                   state)
+        self._call(b, s, get_real(c, self._out_vr[b], n, self._law_at[b]), "fmi2GetReal",
+                   state)
+        if not all_finite(self._laws[10 * b:10 * b + n]):
+            raise FmuError(f"bearing {b + 1} ({s.path.name}) failed at state "
+                           f"{state.tolist()}: non-finite outputs; FMU log: {s.log_tail()}")
+
+    def _force(self, b: int, s: FmuInstance, state, n: int) -> np.ndarray:
+        """Set the journal state of bearing b, read its first ``n`` outputs."""
+        self._states_np[b] = state
+        self._exchange(b, s, n)
+        return self._laws_np[b].reshape(10)[:n].copy()
+
+    def _fd_jacobian(self, b: int, s: FmuInstance, state):
+        """Kb = -dF/dX, Cb = -dF/dXdot of a force-only FMU by central differences (steps
+        :data:`FD_STEP`), then the force at ``state`` itself (its evaluation state last)."""
+        hx = FD_STEP * self.clearances[b]
+        hv = hx * self._omegas[b]
+        jac = np.empty((2, 4))
+        for j, h in enumerate((hx, hx, hv, hv)):
+            plus, minus = np.array(state, dtype=float), np.array(state, dtype=float)
+            plus[j] += h
+            minus[j] -= h
+            jac[:, j] = -(self._force(b, s, plus, 2) - self._force(b, s, minus, 2)) / (2 * h)
+        return self._force(b, s, state, 2), jac[:, :2], jac[:, 2:]
+
+    @staticmethod
+    def _clearance(b, s, params) -> float:
+        """Radial clearance C [m] of bearing ``b``: the FMU's own value when it declares one
+        (what the film uses), else the case's (a force-only FMU)."""
+        if "C" in s.vr:
+            return float(s.fmu.getReal([s.vr["C"]])[0])
+        if "C" in params:
+            return float(params["C"])
+        raise FmuError(f"bearing {b + 1} ({s.path.name}): neither the FMU nor the case gives "
+                       "the radial clearance C [m] (it scales the finite-difference steps and "
+                       "bounds the first guess of X0)")
+
+    def evaluate(self, states):
+        if not self.slaves:
+            raise FmuError("the bearing FMUs are closed")
+        laws = self._laws_np
+        self._states_np[:] = states
+        for b, s in enumerate(self.slaves):
+            if self.force_only[b]:
+                laws[b, 0], laws[b, 1:3], laws[b, 3:5] = self._fd_jacobian(b, s, states[b])
+            else:
+                self._exchange(b, s, 10)
+        out = laws.copy()
+        return out[:, 0], out[:, 1:3], out[:, 3:5]
+
+    def exit_initialization(self) -> None:
+        """Leave initialisation mode (the linear FMU freezes its coefficients here)."""
+        for b, s in enumerate(self.slaves):
+            f = s.fmu
+            since = len(s.messages)
+            status = f.dll.fmi2ExitInitializationMode(f.component)
+            if status > 1 or s.errors_since(since):
+                raise FmuError(f"bearing {b + 1} ({s.path.name}): fmi2ExitInitializationMode "
+                               f"returned {status_name(status)}; FMU log: "
+                               f"{s.log_tail(since=since)}")
+        self.in_init = False
+
+    def checkpoint(self) -> list:
+        """Each bearing FMU's state serialised (its solver's warm start); None for an FMU
+        that cannot serialise (a force-only FMU of the user's own: assumed memoryless)."""
+        return [s.serialize_state() if s.can_serialize else None for s in self.slaves]
+
+    def restore(self, checkpoint) -> None:
+        for s, data in zip(self.slaves, checkpoint, strict=True):
+            if data is not None:
+                s.restore_serialized(data)
+
+    def close(self) -> None:
+        """Terminate and free every instance, remove the extracted FMU folders."""
+        for s in self.slaves:
+            s.close()
+        self.slaves = []

@@ -1,0 +1,314 @@
+"""The gear-shaft FMU behind the master's :class:`~orchestrator.coupling.master.StructureSlave`
+interface, with rollback through fmi2GetFMUstate / fmi2SetFMUstate."""
+
+from __future__ import annotations
+
+import ctypes
+import sys
+import weakref
+
+import numpy as np
+
+from fmu_src.contract import (
+    GEAR_OUTPUTS,
+    gear_parameters,
+    journal_output_names,
+    law_input_names,
+    pack_laws,
+    support_load_names,
+    unpack_journal,
+)
+from orchestrator.coupling.fmi.instance import FmuError, FmuInstance, all_finite, status_name
+from orchestrator.coupling.master import StructureSlave
+
+__all__ = ["FmuState", "FmuStructure"]
+
+
+class FmuState:
+    """A saved gear-shaft FMU state (fmi2GetFMUstate); freed when no longer referenced."""
+
+    __slots__ = ("__weakref__", "_handle", "_owner", "n_steps", "t")
+
+    def __init__(self, owner: FmuStructure, handle: ctypes.c_void_p, t: float, n_steps: int):
+        self._owner = owner
+        self._handle = handle
+        self.t = t
+        self.n_steps = n_steps
+
+    def free(self) -> None:
+        """Release the FMU's copy now (idempotent; also done on garbage collection)."""
+        owner, self._owner = self._owner, None
+        if owner is not None and self._handle is not None:
+            owner._free_handle(self._handle)
+        self._handle = None
+
+    def __del__(self):
+        if sys.is_finalizing():  # the FMU library may already be gone
+            return
+        try:
+            self.free()
+        except Exception:  # a destructor must not raise
+            pass
+
+
+class FmuStructure(StructureSlave):
+    """The gear-shaft FMU (``GearShaft.fmu``) behind the master's structure interface.
+
+    Parameters
+    ----------
+    fmu : path
+        The built gear-shaft FMU (``gsb build-fmus``).
+    case : fmu_src.case.Case, optional
+        A checked case (e.g. with command-line overrides): its structural fields are set as
+        the FMU's parameters (:func:`fmu_src.contract.gear_parameters`); default: the case the
+        FMU carries.
+    start_time : float
+        Time of the initial (static) state [s].
+
+    The instance starts in initialisation mode: :meth:`set_bearing_laws` + :meth:`solve_static`
+    give static solutions (the FMU solves when its outputs are read). :meth:`exit_initialization`
+    (done by the first :meth:`do_step` if not called before) leaves it; the FMU then rebuilds its
+    modal damping on the modes with the symmetric part of the current Kb laws, which is what
+    :meth:`gear_fmu.structure.Structure.set_damping_reference` does in process. :meth:`get_state` /
+    :meth:`set_state` use fmi2GetFMUstate / fmi2SetFMUstate; a state is freed when its
+    :class:`FmuState` is garbage-collected. An FMU failure raises :class:`FmuError` with the
+    FMU's log message, the time and the step.
+    """
+
+    n_bearings = 4
+
+    def __init__(self, fmu, case=None, start_time: float = 0.0,
+                 instance_name: str = "gear_shaft"):
+        self.slave = FmuInstance(fmu, instance_name)
+        self._states: weakref.WeakSet = weakref.WeakSet()
+        f = self.slave.fmu
+        f.setupExperiment(startTime=float(start_time))
+        f.enterInitializationMode()
+        if case is not None:
+            self._set_case(case)
+        self.in_init = True
+        self.t = float(start_time)
+        self.n_steps = 0
+        vr = self.slave.vr
+        # raw ctypes functions (fmpy sets their argtypes; statuses are checked here)
+        dll = f.dll
+        self._c = f.component
+        self._set_real = dll.fmi2SetReal
+        self._get_real = dll.fmi2GetReal
+        self._get_integer = dll.fmi2GetInteger
+        self._do_step = dll.fmi2DoStep
+        self._get_state = dll.fmi2GetFMUstate
+        self._set_state = dll.fmi2SetFMUstate
+        self._free_state = dll.fmi2FreeFMUstate
+        laws = law_input_names()
+        journal = journal_output_names()
+        extra = [name for name, _, _ in GEAR_OUTPUTS]
+        support = support_load_names()
+        n_laws = len(laws)
+        self._n_laws = n_laws
+        self._law_vr = (ctypes.c_uint * n_laws)(*[vr[n] for n in laws])
+        self._law_val = (ctypes.c_double * n_laws)()
+        self._law_np = np.frombuffer(self._law_val, dtype=np.float64)
+        self._jr_vr = (ctypes.c_uint * 16)(*[vr[n] for n in journal])
+        self._jr_val = (ctypes.c_double * 16)()
+        self._jr_np = np.frombuffer(self._jr_val, dtype=np.float64)
+        self._ex_vr = (ctypes.c_uint * len(extra))(*[vr[n] for n in extra])
+        self._ex_val = (ctypes.c_double * len(extra))()
+        self._ex_index = {n: i for i, n in enumerate(extra)}
+        self._one_vr = {n: (ctypes.c_uint * 1)(vr[n]) for n in extra}
+        self._one_val = (ctypes.c_double * 1)()
+        self._sup_vr = (ctypes.c_uint * 8)(*[vr[n] for n in support])
+        self._sup_val = (ctypes.c_double * 8)()
+        self._it_vr = (ctypes.c_uint * 1)(vr["iterations"])
+        self._it_val = (ctypes.c_int * 1)()
+
+    def _set_case(self, case) -> None:
+        """Set the case's structural fields as the FMU's parameters (one call per type)."""
+        values = {name: value for name, _, value in gear_parameters(case)}
+        self.slave.set(values, f"gear-shaft FMU, case {case['case.name']!r}")
+
+    # --- errors -------------------------------------------------------------------------------
+    def _fail(self, what: str, status: int | None = None, since: int = 0, where: bool = True):
+        at = f" at t = {self.t:.9g} s (after step {self.n_steps})" if where else ""
+        st = "" if status is None else f" (status {status_name(status)})"
+        raise FmuError(f"gear-shaft FMU ({self.slave.path.name}): {what}{st}{at}; FMU log: "
+                       f"{self.slave.log_tail(since=since)}")
+
+    def _check(self, status: int, what: str, since: int = 0) -> None:
+        if status > 1:  # discard, error, fatal
+            self._fail(what, status, since)
+
+    def _live(self):
+        if self.slave.fmu is None:
+            raise FmuError("the gear-shaft FMU is closed")
+
+    # --- master interface ---------------------------------------------------------------------
+    def set_bearing_laws(self, laws) -> None:
+        """Set the 56 law inputs in one call: each law's expansion, as a bearing FMU's outputs
+        (force, Kb, Cb and the journal state they belong to; global frame)."""
+        self._live()
+        pack_laws(laws, self._law_np)
+        self._check(self._set_real(self._c, self._law_vr, self._n_laws, self._law_val),
+                    "setting the bearing laws")
+
+    def solve_static(self) -> None:
+        """Static solution for the current laws (initialisation mode only): read the outputs."""
+        self._live()
+        if not self.in_init:
+            raise FmuError("the gear-shaft FMU solves static solutions only in initialisation "
+                           "mode (before exit_initialization / the first do_step)")
+        self._read_journal("static solution")
+
+    def exit_initialization(self) -> None:
+        """Leave initialisation mode: the current static solution becomes the initial state and
+        the FMU's modal damping is rebuilt with the symmetric part of the current Kb laws."""
+        self._live()
+        if not self.in_init:
+            return
+        since, errors = len(self.slave.messages), self.slave.errors
+        status = self.slave.fmu.dll.fmi2ExitInitializationMode(self._c)
+        self.in_init = False
+        self._check(status, "exitInitializationMode", since)
+        if self.slave.errors > errors:
+            self._fail("initialisation failed", since=since)
+
+    def do_step(self, t: float, dt: float) -> None:
+        """One Newmark step from t to t + dt with the current laws (FmuError on failure)."""
+        if self.in_init:
+            self.exit_initialization()
+        since = len(self.slave.messages)
+        status = self._do_step(self._c, t, dt, 0)
+        if status != 0:
+            self._fail(f"doStep {self.n_steps + 1} from t = {t:.9g} s (dt = {dt:.6g} s) failed",
+                       status, since, where=False)
+        self.t = t + dt
+        self.n_steps += 1
+
+    def _read_journal(self, what: str) -> np.ndarray:
+        since = len(self.slave.messages)
+        self._check(self._get_real(self._c, self._jr_vr, 16, self._jr_val), what, since)
+        out = unpack_journal(self._jr_np).copy()
+        if not all_finite(self._jr_val):
+            self._fail(f"{what} failed", since=since)
+        return out
+
+    def journal_states(self) -> np.ndarray:
+        """(4, 4) [s, t, s_dot, t_dot] at bearings 1-4, global frame [m, m/s]."""
+        self._live()
+        return self._read_journal("reading the journal states")
+
+    def get_state(self) -> FmuState:
+        """Save the FMU state (fmi2GetFMUstate); freed with the returned object."""
+        self._live()
+        handle = ctypes.c_void_p()
+        self._check(self._get_state(self._c, ctypes.byref(handle)), "fmi2GetFMUstate")
+        state = FmuState(self, handle, self.t, self.n_steps)
+        self._states.add(state)
+        return state
+
+    def set_state(self, state: FmuState) -> None:
+        """Restore a state of :meth:`get_state` exactly (fmi2SetFMUstate)."""
+        self._live()
+        if state._owner is not self or state._handle is None:
+            raise FmuError("set_state: the state is freed or belongs to another FMU instance")
+        self._check(self._set_state(self._c, state._handle), "fmi2SetFMUstate")
+        self.t, self.n_steps = state.t, state.n_steps
+
+    def checkpoint(self) -> dict:
+        """The FMU state serialised (fmi2SerializeFMUstate), with the time and step count."""
+        self._live()
+        if not self.slave.can_serialize:
+            raise FmuError(f"gear-shaft FMU ({self.slave.path.name}) cannot serialise its "
+                           "state (canSerializeFMUstate is false)")
+        return {"fmu": self.slave.serialize_state(), "t": self.t, "n_steps": self.n_steps}
+
+    def restore(self, checkpoint: dict) -> None:
+        """Continue from :meth:`checkpoint` (fmi2DeSerializeFMUstate + fmi2SetFMUstate)."""
+        self._live()
+        if self.in_init:
+            self.exit_initialization()
+        self.slave.restore_serialized(checkpoint["fmu"])
+        self.t, self.n_steps = checkpoint["t"], checkpoint["n_steps"]
+
+    def _free_handle(self, handle) -> None:
+        if self.slave.fmu is not None:
+            self._free_state(self._c, ctypes.byref(handle))
+
+    def support_loads(self) -> np.ndarray:
+        """(4, 2) static loads of the structure on stiff bearings [N] (calculated parameters)."""
+        self._live()
+        self._check(self._get_real(self._c, self._sup_vr, 8, self._sup_val),
+                    "reading the support loads")
+        out = np.frombuffer(self._sup_val, dtype=np.float64).reshape(4, 2).copy()
+        if not np.isfinite(out).all():
+            self._fail("support loads failed")
+        return out
+
+    # --- other outputs ------------------------------------------------------------------------
+    def outputs(self) -> dict:
+        """Mesh and gear-node outputs by name (mesh_force, transmission_error, u_pinion, ...)."""
+        self._live()
+        n = len(self._ex_val)
+        self._check(self._get_real(self._c, self._ex_vr, n, self._ex_val), "reading outputs")
+        return {name: float(self._ex_val[i]) for name, i in self._ex_index.items()}
+
+    def step_outputs(self) -> tuple[float, float, np.ndarray]:
+        """Mesh force [N], transmission error [m] and the (2, 2) [u, v] of the pinion and gear
+        nodes [m] in one fmi2GetReal (:meth:`outputs`)."""
+        o = self.outputs()
+        return o["mesh_force"], o["transmission_error"], _gear_nodes(o)
+
+    def _extra(self, name: str) -> float:
+        self._live()
+        self._check(self._get_real(self._c, self._one_vr[name], 1, self._one_val),
+                    f"reading {name}")
+        return float(self._one_val[0])
+
+    def mesh_force(self) -> float:
+        """Total normal tooth load of the mesh [N]."""
+        return self._extra("mesh_force")
+
+    def transmission_error(self) -> float:
+        """Transmission error of the gear nodes [m]."""
+        return self._extra("transmission_error")
+
+    def gear_displacements(self) -> np.ndarray:
+        """(2, 2) [u, v] of the pinion and gear nodes [m] (the in-process Structure gives all
+        six DOFs per node; the FMU outputs these two)."""
+        return _gear_nodes(self.outputs())
+
+    def iterations(self) -> int:
+        """Newton/contact iterations of the last step or static solution."""
+        self._live()
+        self._check(self._get_integer(self._c, self._it_vr, 1, self._it_val),
+                    "reading iterations")
+        return int(self._it_val[0])
+
+    def close(self) -> None:
+        """Free every saved state, terminate and free the instance (idempotent)."""
+        if self.slave.fmu is None:
+            return
+        for state in list(self._states):
+            state.free()
+        self._states = weakref.WeakSet()
+        self.slave.close()
+
+    def __enter__(self) -> FmuStructure:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def __del__(self):
+        if sys.is_finalizing():
+            return
+        try:
+            self.close()
+        except Exception:  # a destructor must not raise
+            pass
+
+
+def _gear_nodes(outputs: dict) -> np.ndarray:
+    """(2, 2) [u, v] of the pinion and gear nodes from :meth:`FmuStructure.outputs`."""
+    o = outputs
+    return np.array([[o["u_pinion"], o["v_pinion"]], [o["u_gear"], o["v_gear"]]])

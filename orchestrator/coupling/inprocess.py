@@ -1,0 +1,142 @@
+"""In-process slaves: the physics objects behind the master's interface, no FMI layer.
+
+* :class:`InProcessStructure`: a :class:`gear_fmu.structure.Structure` as a
+  :class:`~orchestrator.coupling.master.StructureSlave`.
+* :class:`ModelBearings`: bearing models (:mod:`bearing_fmu`) as a
+  :class:`~orchestrator.coupling.master.BearingSet`, converting between their local frames and the
+  global (s, t) frame.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from bearing_fmu.affine import AffineLaws
+from bearing_fmu.base import BearingModel
+from bearing_fmu.frames import LocalFrame
+from gear_fmu.analyses import support_loads
+from gear_fmu.structure import Structure
+from orchestrator.coupling.master import BearingSet, StructureSlave
+
+__all__ = ["InProcessStructure", "ModelBearings"]
+
+
+class InProcessStructure(StructureSlave):
+    """The gear-shaft structure driven directly (what the gear-shaft FMU does through FMI).
+
+    Parameters
+    ----------
+    structure : gear_fmu.structure.Structure
+    """
+
+    n_bearings = Structure.n_bearings
+
+    def __init__(self, structure: Structure):
+        self.structure = structure
+        self._laws: AffineLaws | None = None
+
+    def _require_laws(self) -> AffineLaws:
+        if self._laws is None:
+            raise RuntimeError("set_bearing_laws() before a static solution or a step")
+        return self._laws
+
+    def get_state(self):
+        return self.structure.get_state()
+
+    def set_state(self, state) -> None:
+        self.structure.set_state(state)
+
+    def set_bearing_laws(self, laws: AffineLaws) -> None:
+        self._laws = laws
+
+    def do_step(self, t: float, dt: float) -> None:
+        st = self.structure
+        if abs(t - st.t) > 1e-9 * max(dt, abs(t)):
+            raise ValueError(f"do_step from t = {t!r} s but the structure is at t = {st.t!r} s")
+        laws = self._require_laws()
+        st.step(dt, laws.f0, laws.kb, laws.cb)
+
+    def solve_static(self) -> None:
+        laws = self._require_laws()
+        self.structure.static(laws.f0, laws.kb, laws.cb)
+
+    def exit_initialization(self) -> None:
+        kb = self._require_laws().kb
+        self.structure.set_damping_reference(0.5 * (kb + np.transpose(kb, (0, 2, 1))))
+
+    def checkpoint(self):
+        return self.structure.get_state()
+
+    def restore(self, checkpoint) -> None:
+        self.structure.set_state(checkpoint)
+
+    def journal_states(self) -> np.ndarray:
+        return self.structure.journal_states()
+
+    def support_loads(self) -> np.ndarray:
+        return support_loads(self.structure)
+
+    def mesh_force(self) -> float:
+        return self.structure.mesh_force()
+
+    def transmission_error(self) -> float:
+        return self.structure.transmission_error()
+
+    def gear_displacements(self) -> np.ndarray:
+        return self.structure.gear_displacements()[:, :2]
+
+
+class ModelBearings(BearingSet):
+    """Bearing models evaluated directly, converted between local and global frames.
+
+    Parameters
+    ----------
+    models : sequence of BearingModel
+        One per bearing node.
+    frames : sequence of LocalFrame
+        Local frame of each bearing in the global (s, t) plane.
+    omegas : sequence of float
+        Shaft speed magnitude at each bearing [rad/s].
+    """
+
+    def __init__(self, models, frames, omegas):
+        if not (len(models) == len(frames) == len(omegas)):
+            raise ValueError("models, frames and omegas must have one entry per bearing")
+        self.frames = [f if isinstance(f, LocalFrame) else LocalFrame(*f) for f in frames]
+        self.omegas = [float(w) for w in omegas]
+        for w in self.omegas:
+            if not (np.isfinite(w) and w > 0.0):
+                raise ValueError(f"shaft speed {w!r} rad/s must be finite and > 0")
+        for m in models:
+            if not isinstance(m, BearingModel):
+                raise TypeError(f"{m!r} is not a BearingModel")
+        self.models = list(models)
+        self.clearances = np.array([m.bearing.clearance for m in self.models])
+        self._q = np.array([f.q for f in self.frames])
+        self._states = None  # global journal states of the last evaluation
+        self.evaluations = 0
+
+    def evaluate(self, states):
+        nb = len(self.models)
+        states = np.asarray(states, dtype=float)
+        self._states = states.copy()
+        out = np.empty((nb, 5, 2))
+        for b in range(nb):
+            self.models[b].evaluate_global(self._q[b], states[b], self.omegas[b], out[b])
+        self.evaluations += nb
+        return out[:, 0], out[:, 1:3], out[:, 3:5]
+
+    def checkpoint(self):
+        return [model.get_state() for model in self.models]
+
+    def restore(self, checkpoint) -> None:
+        for model, state in zip(self.models, checkpoint, strict=True):
+            model.set_state(state)
+
+    def exit_initialization(self) -> None:
+        if self._states is None:
+            raise RuntimeError("exit_initialization before any evaluation (no static state)")
+        for model, frame, state, om in zip(self.models, self.frames, self._states, self.omegas,
+                                           strict=True):
+            x, y = frame.to_local(state[:2])
+            model.end_initialization(float(x), float(y), om)

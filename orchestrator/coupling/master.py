@@ -1,0 +1,318 @@
+"""The master algorithm: Newton on the coupled structure-bearing system through the slaves.
+
+The structure slave owns (X, Xdot, Xddot) and advances one Newmark step for given affine
+bearing laws ``F = F0 - Kb X - Cb Xdot`` (global frame, one per bearing). The bearing slaves
+are algebraic: journal state -> film force, Kb, Cb. One coupled step (DESIGN.md section 4):
+
+1. save the structure state;
+2. set the affine laws linearised at the last iterate; ``do_step``;
+3. read the journal states, evaluate the bearings there;
+4. if the film forces differ from the affine laws by more than ``tol`` (relative to the force
+   norm), re-linearise at the new iterate, restore the saved state and repeat; else accept.
+
+The structure's own Newton/contact loop converges the rest of the system exactly for each law,
+and the law is the exact linearisation of the bearings at the current iterate (Eq. 14, 16), so
+the outer loop is Newton-Raphson on the bearing nonlinearity: a converged co-simulated step is
+the monolithic step to ``tol``, and an affine bearing (linear, lumped) converges in one pass.
+
+A bearing force can be continuous with a slope that jumps: the hybrid model's is where a node
+of its film enters or leaves the pressurised zone. Near such a kink Newton can fall into a
+two-cycle between iterates on either side (the paper's case at 300, 400, 800 and 900 rad/s:
+the mismatch alternating between two values above ``tol`` until the step fails). When the
+mismatch has not halved over two iterations, the rest of the step is relaxed: each new law is
+the mean of the linearisation at the new iterate and the law just used
+(:data:`RELAXATION`). The acceptance test is unchanged (the law used against the bearings at
+the new iterate), so a relaxed step is still the monolithic step to ``tol``.
+
+The static solution X0 is the same iteration with the structure's static solve and the
+velocities zero. Its first linearisation point comes from a per-bearing static equilibrium
+under the loads a stiff support would carry (so no iterate starts outside the clearance),
+solved by :meth:`BearingSet.static_position` through the bearings' own ``evaluate``, the same
+calls whatever the transport.
+
+The slaves are reached only through :class:`StructureSlave` and :class:`BearingSet`, which
+declare everything the master and the runner use; :mod:`orchestrator.coupling.inprocess` (the
+physics
+objects directly) and :mod:`orchestrator.coupling.fmi` (the FMUs through fmpy) implement them.
+"""
+
+from __future__ import annotations
+
+import math
+import pickle
+from abc import ABC, abstractmethod
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from bearing_fmu.affine import AffineLaws
+from bearing_fmu.static import newton_equilibrium
+
+__all__ = [
+    "BearingSet",
+    "CouplingError",
+    "Master",
+    "StepReport",
+    "StructureSlave",
+]
+
+#: weight of the new linearisation in a relaxed iteration (module docstring): the law used next
+#: is ``RELAXATION * new + (1 - RELAXATION) * last used``
+RELAXATION = 0.5
+#: a step is relaxed from the iteration whose mismatch exceeds STALL times the one two
+#: iterations earlier (Newton's mismatch falls quadratically; a two-cycle's repeats)
+STALL = 0.5
+
+
+class CouplingError(RuntimeError):
+    """The coupled iteration did not converge (step, time and mismatch in the message)."""
+
+
+class StructureSlave(ABC):
+    """What the master and the runner need from the gear-shaft slave (in-process or FMU).
+
+    Life cycle: laws + :meth:`solve_static` (repeated: the static iteration), then
+    :meth:`exit_initialization` once, then :meth:`do_step` with :meth:`get_state` /
+    :meth:`set_state` around it (rollback), then :meth:`close`.
+    """
+
+    n_bearings: int
+
+    @abstractmethod
+    def get_state(self):
+        """An opaque copy of everything a step changes."""
+
+    @abstractmethod
+    def set_state(self, state) -> None:
+        """Restore a state from :meth:`get_state`."""
+
+    @abstractmethod
+    def set_bearing_laws(self, laws: AffineLaws) -> None:
+        """The affine laws (Eq. 17, global frame) used by the next step or static solve."""
+
+    @abstractmethod
+    def do_step(self, t: float, dt: float) -> None:
+        """One Newmark step from t to t + dt; raises on non-convergence."""
+
+    @abstractmethod
+    def solve_static(self) -> None:
+        """Static solution with the current laws (velocities and accelerations zero)."""
+
+    @abstractmethod
+    def exit_initialization(self) -> None:
+        """End of the static phase: the static solution becomes the initial state and the
+        modal damping is built on the modes with the symmetric part of the current Kb laws."""
+
+    @abstractmethod
+    def journal_states(self) -> np.ndarray:
+        """(nb, 4) journal displacement and velocity at the bearing nodes, global frame."""
+
+    @abstractmethod
+    def support_loads(self) -> np.ndarray:
+        """(nb, 2) static loads on the journals with a stiff support [N] (first guess)."""
+
+    @abstractmethod
+    def mesh_force(self) -> float:
+        """Total normal mesh force of the current state [N]."""
+
+    @abstractmethod
+    def transmission_error(self) -> float:
+        """Transmission error r_b1 theta_1 + r_b2 theta_2 of the current state [m]."""
+
+    @abstractmethod
+    def gear_displacements(self) -> np.ndarray:
+        """(2, 2) [u, v] of the pinion and gear nodes [m], global frame."""
+
+    def step_outputs(self) -> tuple[float, float, np.ndarray]:
+        """What the runner records after each step: :meth:`mesh_force`,
+        :meth:`transmission_error` and :meth:`gear_displacements` (one FMI call through the
+        FMU)."""
+        return self.mesh_force(), self.transmission_error(), self.gear_displacements()
+
+    def checkpoint(self):
+        """A picklable copy of the state after the last accepted step, from which
+        :meth:`restore` continues bit for bit in another process (resumed runs)."""
+        raise NotImplementedError(f"{type(self).__name__} cannot save its state")
+
+    def restore(self, checkpoint) -> None:
+        """Continue from a :meth:`checkpoint` (after the same static solution)."""
+        raise NotImplementedError(f"{type(self).__name__} cannot restore a state")
+
+    def close(self) -> None:  # noqa: B027 - optional: nothing to release by default
+        """Release what the slave holds (FMU instances, files); idempotent."""
+
+
+class BearingSet(ABC):
+    """What the master and the runner need from the bearing slaves (in-process or FMUs)."""
+
+    @abstractmethod
+    def evaluate(self, states: np.ndarray):
+        """Film force (nb, 2), Kb (nb, 2, 2), Cb (nb, 2, 2) at journal states (nb, 4)."""
+
+    #: (nb,) radial clearance of each bearing [m] (bounds the first guess of X0)
+    clearances: np.ndarray
+
+    def static_position(self, loads: np.ndarray) -> np.ndarray:
+        """(nb, 2) journal positions [m] balancing static loads (nb, 2) [N]: the first guess
+        of X0.
+
+        One Newton per journal from the centre, kept inside 0.95 C, every iterate evaluating
+        the whole set (:func:`bearing_fmu.static.newton_equilibrium`). It is written once,
+        here, for every transport: a bearing with memory (the hybrid solver's warm start)
+        remembers the sequence of states it was evaluated at, so in-process and FMU runs give
+        the same bits only if they evaluate the same sequence."""
+        loads = np.asarray(loads, dtype=float)
+        states = np.zeros((len(loads), 4))
+
+        def law(x):
+            states[:, :2] = x
+            force, kb, _ = self.evaluate(states)
+            return force, kb, None
+
+        positions, _, _ = newton_equilibrium(
+            law, loads, np.zeros_like(loads), 0.95 * np.asarray(self.clearances, dtype=float),
+            tol=1e-10, maxit=100, what="(bearings' first guess of X0)")
+        return positions
+
+    @abstractmethod
+    def exit_initialization(self) -> None:
+        """End of the static phase (at the journal states of the last evaluation): the linear
+        model freezes its coefficients there."""
+
+    def checkpoint(self):
+        """A picklable copy of what the bearings remember between calls (the solvers' warm
+        starts); None for memoryless bearings."""
+        return None
+
+    def restore(self, checkpoint) -> None:  # noqa: B027 - memoryless by default
+        """Restore a :meth:`checkpoint`."""
+
+    def close(self) -> None:  # noqa: B027 - optional: nothing to release by default
+        """Release what the set holds (FMU instances); idempotent."""
+
+
+@dataclass
+class StepReport:
+    """Outcome of one coupled step (or of the static solution)."""
+
+    iterations: int
+    mismatch: float  # relative force mismatch at acceptance
+    bearing_force: np.ndarray  # (nb, 2) N
+    laws: AffineLaws = field(repr=False)
+    states: np.ndarray = field(default=None, repr=False)  # (nb, 4) accepted journal states
+
+
+@dataclass
+class Master:
+    """Couple a structure slave with a bearing set.
+
+    Parameters
+    ----------
+    structure : StructureSlave
+    bearings : BearingSet
+    tol : float
+        Convergence limit l on ``||F_bearing(X) - F_law(X)|| / ||F_bearing(X)||`` (paper 1e-5).
+    max_iterations : int
+        Outer iterations per step before :class:`CouplingError`.
+    """
+
+    structure: StructureSlave
+    bearings: BearingSet
+    tol: float = 1e-5
+    max_iterations: int = 30
+    laws: AffineLaws | None = None
+    total_iterations: int = 0
+    total_bearing_evaluations: int = 0
+    relaxed_steps: int = 0  # steps that needed the relaxation (module docstring)
+
+    def _evaluate(self, states):
+        self.total_bearing_evaluations += 1
+        return self.bearings.evaluate(states)
+
+    def solve_static(self, initial_states: np.ndarray | None = None) -> StepReport:
+        """X0: iterate structure static solves and bearing linearisations (Sec. 2.2.3)."""
+        if initial_states is None:
+            loads = self.structure.support_loads()
+            positions = self.bearings.static_position(loads)
+            initial_states = np.hstack([positions, np.zeros_like(positions)])
+        states = np.array(initial_states, dtype=float)
+        states[:, 2:] = 0.0
+        force, kb, cb = self._evaluate(states)
+        laws = AffineLaws.linearise(states, force, kb, cb)
+        for it in range(1, self.max_iterations + 1):
+            self.structure.set_bearing_laws(laws)
+            self.structure.solve_static()
+            states = self.structure.journal_states().copy()
+            states[:, 2:] = 0.0
+            force, kb, cb = self._evaluate(states)
+            mismatch, laws = laws.relinearise(states, force, kb, cb)
+            if mismatch <= self.tol:
+                # leave the structure on the converged solution with the final laws
+                self.structure.set_bearing_laws(laws)
+                self.laws = laws
+                return StepReport(it, mismatch, force, laws, states)
+        raise CouplingError(
+            f"static solution did not converge in {self.max_iterations} iterations: "
+            f"relative bearing-force mismatch {mismatch:.3e} > tol {self.tol:.1e}"
+        )
+
+    def exit_initialization(self) -> None:
+        """End the static phase of both slaves (linear bearings freeze, the structure builds
+        its modal damping with the bearings' static stiffness)."""
+        self.bearings.exit_initialization()
+        self.structure.exit_initialization()
+
+    def checkpoint(self) -> bytes:
+        """The coupled state after the last accepted step (structure, bearing warm starts,
+        the laws the next step starts from) as bytes: :meth:`restore` on a master built from
+        the same case, after the same static solution, continues bit for bit."""
+        laws = self.laws
+        return pickle.dumps({
+            "structure": self.structure.checkpoint(), "bearings": self.bearings.checkpoint(),
+            "laws": (laws.f0, laws.kb, laws.cb, laws.states, laws.force_at)},
+            protocol=pickle.HIGHEST_PROTOCOL)
+
+    def restore(self, checkpoint: bytes) -> None:
+        """Continue from :meth:`checkpoint` bytes (a pickle: restore only files you trust)."""
+        state = pickle.loads(checkpoint)
+        self.structure.restore(state["structure"])
+        self.bearings.restore(state["bearings"])
+        self.laws = AffineLaws(*state["laws"])
+
+    def close(self) -> None:
+        """Release both slaves (FMU instances; nothing in-process); idempotent."""
+        try:
+            self.bearings.close()
+        finally:
+            self.structure.close()
+
+    def step(self, t: float, dt: float) -> StepReport:
+        """One coupled Newmark step from t to t + dt."""
+        if self.laws is None:
+            raise CouplingError("call solve_static() (or set laws) before the first step")
+        saved = self.structure.get_state()
+        laws = self.laws
+        mismatch = math.inf
+        history = []
+        relaxed = False
+        for it in range(1, self.max_iterations + 1):
+            self.structure.set_bearing_laws(laws)
+            self.structure.do_step(t, dt)
+            states = self.structure.journal_states()
+            force, kb, cb = self._evaluate(states)
+            mismatch, new = laws.relinearise(states, force, kb, cb)
+            self.total_iterations += 1
+            if mismatch <= self.tol:
+                self.laws = new
+                return StepReport(it, mismatch, force, new, states)
+            history.append(mismatch)
+            if not relaxed and it >= 3 and mismatch > STALL * history[-3]:
+                relaxed = True
+                self.relaxed_steps += 1
+            laws = laws.blend(new, RELAXATION) if relaxed else new
+            self.structure.set_state(saved)
+        raise CouplingError(
+            f"step at t = {t:.6e} s (dt = {dt:.3e} s) did not converge in "
+            f"{self.max_iterations} iterations: relative bearing-force mismatch "
+            f"{mismatch:.3e} > tol {self.tol:.1e}"
+        )

@@ -1,0 +1,436 @@
+"""Figures of a run: ``gsb run`` draws them at its end, ``gsb plot FILE`` from any results file
+(also an incomplete one, or one still being written).
+
+:func:`run_figures` writes four PNGs into the folder beside the results file
+(``<file stem>/``), each titled with the case, bearing model, mode, speed, torque and unbalance
+(:func:`orchestrator.figures.base.run_title`):
+
+``orbits.png``
+    the journal-centre orbits of bearings 1-4 [um], zoomed on the orbit, the last gear
+    revolution drawn over the whole (faded) trajectory, the static position X0 marked, and an
+    inset with the full clearance circle;
+``bearing_forces.png``
+    ||F_b|| of the four bearings over the last pinion revolution, one panel per shaft;
+``spectra.png``
+    order spectra of ||F_b|| over the last gear revolution (Hann window, peak amplitude) with
+    the 1x, gear-1x and mesh-order lines marked, and their least-squares amplitudes
+    (:func:`orchestrator.analysis.metrics.order_lines`) listed;
+``mesh.png``
+    transmission error and dynamic mesh force over the last pinion revolution and over the
+    whole run (min/max envelope per bin).
+
+Channels read (:data:`orchestrator.run.runner.CHANNELS`): ``time`` [s], ``journal_position`` (4, 2)
+[m], ``bearing_force`` (4, 2) [N], ``mesh_force`` [N], ``transmission_error`` [m]; root
+attributes ``case``, ``bearing_model``, ``mode``, ``speed`` [rad/s], ``teeth`` (2,), ``torque``
+[N m], ``unbalance`` (2,) [m], ``clearance`` (4,) [m], ``static_journal`` (4, 2) [m],
+``static_mesh_force`` [N], ``static_transmission_error`` [m], ``complete``.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from orchestrator.analysis.metrics import (
+    order_amplitude_spectrum,
+    order_lines,
+    pinion_lines,
+    resolved_lines,
+)
+from orchestrator.figures.base import (
+    BEARING_STYLE,
+    DPI,
+    SHAFTS,
+    UM,
+    RunData,
+    pyplot,
+    titled_figure,
+)
+from orchestrator.run.results import read_results
+
+__all__ = ["RUN_FIGURES", "make_run_figures", "run_figures"]
+
+#: the PNGs :func:`run_figures` writes (and removes first when stale)
+RUN_FIGURES = ("orbits.png", "bearing_forces.png", "spectra.png", "mesh.png")
+#: names of earlier versions, removed as stale too
+_OLD_FIGURES = ("bearing_force.png", "mesh_force.png")
+
+
+def _corners(sw: float, sh: float, pad: float):
+    """Axes-fraction bounds ``[left, bottom, sw, sh]`` of the four corner boxes, upper right
+    first."""
+    for cu, cv in ((1, 1), (0, 1), (1, 0), (0, 0)):
+        yield [1 - pad - sw if cu else pad, 1 - pad - sh if cv else pad, sw, sh]
+
+
+def _zoom(xs, ys, shape: float, floor: float = 1e-3, side: float = 0.34, margin: float = 0.1,
+          pad: float = 0.015):
+    """Limits of an equal-aspect zoom on the points ``xs, ys`` (extent at least ``floor``) in
+    an axes of height / width ``shape``, leaving a corner box free for an inset (of side
+    ``side`` times the smaller axes dimension): ``(xlim, ylim, inset bounds in axes
+    fraction)``.
+
+    The points are centred with ``margin`` of their extent on each side if a corner is then
+    free of them; otherwise they are moved to the left (or the bottom) of the axes and the
+    inset goes into the strip left free, whichever zooms more."""
+    xs, ys = np.asarray(xs, dtype=float), np.asarray(ys, dtype=float)
+    x0, x1, y0, y1 = xs.min(), xs.max(), ys.min(), ys.max()
+    floor = max(floor, 0.1 * max(x1 - x0, y1 - y0))
+    w, h = max(x1 - x0, floor), max(y1 - y0, floor)
+    sw, sh = side * min(1.0, shape), side * min(1.0, 1.0 / shape)  # a square inset
+    cx, cy = 0.5 * (x0 + x1), 0.5 * (y0 + y1)
+
+    def fit(hx, hy):  # half ranges with the axes' shape (equal aspect)
+        return (hx, hx * shape) if hy < hx * shape else (hy / shape, hy)
+
+    hx, hy = fit(w * (0.5 + margin), h * (0.5 + margin))
+    xlim, ylim = (cx - hx, cx + hx), (cy - hy, cy + hy)
+    u, v = (xs - xlim[0]) / (2 * hx), (ys - ylim[0]) / (2 * hy)
+    for box in _corners(sw, sh, pad):
+        if not np.any((u > box[0] - pad) & (u < box[0] + sw + pad)
+                      & (v > box[1] - pad) & (v < box[1] + sh + pad)):
+            return xlim, ylim, box
+    # the points in the left part, the inset in the right strip; or bottom and top
+    right = fit(w * (1 + 2 * margin) / (2 * (1 - sw - 2 * pad)), h * (0.5 + margin))
+    top = fit(w * (0.5 + margin), h * (1 + 2 * margin) / (2 * (1 - sh - 2 * pad)))
+    if right[0] <= top[0]:
+        hx, hy = right
+        left = x0 - margin * w
+        return (left, left + 2 * hx), (cy - hy, cy + hy), [1 - pad - sw, 1 - pad - sh, sw, sh]
+    hx, hy = top
+    bottom = y0 - margin * h
+    return (cx - hx, cx + hx), (bottom, bottom + 2 * hy), [1 - pad - sw, 1 - pad - sh, sw, sh]
+
+
+def _orbits(plt, run: RunData):
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Rectangle
+
+    fig = titled_figure(plt, run, "journal-centre orbits")
+    axes = fig.subplots(2, 2)
+    win, kind = run.long_window()
+    span_ms = (run.time[win][-1] - run.time[win][0] + run.dt) * 1e3
+    circle = np.linspace(0.0, 2.0 * np.pi, 361)
+    insets = []
+    for b, ax in enumerate(axes.flat):
+        colour = BEARING_STYLE[b][0]
+        s, t = run.journal[:, b, 0] * UM, run.journal[:, b, 1] * UM
+        ax.plot(s, t, color="0.6", lw=0.5, alpha=0.6, zorder=1)
+        ax.plot(s[win], t[win], color=colour, lw=1.3, zorder=3)
+        ax.plot(s[-1], t[-1], "o", color=colour, ms=4, zorder=4)
+        xs, ys = list(s[win]), list(t[win])
+        x0 = None if run.static_journal is None else run.static_journal[b] * UM
+        if x0 is not None:
+            ax.plot(*x0, "P", color="k", ms=9, mec="w", mew=0.8, zorder=5)
+            xs.append(x0[0])
+            ys.append(x0[1])
+        c = None if run.clearance is None else float(run.clearance[b]) * UM
+        ax.ticklabel_format(useOffset=False)
+        ax.grid(True, lw=0.4, alpha=0.5)
+        ax.set_xlabel("s [um]")
+        ax.set_ylabel("t [um]")
+        shaft = "pinion" if b < 2 else "gear"
+        title = f"bearing {b + 1} ({shaft} shaft)"
+        if x0 is not None and c:
+            title += f", X0 at e/C = {math.hypot(*x0) / c:.2f}"
+        ax.set_title(title, fontsize=11)
+        insets.append((ax, xs, ys, c, s, t, colour))
+    handles = [Line2D([], [], color="0.6", lw=1, label="whole run (transient from X0)"),
+               Line2D([], [], color="C0", lw=1.5,
+                      label=f"{kind} ({span_ms:.1f} ms; colour per bearing)"),
+               Line2D([], [], color="C0", marker="o", ls="", ms=4, label="last step"),
+               Line2D([], [], color="k", marker="P", ls="", ms=8, label="static position X0"),
+               Rectangle((0, 0), 1, 1, fill=False, ec="r",
+                         label="inset: clearance circle, red box = zoomed region")]
+    fig.legend(handles=handles, loc="outside lower center", ncol=3, fontsize=9, frameon=False)
+    fig.draw_without_rendering()  # the layout: the panels' shape sets the zoom limits
+    for ax, xs, ys, c, s, t, colour in insets:  # zoom on the steady orbit and X0
+        box = ax.get_position()
+        shape = (box.height * fig.get_figheight()) / (box.width * fig.get_figwidth())
+        xlim, ylim, bounds = _zoom(xs, ys, shape, floor=1e-4 * (c or 1.0))
+        ax.set_xlim(*xlim)
+        ax.set_ylim(*ylim)
+        ax.set_aspect("equal", adjustable="box")
+        if c:
+            ins = ax.inset_axes(bounds)
+            ins.set_anchor("NE")
+            ins.plot(c * np.cos(circle), c * np.sin(circle), "k-", lw=0.8)
+            ins.plot(s, t, color=colour, lw=0.6)
+            (u0, u1), (v0, v1) = xlim, ylim
+            if max(u1 - u0, v1 - v0) > 0.15 * c:
+                ins.add_patch(Rectangle((u0, v0), u1 - u0, v1 - v0, fill=False, ec="r",
+                                        lw=0.9))
+            else:  # too small to see: a red square marker around it
+                ins.plot(0.5 * (u0 + u1), 0.5 * (v0 + v1), "s", mfc="none", mec="r", ms=7,
+                         mew=1.0)
+            ins.set_xlim(-1.08 * c, 1.08 * c)
+            ins.set_ylim(-1.08 * c, 1.08 * c)
+            ins.set_aspect("equal")
+            ins.set_xticks([])
+            ins.set_yticks([])
+            ins.patch.set_alpha(0.92)
+            ins.text(0.5, 0.03, f"C = {c:.0f} um", transform=ins.transAxes, ha="center",
+                     va="bottom", fontsize=7)
+    return fig
+
+
+def _angle_axis(ax, run: RunData, t_start: float):
+    """Top axis in ms of run time for a bottom axis in pinion degrees since ``t_start``."""
+    deg_per_s = math.degrees(run.speed)
+    top = ax.secondary_xaxis("top", functions=(lambda a: (t_start + a / deg_per_s) * 1e3,
+                                               lambda ms: (ms * 1e-3 - t_start) * deg_per_s))
+    top.set_xlabel("time [ms]")
+    return top
+
+
+def _bearing_forces(plt, run: RunData):
+    fig = titled_figure(plt, run, "bearing force norms ||F_b||")
+    axes = fig.subplots(2, 1, sharex=True)
+    win, kind = run.short_window()
+    t = run.time[win]
+    t_start = t[0] - run.dt
+    angle = (t - t_start) * math.degrees(run.speed)
+    every = max(1, t.size // 14)
+    for ax, (shaft, pair) in zip(axes, SHAFTS, strict=True):
+        for j, b in enumerate(pair):
+            colour, ls, marker = BEARING_STYLE[b]
+            ax.plot(angle, run.force_norm[win, b], color=colour, ls=ls, marker=marker,
+                    lw=2.0 if j == 0 else 1.4, ms=6, mfc=colour if j == 0 else "none",
+                    markevery=(j * every // 2, every), label=f"bearing {b + 1}",
+                    zorder=2 + j)
+        ax.set_ylabel("||F_b|| [N]")
+        ax.ticklabel_format(axis="y", useOffset=False)
+        ax.grid(True, lw=0.4, alpha=0.5)
+        ax.legend(loc="upper left", bbox_to_anchor=(1.005, 1.0), fontsize=9, frameon=False,
+                  title=shaft, title_fontsize=9)  # beside the panel: no curve hidden
+    axes[-1].set_xlabel(f"pinion angle [deg] ({kind})")
+    axes[-1].set_xlim(angle[0], angle[-1])
+    if angle[-1] > 300:
+        axes[-1].set_xticks(np.arange(0, 361, 45))
+    _angle_axis(axes[0], run, t_start)
+    return fig
+
+
+def _line_table(run: RunData, win) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """Least-squares peak amplitudes (4, n) [N] of the pinion lines over ``win`` (NaN where
+    the window does not resolve a line), their orders and labels."""
+    orders, labels = pinion_lines(run.teeth)
+    freqs = orders * run.pinion_hz
+    t = run.time[win]
+    duration = t[-1] - t[0] + run.dt
+    ok = resolved_lines(freqs, duration, run.dt)
+    amp = np.full((4, orders.size), np.nan)
+    if ok.any() and t.size >= 1 + 2 * ok.sum():
+        amp[:, ok] = order_lines(t, run.force_norm[win], freqs[ok]).T
+    return amp, orders, labels
+
+
+def _short(value: float) -> str:
+    """At most 6 characters: 3 significant digits, '-' for NaN."""
+    if not np.isfinite(value):
+        return "-"
+    text = f"{value:.3g}"
+    if len(text) <= 6:
+        return text
+    return f"{value:.0f}" if 1e3 <= abs(value) < 1e6 else f"{value:.0e}"
+
+
+def _spectra(plt, run: RunData):
+    fig = titled_figure(plt, run, "order spectra of ||F_b||")
+    grid = fig.add_gridspec(2, 2, width_ratios=[3.3, 1])
+    axes = [fig.add_subplot(grid[0, 0])]
+    axes.append(fig.add_subplot(grid[1, 0], sharex=axes[0]))
+    win, kind = run.long_window()
+    q, amp = order_amplitude_spectrum(run.force_norm[win], run.dt, run.pinion_hz)
+    duration = (win.sum()) * run.dt
+    if run.teeth is not None:
+        lines, orders, labels = _line_table(run, win)
+        z1 = run.teeth[0]
+    else:
+        lines, orders, labels, z1 = None, np.array([1.0]), ["1x"], 1
+    resolution = 1.0 / (duration * run.pinion_hz)  # orders
+    q_lo = max(0.6 * min(orders.min(), 1.0), 0.5 * resolution)
+    q_hi = min(3.6 * z1, q[-1])
+    keep = (q >= q_lo * 0.9) & (q <= q_hi)
+    top = max(float(amp[keep].max()), 1e-12) if keep.any() else 1.0
+    for ax, (shaft, pair) in zip(axes, SHAFTS, strict=True):
+        for j, b in enumerate(pair):
+            colour, ls, marker = BEARING_STYLE[b]
+            ax.plot(q[keep], amp[keep, b], color=colour, ls=ls, lw=1.5 if j == 0 else 1.1,
+                    label=f"bearing {b + 1} (Hann spectrum)", zorder=2 + j)
+            if lines is not None:
+                ax.plot(orders, lines[b], ls="", marker=marker, color=colour, ms=8,
+                        mfc=colour if j == 0 else "none", mew=1.5, zorder=5,
+                        label=f"bearing {b + 1} (least-squares line)")
+        for order, label in zip(orders, labels, strict=True):
+            if q_lo <= order <= q_hi:
+                ax.axvline(order, color="0.45", ls=":", lw=0.9, zorder=1)
+                ax.text(order, 1.0, " " + label.replace("_", " "), rotation=90, ha="right",
+                        va="top", fontsize=9, color="0.3",
+                        transform=ax.get_xaxis_transform())
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_ylim(top * 1e-5, top * 3.0)
+        ax.set_xlim(q_lo, q_hi)
+        ax.grid(True, which="major", lw=0.4, alpha=0.5)
+        ax.set_ylabel("peak amplitude of ||F_b|| [N]")
+        ax.set_title(shaft, fontsize=11, loc="left")
+        ticks = sorted({*orders[(orders >= q_lo) & (orders <= q_hi)],
+                        *[v for v in (0.5, 2, 5, 10) if q_lo <= v <= q_hi]})
+        ax.set_xticks(ticks, [f"{v:.3g}" for v in ticks])
+        ax.set_xticks([], minor=True)
+    axes[-1].set_xlabel(f"pinion order (f / {run.pinion_hz:.4g} Hz)")
+    # the table of least-squares amplitudes beside the panels
+    text = [f"{kind}", f"{duration * 1e3:.1f} ms, {win.sum()} steps",
+            f"resolution {resolution:.3g} orders", "",
+            "least-squares peak", "amplitudes [N]", ""]
+    if lines is not None:
+        text.append(f"{'line':<7}" + "".join(f"{'b' + str(b + 1):>7}" for b in range(4)))
+        for k, label in enumerate(labels):
+            cells = "".join(f" {_short(v):>6}" for v in lines[:, k])
+            text.append(f"{label.replace('gear_1x', 'gear1x'):<7}" + cells)
+        text += ["", "- : not resolved by the", "    window", "",
+                 "spectrum: Hann window,", "zero-padded x8"]
+    side = fig.add_subplot(grid[:, 1])
+    side.axis("off")
+    side.text(0.0, 1.0, "\n".join(text), family="monospace", fontsize=8.5, va="top",
+              transform=side.transAxes)
+    handles = [h for ax in axes for h in ax.get_legend_handles_labels()[0]]
+    side.legend(handles=handles, loc="lower left", fontsize=8.5, frameon=False,
+                borderaxespad=0.0)
+    return fig
+
+
+def _envelope(ax, x, y, colour, period: int, bins: int = 600):
+    """``y(x)`` as a thin line, or, over more than ``2 bins`` points, as its max and min and
+    mean per bin of a whole number of ``period`` samples (mesh periods: no beating with the
+    mesh frequency), the last bins ending at the last sample."""
+    n = x.size
+    if n <= 2 * bins:
+        ax.plot(x, y, color=colour, lw=0.7)
+        return
+    period = max(1, int(period))
+    width = period * math.ceil(n / (period * bins))
+    starts = np.arange(n - width, -1, -width)[::-1]  # whole bins ending at the last sample
+    if starts[0] >= width // 2:
+        starts = np.r_[0, starts]  # the partial first bin kept
+    else:
+        starts[0] = 0  # merged into the first whole bin
+    ends = np.r_[starts[1:], n]
+    lo = np.minimum.reduceat(y, starts)
+    hi = np.maximum.reduceat(y, starts)
+    mean = np.add.reduceat(y, starts) / (ends - starts)
+    xc = x[(starts + ends - 1) // 2]
+    span = (x[-1] - x[0]) * width / (n - 1)
+    ax.plot(xc, hi, color=colour, lw=0.9,
+            label=f"max / min per bin of {width // period} mesh period(s), {span:.3g}")
+    ax.plot(xc, lo, color=colour, lw=0.9)
+    ax.plot(xc, mean, color="0.3", lw=0.6, label="mean per bin")
+
+
+def _mesh(plt, run: RunData):
+    fig = titled_figure(plt, run, "transmission error and mesh force")
+    axes = fig.subplots(2, 2, sharex="col", width_ratios=[1, 1.25])
+    win, kind = run.short_window()
+    t = run.time[win]
+    t_start = t[0] - run.dt
+    angle = (t - t_start) * math.degrees(run.speed)
+    w0 = run.static_mesh
+    dyn = run.mesh - (w0 if w0 is not None else 0.0)
+    dyn_label = "W - W0 [N]" if w0 is not None else "mesh force W [N]"
+    teeth = run.teeth[0] if run.teeth else 1
+    period = round(1.0 / (teeth * run.pinion_hz * run.dt))  # steps per mesh period
+    te = run.te
+    if te is not None:
+        axes[0, 0].plot(angle, te[win] * UM, color="C4", lw=1.0)
+        if run.static_te is not None:
+            axes[0, 0].axhline(run.static_te * UM, color="k", ls=":", lw=0.9,
+                               label="static TE")
+            axes[0, 0].legend(loc="best", fontsize=9)
+        axes[0, 0].set_ylabel("transmission error [um]")
+        _envelope(axes[0, 1], run.time * 1e3, te * UM, "C4", period)
+    else:
+        for ax in axes[0]:
+            ax.text(0.5, 0.5, "no transmission_error channel", ha="center",
+                    transform=ax.transAxes)
+    axes[1, 0].plot(angle, dyn[win], color="C5", lw=1.0)
+    axes[1, 0].axhline(0.0, color="k", ls=":", lw=0.9)
+    axes[1, 0].set_ylabel(dyn_label)
+    _envelope(axes[1, 1], run.time * 1e3, dyn, "C5", period)
+    axes[1, 1].axhline(0.0, color="k", ls=":", lw=0.9)
+    if w0:
+        for ax in axes[1]:
+            ratio = ax.secondary_yaxis("right", functions=(lambda f: 1.0 + f / w0,
+                                                           lambda r: (r - 1.0) * w0))
+            ratio.set_ylabel("W / W0")
+    axes[1, 0].set_xlabel(f"pinion angle [deg] ({kind})")
+    axes[1, 0].set_xlim(angle[0], angle[-1])
+    if angle[-1] > 300:
+        axes[1, 0].set_xticks(np.arange(0, 361, 60))
+    _angle_axis(axes[0, 0], run, t_start)
+    axes[0, 0].set_title(kind, fontsize=11)
+    axes[0, 1].set_title("whole run", fontsize=11)
+    axes[1, 1].set_xlabel("time [ms]")
+    for ax in axes[:, 1]:
+        if not win.all():
+            ax.axvspan(t[0] * 1e3, t[-1] * 1e3, color="0.85", zorder=0,
+                       label="left panels' window")
+        ax.set_xlim(0.0, run.time[-1] * 1e3)
+    handles, labels = axes[1, 1].get_legend_handles_labels()
+    if len(handles) > 1:
+        labels = [lab + " ms" if lab.startswith("max") else lab for lab in labels]
+        fig.legend(handles, labels, loc="outside lower right", ncol=3, fontsize=9,
+                   frameon=False)
+    for ax in axes.flat:
+        ax.grid(True, lw=0.4, alpha=0.5)
+        ax.ticklabel_format(axis="y", useOffset=False)
+    axes[0, 1].set_ylabel("transmission error [um]")
+    axes[1, 1].set_ylabel(dyn_label)
+    return fig
+
+
+_DRAW = {"orbits.png": _orbits, "bearing_forces.png": _bearing_forces,
+         "spectra.png": _spectra, "mesh.png": _mesh}
+
+
+def make_run_figures(results: dict) -> dict:
+    """The run figures (matplotlib Figures, by file name) of what
+    :func:`orchestrator.run.results.read_results` returns; the caller closes them. Raises
+    ValueError below 2 time steps."""
+    plt = pyplot()
+    run = RunData(results)
+    figures = {}
+    with plt.rc_context({"font.size": 10, "axes.titlesize": 11, "axes.labelsize": 10}):
+        try:
+            for name in RUN_FIGURES:
+                figures[name] = _DRAW[name](plt, run)
+        except BaseException:
+            for fig in figures.values():
+                plt.close(fig)
+            raise
+    return figures
+
+
+def run_figures(path, out_dir=None) -> list[Path]:
+    """Write :data:`RUN_FIGURES` of the results file ``path`` (module docstring) into
+    ``out_dir`` (default: the folder beside the file named after its stem), removing those
+    PNGs left there by an earlier call first; returns the paths written. Raises ValueError if
+    the file holds fewer than 2 time steps."""
+    plt = pyplot()
+    path = Path(path)
+    out_dir = path.with_suffix("") if out_dir is None else Path(out_dir)
+    figures = make_run_figures(read_results(path))
+    out_dir.mkdir(parents=True, exist_ok=True)
+    for name in RUN_FIGURES + _OLD_FIGURES:
+        (out_dir / name).unlink(missing_ok=True)
+    written = []
+    try:
+        for name, fig in figures.items():
+            written.append(out_dir / name)
+            fig.savefig(written[-1], dpi=DPI)
+    finally:
+        for fig in figures.values():
+            plt.close(fig)
+    return written

@@ -1,0 +1,233 @@
+"""Figures of a sweep file (``gsb sweep``, :mod:`orchestrator.sweep.runner`).
+
+:func:`sweep_figures` draws, against the pinion speed when the sweep varies it (else against
+the first varied field):
+
+* ``R_ptp.png``: the dynamic factor R, one curve per bearing model (and per value of the other
+  varied fields), and the peak-to-peak of ||F_b|| at the four bearings, a panel per curve;
+  bearings 1-4 differ in colour, line style and marker, so bearings that coincide (1 and 2, 3
+  and 4 in the spur case) both stay visible;
+* ``waterfall_bearing1.png``: the order spectrum of ||F_b|| at bearing 1 against the swept
+  value (log colour scale), a panel per curve, with the pinion 1x and mesh orders z1, 2 z1,
+  3 z1 marked.
+
+Every figure is titled with the case, the bearing models and the operating values the sweep
+keeps fixed.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from orchestrator.figures.base import BEARING_STYLE
+
+__all__ = ["BEARING_STYLES", "sweep_figures"]
+
+#: matplotlib styles of bearings 1-4: the colours, lines and markers of the run figures
+#: (:data:`orchestrator.figures.base.BEARING_STYLE`), the second bearing of each shaft with open
+#: markers, so that bearings that coincide both stay visible
+BEARING_STYLES = tuple(
+    {"color": colour, "ls": ls, "marker": marker, "ms": 8, "lw": 1.6,
+     "mfc": "none" if b % 2 else colour}
+    for b, (colour, ls, marker) in enumerate(BEARING_STYLE))
+
+_NAMES = {"operation.speed": "pinion speed", "operation.torque": "input torque",
+          "operation.unbalance": "unbalance e_mu"}
+
+
+def _axis_label(key: str, unit: str) -> str:
+    name = _NAMES.get(key, key)
+    return f"{name} [{unit}]" if unit else name
+
+
+def _short(key: str, value: float, unit: str) -> str:
+    name = {"operation.speed": "speed", "operation.torque": "torque",
+            "operation.unbalance": "unbalance"}.get(key, key)
+    return f"{name} {value:g}{' ' + unit if unit not in ('', '1') else ''}"
+
+
+def _fixed(case, keys) -> str:
+    """The operating values the sweep keeps fixed."""
+    parts = []
+    if "operation.speed" not in keys:
+        w = case["operation.speed"]
+        parts.append(f"speed {w:g} rad/s ({w * 30 / math.pi:.0f} rpm)")
+    if "operation.torque" not in keys:
+        parts.append(f"torque {case['operation.torque']:g} N m")
+    if "operation.unbalance" not in keys:
+        e = case["operation.unbalance"]
+        parts.append(f"unbalance {e[0] * 1e3:g} / {e[1] * 1e3:g} mm")
+    return ", ".join(parts)
+
+
+def _edges(x: np.ndarray) -> np.ndarray:
+    """Cell edges around sorted centres (pcolormesh)."""
+    x = np.asarray(x, dtype=float)
+    if x.size == 1:
+        h = 0.05 * abs(x[0]) or 0.5
+        return np.array([x[0] - h, x[0] + h])
+    mid = 0.5 * (x[1:] + x[:-1])
+    return np.r_[x[0] - (mid[0] - x[0]), mid, x[-1] + (x[-1] - mid[-1])]
+
+
+def _groups(points, keys, units, ix):
+    """Successful points by (bearing model, values of the other varied fields), each sorted
+    by the swept value: ``{label: [points]}``."""
+    out: dict[str, list] = {}
+    for p in points:
+        if p["error"] is not None:
+            continue
+        others = [_short(k, p["values"][j], units[j]) for j, k in enumerate(keys) if j != ix]
+        label = ", ".join([str(p["bearing"]), *others])
+        out.setdefault(label, []).append(p)
+    for label in out:
+        out[label].sort(key=lambda p: p["values"][ix])
+    return out
+
+
+def _grid(plt, n: int, ncols_max: int, width: float, height: float, **kw):
+    ncols = min(n, ncols_max)
+    nrows = math.ceil(n / ncols)
+    fig, axes = plt.subplots(nrows, ncols, figsize=(max(width * ncols, 9.5),
+                                                    height * nrows + 0.8),
+                             constrained_layout=True, squeeze=False, **kw)
+    flat = list(axes.ravel())
+    for ax in flat[n:]:
+        ax.set_visible(False)
+    return fig, flat[:n]
+
+
+def sweep_figures(path, out_dir=None) -> list[Path]:
+    """The PNG figures of a sweep file (module docstring) in ``out_dir`` (default: the folder
+    named after the file's stem, beside it); returns their paths ([] when no point
+    succeeded)."""
+    from matplotlib.colors import LogNorm
+
+    from orchestrator.analysis.metrics import stored_case
+    from orchestrator.figures.base import pyplot
+    from orchestrator.sweep.file import read_sweep, read_sweep_attrs
+
+    path = Path(path)
+    out_dir = path.parent / path.stem if out_dir is None else Path(out_dir)
+    attrs = read_sweep_attrs(path)
+    if attrs.get("kind") != "sweep":
+        raise ValueError(f"{path}: not a sweep file (kind = {attrs.get('kind')!r})")
+    keys = list(attrs["vary_keys"])
+    units = list(attrs["vary_units"])
+    if not keys:
+        raise ValueError(f"{path}: the sweep varies no field")
+    case = stored_case(attrs, str(path))
+    z1 = int(case["gear_pair.teeth"][0])
+    ix = keys.index("operation.speed") if "operation.speed" in keys else 0
+    points = read_sweep(path)
+    groups = _groups(points, keys, units, ix)
+    if not groups:
+        return []
+    out_dir.mkdir(parents=True, exist_ok=True)
+    plt = pyplot()
+    xlabel = _axis_label(keys[ix], units[ix])
+    bearings = ", ".join(attrs["bearings"])
+    n_models = len(attrs["bearings"])
+    fixed = _fixed(case, keys)
+    head = (f"{attrs['case']}: bearing model{'s' * (n_models > 1)} {bearings}"
+            + (f"; {fixed}" if fixed else ""))
+    window = (f"{attrs['periods']} mesh periods per run, last {attrs['steady_periods']} "
+              "(steady window)")
+    failed = sum(p["error"] is not None for p in points)
+    if failed:
+        window += f"; {failed} failed point{'s' * (failed > 1)} left out"
+    paths = []
+
+    # (1) R and the bearing-force peak-to-peak
+    fig, axes = _grid(plt, 1 + len(groups), 3, 5.0, 4.0)
+    ax = axes[0]
+    for k, (label, pts) in enumerate(groups.items()):
+        x = [p["values"][ix] for p in pts]
+        ax.plot(x, [float(p["R"]) for p in pts], "o-", color=f"C{k % 10}", label=label)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel("R = max dynamic / static mesh load [1]")
+    ax.set_title("dynamic factor R")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    ptp_axes = axes[1:]
+    for ax, (label, pts) in zip(ptp_axes, groups.items(), strict=True):
+        x = [p["values"][ix] for p in pts]
+        ptp = np.array([p["force_ptp"] for p in pts])
+        for b in range(ptp.shape[1]):
+            ax.plot(x, ptp[:, b], label=f"bearing {b + 1}", **BEARING_STYLES[b % 4])
+        ax.set_xlabel(xlabel)
+        ax.set_ylabel("peak-to-peak ||F_b|| [N]")
+        ax.set_title(f"bearing forces: {label}", fontsize=10)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+    top = max(float(np.max([p["force_ptp"] for p in pts])) for pts in groups.values())
+    for ax in ptp_axes:
+        ax.set_ylim(0.0, 1.08 * top if top > 0 else 1.0)
+    _suptitle(fig, f"{head}\nR and bearing-force peak-to-peak; {window}")
+    paths.append(_save(fig, out_dir / "R_ptp.png", plt))
+
+    # (2) waterfall: order spectrum of ||F_b|| at bearing 1 against the swept value
+    fig, axes = _grid(plt, len(groups), 2, 6.5, 4.6)
+    spectra = {}
+    for label, pts in groups.items():
+        orders = np.asarray(pts[0]["spectrum_orders"], dtype=float)
+        amp = np.array([np.interp(orders, p["spectrum_orders"], p["spectrum"][0])
+                        for p in pts])
+        spectra[label] = (np.array([p["values"][ix] for p in pts]), orders[1:], amp[:, 1:])
+    peak = max((float(a.max()) for _, _, a in spectra.values() if a.size), default=0.0)
+    norm = LogNorm(vmin=peak * 1e-4, vmax=peak) if peak > 0 else None
+    mesh = None
+    for ax, (label, (x, orders, amp)) in zip(axes, spectra.items(), strict=True):
+        if orders.size == 0:
+            ax.set_title(f"{label}: no spectrum (window too short)", fontsize=10)
+            continue
+        top = orders[-1] + 0.5 * (orders[1] - orders[0] if orders.size > 1 else 1.0)
+        orders, amp = _pool(orders, amp, 300)  # lines narrower than a pixel would vanish
+        mesh = ax.pcolormesh(_edges(orders), _edges(x), np.maximum(amp, peak * 1e-6),
+                             norm=norm, cmap="viridis", shading="flat")
+        marks = [(q, name) for q, name in [(1.0, "1x")] + [(k * z1, f"{k} z1 = {k * z1}")
+                                                          for k in (1, 2, 3)] if q <= top]
+        sec = ax.secondary_xaxis("top")
+        sec.set_xticks([q for q, _ in marks], [name for _, name in marks], fontsize=8)
+        sec.tick_params(direction="inout", length=8)
+        ax.set_xlim(0.0, top)
+        ax.set_xlabel("order [1] (cycles per pinion revolution)")
+        ax.set_ylabel(xlabel)
+        ax.set_title(label, fontsize=10)
+    if mesh is not None:
+        fig.colorbar(mesh, ax=axes, label="amplitude of ||F_b|| at bearing 1 [N]")
+    _suptitle(fig, f"{head}\norder spectrum of the bearing-1 force norm; {window}")
+    paths.append(_save(fig, out_dir / "waterfall_bearing1.png", plt))
+    return paths
+
+
+def _pool(orders: np.ndarray, amp: np.ndarray, cells: int):
+    """The spectra on at most ``cells`` columns: the largest amplitude of each group of
+    neighbouring bins (a waterfall shows where the lines are)."""
+    k = max(1, math.ceil(orders.size / cells))
+    if k == 1:
+        return orders, amp
+    n = math.ceil(orders.size / k) * k
+    padded = np.zeros((amp.shape[0], n))
+    padded[:, :orders.size] = amp
+    step = orders[1] - orders[0]
+    centres = orders[0] + step * (np.arange(n // k) * k + 0.5 * (k - 1))
+    return centres, padded.reshape(amp.shape[0], -1, k).max(axis=2)
+
+
+def _suptitle(fig, text: str) -> None:
+    """A title wrapped to the figure's width (11 pt: about 10 characters per inch)."""
+    import textwrap
+
+    chars = int(10 * fig.get_figwidth())
+    fig.suptitle("\n".join(textwrap.fill(line, chars) for line in text.splitlines()),
+                 fontsize=11)
+
+
+def _save(fig, path: Path, plt) -> Path:
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path

@@ -1,0 +1,120 @@
+"""Where a run writes: one results file per set of effective parameters, never clobbered.
+
+A run's file is ``<out>/<case>_<model>[_inprocess]_<hash>.h5``, the hash (8 hex digits of a
+SHA-256) taken over the effective case (every field after the overrides, ``--periods``
+included), the transport and, for a bearing FMU of the user's own, the FMU file's bytes. Two
+runs with different overrides therefore write two files; the same run twice finds its file
+and stops with a message (``--overwrite`` replaces it, ``--resume`` continues it).
+
+With ``--overwrite`` over a complete file the new run writes ``<name>.partial.h5`` and
+replaces the old file only once it is complete: a run that fails or is interrupted leaves the
+complete file untouched, and its own steps in the ``.partial.h5`` file. Figures live in the
+folder ``<out>/<name>/`` beside the file they were drawn from.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+__all__ = ["Target", "TargetError", "describe_file", "results_name", "target"]
+
+
+class TargetError(RuntimeError):
+    """The results file cannot be written (message names the file and what to do)."""
+
+
+def results_name(case, label: str, in_process: bool, steps: int | None = None,
+                 bearing_fmu: Path | str | None = None) -> str:
+    """``<case>_<label>[_inprocess]_<hash>`` (module docstring)."""
+    h = hashlib.sha256(case.to_toml(header=False).encode())
+    h.update(f"\nlabel={label}\nin_process={bool(in_process)}\nsteps={steps}\n".encode())
+    if bearing_fmu is not None:
+        h.update(Path(bearing_fmu).read_bytes())
+    suffix = "_inprocess" if in_process else ""
+    return f"{case['case.name']}_{label}{suffix}_{h.hexdigest()[:8]}"
+
+
+def describe_file(path: Path) -> str:
+    """What a results file holds, in a few words (complete, interrupted, being written)."""
+    from orchestrator.run.results import open_results
+
+    try:
+        with open_results(path) as f:
+            n = f["time"].shape[0] if "time" in f else 0
+            complete = bool(f.attrs.get("complete", False))
+            why = str(f.attrs.get("stopped_by", ""))
+    except BlockingIOError:
+        return "open for writing by another run"
+    except OSError as exc:
+        return f"not a readable results file ({exc})"
+    if complete:
+        return f"complete, {n} steps"
+    return f"incomplete, {n} steps" + (f", stopped by {why}" if why else "")
+
+
+@dataclass
+class Target:
+    """Where a run writes (``write``) and the file it becomes when complete (``final``)."""
+
+    write: Path
+    final: Path
+    figures: Path
+
+    def finish(self, complete: bool) -> Path:
+        """Move the written file into place: always when complete; when not, only if no
+        complete file would be replaced. Returns where the run's steps now are."""
+        if self.write == self.final:
+            return self.final
+        if complete or not _is_complete(self.final):
+            os.replace(self.write, self.final)
+            return self.final
+        return self.write
+
+
+def _is_complete(path: Path) -> bool:
+    from orchestrator.run.results import read_attributes
+
+    try:
+        return bool(read_attributes(path).get("complete", False))
+    except OSError:
+        return False
+
+
+def target(out_dir: Path | str, name: str, overwrite: bool) -> Target:
+    """Decide where a run named ``name`` writes in ``out_dir`` (module docstring); checks
+    that the folder can be created and written before anything is computed."""
+    out_dir = Path(out_dir)
+    try:
+        out_dir.mkdir(parents=True, exist_ok=True)
+    except FileExistsError:
+        raise TargetError(f"--out {out_dir}: is a file, not a folder") from None
+    except OSError as exc:
+        raise TargetError(f"--out {out_dir}: cannot create the folder ({exc.strerror})") \
+            from None
+    if not os.access(out_dir, os.W_OK | os.X_OK):
+        raise TargetError(f"--out {out_dir}: the folder is not writable")
+    final = out_dir / f"{name}.h5"
+    figures = out_dir / name
+    if not final.exists():
+        return Target(final, final, figures)
+    from orchestrator.run.results import live_writer
+
+    pid = live_writer(final)
+    if pid is not None:
+        raise TargetError(f"{final} is being written by another run (process {pid}); wait for "
+                          "it, stop it, or use another --out")
+    state = describe_file(final)
+    complete = state.startswith("complete")
+    if not overwrite:
+        hint = "" if complete else f", --resume {final} to continue it"
+        raise TargetError(f"{final} exists ({state}): this run would overwrite it; "
+                          f"--overwrite to replace it{hint}, or another --out")
+    if complete:
+        partial = out_dir / f"{name}.partial.h5"
+        partial.unlink(missing_ok=True)
+        return Target(partial, final, figures)
+    final.unlink()
+    return Target(final, final, figures)

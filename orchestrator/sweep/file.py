@@ -1,0 +1,208 @@
+"""The sweep file: one HDF5 file per sweep, written one point at a time
+(:mod:`orchestrator.sweep.runner`).
+
+Between two points the file is closed, complete and readable (``gsb plot`` of a running sweep),
+so a killed client loses no finished point. Every dataset carries ``unit`` and ``description``
+attributes (:data:`DATASETS`).
+
+* root attributes: ``kind = "sweep"``, ``case`` (name), ``case_file`` (where the client read
+  it), ``case_toml`` (the case's text, SI; the points override it), ``vary_keys`` (strings,
+  the case fields varied), ``vary_units`` (their SI units), ``bearings`` (the bearing models,
+  strings), ``periods``, ``steady_periods`` (mesh periods of the run and of its steady window),
+  ``n_points``, ``n_failed``, ``status`` ("running", "complete", "failed points",
+  "worker timeout", "scheduler lost", "interrupted"), ``complete`` (true only when every point
+  succeeded) and ``wall_time`` [s];
+* a group per point, ``points/<index>``: attributes ``values`` (the varied values in SI units,
+  in ``vary_keys`` order; the first entry of a list field), ``bearing``, ``label``,
+  ``overrides`` (JSON text, as given), ``error`` and ``traceback`` if it failed, ``warnings``
+  (the run's warnings, if any), and the datasets of :data:`DATASETS` if it succeeded.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+
+from fmu_src.case import FIELDS, Case
+from fmu_src.units import DIMENSIONS, symbol
+
+__all__ = ["DATASETS", "field_unit", "finish", "point_values", "read_sweep", "read_sweep_attrs",
+           "store_point", "write_header"]
+
+_BY_KEY = {f.key: f for f in FIELDS}
+
+#: Datasets of a successful point: name -> (unit, description).
+#:
+#: :meta hide-value:
+DATASETS = {
+    "R": (symbol("dimensionless"), "dynamic tooth load factor: max mesh force over the static "
+                                   "mesh load, steady window"),
+    "force_ptp": (symbol("force"), "peak-to-peak of ||F_b|| at bearings 1-4, steady window"),
+    "force_mean": (symbol("force"), "mean of ||F_b|| at bearings 1-4, steady window"),
+    "orbit_centre": (symbol("length"), "centre of the ellipse fitted to the orbit [s, t] at "
+                                       "bearings 1-4, steady window"),
+    "orbit_mean": (symbol("length"), "mean journal position [s, t] at bearings 1-4, steady "
+                                     "window"),
+    "time": (symbol("time"), "time of the decimated steady-window samples"),
+    "orbit": (symbol("length"), "journal position [s, t] at bearings 1-4, steady window, "
+                                "decimated"),
+    "bearing_force": (symbol("force"), "film force [F_s, F_t] at bearings 1-4, steady window, "
+                                       "decimated"),
+    "mesh_force": (symbol("force"), "total normal mesh force, steady window, decimated"),
+    "static_journal": (symbol("length"), "static journal positions X0 [s, t] at bearings 1-4"),
+    "wall_time": (symbol("time"), "wall time of the point on its worker"),
+    "iterations_per_step": (symbol("dimensionless"), "coupled iterations per time step"),
+    "spectrum_orders": (symbol("dimensionless"), "orders of the spectrum bins (cycles per "
+                                                 "pinion revolution), 0 to 3.5 z1"),
+    "spectrum": (symbol("force"), "single-sided peak amplitude of ||F_b|| at bearings 1-4 per "
+                                  "order (full-resolution steady window, a whole number of "
+                                  "pinion revolutions when it holds one)"),
+    "spectrum_window": (symbol("time"), "start and end of the spectrum's window"),
+}
+
+
+def field_unit(key: str) -> str:
+    """SI unit of a case field (``"1"`` for counts, ``""`` for text, choices and flags)."""
+    kind = _BY_KEY[key].kind
+    if kind in DIMENSIONS:
+        return symbol(kind)
+    return "1" if kind == "count" else ""
+
+
+def point_values(base: Case, overrides: dict, keys) -> list[float]:
+    """The varied values of a point in SI units, bounds not checked (the first entry of a list
+    field; NaN where a value is not a number or not readable)."""
+    from fmu_src.units import UnitError, parse_quantity
+
+    out = []
+    for key in keys:
+        value = overrides[key] if key in overrides else base.values.get(key)
+        if isinstance(value, (list, tuple)):
+            value = value[0] if value else math.nan
+        kind = _BY_KEY[key].kind if key in _BY_KEY else None
+        if kind in DIMENSIONS and isinstance(value, (int, float, str)) \
+                and not isinstance(value, bool):
+            try:
+                value = parse_quantity(value, kind, key)
+            except UnitError:
+                value = math.nan
+        out.append(float(value) if isinstance(value, (int, float)) else math.nan)
+    return out
+
+
+def _open(path: Path, mode: str, wait: float = 30.0):
+    """``h5py.File(path, mode)``, retried for ``wait`` s while a reader holds the file's
+    lock (``gsb plot`` of a running sweep)."""
+    import h5py
+
+    t0 = time.monotonic()
+    while True:
+        try:
+            return h5py.File(path, mode)
+        except BlockingIOError:
+            if time.monotonic() - t0 > wait:
+                raise
+            time.sleep(0.2)
+
+
+def _strings(values):
+    import h5py
+
+    return np.array([str(v) for v in values], dtype=h5py.string_dtype())
+
+
+def write_header(path: Path, base: Case, vary_keys, bearings, periods: int,
+                 steady_periods: int, n_points: int) -> None:
+    """Create the sweep file with its root attributes (module docstring), no point yet."""
+    import h5py
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with h5py.File(path, "w") as f:
+        f.attrs["kind"] = "sweep"
+        f.attrs["case"] = base.name
+        f.attrs["case_file"] = str(base.source)
+        f.attrs["case_toml"] = base.to_toml()
+        f.attrs["vary_keys"] = _strings(vary_keys)
+        f.attrs["vary_units"] = _strings(field_unit(k) if k in _BY_KEY else ""
+                                         for k in vary_keys)
+        f.attrs["bearings"] = _strings(bearings)
+        f.attrs["periods"] = int(periods)
+        f.attrs["steady_periods"] = int(steady_periods)
+        f.attrs["n_points"] = int(n_points)
+        f.attrs["n_failed"] = 0
+        f.attrs["status"] = "running"
+        f.attrs["complete"] = False
+        f.attrs["wall_time"] = 0.0
+        f.create_group("points")
+
+
+def store_point(path: Path, index: int, point, base: Case, vary_keys, result: dict,
+                n_failed: int) -> None:
+    """One point's group (module docstring): ``result`` is
+    :func:`orchestrator.sweep.runner.run_point`'s
+    (``ok``, ``data`` or ``error``); ``n_failed`` the failed points so far, this one included."""
+    with _open(path, "a") as f:
+        g = f["points"].create_group(f"{index:04d}")
+        g.attrs["overrides"] = json.dumps(point.overrides)
+        g.attrs["values"] = np.asarray(point_values(base, point.overrides, vary_keys),
+                                       dtype=float)
+        g.attrs["bearing"] = point.bearing or base["bearings.model"]
+        g.attrs["label"] = point.label
+        if result["ok"]:
+            for key, val in result["data"].items():
+                d = g.create_dataset(key, data=val)
+                unit, doc = DATASETS.get(key, ("", ""))
+                d.attrs["unit"] = unit
+                d.attrs["description"] = doc
+            if result.get("warnings"):
+                g.attrs["warnings"] = result["warnings"]
+        else:
+            g.attrs["error"] = result["error"]
+            g.attrs["traceback"] = result.get("traceback", "")
+        f.attrs["n_failed"] = int(n_failed)
+
+
+def finish(path: Path, status: str, complete: bool, wall_time: float) -> None:
+    """Record how the sweep ended."""
+    with _open(path, "a") as f:
+        f.attrs["wall_time"] = float(wall_time)
+        f.attrs["status"] = status
+        f.attrs["complete"] = bool(complete)
+
+
+def read_sweep(path) -> list[dict]:
+    """The points of a sweep file: dicts with ``overrides``, ``values``, ``bearing``, ``label``,
+    ``error`` and the datasets (absent for failed points), in point order."""
+    from orchestrator.run.results import open_results
+
+    out = []
+    with open_results(path) as f:
+        for key in sorted(f["points"]):
+            g = f["points"][key]
+            d = {"overrides": json.loads(g.attrs["overrides"]), "bearing": g.attrs["bearing"],
+                 "label": g.attrs["label"], "error": g.attrs.get("error"),
+                 "values": np.asarray(g.attrs.get("values", []), dtype=float),
+                 "warnings": g.attrs.get("warnings", "")}
+            for name in g:
+                d[name] = g[name][()]
+            out.append(d)
+    return out
+
+
+def read_sweep_attrs(path) -> dict:
+    """The root attributes of a sweep file (:func:`orchestrator.run.results.read_attributes`;
+    string arrays as lists of str, numpy scalars as Python numbers)."""
+    from orchestrator.run.results import read_attributes
+
+    out = {}
+    for key, value in read_attributes(path).items():
+        if isinstance(value, np.ndarray) and value.dtype.kind == "O":
+            value = [v.decode() if isinstance(v, bytes) else str(v) for v in value]
+        elif isinstance(value, np.generic):
+            value = value.item()
+        out[key] = value
+    return out

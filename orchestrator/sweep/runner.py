@@ -1,0 +1,412 @@
+"""Parametric sweeps on Dask: independent runs of one case with overridden fields.
+
+Each point is a full in-process run (:func:`orchestrator.run.runner.run_case`) on a Dask worker,
+reduced there to its figures (:func:`orchestrator.analysis.metrics.run_metrics`), its
+steady-state orbits and the order spectrum of its bearing forces, so only small arrays travel back.
+The workers get the
+case's *content* (a :class:`~fmu_src.case.Case`, or its TOML text), never a path: a worker need
+not share the client's folders. Every point's case is checked in the client first; a point the
+case loader rejects is recorded as failed without being submitted.
+
+A LocalCluster of single-threaded worker processes is started by default;
+``scheduler="tcp://host:8786"`` uses any running Dask scheduler instead, and
+``scheduler="none"`` runs the points one after the other in this process (the reference for the
+parallel efficiency). A point that fails is recorded with its error and the sweep goes on. When
+no worker is connected to the scheduler for ``worker_timeout`` seconds the sweep stops: the
+finished points are kept, the others recorded as failed with that reason. Ctrl-C
+(KeyboardInterrupt) does the same and raises :class:`SweepInterrupted`.
+
+The sweep's results are one HDF5 file, written one point at a time: :mod:`orchestrator.sweep.file`.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import concurrent.futures
+import contextlib
+import math
+import signal
+import sys
+import tempfile
+import threading
+import time
+import tomllib
+import traceback
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from fmu_src.case import Case, CaseError, load_case, parse_case
+from orchestrator.run.runner import RunError, RunInterrupted, deferred_signals
+from orchestrator.sweep import file as sweep_file
+from orchestrator.sweep.file import DATASETS, field_unit, read_sweep, read_sweep_attrs
+
+__all__ = ["DATASETS", "SweepInterrupted", "SweepPoint", "SweepResult", "as_case",
+           "check_point", "field_unit", "point_spectrum", "read_sweep", "read_sweep_attrs",
+           "run_point", "run_sweep"]
+
+#: the highest order kept in a point's spectrum, in mesh orders (z1)
+MAX_MESH_ORDER = 3.5
+
+
+class SweepInterrupted(RunInterrupted):
+    """A sweep stopped by Ctrl-C; the finished points are in the file (``path``)."""
+
+    def __init__(self, message: str, path: Path):
+        import signal
+
+        super().__init__(signal.SIGINT, message)
+        self.path = path
+
+
+@dataclass(frozen=True)
+class SweepPoint:
+    """One run of a sweep: case-field overrides (values as in a case file) and a bearing model."""
+
+    overrides: dict
+    bearing: str | None = None
+    label: str = ""
+
+
+@dataclass
+class SweepResult:
+    path: Path
+    wall_time: float
+    n_points: int
+    failed: list = field(default_factory=list)  # (index, message)
+    status: str = "complete"  # "complete", "failed points", "worker timeout", "scheduler lost"
+    message: str = ""  # why the sweep stopped early ("" otherwise)
+    warnings: dict = field(default_factory=dict)  # index: the run's warnings (stderr text)
+
+    @property
+    def complete(self) -> bool:
+        return not self.failed
+
+
+def as_case(case) -> Case:
+    """A :class:`~fmu_src.case.Case`: itself, parsed from TOML text (a string with a line
+    break), or read from a file path or shipped name (in the client only: workers get the
+    content)."""
+    if isinstance(case, Case):
+        return case
+    if isinstance(case, str) and "\n" in case:
+        try:
+            return parse_case(tomllib.loads(case), "<sweep case>")
+        except tomllib.TOMLDecodeError as exc:
+            raise CaseError(f"sweep case: not valid TOML: {exc}") from None
+    return load_case(case)
+
+
+def point_spectrum(case: Case, results: dict, steady_periods: int) -> dict:
+    """Order spectrum of ||F_b|| (bearings 1-4) of a run, from its full-resolution samples.
+
+    The window is the last whole number of pinion revolutions of the steady window (the last
+    ``steady_periods`` mesh periods), or the whole steady window if it is shorter than one
+    revolution; so the pinion orders 1, z1, 2 z1, ... fall on bins when it holds a revolution.
+    Orders 0 to 3.5 z1 (:func:`orchestrator.analysis.metrics.order_spectrum`)."""
+    from orchestrator.analysis.metrics import order_spectrum
+
+    z1 = int(case["gear_pair.teeth"][0])
+    per_mesh = int(case["simulation.steps_per_mesh_period"])
+    steady = max(1, int(steady_periods))
+    revolutions = steady // z1
+    n = (revolutions * z1 if revolutions >= 1 else steady) * per_mesh
+    time_s = np.asarray(results["time"], dtype=float)
+    n = min(n, time_s.size)
+    force = np.asarray(results["bearing_force"][-n:], dtype=float)
+    norm = np.hypot(force[..., 0], force[..., 1])
+    orders, amp = order_spectrum(norm, z1 * per_mesh, MAX_MESH_ORDER * z1)
+    dt = time_s[1] - time_s[0] if time_s.size > 1 else 0.0
+    return {"spectrum_orders": orders, "spectrum": amp.T,
+            "spectrum_window": np.array([time_s[-n] - dt, time_s[-1]])}
+
+
+def run_point(case, point: SweepPoint, periods: int, steady_periods: int,
+              keep_steps: int = 4096) -> dict:
+    """Run one point and reduce it (executed on a worker). ``case``: the sweep's case as a
+    :class:`~fmu_src.case.Case` or its TOML text (never a path); the point's overrides are
+    applied here. Never raises (errors are returned) except
+    :class:`~orchestrator.run.runner.RunInterrupted`, a Ctrl-C of a serial sweep."""
+    folder = ""
+    try:
+        from orchestrator.analysis.metrics import run_metrics, steady_window
+        from orchestrator.run.results import read_results
+        from orchestrator.run.runner import run_case
+
+        if not isinstance(case, Case):  # TOML text; a path would name the client's folders
+            if not (isinstance(case, str) and "\n" in case):
+                raise TypeError(f"run_point needs a Case or its TOML text, not {case!r}")
+            case = as_case(case)
+        case = case.with_overrides(point.overrides)
+        z1 = case["gear_pair.teeth"][0]
+        mesh_period = 2 * math.pi / (case["operation.speed"] * z1)
+        steady_n = min(steady_periods, periods)
+        steady = steady_n * mesh_period
+        t0 = time.perf_counter()
+        with tempfile.TemporaryDirectory() as tmp:
+            folder = tmp
+            s = run_case(case, bearing=point.bearing, periods=periods, in_process=True,
+                         out_dir=tmp, progress=False, figures=False, echo_warnings=False)
+            r = read_results(s.results)
+        metrics = run_metrics(r, steady)
+        win = steady_window(r["time"], steady)
+        stride = max(1, int(np.count_nonzero(win)) // keep_steps)
+        out = {k: np.asarray(v) for k, v in metrics.items()}
+        out["time"] = r["time"][win][::stride]
+        out["orbit"] = r["journal_position"][win][::stride]
+        out["bearing_force"] = r["bearing_force"][win][::stride]
+        out["mesh_force"] = r["mesh_force"][win][::stride]
+        out["static_journal"] = np.asarray(s.static_positions)
+        out.update(point_spectrum(case, r, steady_n))
+        out["wall_time"] = np.asarray(time.perf_counter() - t0)
+        out["iterations_per_step"] = np.asarray(s.iterations_per_step)
+        return {"ok": True, "data": out, "warnings": "\n".join(s.warnings)}
+    except RunInterrupted:
+        raise
+    except Exception as exc:  # reported, the sweep goes on
+        text = f"{type(exc).__name__}: {exc}"
+        if folder:  # the run's file is gone with its temporary folder
+            text = text.replace(folder, "<the point's temporary folder, removed>")
+        return {"ok": False, "error": text, "traceback": traceback.format_exc()}
+
+
+def check_point(case: Case, point: SweepPoint) -> Case:
+    """The case of a point (its overrides and bearing model applied), checked; raises
+    :class:`~fmu_src.case.CaseError`."""
+    overrides = dict(point.overrides)
+    if point.bearing is not None:
+        overrides["bearings.model"] = point.bearing
+    return case.with_overrides(overrides)
+
+
+@contextlib.contextmanager
+def _children_ignore_sigint():
+    """SIGINT ignored while the LocalCluster starts its processes, so that they inherit it: a
+    Ctrl-C in the terminal reaches the whole process group, and only this process (the
+    client) should act on it (it cancels the points and closes the cluster)."""
+    import signal
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def _client(scheduler, n_workers, timeout):
+    import logging
+
+    from dask.distributed import Client, LocalCluster
+
+    if scheduler:
+        return Client(scheduler, timeout=timeout), None
+    with _children_ignore_sigint():
+        cluster = LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
+                               dashboard_address=":0", scheduler_kwargs={"dashboard": False},
+                               silence_logs=logging.ERROR)
+    return Client(cluster), cluster
+
+
+def _connect(scheduler, n_workers, timeout):
+    try:
+        return _client(scheduler, n_workers, timeout)
+    except KeyboardInterrupt:
+        raise
+    except Exception as exc:
+        where = f"the Dask scheduler {scheduler}" if scheduler else "a Dask LocalCluster"
+        raise RunError(f"cannot connect to {where}: {type(exc).__name__}: {exc}") from None
+
+
+def _workers(client) -> int:
+    """Workers connected to the scheduler (0 when the client lost it)."""
+    if client.status != "running":
+        return 0
+    info = client.scheduler_info(n_workers=1)
+    return int(info.get("n_workers", len(info.get("workers", {}))))
+
+
+def run_sweep(case, points, path: str | Path, periods: int, steady_periods: int = 26,
+              scheduler: str | None = None, n_workers: int = 2, progress: bool = True,
+              name: str = "", vary_keys=None, worker_timeout: float = 60.0) -> SweepResult:
+    """Run the points, gather them into one HDF5 file as they complete (module docstring).
+
+    ``case``: a :class:`~fmu_src.case.Case`, its TOML text, or a case file / shipped name read
+    here (the workers get its content). ``vary_keys``: the fields varied (default: every key the
+    points override, in order of appearance). ``worker_timeout`` [s]: stop when no worker is
+    connected to the scheduler for that long. Raises :class:`~orchestrator.run.runner.RunError` if
+    the
+    cluster cannot be reached (nothing written) and :class:`SweepInterrupted` on Ctrl-C (the
+    finished points kept in the file)."""
+    from orchestrator.run.runner import Progress
+
+    base = as_case(case)
+    points = list(points)
+    if vary_keys is None:
+        vary_keys = list(dict.fromkeys(k for p in points for k in p.overrides))
+    vary_keys = list(vary_keys)
+    bearings = list(dict.fromkeys(p.bearing or base["bearings.model"] for p in points))
+    path = Path(path)
+    t0 = time.perf_counter()
+    failed = []
+    warned = {}
+    status, message = "complete", ""
+    rejected = {}
+    for i, p in enumerate(points):
+        try:
+            check_point(base, p)
+        except CaseError as exc:
+            rejected[i] = f"CaseError: {exc}"
+    client = cluster = None
+    quiet = contextlib.ExitStack()
+    if scheduler != "none":
+        client, cluster = _connect(scheduler, n_workers, max(worker_timeout, 1.0))
+        quiet.enter_context(_quiet_dask_logs())
+    bar = Progress(len(points), f"sweep {name or path.stem}", enabled=progress)
+    done = 0
+    interrupted = False
+    stored: set[int] = set()
+
+    def store(i, res):
+        """One point into the file (:func:`orchestrator.sweep.file.store_point`)."""
+        if res["ok"] and res.get("warnings"):
+            warned[i] = res["warnings"]
+        elif not res["ok"]:
+            failed.append((i, res["error"]))
+        sweep_file.store_point(path, i, points[i], base, vary_keys, res, len(failed))
+        stored.add(i)
+
+    def give_up(why):
+        for i in range(len(points)):
+            if i not in stored:
+                store(i, {"ok": False, "error": why, "traceback": ""})
+
+    try:
+        sweep_file.write_header(path, base, vary_keys, bearings, periods, steady_periods,
+                                len(points))
+        try:
+            for i, why in rejected.items():
+                store(i, {"ok": False, "error": why, "traceback": ""})
+                done += 1
+            todo = [i for i in range(len(points)) if i not in rejected]
+            if client is None:
+                for i in todo:
+                    store(i, run_point(base, points[i], periods, steady_periods))
+                    done += 1
+                    bar.update(done, f"{len(failed)} failed")
+            else:  # Ctrl-C taken between polls: Dask's waits may swallow a KeyboardInterrupt
+                with deferred_signals((signal.SIGINT,), "stopping the sweep") as asked:
+                    status, message, done = _gather(client, base, points, todo, periods,
+                                                    steady_periods, store, bar, done, failed,
+                                                    scheduler, worker_timeout, progress, asked)
+                if message:
+                    give_up(message)
+        except (KeyboardInterrupt, RunInterrupted):
+            interrupted = True
+            status = "interrupted"
+            give_up("interrupted (Ctrl-C) before the point finished")
+        wall = time.perf_counter() - t0
+        if status == "complete" and failed:
+            status = "failed points"
+        sweep_file.finish(path, status, not failed, wall)
+    finally:
+        if client is not None:
+            _close(client, cluster)
+        quiet.close()
+    if interrupted:
+        finished = len(points) - len(failed)
+        raise SweepInterrupted(f"interrupted: {finished} of {len(points)} points finished, kept "
+                               f"in {path} (complete = false)", path)
+    return SweepResult(path, wall, len(points), failed, status, message, warned)
+
+
+def _gather(client, base, points, todo, periods, steady_periods, store, bar, done, failed,
+            scheduler, worker_timeout, progress, asked):
+    """Submit the points, store them as they complete; stop when no worker is connected for
+    ``worker_timeout`` s, and with KeyboardInterrupt once ``asked`` (the signals received,
+    :func:`orchestrator.run.runner.deferred_signals`) is not empty. Returns (status, message,
+    done)."""
+    from dask.distributed import wait
+
+    futures = {client.submit(run_point, base, points[i], periods, steady_periods,
+                             pure=False): i for i in todo}
+    pending = set(futures)
+    poll = min(1.0, max(0.05, worker_timeout / 10))
+    alone_since = None
+    where = f"the scheduler {scheduler}" if scheduler else "the LocalCluster's scheduler"
+    try:
+        while pending:
+            if asked:
+                raise KeyboardInterrupt
+            try:
+                finished, pending = wait(pending, timeout=poll, return_when="FIRST_COMPLETED")
+            except TimeoutError:
+                finished = set()
+            except Exception as exc:  # FuturesCancelledError: the client lost the scheduler
+                if client.status == "running" and not any(f.cancelled() for f in pending):
+                    raise
+                return ("scheduler lost", f"lost the connection to {where} "
+                        f"({type(exc).__name__})", done)
+            for fut in finished:
+                i = futures[fut]
+                try:
+                    res = fut.result()
+                except (Exception, asyncio.CancelledError, concurrent.futures.CancelledError) \
+                        as exc:  # the worker died, or the client lost the scheduler
+                    res = {"ok": False, "error": f"{type(exc).__name__}: {exc}",
+                           "traceback": traceback.format_exc()}
+                fut.release()
+                store(i, res)
+                done += 1
+            if not pending:
+                break
+            now = time.perf_counter()
+            n = _workers(client)
+            if n > 0:
+                alone_since = None
+            elif alone_since is None:
+                alone_since = now
+                if progress:
+                    print(f"{chr(10) * bar.tty}no Dask worker connected to {where}: waiting up to "
+                          f"{worker_timeout:g} s", file=sys.stderr, flush=True)
+            elif now - alone_since >= worker_timeout:
+                return ("worker timeout",
+                        f"worker timeout: no Dask worker connected to {where} for "
+                        f"{worker_timeout:g} s", done)
+            bar.update(done, f"{len(failed)} failed, {n} worker{'s' * (n != 1)}")
+        bar.update(done, f"{len(failed)} failed")
+        return "complete", "", done
+    finally:
+        if pending:
+            with contextlib.suppress(Exception):
+                client.cancel(list(pending))
+
+
+@contextlib.contextmanager
+def _quiet_dask_logs():
+    """Dask's own log records (connection errors with their tracebacks) held back below
+    CRITICAL: the sweep reports what they mean (the points' errors, a lost scheduler, no
+    worker)."""
+    import logging
+
+    names = ["distributed"] + [n for n, x in logging.root.manager.loggerDict.items()
+                               if n.startswith("distributed.") and isinstance(x, logging.Logger)]
+    levels = {n: logging.getLogger(n).level for n in names}
+    for n in names:
+        logging.getLogger(n).setLevel(logging.CRITICAL)
+    try:
+        yield
+    finally:
+        for n, level in levels.items():
+            logging.getLogger(n).setLevel(level)
+
+
+def _close(client, cluster):
+    with contextlib.suppress(Exception):
+        client.close(timeout=10)
+    if cluster is not None:
+        with contextlib.suppress(Exception):
+            cluster.close(timeout=10)
