@@ -1,12 +1,15 @@
-"""The FMUs' native layer builds from the running interpreter, whatever else is on PATH.
+"""The FMUs' native layer builds from the running interpreter, whatever else is on PATH, and
+from pythonfmu's pristine sources with this project's patch series applied exactly.
 
 Under pyenv, CMake's FindPython found a shim's ``python3.13-config`` before the interpreter it
 was given and the build failed; the FMUs then fell back, silently, to pythonfmu's own library.
+A patch that no longer fits its upstream must stop the build, not apply approximately.
 """
 
 from __future__ import annotations
 
 import os
+import shutil
 import stat
 import subprocess
 import sys
@@ -16,6 +19,7 @@ from pathlib import Path
 import pytest
 
 GSB = [sys.executable, "-m", "orchestrator.cli"]
+MARK = "gear-shaft-bearing patch"
 OTHER = f"3.{sys.version_info.minor + 2}"  # a version this interpreter is not
 
 
@@ -107,3 +111,56 @@ def test_pythonfmu_is_pinned_to_the_release_whose_library_is_vendored():
     deps = tomllib.loads((root / "pyproject.toml").read_text())["project"]["dependencies"]
     assert f"pythonfmu=={VENDORED_PYTHONFMU}" in deps
     assert importlib.metadata.version("pythonfmu") == VENDORED_PYTHONFMU
+
+
+def test_the_patch_series_applies_to_the_pristine_copy_and_leaves_its_marks(tmp_path):
+    """upstream/ carries no change of this project; every patch, numbered in order and
+    described, applies exactly, and every line it adds with the mark is in the patched tree,
+    beside the loader and the CMake project that joins the two."""
+    from fmu_src.build.native import NATIVE_DIR, PATCHES_APPLIED, patch_series, prepare_sources
+    from fmu_src.build.native_patch import read_patch
+
+    upstream = [p for p in (NATIVE_DIR / "upstream").rglob("*") if p.is_file()]
+    assert upstream and not [p for p in upstream if MARK.encode() in p.read_bytes()]
+    tree = prepare_sources(tmp_path / "src")
+    patches = [read_patch(p) for p in patch_series()]
+    assert [p.name[:5] for p in patches] == [f"{i:04d}-" for i in range(1, len(patches) + 1)]
+    assert (tree / PATCHES_APPLIED).read_text().split() == [p.name for p in patches]
+    for patch in patches:
+        assert patch.description.startswith(f"{MARK} {patch.name[:4]}: "), patch.name
+        assert "What:" in patch.description and "Why:" in patch.description, patch.name
+        marked = [(path, line) for path, line in patch.added_lines() if MARK in line]
+        assert marked, f"{patch.name} adds no line with {MARK!r}"
+        for path, line in marked:
+            patched = (tree / "upstream" / path).read_text().splitlines(keepends=True)
+            assert line in patched, (patch.name, path, line)
+    assert (tree / "loader" / "gsb_loader.c").is_file()
+    assert (tree / "CMakeLists.txt").read_bytes() == (NATIVE_DIR / "CMakeLists.txt").read_bytes()
+
+
+def test_a_patch_whose_context_does_not_match_is_refused_by_patch_and_hunk(tmp_path,
+                                                                            monkeypatch):
+    """One context line of a patch's second hunk altered: the patch is refused with its name,
+    file and hunk, its first hunk is not written either, and the build says so."""
+    from fmu_src.build import native as native_build
+    from fmu_src.build.native_patch import PatchError, apply_series
+
+    source = next(p for p in native_build.patch_series() if "borrowed" in p.name)
+    text = source.read_text()
+    context = "     Py_DECREF(pLocals);\n     Py_DECREF(pyModule);\n-    Py_DECREF(pGlobals);"
+    assert text.count(context) == 1
+    corrupt = tmp_path / source.name
+    corrupt.write_text(text.replace(context, context.replace("pLocals", "pLocal")))
+    tree = shutil.copytree(native_build.NATIVE_DIR / "upstream", tmp_path / "upstream")
+    target = tree / "src" / "pythonfmu" / "PySlaveInstance.cpp"
+    before = target.read_bytes()
+    with pytest.raises(PatchError) as caught:
+        apply_series([corrupt], tree)
+    message = str(caught.value)
+    assert message.startswith(f"{source.name}: src/pythonfmu/PySlaveInstance.cpp: hunk 2 (@@ ")
+    assert "does not match at line" in message and "pLocal)" in message
+    assert target.read_bytes() == before
+
+    monkeypatch.setattr(native_build, "patch_series", lambda: [corrupt])
+    with pytest.raises(native_build.NativeBuildError, match=f"does not apply: {source.name}"):
+        native_build.build_library(tmp_path / "native")

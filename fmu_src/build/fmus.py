@@ -114,19 +114,18 @@ def _code_files():
 
 
 def code_hash() -> str:
-    """Content hash of everything the FMUs are built from: the code they carry and the patched
-    library's sources (20 hex digits)."""
-    from fmu_src.build.native import NATIVE_SOURCE
+    """Content hash of everything the FMUs are built from: the code they carry, the builder
+    and the native layer's sources (pythonfmu's copy, the patches, the loader; 20 hex
+    digits)."""
+    from fmu_src.build.native import native_sources
 
     digest = hashlib.sha256()
     for rel, path in _code_files():
         digest.update(str(rel).encode() + b"\0" + path.read_bytes())
     for rel in _SHAPING:
         digest.update(rel.encode() + b"\0" + (HERE / rel).read_bytes())
-    for path in sorted(NATIVE_SOURCE.rglob("*")):
-        if path.is_file():
-            digest.update(str(path.relative_to(NATIVE_SOURCE)).encode() + b"\0"
-                          + path.read_bytes())
+    for rel, path in native_sources():
+        digest.update(rel.encode() + b"\0" + path.read_bytes())
     return digest.hexdigest()[:20]
 
 

@@ -3,30 +3,43 @@
 The FMUs are built by pythonfmu (:mod:`fmu_src.build.fmus`), whose shared library carries the FMI C
 interface and hosts the Python slave. pythonfmu 0.7.0's library turns every Python exception of
 a setter or getter into fmi2Fatal and finalises the interpreter while a C++ host's process is
-being torn down. ``fmu_src/native/pythonfmu_export`` is that library's source (MIT, vendored
-from pythonfmu 0.7.0) with three patches, each marked ``gear-shaft-bearing patch``:
+being torn down. ``fmu_src/native`` (:data:`NATIVE_DIR`; ``UPSTREAM.md`` there says where each
+part comes from and how to update it) holds:
 
-* status protocol: a setter may return an int FMI status and a getter a tuple
-  ``(values, status)``; a non-zero status is what the FMI call returns (fmi2Error at the
-  fmi2SetReal that receives a bad value, fmi2Discard or fmi2Error at the read of an output that
-  cannot be computed), the reason being in the FMU log. The library sets
-  ``_fmi_status_protocol = True`` on the slave so that the slave knows it may do so;
-* the interpreter is never finalised by the library (the exit-time abort of C++ hosts);
-* a borrowed reference is no longer released (the reason for ``pin_namespace``);
-* the interpreter, when the library starts it (a C/C++ host), leaves the host's signal
-  handlers alone (``Py_InitializeEx(0)``).
+* ``upstream/``: that library's source as pythonfmu 0.7.0 ships it (MIT), unmodified;
+* ``patches/``: this project's changes to it, one concern per numbered patch, each change
+  marked ``gear-shaft-bearing patch`` in the code:
 
-Beside it, on Linux, ``src/loader/gsb_loader.c`` (this project's, not pythonfmu's) builds the
-loader that becomes the FMU's binary: it has no Python dependency, so a C/C++ host can load
-it; it loads libpython when the host has none (the paths of :func:`python_host_config`) and
-forwards every FMI call to the library above (:func:`export_library` returns both).
+  - status protocol: a setter may return an int FMI status and a getter a tuple
+    ``(values, status)``; a non-zero status is what the FMI call returns (fmi2Error at the
+    fmi2SetReal that receives a bad value, fmi2Discard or fmi2Error at the read of an output
+    that cannot be computed), the reason being in the FMU log. The library sets
+    ``_fmi_status_protocol = True`` on the slave so that the slave knows it may do so;
+  - the interpreter is never finalised by the library (the exit-time abort of C++ hosts);
+  - a borrowed reference is no longer released (the reason for ``pin_namespace``);
+  - the interpreter, when the library starts it (a C/C++ host), leaves the host's signal
+    handlers alone (``Py_InitializeEx(0)``);
+  - CMake takes the Python of the build from this interpreter's ``sysconfig``, and builds into
+    a given folder;
+
+* ``loader/``: this project's loader (Linux), the FMU's binary: it has no Python dependency,
+  so a C/C++ host can load it; it loads libpython when the host has none (the paths of
+  :func:`python_host_config`) and forwards every FMI call to the library above
+  (:func:`export_library` returns both);
+* ``CMakeLists.txt``: the project that builds the two.
+
+:func:`prepare_sources` copies them into a build folder and applies the patches there, with
+:mod:`fmu_src.build.native_patch` (strict: a hunk whose context does not match stops the build), so
+that a machine needs neither git nor GNU patch and the pristine copy can be replaced by a new
+release and the series re-applied.
 
 :func:`export_library` compiles it with CMake (a dependency of fmpy) into the per-user cache
 (:func:`fmu_src.slaves.bootstrap.cache_dir`) the first time and returns the cached file
-afterwards; the cache key is a hash of the sources, the Python version and the platform. The
-Python it builds against is the running interpreter, described by its own ``sysconfig``
-(:func:`python_build_config`), never what CMake's FindPython finds on PATH (under pyenv, a
-shim's ``python3.X-config`` of another version).
+afterwards; the cache key is a hash of the sources (:func:`native_sources`: the pristine copy,
+the patches, the loader), the Python version and the platform. The Python it builds against is
+the running interpreter, described by its own ``sysconfig`` (:func:`python_build_config`),
+never what CMake's FindPython finds on PATH (under pyenv, a shim's ``python3.X-config`` of
+another version).
 
 Where it cannot be built (no C++ compiler, no CMake, no Python headers), :func:`export_library`
 says why and how to fix it, once, records the reason in the cache (:data:`UNAVAILABLE`; ``gsb
@@ -50,21 +63,56 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from fmu_src.slaves.bootstrap import cache_dir, locked
+from fmu_src.build.native_patch import PatchError, apply_series
 
-__all__ = ["NATIVE_SOURCE", "UNAVAILABLE", "VENDORED_PYTHONFMU", "NativeBuildError",
+__all__ = ["NATIVE_DIR", "UNAVAILABLE", "VENDORED_PYTHONFMU", "NativeBuildError",
            "NativeLayerWarning", "NativeLibraries", "cache_dir", "export_library", "find_cmake",
-           "native_status", "python_build_config", "python_host_config"]
+           "native_sources", "native_status", "patch_series", "prepare_sources",
+           "python_build_config", "python_host_config"]
 
-#: the patched pythonfmu-export sources
-NATIVE_SOURCE = Path(__file__).resolve().parent.parent / "native" / "pythonfmu_export"
+#: pythonfmu's pristine library (upstream/), the patches (patches/), the loader (loader/)
+NATIVE_DIR = Path(__file__).resolve().parent.parent / "native"
+#: what of NATIVE_DIR the build uses (UPSTREAM.md, documentation only, is not)
+_BUILT_FROM = ("CMakeLists.txt", "upstream", "patches", "loader")
+#: in a prepared tree: the patches applied, one a line (the CMake project requires it)
+PATCHES_APPLIED = "PATCHES_APPLIED"
+
+
+def native_sources() -> list[tuple[str, Path]]:
+    """(path relative to :data:`NATIVE_DIR`, file) of every file the native layer is built
+    from, sorted: what a build's cache key and the FMUs' code hash cover."""
+    files = []
+    for name in _BUILT_FROM:
+        top = NATIVE_DIR / name
+        for path in [top] if top.is_file() else top.rglob("*"):
+            if path.is_file():
+                files.append((path.relative_to(NATIVE_DIR).as_posix(), path))
+    return sorted(files)
+
+
+def patch_series() -> list[Path]:
+    """The patch files, in the order they apply (their numbers)."""
+    return sorted((NATIVE_DIR / "patches").glob("*.patch"))
+
+
+def prepare_sources(dest: Path) -> Path:
+    """Write into ``dest`` the tree CMake builds: the pristine copy with the patch series
+    applied, the loader and the project joining them; ``dest``. Raises
+    :class:`~fmu_src.build.native_patch.PatchError` when a patch does not apply exactly."""
+    dest.mkdir(parents=True, exist_ok=True)
+    for rel, path in native_sources():
+        if not rel.startswith("patches/"):
+            (dest / rel).parent.mkdir(parents=True, exist_ok=True)
+            shutil.copyfile(path, dest / rel)
+    applied = apply_series(patch_series(), dest / "upstream")
+    (dest / PATCHES_APPLIED).write_text("".join(p.name + "\n" for p in applied))
+    return dest
 
 
 def _key() -> str:
     h = hashlib.sha256()
-    for path in sorted(NATIVE_SOURCE.rglob("*")):
-        if path.is_file() and "build" not in path.relative_to(NATIVE_SOURCE).parts:
-            h.update(str(path.relative_to(NATIVE_SOURCE)).encode())
-            h.update(path.read_bytes())
+    for rel, path in native_sources():
+        h.update(rel.encode() + b"\0" + path.read_bytes())
     h.update(f"{sys.version_info[:2]} {platform.machine()} {sys.platform}".encode())
     return h.hexdigest()[:16]
 
@@ -175,8 +223,14 @@ def build_library(folder: Path, quiet: bool = True) -> NativeLibraries:
     folder.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix="build-", dir=folder) as tmp:
         out = Path(tmp) / "out"
+        try:
+            source = prepare_sources(Path(tmp) / "src")
+        except PatchError as exc:
+            raise NativeBuildError(f"the patch series does not apply: {exc}",
+                                   "restore fmu_src/native as released (its UPSTREAM.md says "
+                                   "how the patches are kept in step with upstream/)") from None
         commands = [
-            [cmake, "-S", str(NATIVE_SOURCE), "-B", str(Path(tmp) / "build"),
+            [cmake, "-S", str(source), "-B", str(Path(tmp) / "build"),
              "-DCMAKE_BUILD_TYPE=Release", f"-DGSB_PYTHON_INCLUDE_DIR={config['include']}",
              f"-DGSB_PYTHON_LIBRARY={config['library']}", f"-DGSB_OUTPUT_DIR={out}"],
             [cmake, "--build", str(Path(tmp) / "build"), "--config", "Release"],

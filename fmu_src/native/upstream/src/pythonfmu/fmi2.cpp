@@ -165,8 +165,6 @@ fmi2Status fmi2SetupExperiment(
     } catch (const pythonfmu::fatal_error& e) {
         component->logger->log(fmi2Fatal, e.what());
         return fmi2Fatal;
-    } catch (const pythonfmu::status_error& e) {
-        return static_cast<fmi2Status>(e.status()); // gear-shaft-bearing patch
     } catch (const std::exception& e) {
         component->logger->log(fmi2Error, e.what());
         return fmi2Error;
@@ -183,8 +181,6 @@ fmi2Status fmi2EnterInitializationMode(fmi2Component c)
     } catch (const pythonfmu::fatal_error& e) {
         component->logger->log(fmi2Fatal, e.what());
         return fmi2Fatal;
-    } catch (const pythonfmu::status_error& e) {
-        return static_cast<fmi2Status>(e.status()); // gear-shaft-bearing patch
     } catch (const std::exception& e) {
         component->logger->log(fmi2Error, e.what());
         return fmi2Error;
@@ -201,8 +197,6 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component c)
     } catch (const pythonfmu::fatal_error& e) {
         component->logger->log(fmi2Fatal, e.what());
         return fmi2Fatal;
-    } catch (const pythonfmu::status_error& e) {
-        return static_cast<fmi2Status>(e.status()); // gear-shaft-bearing patch
     } catch (const std::exception& e) {
         component->logger->log(fmi2Error, e.what());
         return fmi2Error;
@@ -219,8 +213,6 @@ fmi2Status fmi2Terminate(fmi2Component c)
     } catch (const pythonfmu::fatal_error& e) {
         component->logger->log(fmi2Fatal, e.what());
         return fmi2Fatal;
-    } catch (const pythonfmu::status_error& e) {
-        return static_cast<fmi2Status>(e.status()); // gear-shaft-bearing patch
     } catch (const std::exception& e) {
         component->logger->log(fmi2Error, e.what());
         return fmi2Error;
@@ -237,8 +229,6 @@ fmi2Status fmi2Reset(fmi2Component c)
     } catch (const pythonfmu::fatal_error& e) {
         component->logger->log(fmi2Fatal, e.what());
         return fmi2Fatal;
-    } catch (const pythonfmu::status_error& e) {
-        return static_cast<fmi2Status>(e.status()); // gear-shaft-bearing patch
     } catch (const std::exception& e) {
         component->logger->log(fmi2Error, e.what());
         return fmi2Error;
@@ -259,8 +249,6 @@ fmi2Status fmi2GetReal(
     } catch (const pythonfmu::fatal_error& e) {
         component->logger->log(fmi2Fatal, e.what());
         return fmi2Fatal;
-    } catch (const pythonfmu::status_error& e) {
-        return static_cast<fmi2Status>(e.status()); // gear-shaft-bearing patch
     } catch (const std::exception& e) {
         component->logger->log(fmi2Error, e.what());
         return fmi2Error;
@@ -280,8 +268,6 @@ fmi2Status fmi2GetInteger(
     } catch (const pythonfmu::fatal_error& e) {
         component->logger->log(fmi2Fatal, e.what());
         return fmi2Fatal;
-    } catch (const pythonfmu::status_error& e) {
-        return static_cast<fmi2Status>(e.status()); // gear-shaft-bearing patch
     } catch (const std::exception& e) {
         component->logger->log(fmi2Error, e.what());
         return fmi2Error;
@@ -301,8 +287,6 @@ fmi2Status fmi2GetBoolean(
     } catch (const pythonfmu::fatal_error& e) {
         component->logger->log(fmi2Fatal, e.what());
         return fmi2Fatal;
-    } catch (const pythonfmu::status_error& e) {
-        return static_cast<fmi2Status>(e.status()); // gear-shaft-bearing patch
     } catch (const std::exception& e) {
         component->logger->log(fmi2Error, e.what());
         return fmi2Error;
@@ -322,8 +306,6 @@ fmi2Status fmi2GetString(
     } catch (const pythonfmu::fatal_error& e) {
         component->logger->log(fmi2Fatal, e.what());
         return fmi2Fatal;
-    } catch (const pythonfmu::status_error& e) {
-        return static_cast<fmi2Status>(e.status()); // gear-shaft-bearing patch
     } catch (const std::exception& e) {
         component->logger->log(fmi2Error, e.what());
         return fmi2Error;
@@ -344,8 +326,6 @@ fmi2Status fmi2SetReal(
     } catch (const pythonfmu::fatal_error& e) {
         component->logger->log(fmi2Fatal, e.what());
         return fmi2Fatal;
-    } catch (const pythonfmu::status_error& e) {
-        return static_cast<fmi2Status>(e.status()); // gear-shaft-bearing patch
     } catch (const std::exception& e) {
         component->logger->log(fmi2Error, e.what());
         return fmi2Error;
@@ -365,8 +345,6 @@ fmi2Status fmi2SetInteger(
     } catch (const pythonfmu::fatal_error& e) {
         component->logger->log(fmi2Fatal, e.what());
         return fmi2Fatal;
-    } catch (const pythonfmu::status_error& e) {
-        return static_cast<fmi2Status>(e.status()); // gear-shaft-bearing patch
     } catch (const std::exception& e) {
         component->logger->log(fmi2Error, e.what());
         return fmi2Error;
@@ -386,8 +364,6 @@ fmi2Status fmi2SetBoolean(
     } catch (const pythonfmu::fatal_error& e) {
         component->logger->log(fmi2Fatal, e.what());
         return fmi2Fatal;
-    } catch (const pythonfmu::status_error& e) {
-        return static_cast<fmi2Status>(e.status()); // gear-shaft-bearing patch
     } catch (const std::exception& e) {
         component->logger->log(fmi2Error, e.what());
         return fmi2Error;
@@ -407,8 +383,6 @@ fmi2Status fmi2SetString(
     } catch (const pythonfmu::fatal_error& e) {
         component->logger->log(fmi2Fatal, e.what());
         return fmi2Fatal;
-    } catch (const pythonfmu::status_error& e) {
-        return static_cast<fmi2Status>(e.status()); // gear-shaft-bearing patch
     } catch (const std::exception& e) {
         component->logger->log(fmi2Error, e.what());
         return fmi2Error;
@@ -427,8 +401,6 @@ fmi2Status fmi2GetFMUstate(
     } catch (const pythonfmu::fatal_error& e) {
         component->logger->log(fmi2Fatal, e.what());
         return fmi2Fatal;
-    } catch (const pythonfmu::status_error& e) {
-        return static_cast<fmi2Status>(e.status()); // gear-shaft-bearing patch
     } catch (const std::exception& e) {
         component->logger->log(fmi2Error, e.what());
         return fmi2Error;
@@ -446,8 +418,6 @@ fmi2Status fmi2SetFMUstate(
     } catch (const pythonfmu::fatal_error& e) {
         component->logger->log(fmi2Fatal, e.what());
         return fmi2Fatal;
-    } catch (const pythonfmu::status_error& e) {
-        return static_cast<fmi2Status>(e.status()); // gear-shaft-bearing patch
     } catch (const std::exception& e) {
         component->logger->log(fmi2Error, e.what());
         return fmi2Error;
@@ -465,8 +435,6 @@ fmi2Status fmi2FreeFMUstate(
     } catch (const pythonfmu::fatal_error& e) {
         component->logger->log(fmi2Fatal, e.what());
         return fmi2Fatal;
-    } catch (const pythonfmu::status_error& e) {
-        return static_cast<fmi2Status>(e.status()); // gear-shaft-bearing patch
     } catch (const std::exception& e) {
         component->logger->log(fmi2Error, e.what());
         return fmi2Error;
@@ -485,8 +453,6 @@ fmi2Status fmi2SerializedFMUstateSize(
     } catch (const pythonfmu::fatal_error& e) {
         component->logger->log(fmi2Fatal, e.what());
         return fmi2Fatal;
-    } catch (const pythonfmu::status_error& e) {
-        return static_cast<fmi2Status>(e.status()); // gear-shaft-bearing patch
     } catch (const std::exception& e) {
         component->logger->log(fmi2Error, e.what());
         return fmi2Error;
@@ -506,8 +472,6 @@ fmi2Status fmi2SerializeFMUstate(
     } catch (const pythonfmu::fatal_error& e) {
         component->logger->log(fmi2Fatal, e.what());
         return fmi2Fatal;
-    } catch (const pythonfmu::status_error& e) {
-        return static_cast<fmi2Status>(e.status()); // gear-shaft-bearing patch
     } catch (const std::exception& e) {
         component->logger->log(fmi2Error, e.what());
         return fmi2Error;
@@ -527,8 +491,6 @@ fmi2Status fmi2DeSerializeFMUstate(
     } catch (const pythonfmu::fatal_error& e) {
         component->logger->log(fmi2Fatal, e.what());
         return fmi2Fatal;
-    } catch (const pythonfmu::status_error& e) {
-        return static_cast<fmi2Status>(e.status()); // gear-shaft-bearing patch
     } catch (const std::exception& e) {
         component->logger->log(fmi2Error, e.what());
         return fmi2Error;
@@ -604,8 +566,6 @@ fmi2Status fmi2DoStep(
     } catch (const pythonfmu::fatal_error& e) {
         component->logger->log(fmi2Fatal, e.what());
         return fmi2Fatal;
-    } catch (const pythonfmu::status_error& e) {
-        return static_cast<fmi2Status>(e.status()); // gear-shaft-bearing patch
     } catch (const std::exception& e) {
         component->logger->log(fmi2Error, e.what());
         return fmi2Error;

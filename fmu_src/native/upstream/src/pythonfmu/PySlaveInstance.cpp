@@ -64,6 +64,7 @@ PyObject* findClass(const std::string& resources, const std::string& moduleName)
     } else {
         PyErr_Print(); // Handle compilation error
         Py_Finalize();
+        Py_DECREF(pGlobals);
         Py_DECREF(pyModule);
         Py_DECREF(pLocals);
         Py_DECREF(pCode);
@@ -112,7 +113,7 @@ PyObject* findClass(const std::string& resources, const std::string& moduleName)
     Py_DECREF(pCode);
     Py_DECREF(pLocals);
     Py_DECREF(pyModule);
-    // gear-shaft-bearing patch: pGlobals is borrowed (PyModule_GetDict): no Py_DECREF here
+    Py_DECREF(pGlobals);
     file.close();
     Py_DECREF(pyClassName);
     return pyClass;
@@ -220,40 +221,7 @@ public:
         if (pInstance_ == nullptr) {
             handle_py_exception("[initialize] PyObject_Call", gilState);
         }
-        // gear-shaft-bearing patch: tell the slave that statuses may be returned (status_of)
-        PyObject_SetAttrString(pInstance_, "_fmi_status_protocol", Py_True);
         pMessages_ = PyObject_CallMethod(pInstance_, "_get_log_queue", nullptr);
-    }
-
-    // gear-shaft-bearing patch: a setter may return an int status, a getter a tuple
-    // (values, status); a non-zero status is returned by the FMI call (after the log is
-    // flushed) instead of fmi2OK. Python exceptions stay fatal, as in pythonfmu.
-    static int status_of(PyObject* result)
-    {
-        if (result != nullptr && PyLong_Check(result)) {
-            return static_cast<int>(PyLong_AsLong(result));
-        }
-        return 0;
-    }
-
-    void raise_status(int status, PyGILState_STATE gilState) const
-    {
-        if (status != 0) {
-            clearLogBuffer();
-            PyGILState_Release(gilState);
-            throw status_error(status);
-        }
-    }
-
-    // the values list of a getter's result, and its status: (values, status) or values
-    static PyObject* values_of(PyObject* result, int& status)
-    {
-        status = 0;
-        if (result != nullptr && PyTuple_Check(result) && PyTuple_Size(result) == 2) {
-            status = static_cast<int>(PyLong_AsLong(PyTuple_GetItem(result, 1)));
-            return PyTuple_GetItem(result, 0);
-        }
-        return result;
     }
 
     void SetupExperiment(double startTime, std::optional<double> stop, std::optional<double> tolerance) override
@@ -350,9 +318,7 @@ public:
             if (f == nullptr) {
                 handle_py_exception("[setReal] PyObject_CallMethod", gilState);
             }
-            const int status = status_of(f);
             Py_DECREF(f);
-            raise_status(status, gilState);
             clearLogBuffer();
         });
     }
@@ -373,9 +339,7 @@ public:
             if (f == nullptr) {
                 handle_py_exception("[setInteger] PyObject_CallMethod", gilState);
             }
-            const int status = status_of(f);
             Py_DECREF(f);
-            raise_status(status, gilState);
             clearLogBuffer();
         });
     }
@@ -396,9 +360,7 @@ public:
             if (f == nullptr) {
                 handle_py_exception("[setBoolean] PyObject_CallMethod", gilState);
             }
-            const int status = status_of(f);
             Py_DECREF(f);
-            raise_status(status, gilState);
             clearLogBuffer();
         });
     }
@@ -419,9 +381,7 @@ public:
             if (f == nullptr) {
                 handle_py_exception("[setString] PyObject_CallMethod", gilState);
             }
-            const int status = status_of(f);
             Py_DECREF(f);
-            raise_status(status, gilState);
             clearLogBuffer();
         });
     }
@@ -439,15 +399,12 @@ public:
             if (refs == nullptr) {
                 handle_py_exception("[getReal] PyObject_CallMethod", gilState);
             }
-            int status = 0;
-            PyObject* list = values_of(refs, status);
 
             for (int i = 0; i < nvr; i++) {
-                PyObject* value = PyList_GetItem(list, i);
+                PyObject* value = PyList_GetItem(refs, i);
                 values[i] = PyFloat_AsDouble(value);
             }
             Py_DECREF(refs);
-            raise_status(status, gilState);
             clearLogBuffer();
         });
     }
@@ -464,15 +421,12 @@ public:
             if (refs == nullptr) {
                 handle_py_exception("[getInteger] PyObject_CallMethod", gilState);
             }
-            int status = 0;
-            PyObject* list = values_of(refs, status);
 
             for (int i = 0; i < nvr; i++) {
-                PyObject* value = PyList_GetItem(list, i);
+                PyObject* value = PyList_GetItem(refs, i);
                 values[i] = static_cast<fmi2Integer>(PyLong_AsLong(value));
             }
             Py_DECREF(refs);
-            raise_status(status, gilState);
             clearLogBuffer();
         });
     }
@@ -489,15 +443,12 @@ public:
             if (refs == nullptr) {
                 handle_py_exception("[getBoolean] PyObject_CallMethod", gilState);
             }
-            int status = 0;
-            PyObject* list = values_of(refs, status);
 
             for (int i = 0; i < nvr; i++) {
-                PyObject* value = PyList_GetItem(list, i);
+                PyObject* value = PyList_GetItem(refs, i);
                 values[i] = PyObject_IsTrue(value);
             }
             Py_DECREF(refs);
-            raise_status(status, gilState);
             clearLogBuffer();
         });
     }
@@ -515,16 +466,13 @@ public:
             if (refs == nullptr) {
                 handle_py_exception("[getString] PyObject_CallMethod", gilState);
             }
-            int status = 0;
-            PyObject* list = values_of(refs, status);
 
             for (int i = 0; i < nvr; i++) {
-                PyObject* value = PyUnicode_AsEncodedString(PyList_GetItem(list, i), "utf-8", nullptr);
+                PyObject* value = PyUnicode_AsEncodedString(PyList_GetItem(refs, i), "utf-8", nullptr);
                 values[i] = PyBytes_AsString(value);
                 strBuffer.emplace_back(value);
             }
             Py_DECREF(refs);
-            raise_status(status, gilState);
             clearLogBuffer();
         });
     }
@@ -716,13 +664,7 @@ namespace
 {
 
 std::mutex pyStateMutex{};
-// gear-shaft-bearing patch: the interpreter state is created once and never destroyed.
-// pythonfmu 0.7.0 keeps it in a static shared_ptr: the C++ exit handlers destroy it, which runs
-// Py_Finalize in the middle of the process's teardown (after the native libraries of scipy and
-// numba are gone: heap corruption, "corrupted double-linked list" at exit in C++ hosts), and
-// onLibraryUnload then resets the destroyed pointer again (use after free). Left alone, Python
-// ends with the process, as it does in a Python host.
-std::shared_ptr<PyState>* const pyState = new std::shared_ptr<PyState>();
+std::shared_ptr<PyState> pyState{};
 
 } // namespace
 
@@ -731,12 +673,13 @@ std::unique_ptr<SlaveInstance> pythonfmu::createInstance(fmu_data data)
     {
         auto const ensurePyStateAlive = [&]() {
             auto const lock = std::lock_guard{pyStateMutex};
-            if (nullptr == *pyState) *pyState = std::make_shared<PyState>();
+            if (nullptr == pyState) pyState = std::make_shared<PyState>();
         };
 
         ensurePyStateAlive();
-        data.pyState = *pyState;
-        return std::make_unique<PySlaveInstance>(data);
+        auto c = std::make_unique<PySlaveInstance>(data);
+        data.pyState = pyState;
+        return c;
     }
 }
 
@@ -749,7 +692,7 @@ extern "C" {
 // Thus, use DllMain on Windows and __attribute__((destructor)) on Linux for signaling to the PyState about de-initialization.
 void finalizePythonInterpreter()
 {
-    // gear-shaft-bearing patch: nothing to do, the interpreter ends with the process (pyState)
+    pyState = nullptr;
 }
 }
 
@@ -776,8 +719,10 @@ BOOL APIENTRY DllMain(HMODULE hModule,
     return TRUE;
 }
 #elif defined(__linux__)
-// gear-shaft-bearing patch: no destructor: see pyState
-#elif defined(__APPLE__)
+__attribute__((destructor)) void onLibraryUnload()
+{
+    finalizePythonInterpreter();
+}
 #else
 #    error port the code
 #endif

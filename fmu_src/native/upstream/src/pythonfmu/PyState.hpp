@@ -48,9 +48,7 @@ namespace pythonfmu
             auto const mainPyThread = []() -> PyThreadState* {
                 auto const justInitialized = !Py_IsInitialized();
                 if (justInitialized) {
-                    // gear-shaft-bearing patch: embedded in a C/C++ host, leave the host's
-                    // signal handlers alone (Py_Initialize would install Python's SIGINT one)
-                    Py_InitializeEx(0);
+                    Py_Initialize();
 #if PY_VERSION_HEX < 0x03070000
                     PyEval_InitThreads();
 #endif
