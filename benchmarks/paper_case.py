@@ -111,13 +111,17 @@ def breakdown(periods: int, in_process: bool) -> None:
     kw = dict(bearing="hybrid", in_process=in_process, progress=False, figures=False)
     case = load_case(CASE)
     with tempfile.TemporaryDirectory() as tmp:
-        run_case(case, periods=2, out_dir=tmp + "/w", **kw)  # warm-up
-        plain = run_case(case, periods=periods, out_dir=tmp + "/p", **kw)
+        run_case(case.with_overrides({"simulation.mesh_periods": 2}), out_dir=tmp + "/w",
+                 **kw)  # warm-up
+        plain = run_case(case.with_overrides({"simulation.mesh_periods": periods}),
+                         out_dir=tmp + "/p", **kw)
         with timed_calls() as totals:
-            s = run_case(case, periods=periods, out_dir=tmp + "/t", **kw)
+            s = run_case(case.with_overrides({"simulation.mesh_periods": periods}),
+                         out_dir=tmp + "/t", **kw)
         calls: dict[str, int] = {}
         with timed_calls(KERNELS, calls) as kernels:
-            k = run_case(case, periods=periods, out_dir=tmp + "/k", **kw)
+            k = run_case(case.with_overrides({"simulation.mesh_periods": periods}),
+                         out_dir=tmp + "/k", **kw)
     n = s.iterations
     us = 1e6 / n
     where = "in-process" if in_process else "FMUs (fmpy)"
@@ -170,8 +174,9 @@ def main() -> None:
             name = variant[0] if variant else ""
             run = load_case("baguet2010_helical" if "helical" in name else CASE,
                             {"simulation.locate_contact": "no-location" not in name})
-            run_case(run, periods=2, **kw)  # warm-up: numba, FMU extraction
-            s = run_case(run, periods=args.periods, **kw)
+            run_case(run.with_overrides({"simulation.mesh_periods": 2}),
+                     **kw)  # warm-up: numba, FMU extraction
+            s = run_case(run.with_overrides({"simulation.mesh_periods": args.periods}), **kw)
             label = f"{model:7s} {'in-process' if in_process else 'FMUs (fmpy)'} {name}"
             rows[(model, in_process, *variant)] = s
             solves = 4 * s.bearing_evaluations

@@ -35,8 +35,9 @@ def measure(in_process: bool, periods: int) -> dict:
     Master.checkpoint = sized
     try:
         with tempfile.TemporaryDirectory() as tmp, timed_calls(targets, counts) as totals:
-            s = run_case(load_case("baguet2010_spur"), periods=periods, in_process=in_process,
-                         out_dir=tmp, progress=False, figures=False, echo_warnings=False)
+            case = load_case("baguet2010_spur", {"simulation.mesh_periods": periods})
+            s = run_case(case, in_process=in_process, out_dir=tmp, progress=False, figures=False,
+                         echo_warnings=False)
     finally:
         Master.checkpoint = original
     return {"flushes": counts.get("flush", 0), "flush_s": totals.get("flush", 0.0),

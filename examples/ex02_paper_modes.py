@@ -19,7 +19,7 @@ import numpy as np
 from fmu_src.examples import paper_case, paper_system
 from gear_fmu.analyses import modes
 from gear_fmu.modal import mode_table, natural_modes
-from orchestrator.run.runner import build_master
+from orchestrator.run.spec import build_master
 
 STIFF = 1e12  # N/m, "stiff" bearings
 

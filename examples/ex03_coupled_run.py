@@ -29,8 +29,8 @@ def main(periods: int = 64, bearing: str = "hybrid", **overrides) -> dict:
     z1 = case["gear_pair.teeth"][0]
     window = 2 * z1 * description.mesh_period(case)  # two pinion revolutions [s]
     with tempfile.TemporaryDirectory() as tmp:
-        s = run_case(case, bearing=bearing, periods=periods, in_process=True, out_dir=tmp,
-                     progress=False, figures=False)
+        run = case.with_overrides({"bearings.model": bearing, "simulation.mesh_periods": periods})
+        s = run_case(run, in_process=True, out_dir=tmp, progress=False, figures=False)
         r = read_results(s.results)
     metrics = run_metrics(r, window)
     win = steady_window(r["time"], window)

@@ -162,19 +162,18 @@ def bearing_speeds(case: Case) -> list[float]:
     return [w1, w1, w2, w2]
 
 
-def bearing_options(case: Case, model: str | None = None) -> dict:
-    """The case's settings of a bearing model: ``{option key: value}`` (its declared
-    :attr:`~bearing_fmu.base.BearingModel.options`; ``model`` overrides ``bearings.model``)."""
-    name = case["bearings.model"] if model is None else model
-    return {o.key: case[f"bearings.{o.key}"] for o in model_class(name).options}
+def bearing_options(case: Case) -> dict:
+    """The case's settings of its bearing model (``bearings.model``): ``{option key: value}``
+    (the model's declared :attr:`~bearing_fmu.base.BearingModel.options`)."""
+    return {o.key: case[f"bearings.{o.key}"]
+            for o in model_class(case["bearings.model"]).options}
 
 
-def bearing_models(case: Case, model: str | None = None) -> list[BearingModel]:
-    """In-process bearing models of the case (``model`` overrides ``bearings.model``), each
-    built by the registry's ``from_parameters`` with the case's options."""
-    name = case["bearings.model"] if model is None else model
-    cls = model_class(name)
-    options = bearing_options(case, name)
+def bearing_models(case: Case) -> list[BearingModel]:
+    """In-process bearing models of the case (``bearings.model``), each built by the
+    registry's ``from_parameters`` with the case's options."""
+    cls = model_class(case["bearings.model"])
+    options = bearing_options(case)
     return [cls.from_parameters(data, **options) for data in bearing_data(case)]
 
 

@@ -1,1 +1,48 @@
-"""Master algorithm coupling the gear-shaft and bearing slaves; CLI."""
+"""The master of the co-simulation, its runs, analyses and command line; the Python API.
+
+>>> import orchestrator as gsb
+>>> result = gsb.simulate("baguet2010_spur", periods=64)          # doctest: +SKIP
+>>> result["journal_position"].shape                               # doctest: +SKIP
+(2048, 4, 2)
+
+The API (:mod:`orchestrator.api`):
+
+* :func:`load_case`, :func:`shipped_cases`: a case file or a shipped case, checked;
+* :func:`simulate`: a run in memory, :class:`Result` (channels with named dimensions,
+  ``to_xarray()``), :func:`read_result` for a results file;
+* :func:`sweep`: a parametric sweep on Dask; :func:`modes`: the linearised system at X0;
+* :class:`Case`, :class:`CaseError`, :class:`RunError`, :class:`RunInterrupted`.
+
+Subpackages, one concern each: :mod:`~orchestrator.coupling` (the master, in-process and FMI
+transports), :mod:`~orchestrator.run` (a run's life cycle, results files),
+:mod:`~orchestrator.analysis`, :mod:`~orchestrator.figures`, :mod:`~orchestrator.sweep`,
+:mod:`~orchestrator.cli` (the ``gsb`` command), :mod:`~orchestrator.studies`.
+"""
+
+from __future__ import annotations
+
+import importlib
+
+#: public name -> the module that defines it (imported when the name is first used, so that
+#: ``import orchestrator`` and ``gsb --help`` stay light)
+_API = {
+    "Case": "fmu_src.case", "CaseError": "fmu_src.case", "load_case": "fmu_src.case",
+    "shipped_cases": "fmu_src.case", "simulate": "orchestrator.api",
+    "read_result": "orchestrator.api", "sweep": "orchestrator.api",
+    "modes": "orchestrator.api", "Result": "orchestrator.run.result",
+    "RunError": "orchestrator.run.spec", "RunInterrupted": "orchestrator.run.progress",
+}
+
+__all__ = sorted(_API)
+
+
+def __getattr__(name: str):
+    if name in _API:
+        value = getattr(importlib.import_module(_API[name]), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'orchestrator' has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted([*globals(), *_API])

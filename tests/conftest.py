@@ -41,8 +41,8 @@ from orchestrator.run.runner import run_case
 export_library()
 with tempfile.TemporaryDirectory() as tmp:
     for case, model in (("baguet2010_spur", "lumped"), ("baguet2010_helical", "lumped")):
-        run_case(load_case(case), bearing=model, steps=2, in_process=True,
-                 out_dir=tmp + "/" + case, progress=False, figures=False)
+        run_case(load_case(case).with_overrides({"bearings.model": model}), steps=2,
+                 in_process=True, out_dir=tmp + "/" + case, progress=False, figures=False)
 """,
 )
 

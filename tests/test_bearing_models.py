@@ -128,12 +128,13 @@ def test_one_coupled_step_through_its_fmu_equals_in_process(name, fmu_dir):
     same bits (the same code, the same calls)."""
     from fmu_src.case import load_case
     from fmu_src.description import time_step
-    from orchestrator.run.runner import build_master
+    from orchestrator.run.spec import build_master
 
     case = load_case("baguet2010_spur")
     res = {}
     for in_process in (True, False):
-        m = build_master(case, name, in_process=in_process, fmu_dir=fmu_dir)
+        m = build_master(case.with_overrides({"bearings.model": name}), in_process=in_process,
+                         fmu_dir=fmu_dir)
         try:
             static = m.solve_static()
             m.exit_initialization()

@@ -105,7 +105,7 @@ def jacobi(steps: int, lag: int = 1) -> np.ndarray:
     back (ecos: 1). Independent of ecos and of orchestrator.coupling.master's stepping."""
     from bearing_fmu.affine import AffineLaws
     from fmu_src.case import load_case
-    from orchestrator.run.runner import build_master
+    from orchestrator.run.spec import build_master
 
     master = build_master(load_case(CASE), in_process=True)
     master.solve_static()

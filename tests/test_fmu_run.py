@@ -28,8 +28,9 @@ def compare(fmu_dir, model, periods, tmp, steps=None, overrides=None) -> dict:
     case = load_case("baguet2010_spur", overrides or None)
     out = {}
     for in_process in (True, False):
-        s = run_case(case, bearing=model, periods=periods, in_process=in_process,
-                     out_dir=tmp, fmu_dir=fmu_dir, progress=False, figures=False, steps=steps)
+        run = case.with_overrides({"bearings.model": model, "simulation.mesh_periods": periods})
+        s = run_case(run, in_process=in_process, out_dir=tmp, fmu_dir=fmu_dir, progress=False,
+                     figures=False, steps=steps)
         out[in_process] = (read_results(s.results), s)
     (a, sa), (b, sb) = out[True], out[False]
     return {"differ": [k for k in CHANNELS if not np.array_equal(a[k], b[k])]
@@ -73,7 +74,8 @@ def test_swapping_the_bearing_fmu_is_a_file_name(fmu_dir):
         case = load_case("baguet2010_spur")
         out = {{}}
         for model in ("hybrid", "lumped"):
-            st, b = system_from_case(case, model, {str(fmu_dir)!r})
+            st, b = system_from_case(case.with_overrides({{"bearings.model": model}}),
+                                     {str(fmu_dir)!r})
             out[model] = sorted({{s.path.name for s in b.slaves}})
             b.close(); st.close()
         print(json.dumps(out))

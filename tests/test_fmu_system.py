@@ -123,7 +123,7 @@ def test_closed_bearing_fmus_refuse_to_evaluate(fmu_dir):
         import numpy as np
         from fmu_src.case import load_case
         from orchestrator.coupling.fmi import FmuError
-        from orchestrator.run.runner import build_master
+        from orchestrator.run.spec import build_master
         master = build_master(load_case("baguet2010_spur"), fmu_dir=r"{fmu_dir}")
         master.solve_static()
         states = master.laws.states
@@ -164,7 +164,7 @@ def test_the_ssp_archive_holds_the_system(ssp_file):
     clearance = load_case("baguet2010_spur")["bearings.clearance"]
     assert [float(values[(f"bearing{j}", "C")]) for j in range(1, 5)] == clearance  # exact
     # the static solution X0 as start values: a non-iterative master starts in equilibrium
-    from orchestrator.run.runner import build_master
+    from orchestrator.run.spec import build_master
 
     master = build_master(load_case("baguet2010_spur"), in_process=True)
     x0 = master.solve_static().states

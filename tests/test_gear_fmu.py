@@ -220,7 +220,8 @@ def comparison(gear_fmu):
         states, its = [], []
         for slave in (InProcessStructure(description.structure(case)),
                       FmuStructure(r"{gear_fmu}", case=case)):
-            bearings = ModelBearings(description.bearing_models(case, "short"),
+            short = case.with_overrides({{"bearings.model": "short"}})
+            bearings = ModelBearings(description.bearing_models(short),
                                      description.BEARING_FRAMES, description.bearing_speeds(case))
             m = Master(slave, bearings)
             m.solve_static()

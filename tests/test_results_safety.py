@@ -134,7 +134,7 @@ def test_signals_and_a_kill_keep_the_steps_and_the_run_resumes_exactly(transport
     if transport == "in-process":
         opts.append("--in-process")
     # the uninterrupted reference, in this process
-    run_case(load_case("baguet2010_spur"), periods=int(periods),
+    run_case(load_case("baguet2010_spur").with_overrides({"simulation.mesh_periods": int(periods)}),
              in_process=transport == "in-process", fmu_dir=fmu_dir, out_dir=tmp_path / "ref",
              progress=False, figures=False)
     reference = read_results(only(tmp_path / "ref"))
@@ -316,9 +316,9 @@ case = load_case("baguet2010_spur", {{"simulation.steps_per_mesh_period": 8,
 kw = dict(in_process={in_process}, fmu_dir={fmu_dir!r}, progress=False, figures=False)
 with tempfile.TemporaryDirectory() as tmp:
     for model in MODELS:
-        ref = run_case(case, bearing=model, periods=1, out_dir=tmp + "/ref_" + model, **kw)
-        part = run_case(case, bearing=model, periods=1, steps=4, out_dir=tmp + "/" + model,
-                        **kw)
+        one = case.with_overrides({{"bearings.model": model, "simulation.mesh_periods": 1}})
+        ref = run_case(one, out_dir=tmp + "/ref_" + model, **kw)
+        part = run_case(one, steps=4, out_dir=tmp + "/" + model, **kw)
         resume_run(part.results, periods=1, fmu_dir={fmu_dir!r}, progress=False,
                    figures=False)
         a, b = read_results(ref.results), read_results(part.results)

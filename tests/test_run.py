@@ -13,7 +13,8 @@ from gear_fmu.structure import EVENT_SIDE
 from orchestrator.cli import main
 from orchestrator.coupling.inprocess import ModelBearings
 from orchestrator.run.results import read_results
-from orchestrator.run.runner import RunError, build_master, run_case
+from orchestrator.run.runner import run_case
+from orchestrator.run.spec import RunError, build_master
 from tests.helpers import fail_master_step, monolithic_structure
 
 SPUR = "baguet2010_spur"
@@ -128,29 +129,30 @@ def test_cosimulation_equals_the_monolithic_newton_solution(refined):
                                             ("hybrid", 1.5, 4.0), ("short", 1.5, 4.0)])
 def test_iterations_per_step(model, low, high, tmp_path):
     """Affine bearings converge in one pass; the film models in 2-4 on average (paper: ~3)."""
-    s = run_case(paper_case(), bearing=model, periods=8, in_process=True, out_dir=tmp_path,
-                 progress=False, figures=False)
+    case = paper_case().with_overrides({"bearings.model": model, "simulation.mesh_periods": 8})
+    s = run_case(case, in_process=True, out_dir=tmp_path, progress=False, figures=False)
     print(f"\n{model}: {s.iterations_per_step:.2f} coupled iterations per step")
     assert low <= s.iterations_per_step <= high
 
 
 def test_spur_orbits_identical_in_bearings_1_2_and_3_4(tmp_path):
-    s = run_case(paper_case(), periods=16, in_process=True, out_dir=tmp_path, progress=False,
-                 figures=False)
+    s = run_case(paper_case().with_overrides({"simulation.mesh_periods": 16}), in_process=True,
+                 out_dir=tmp_path, progress=False, figures=False)
     r = read_results(s.results)
     for j in (r["journal_position"], r["journal_velocity"]):
         scale = np.abs(j).max()
         np.testing.assert_allclose(j[:, 0], j[:, 1], rtol=0, atol=1e-9 * scale)
         np.testing.assert_allclose(j[:, 2], j[:, 3], rtol=0, atol=1e-9 * scale)
     # and the helical pair breaks the symmetry (Fig. 12)
-    h = run_case(paper_case(HELICAL), periods=2, in_process=True, out_dir=tmp_path,
-                 progress=False, figures=False)
+    h = run_case(paper_case(HELICAL).with_overrides({"simulation.mesh_periods": 2}),
+                 in_process=True, out_dir=tmp_path, progress=False, figures=False)
     jh = read_results(h.results)["journal_position"]
     assert np.abs(jh[:, 0] - jh[:, 1]).max() > 0.05 * 150e-6
 
 
 def test_results_file_is_self_describing_and_complete(tmp_path):
-    s = run_case(paper_case(), periods=2, in_process=True, out_dir=tmp_path, progress=False)
+    s = run_case(paper_case().with_overrides({"simulation.mesh_periods": 2}), in_process=True,
+                 out_dir=tmp_path, progress=False)
     r = read_results(s.results)
     assert r["attrs"]["complete"]
     assert r["time"].shape == (64,)
@@ -170,8 +172,8 @@ def test_results_file_is_self_describing_and_complete(tmp_path):
 def test_a_failing_run_keeps_what_it_computed(tmp_path, monkeypatch):
     fail_master_step(monkeypatch, at=40)
     with pytest.raises(RunError, match=r"step 40 of 64 .* the 39 steps computed are in"):
-        run_case(paper_case(), periods=2, in_process=True, out_dir=tmp_path, progress=False,
-                 figures=False)
+        run_case(paper_case().with_overrides({"simulation.mesh_periods": 2}), in_process=True,
+                 out_dir=tmp_path, progress=False, figures=False)
     r = read_results(next(tmp_path.glob("baguet2010_spur_hybrid_inprocess_*.h5")))
     assert r["time"].shape == (39,)
     assert not r["attrs"]["complete"]
@@ -185,7 +187,8 @@ def test_swapping_the_bearing_model_is_a_name():
     Asserted within 0.4 points of the paper's value (measured: 0.25)."""
     ecc = {}
     for model in ("hybrid", "short"):
-        master = build_master(paper_case(), model, in_process=True)
+        master = build_master(paper_case().with_overrides({"bearings.model": model}),
+                              in_process=True)
         assert isinstance(master.bearings, ModelBearings)
         assert [m.name for m in master.bearings.models] == [model] * 4
         master.solve_static()
@@ -201,7 +204,7 @@ def test_linear_model_freezes_the_hybrid_law_at_the_static_position():
     F0 - Kb dX - Cb dXdot of the hybrid film at X0, computed here by an independent hybrid
     model; the nonlinear film differs from it at a finite displacement."""
     case = paper_case()
-    master = build_master(case, "linear", in_process=True)
+    master = build_master(case.with_overrides({"bearings.model": "linear"}), in_process=True)
     static = master.solve_static()
     master.exit_initialization()
     models = master.bearings.models

@@ -11,7 +11,8 @@ import pytest
 from fmu_src.case import load_case
 from orchestrator.analysis.metrics import order_lines, resolved_lines, run_report
 from orchestrator.run.results import read_results
-from orchestrator.run.runner import RunError, run_case
+from orchestrator.run.runner import run_case
+from orchestrator.run.spec import RunError
 from tests.helpers import fail_master_step, run_here
 
 SPUR = "baguet2010_spur"
@@ -167,8 +168,8 @@ def test_run_report_over_the_last_half_of_a_short_run():
 def test_gsb_run_stores_the_report_as_numeric_attributes(tmp_path):
     """Through the pipeline: the spur case, linear bearings, 8 mesh periods in-process."""
     case = load_case(SPUR, {"bearings.model": "linear"})
-    s = run_case(case, periods=8, in_process=True, out_dir=tmp_path, figures=False,
-                 progress=False)
+    s = run_case(case.with_overrides({"simulation.mesh_periods": 8}), in_process=True,
+                 out_dir=tmp_path, figures=False, progress=False)
     with h5py.File(s.results, "r") as f:
         a = {k: f.attrs[k] for k in ("dynamic_factor", "bearing_force_ptp", "line_amplitudes",
                                      "line_orders", "line_labels", "report_window")}
@@ -207,8 +208,8 @@ def test_a_failing_run_stores_the_report_of_what_it_kept(tmp_path, monkeypatch):
     fail_master_step(monkeypatch, at=201)
     case = load_case(SPUR, {"bearings.model": "linear"})
     with pytest.raises(RunError, match="step 201 of 256"):
-        run_case(case, periods=8, in_process=True, out_dir=tmp_path, figures=False,
-                 progress=False)
+        run_case(case.with_overrides({"simulation.mesh_periods": 8}), in_process=True,
+                 out_dir=tmp_path, figures=False, progress=False)
     r = read_results(next(tmp_path.glob("baguet2010_spur_linear_inprocess_*.h5")))
     assert r["time"].shape == (200,) and not r["attrs"]["complete"]
     win = slice(100, None)
@@ -232,9 +233,10 @@ def test_the_fmu_transport_stores_the_report(fmu_dir, tmp_path):
         from fmu_src.case import load_case
         from orchestrator.run.results import read_results
         from orchestrator.run.runner import run_case
-        case = load_case("baguet2010_spur", {{"bearings.model": "linear"}})
-        s = run_case(case, periods=8, out_dir={str(tmp_path)!r}, fmu_dir={str(fmu_dir)!r},
-                     progress=False, figures=False)
+        case = load_case("baguet2010_spur", {{"bearings.model": "linear",
+                                              "simulation.mesh_periods": 8}})
+        s = run_case(case, out_dir={str(tmp_path)!r},
+                     fmu_dir={str(fmu_dir)!r}, progress=False, figures=False)
         r = read_results(s.results)
         a = r["attrs"]
         fb = np.hypot(r["bearing_force"][128:, :, 0], r["bearing_force"][128:, :, 1])

@@ -15,7 +15,7 @@ import pytest
 from fmu_src import description
 from fmu_src.case import load_case
 from gear_fmu.newmark import newmark_step
-from orchestrator.run.runner import build_master
+from orchestrator.run.spec import build_master
 
 
 def observed_order(steps, errors) -> float:

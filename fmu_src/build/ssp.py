@@ -140,19 +140,17 @@ def ssd_text(case: Case, gear_source: str, bearing_source: str, laws=None) -> by
     return parseString(ET.tostring(root, encoding="UTF-8")).toprettyxml(encoding="UTF-8")
 
 
-def write_ssp(case: Case, dest: Path | str, model: str | None = None, laws=None) -> Path:
-    """Build the FMUs of a case (the gear shaft carrying it, the bearing FMU of ``model``,
-    default ``bearings.model``) and write ``dest/<case name>.ssp``; returns its path.
+def write_ssp(case: Case, dest: Path | str, laws=None) -> Path:
+    """Build the FMUs of a case (the gear shaft carrying it, the bearing FMU of its
+    ``bearings.model``) and write ``dest/<case name>.ssp``; returns its path.
     ``laws``: the bearing laws at the static solution (:func:`ssd_text`)."""
     from bearing_fmu import fmu_name
     from fmu_src.build.fmus import build_fmus
 
-    model = case["bearings.model"] if model is None else model
-    case = case.with_overrides({"bearings.model": model})
     dest = Path(dest)
     dest.mkdir(parents=True, exist_ok=True)
     out = dest / f"{case['case.name']}.ssp"
-    bearing = fmu_name(model)
+    bearing = fmu_name(case["bearings.model"])
     with tempfile.TemporaryDirectory(prefix="gsb_ssp_") as tmp:
         fmus = build_fmus(tmp, ["GearShaft", bearing], case=case)
         part = Path(tmp) / "system.ssp"

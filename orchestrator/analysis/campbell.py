@@ -36,7 +36,7 @@ from gear_fmu.analyses import exact_mean_mesh_stiffness, line_of_action_stiffnes
 from gear_fmu.damped_modes import MESH_MODE_FRACTION, DampedModes, damped_modes
 from gear_fmu.modal import Modes
 from orchestrator.coupling.master import CouplingError
-from orchestrator.run.runner import build_master
+from orchestrator.run.spec import build_master
 
 __all__ = ["Linearised", "campbell_data", "crossings", "linearise", "plot_campbell"]
 

@@ -9,7 +9,8 @@ import sys
 from bearing_fmu.base import BearingError
 from fmu_src.case import CaseError
 from gear_fmu.geometry import GearGeometryError
-from orchestrator.run.runner import RunError, RunInterrupted
+from orchestrator.run.progress import RunInterrupted
+from orchestrator.run.spec import RunError
 
 
 def make_parser() -> argparse.ArgumentParser:

@@ -171,10 +171,16 @@ def add_parsers(sub) -> None:
 
 
 def _overrides(args) -> dict:
+    """The command line's settings as case fields: the case is their one carrier."""
+    from orchestrator.run.spec import check_periods
+
     overrides = dict(args.overrides)
+    periods = getattr(args, "periods", None)
     for key, value in (("operation.speed", args.speed), ("operation.torque", args.torque),
                        ("operation.unbalance", args.unbalance),
-                       ("bearings.model", getattr(args, "bearing", None))):
+                       ("bearings.model", getattr(args, "bearing", None)),
+                       ("simulation.mesh_periods",
+                        None if periods is None else check_periods(periods))):
         if value is not None:
             overrides[key] = value
     return overrides
@@ -198,7 +204,7 @@ def build_fmus(args) -> int:
 def export_ssp(args) -> int:
     from fmu_src.build.ssp import write_ssp
     from fmu_src.description import time_step
-    from orchestrator.run.runner import build_master
+    from orchestrator.run.spec import build_master
 
     case = case_from_args(args)
     master = build_master(case, in_process=True)  # X0: start values for non-iterative masters
@@ -299,7 +305,7 @@ def run(args) -> int:
         gear = fmus["gear"] if fmus else ensure_fmus(["GearShaft"], args.fmu_dir)["GearShaft"]
         fmus = {"gear": gear, "bearings": [path] * 4}
     try:
-        summary = run_case(case, periods=args.periods, in_process=args.in_process,
+        summary = run_case(case, in_process=args.in_process,
                            out_dir=args.out, fmu_dir=args.fmu_dir, progress=not args.quiet,
                            figures=not args.no_figures, fmus=fmus, overwrite=args.overwrite)
     finally:
@@ -358,7 +364,7 @@ def modal(args) -> int:
     from gear_fmu.modal import mode_table
     from orchestrator.analysis import campbell
     from orchestrator.coupling.master import CouplingError
-    from orchestrator.run.runner import RunError
+    from orchestrator.run.spec import RunError
 
     low, high = _modal_checks(args)
     case = case_from_args(args)

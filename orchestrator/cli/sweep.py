@@ -194,7 +194,7 @@ def sweep_hash(case, vary: list, bearings: list, periods: int, steady: int) -> s
 def _plan(args):
     """The checked inputs: (case, vary [(key, values)], bearings, points, periods, steady)."""
     from fmu_src.case import load_case
-    from orchestrator.run.runner import check_periods
+    from orchestrator.run.spec import check_periods
     from orchestrator.sweep.runner import SweepPoint, check_point
 
     case = load_case(args.case, dict(args.overrides))

@@ -35,6 +35,10 @@ class InProcessStructure(StructureSlave):
         self.structure = structure
         self._laws: AffineLaws | None = None
 
+    @property
+    def physics(self) -> Structure:
+        return self.structure
+
     def _require_laws(self) -> AffineLaws:
         if self._laws is None:
             raise RuntimeError("set_bearing_laws() before a static solution or a step")

@@ -77,6 +77,9 @@ class StructureSlave(ABC):
     """
 
     n_bearings: int
+    #: the in-process physics object (:class:`gear_fmu.structure.Structure`) where there is
+    #: one, so that checks reuse its damping instead of building it again; None through FMUs
+    physics = None
 
     @abstractmethod
     def get_state(self):

@@ -19,7 +19,8 @@
     transmission error and dynamic mesh force over the last pinion revolution and over the
     whole run (min/max envelope per bin).
 
-Channels read (:data:`orchestrator.run.runner.CHANNELS`): ``time`` [s], ``journal_position`` (4, 2)
+Channels read (:data:`orchestrator.run.channels.CHANNELS`): ``time`` [s],
+``journal_position`` (4, 2)
 [m], ``bearing_force`` (4, 2) [N], ``mesh_force`` [N], ``transmission_error`` [m]; root
 attributes ``case``, ``bearing_model``, ``mode``, ``speed`` [rad/s], ``teeth`` (2,), ``torque``
 [N m], ``unbalance`` (2,) [m], ``clearance`` (4,) [m], ``static_journal`` (4, 2) [m],

@@ -48,7 +48,7 @@ def film_capacities(case: Case, eps: float = EPS_LIMIT) -> tuple[np.ndarray, str
     models = description.bearing_models(case)
     if not all(isinstance(m, FilmBearingModel) for m in models):
         name = "hybrid"
-        models = description.bearing_models(case, name)
+        models = description.bearing_models(case.with_overrides({"bearings.model": name}))
     out = np.empty(len(models))
     for b, (m, w) in enumerate(zip(models, description.bearing_speeds(case), strict=True)):
         fbar = m.dimensionless(eps, 0.0, jacobian=False).force

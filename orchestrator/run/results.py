@@ -185,11 +185,16 @@ class ResultsWriter:
         Rows buffered at most between two writes.
     checkpoint : callable, optional
         ``checkpoint() -> bytes``: the state after the last appended row, stored at each flush.
+    dims, coords : optional
+        ``dims(name)``: the dimension names of a channel, ``time`` first, and ``coords``: the
+        labels of the other dimensions (:mod:`orchestrator.run.channels`). Given, every
+        dimension is an HDF5 dimension scale named so (netCDF-4's convention), so that
+        xarray (engine ``h5netcdf``) opens the file with labelled dimensions.
     """
 
     def __init__(self, path, channels: dict, attrs: dict | None = None,
                  flush_seconds: float = 1.0, capacity: int = CAPACITY, checkpoint=None,
-                 _resume_rows: int | None = None):
+                 dims=None, coords: dict | None = None, _resume_rows: int | None = None):
         import h5py
 
         self.path = Path(path)
@@ -205,8 +210,10 @@ class ResultsWriter:
             for name, (shape, unit, desc) in self.channels.items():
                 ds = self.file.create_dataset(name, shape=(0, *shape), maxshape=(None, *shape),
                                               dtype="f8", chunks=(1024, *shape))
-                ds.attrs["unit"] = unit
+                ds.attrs["units"] = unit
                 ds.attrs["description"] = desc
+            if dims is not None:
+                _label_dimensions(self.file, self.channels, dims, coords or {})
             grp = self.file.create_group("resume")
             for slot in ("slot0", "slot1"):
                 grp.create_dataset(slot, shape=(0,), maxshape=(None,), dtype="u1",
@@ -293,6 +300,24 @@ class ResultsWriter:
         return False
 
 
+def _label_dimensions(f, channels: dict, dims, coords: dict) -> None:
+    """Dimension scales: ``time`` (the channel) and one dataset of labels per other
+    dimension, attached to every channel's axes."""
+    import h5py
+
+    f["time"].make_scale("time")
+    for name, labels in coords.items():
+        labels = np.asarray(labels)
+        if labels.dtype.kind == "U":
+            labels = labels.astype(h5py.string_dtype())
+        f.create_dataset(name, data=labels).make_scale(name)
+    for name in channels:
+        if name == "time":
+            continue
+        for axis, dim in enumerate(dims(name)):
+            f[name].dims[axis].attach_scale(f[dim])
+
+
 def add_attributes(path, **attrs) -> None:
     """Add (or replace) root attributes of a closed results file (:func:`attribute_value`);
     :func:`read_results` gives them back as numbers, numpy arrays and strings."""
@@ -326,13 +351,23 @@ def read_results(path) -> dict:
     """All channels as numpy arrays, plus ``attrs`` (root) and ``units``; works while the
     file is being written (the rows flushed so far)."""
     with open_results(path) as f:
-        names = [n for n in f if n != "resume"]
+        names = [n for n in f if _is_channel(f[n])]
         out = {name: f[name][()] for name in names}
         rows = min(len(out[n]) for n in names) if names else 0
         out = {name: v[:rows] for name, v in out.items()}  # channels flushed one by one
-        out["units"] = {name: f[name].attrs["unit"] for name in names}
+        out["units"] = {name: _unit(f[name]) for name in names}
         out["attrs"] = _attributes(f)
     return out
+
+
+def _unit(ds) -> str:
+    """A channel's unit (``unit``: files of earlier versions of this package)."""
+    return ds.attrs["units"] if "units" in ds.attrs else ds.attrs["unit"]
+
+
+def _is_channel(item) -> bool:
+    """A dataset with a unit (the labels of a dimension have none)."""
+    return hasattr(item, "shape") and ("units" in item.attrs or "unit" in item.attrs)
 
 
 def read_checkpoint(path) -> tuple[int, bytes] | None:

@@ -1,7 +1,14 @@
 """``gsb run``: static solution X0 and the nonlinear (or linear) transient of a case.
 
-1. Build the structure slave and the bearing set, through FMUs (default; fmpy) or in-process
-   (:func:`build_master`; the runner sees only the master's interfaces).
+A run is a :class:`~orchestrator.run.spec.RunSpec` (the case, which carries every setting,
+and the transport) taken through the steps of a :class:`Runner`; the rows go to a recorder
+that observes the steps: a results file (:class:`~orchestrator.run.results.ResultsWriter`,
+:func:`run_case`, :func:`resume_run`) or memory (:class:`~orchestrator.run.result.MemoryRecorder`,
+:func:`simulate_case`, behind :func:`orchestrator.simulate`).
+
+1. Start: the structure slave and the bearing set, through FMUs (default; fmpy) or in-process
+   (:func:`~orchestrator.run.spec.build_master`; the runner sees only the master's
+   interfaces).
 2. Static solution X0 (paper Sec. 2.2.3): the master iterates structure static solves and
    bearing linearisations with velocities zero
    (:meth:`orchestrator.coupling.master.Master.solve_static`).
@@ -10,26 +17,26 @@
    stiffness (Structure docs).
 4. Transient (Sec. 3.2): ``steps_per_mesh_period x mesh_periods`` coupled Newmark steps, each
    converged to the case tolerance; every step's channels go to the results file as the run
-   goes (:mod:`orchestrator.run.results`: HDF5 SWMR, flushed every second with a checkpoint of the
-   coupled state; an interrupted or failed run keeps what it computed, :func:`resume_run`
+   goes (:mod:`orchestrator.run.results`: HDF5 SWMR, flushed every second with a checkpoint of
+   the coupled state; an interrupted or failed run keeps what it computed, :func:`resume_run`
    continues it). The file's name and what happens to an existing one:
    :mod:`orchestrator.run.files`.
 
-Channels (:data:`CHANNELS`, units from :mod:`fmu_src.units`): ``journal_position`` (4, 2) [s, t]
-and ``journal_velocity`` (4, 2) of the journal centres, ``bearing_force`` (4, 2),
+Channels (:data:`~orchestrator.run.channels.CHANNELS`, with named dimensions):
+``journal_position`` (4, 2) [s, t] and ``journal_velocity`` (4, 2) of the journal centres,
+``bearing_force`` (4, 2),
 ``mesh_force``, ``transmission_error``, ``gear_nodes`` (2, 2) (u, v of the pinion and gear
 nodes), ``iterations`` (coupled iterations of the step).
 
-Report (:func:`orchestrator.analysis.metrics.run_report`, over the last gear revolution or the last
-half
-of a shorter run; :meth:`RunSummary.report_text`), stored as numeric root attributes of the
-results file once the transient stops (complete, failed or interrupted; at least 2 steps):
+Report (:func:`orchestrator.analysis.metrics.run_report`, over the last gear revolution or the
+last half of a shorter run; :meth:`RunSummary.report_text`), stored as numeric root attributes
+of the results file once the transient stops (complete, failed or interrupted; at least 2 steps):
 ``dynamic_factor`` [1] (R, max mesh force over the static load), ``bearing_force_ptp`` (4,) [N]
 (peak-to-peak of ||F_b||), ``line_amplitudes`` (4, n) [N] (peak amplitudes of the lines of
 ||F_b||, NaN where the window does not resolve a line), ``line_orders`` (n,) [1] (pinion orders),
 ``line_labels`` (n,) (strings: "1x", "gear_1x", "26x", ...) and ``report_window`` (2,) [s]
 (start and end of the window); each numeric attribute with a unit has it in ``<name>_unit``
-(:data:`ATTRIBUTE_UNITS`).
+(:data:`~orchestrator.run.spec.ATTRIBUTE_UNITS`).
 """
 
 from __future__ import annotations
@@ -38,21 +45,19 @@ import contextlib
 import math
 import signal
 import sys
-import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from fmu_src import description
 from fmu_src.case import Case
-from fmu_src.units import symbol
-from orchestrator.coupling.inprocess import InProcessStructure, ModelBearings
-from orchestrator.coupling.master import Master
+from orchestrator.coupling.master import StepReport
 from orchestrator.run import files as run_files
+from orchestrator.run.channels import CHANNELS, COORDS, dims
 from orchestrator.run.checks import overload_message, time_step_warnings, unbalance_warnings
-from orchestrator.run.files import results_name
+from orchestrator.run.progress import Progress, RunInterrupted, deferred_signals
+from orchestrator.run.result import MemoryRecorder, Result
 from orchestrator.run.results import (
     ResultsWriter,
     add_attributes,
@@ -62,77 +67,16 @@ from orchestrator.run.results import (
     read_checkpoint,
     read_results,
 )
+from orchestrator.run.spec import RunError, RunSpec, build_master, check_periods, with_units
 
-__all__ = ["ATTRIBUTE_UNITS", "CHANNELS", "Progress", "RunError", "RunInterrupted",
-           "RunSummary", "build_master", "check_periods", "resume_run", "run_case"]
-
-#: results channels: name -> (shape per step, unit, description)
-CHANNELS = {
-    "journal_position": ((4, 2), symbol("length"),
-                         "journal-centre displacement [s, t] at bearings 1-4, global frame"),
-    "journal_velocity": ((4, 2), symbol("velocity"),
-                         "journal-centre velocity [s_dot, t_dot] at bearings 1-4, global frame"),
-    "bearing_force": ((4, 2), symbol("force"),
-                      "film force on the journal [F_s, F_t] at bearings 1-4"),
-    "mesh_force": ((), symbol("force"), "total normal mesh force (sum of slice loads)"),
-    "transmission_error": ((), symbol("length"),
-                           "r_b1 theta1 + r_b2 theta2 (elastic torsion at the gears)"),
-    "gear_nodes": ((2, 2), symbol("length"), "[u, v] of the pinion and gear nodes"),
-    "iterations": ((), symbol("dimensionless"), "coupled master iterations of the step"),
-}
-
-
-class RunError(RuntimeError):
-    """A run that stopped; the message says where and which file keeps the computed steps."""
-
-
-class RunInterrupted(RuntimeError):
-    """A run stopped by SIGINT (Ctrl-C) or SIGTERM between two steps; ``exit_code`` is the
-    shell's convention, 128 + the signal number (130, 143)."""
-
-    def __init__(self, signum: int, message: str):
-        super().__init__(message)
-        self.signum = signum
-        self.exit_code = 128 + int(signum)
-
-
-@contextlib.contextmanager
-def deferred_signals(signals=(signal.SIGINT, signal.SIGTERM),
-                     stopping: str = "stopping after the current step"):
-    """Hold SIGINT and SIGTERM in a list instead of raising where they land.
-
-    A KeyboardInterrupt raised inside an FMU's Python code (pythonfmu runs it in this
-    interpreter) is fatal for that FMU and often for the process, and Dask's waits can swallow
-    one; the run (and a sweep's gather loop) checks the list between steps instead and stops
-    cleanly there. ``stopping`` is what the first signal's message says happens next. Only the
-    main thread can install handlers: elsewhere (a Dask worker thread) the list stays empty and
-    signals keep their handlers."""
-    received: list[int] = []
-    if threading.current_thread() is not threading.main_thread():
-        yield received
-        return
-
-    def hold(signum, frame):
-        if not received:
-            print(f"\n{signal.Signals(signum).name} received: {stopping} (again to stop at "
-                  "once)", file=sys.stderr, flush=True)
-        elif signum == signal.SIGINT:  # a second Ctrl-C: the user insists
-            raise KeyboardInterrupt
-        received.append(signum)
-
-    previous = {s: signal.signal(s, hold) for s in signals}
-    try:
-        yield received
-    finally:
-        for s, handler in previous.items():
-            signal.signal(s, handler)
+__all__ = ["RunSummary", "Runner", "resume_run", "run_case", "simulate_case"]
 
 
 @dataclass
 class RunSummary:
     """What a run did (figures for the README and the benchmark)."""
 
-    results: Path
+    results: Path | None  # the results file; None for a run kept in memory
     steps: int
     wall_time: float  # s, transient only
     static_time: float  # s
@@ -183,185 +127,220 @@ class RunSummary:
         return "\n".join(lines)
 
 
-class Progress:
-    """A one-line progress display on stderr, refreshed at most every ``every`` seconds; on a
-    stream that is not a terminal (a log file), one line every 10 s instead."""
+@dataclass
+class Static:
+    """What the static step leaves: the master's report, X0 (4, 2) [m], the static mesh force
+    [N] and transmission error [m], the checks' warnings and the wall time [s]."""
 
-    def __init__(self, total: int, label: str = "", every: float = 0.5, stream=None,
-                 enabled: bool = True):
-        self.total = total
-        self.label = label
-        self.stream = sys.stderr if stream is None else stream
-        self.tty = bool(getattr(self.stream, "isatty", lambda: False)())
-        self.every = every if self.tty else max(every, 10.0)
-        self.enabled = enabled
-        self.start = time.perf_counter()
-        self._last = -math.inf
-
-    def update(self, done: int, extra: str = "") -> None:
-        if not self.enabled:
-            return
-        now = time.perf_counter()
-        if now - self._last < self.every and done < self.total:
-            return
-        self._last = now
-        elapsed = now - self.start
-        frac = done / self.total if self.total else 1.0
-        eta = elapsed / frac - elapsed if frac > 0 else math.inf
-        bar = "#" * int(30 * frac)
-        line = (f"{self.label} [{bar:<30}] {done}/{self.total} {100 * frac:5.1f} % "
-                f"{elapsed:6.1f} s, {eta:6.1f} s left {extra}")
-        if self.tty:
-            self.stream.write(f"\r{line}   " + ("\n" if done >= self.total else ""))
-        else:
-            self.stream.write(line + "\n")
-        self.stream.flush()
+    report: StepReport
+    x0: np.ndarray
+    mesh_force: float
+    transmission_error: float
+    warnings: list
+    seconds: float
 
 
-def _clearances(case: Case) -> list[float]:
-    return [float(c) for c in case["bearings.clearance"]]
+class Stop(Exception):
+    """A signal received, seen between two steps (``where``: "after step 12 of 64", ...)."""
+
+    def __init__(self, signum: int, where: str):
+        super().__init__(where)
+        self.signum = signum
+        self.where = where
+
+    def message(self, kept: str) -> RunInterrupted:
+        sig = signal.Signals(self.signum).name
+        return RunInterrupted(self.signum, f"interrupted by {sig} {self.where}; {kept}")
 
 
-def build_master(case: Case, bearing: str | None = None, in_process: bool = False,
-                 fmu_dir: Path | str | None = None, fmus: dict | None = None) -> Master:
-    """The master of a case with its two slaves (``master.structure``, ``master.bearings``).
+class StepFailed(Exception):
+    """Step ``index`` (0-based), from ``t`` [s], raised ``cause``."""
 
-    ``bearing`` overrides ``bearings.model``. In-process the physics objects of
-    :mod:`fmu_src.description` are driven directly; through FMUs the bearing FMU of that model
-    and the gear-shaft FMU are taken from ``fmu_dir`` (default: the per-user cache; built
-    there if missing), or ``fmus`` names the files: ``{"gear": path, "bearings": [4 paths],
-    "bearing_parameters": [4 dicts] (optional)}`` (an SSP's, or a bearing FMU of the user's
-    own). Release the slaves with :meth:`orchestrator.coupling.master.Master.close`.
-    """
-    if bearing is not None:
-        case = case.with_overrides({"bearings.model": bearing})
-    tol = case["simulation.tolerance"]
-    max_it = case["simulation.max_iterations"]
-    if in_process:
-        structure = InProcessStructure(description.structure(case))
-        bearings = ModelBearings(description.bearing_models(case), description.BEARING_FRAMES,
-                                 description.bearing_speeds(case))
-    elif fmus is not None:
-        from orchestrator.coupling import fmi
-
-        structure, bearings = fmi.system_from_files(case, fmus["gear"], fmus["bearings"],
-                                                    fmus.get("bearing_parameters"))
-    else:
-        from orchestrator.coupling import fmi
-
-        structure, bearings = fmi.system_from_case(case, fmu_dir=fmu_dir)
-    return Master(structure, bearings, tol, max_it)
+    def __init__(self, index: int, t: float, cause: BaseException):
+        super().__init__(str(cause))
+        self.index, self.t, self.cause = index, t, cause
 
 
-#: units of the numeric root attributes, stored beside each as ``<name>_unit``
-ATTRIBUTE_UNITS = {
-    "dt": symbol("time"), "speed": symbol("angular_speed"),
-    "speeds": symbol("angular_speed"), "torque": symbol("torque"),
-    "unbalance": symbol("length"), "clearance": symbol("length"),
-    "static_journal": symbol("length"), "static_bearing_force": symbol("force"),
-    "static_mesh_force": symbol("force"), "static_transmission_error": symbol("length"),
-    "wall_time": symbol("time"), "dynamic_factor": symbol("dimensionless"),
-    "bearing_force_ptp": symbol("force"), "line_amplitudes": symbol("force"),
-    "line_orders": symbol("dimensionless"), "report_window": symbol("time"),
-}
+class Runner:
+    """The steps of a run: :meth:`start` (the master and its slaves), :meth:`static` (X0 and
+    the end of initialisation), :meth:`transient` (the coupled steps, each row handed to a
+    recorder) and :meth:`finish` (the slaves released).
 
+    ``received``: the signals received so far (:func:`~orchestrator.run.progress.
+    deferred_signals`), checked between two steps (:class:`Stop`); ``echo``: print the
+    checks' warnings on stderr."""
 
-def _with_units(attrs: dict) -> dict:
-    return attrs | {f"{k}_unit": ATTRIBUTE_UNITS[k] for k in attrs if k in ATTRIBUTE_UNITS}
+    def __init__(self, spec: RunSpec, received=(), echo: bool = True):
+        self.spec = spec
+        self.received = received
+        self.echo = echo
+        self.master = None
 
+    def stop_if_asked(self, where: str) -> None:
+        if self.received:
+            raise Stop(self.received[0], where)
 
-def _start(master: Master, case: Case, dt: float, stop_if_asked, echo: bool) -> tuple:
-    """Static solution X0 and the end of initialisation; returns (static report, x0,
-    (static mesh force [N], static transmission error [m]), warnings, seconds)."""
-    t0 = time.perf_counter()
-    try:
-        static = master.solve_static()
-    except Exception as exc:
+    def start(self) -> None:
+        s = self.spec
+        self.master = build_master(s.case, s.in_process, s.fmu_dir, s.fmus)
+        self.stop_if_asked("before the static solution")
+
+    def static(self) -> Static:
+        """Static solution X0 and the end of initialisation; RunError if there is none."""
+        case, master = self.spec.case, self.master
+        t0 = time.perf_counter()
         try:
-            why = overload_message(case)
-        except Exception:  # the explanation must not hide the failure
-            why = None
-        if why is not None:
-            raise RunError(f"{case.source}: no static solution: {why}") from None
-        raise RunError(f"{case.source}: static solution failed: {exc}") from exc
-    x0 = static.states[:, :2].copy()
-    stop_if_asked("after the static solution")
-    # leave initialisation: linear bearings freeze, the structure builds its modal
-    # damping on the modes with the bearings' static stiffness
-    structure = master.structure
-    master.exit_initialization()
-    # read after leaving initialisation: a gear-shaft FMU in initialisation mode would solve
-    # its static problem again for outputs read after the final laws were set
-    static_mesh = (structure.mesh_force(), structure.transmission_error())
-    try:
-        warnings = time_step_warnings(
-            case, master.laws, dt,
-            structure.structure if isinstance(structure, InProcessStructure) else None)
-    except (ValueError, np.linalg.LinAlgError) as exc:  # a check, not the run
-        warnings = [f"the time-step check could not run: {exc}"]
-    warnings = unbalance_warnings(case) + warnings
-    for text in warnings if echo else ():
-        print(f"warning: {text}", file=sys.stderr, flush=True)
-    return static, x0, static_mesh, warnings, time.perf_counter() - t0
+            static = master.solve_static()
+        except Exception as exc:
+            try:
+                why = overload_message(case)
+            except Exception:  # the explanation must not hide the failure
+                why = None
+            if why is not None:
+                raise RunError(f"{case.source}: no static solution: {why}") from None
+            raise RunError(f"{case.source}: static solution failed: {exc}") from exc
+        x0 = static.states[:, :2].copy()
+        self.stop_if_asked("after the static solution")
+        # leave initialisation: linear bearings freeze, the structure builds its modal
+        # damping on the modes with the bearings' static stiffness
+        structure = master.structure
+        master.exit_initialization()
+        # read after leaving initialisation: a gear-shaft FMU in initialisation mode would
+        # solve its static problem again for outputs read after the final laws were set
+        mesh_force, te = structure.mesh_force(), structure.transmission_error()
+        try:
+            warnings = time_step_warnings(case, master.laws, self.spec.dt, structure.physics)
+        except (ValueError, np.linalg.LinAlgError) as exc:  # a check, not the run
+            warnings = [f"the time-step check could not run: {exc}"]
+        warnings = unbalance_warnings(case) + warnings
+        for text in warnings if self.echo else ():
+            print(f"warning: {text}", file=sys.stderr, flush=True)
+        return Static(static, x0, mesh_force, te, warnings, time.perf_counter() - t0)
+
+    def transient(self, recorder, first: int = 0, bar: Progress | None = None) -> dict:
+        """Steps ``first`` .. ``n_steps`` - 1, each row appended to ``recorder``; returns the
+        counts of the transient (``wall_time`` [s], ``iterations``, ``bearing_evaluations``,
+        ``relaxed_steps``). Raises :class:`StepFailed` and :class:`Stop`."""
+        master, dt, n_steps = self.master, self.spec.dt, self.spec.n_steps
+        structure = master.structure
+        start = (master.total_iterations, master.total_bearing_evaluations,
+                 master.relaxed_steps)
+        t_start = time.perf_counter()
+        if bar is not None:
+            bar.update(first)
+        for i in range(first, n_steps):
+            t = i * dt
+            try:
+                report = master.step(t, dt)
+            except Exception as exc:
+                raise StepFailed(i, t, exc) from exc
+            mesh_force, te, gear_nodes = structure.step_outputs()
+            recorder.append(time=(i + 1) * dt, journal_position=report.states[:, :2],
+                            journal_velocity=report.states[:, 2:],
+                            bearing_force=report.bearing_force, mesh_force=mesh_force,
+                            transmission_error=te, gear_nodes=gear_nodes,
+                            iterations=report.iterations)
+            if bar is not None and (i & 63) == 0:
+                its = (master.total_iterations - start[0]) / (i + 1 - first)
+                bar.update(i + 1, f"{its:.2f} it/step")
+            self.stop_if_asked(f"after step {i + 1} of {n_steps}")
+        done = {"wall_time": time.perf_counter() - t_start,
+                "iterations": master.total_iterations - start[0],
+                "bearing_evaluations": master.total_bearing_evaluations - start[1],
+                "relaxed_steps": master.relaxed_steps - start[2]}
+        if bar is not None:
+            bar.update(n_steps, f"{done['iterations'] / max(n_steps - first, 1):.2f} it/step")
+        return done
+
+    def finish(self) -> None:
+        if self.master is not None:
+            self.master.close()
+
+    def summary(self, static: Static, done: dict, path: Path | None, steps: int) -> RunSummary:
+        return RunSummary(path, steps, done["wall_time"], static.seconds, done["iterations"],
+                          done["bearing_evaluations"], static.report.iterations, static.x0,
+                          warnings=static.warnings, relaxed_steps=done["relaxed_steps"])
 
 
-def run_case(case: Case, bearing: str | None = None, periods: int | None = None,
-             in_process: bool = False, out_dir: Path | str = "results",
+def _static_attributes(static: Static) -> dict:
+    return {"static_journal": static.x0, "static_bearing_force": static.report.bearing_force,
+            "static_iterations": static.report.iterations,
+            "static_mesh_force": static.mesh_force,
+            "static_transmission_error": static.transmission_error,
+            "warnings": "\n".join(static.warnings)}
+
+
+def simulate_case(spec: RunSpec, progress: bool = False, echo_warnings: bool = True) -> Result:
+    """The run of ``spec`` kept in memory (:func:`orchestrator.simulate`); raises
+    :class:`RunError` or :class:`~orchestrator.run.progress.RunInterrupted` with the steps
+    computed so far in the exception's ``result``."""
+    from orchestrator.analysis.metrics import run_report
+
+    attrs = with_units(spec.attributes())
+    recorder = MemoryRecorder(CHANNELS, attrs)
+    with deferred_signals() as received:
+        runner = Runner(spec, received, echo_warnings)
+        try:
+            runner.start()
+            static = runner.static()
+            recorder.attrs |= with_units(_static_attributes(static))
+            bar = Progress(spec.n_steps, spec.case["case.name"], enabled=progress)
+            done = runner.transient(recorder, 0, bar)
+        except Stop as stop:
+            recorder.close(False, interrupted=signal.Signals(stop.signum).name,
+                           stopped_by=f"interrupted {stop.where}")
+            exc = stop.message(f"{recorder.rows} steps kept in the result")
+            exc.result = recorder.result()
+            raise exc from None
+        except StepFailed as failed:
+            recorder.close(False, stopped_by=f"{type(failed.cause).__name__}: {failed}")
+            exc = RunError(f"step {failed.index + 1} of {spec.n_steps} (t = "
+                           f"{failed.t + spec.dt:.6e} s) failed: {failed}; the "
+                           f"{failed.index} steps computed are in the exception's result")
+            exc.result = recorder.result()
+            raise exc from failed.cause
+        finally:
+            runner.finish()
+    recorder.close(True, wall_time=done["wall_time"])
+    summary = runner.summary(static, done, None, spec.n_steps)
+    result = recorder.result(summary)
+    if spec.n_steps >= 2:
+        summary.report = run_report(result.as_dict())
+        result.attrs |= with_units(_report_attributes(summary.report))
+    return result
+
+
+def run_case(case: Case, in_process: bool = False, out_dir: Path | str = "results",
              fmu_dir: Path | str | None = None, progress: bool = True, figures: bool = True,
              fmus: dict | None = None, steps: int | None = None, overwrite: bool = False,
              flush_seconds: float = 1.0, echo_warnings: bool = True) -> RunSummary:
-    """Run a case (module docstring); returns a :class:`RunSummary`.
+    """Run a case into a results file (module docstring); returns a :class:`RunSummary`.
 
-    ``steps``: stop after this many time steps (a quick look; default: all the periods').
-    ``echo_warnings``: print the checks' warnings on stderr (they are also in the summary and
-    the results file).
+    The case carries every setting (the bearing model in ``bearings.model``, the length in
+    ``simulation.mesh_periods``: :meth:`fmu_src.case.Case.with_overrides`). ``steps``: stop
+    after this many time steps (a quick look; default: all the periods'). ``echo_warnings``:
+    print the checks' warnings on stderr (they are also in the summary and the results file).
     The results file is named after the effective parameters
     (:func:`orchestrator.run.files.results_name`); an existing one stops the run before it
     starts unless ``overwrite`` (:func:`orchestrator.run.files.target`: a complete file is
     replaced only by a complete run).
 
-    ``fmus``: run these FMU files instead of the built ones (:func:`build_master`); the
-    results are then named after the bearing FMU file. Raises :class:`RunError` (with the
-    results file that keeps the steps computed) if the static solution or a step fails, and
-    :class:`RunInterrupted` after SIGINT or SIGTERM, which stop the run between two steps with
-    the results file closed and marked interrupted.
+    ``fmus``: run these FMU files instead of the built ones
+    (:func:`~orchestrator.run.spec.build_master`); the results are then named after the
+    bearing FMU file. Raises :class:`RunError` (with the results file that keeps the steps
+    computed) if the static solution or a step fails, and
+    :class:`~orchestrator.run.progress.RunInterrupted` after SIGINT or SIGTERM, which stop the
+    run between two steps with the results file closed and marked interrupted.
     """
-    model = case["bearings.model"] if bearing is None else bearing
-    label = model if fmus is None else Path(fmus["bearings"][0]).stem
-    periods = check_periods(case["simulation.mesh_periods"] if periods is None else periods)
-    if steps is not None and int(steps) < 1:
-        raise RunError(f"steps = {steps!r}: need at least one step")
-    case = case.with_overrides({"bearings.model": model, "simulation.mesh_periods": periods})
-    steps_per_period = case["simulation.steps_per_mesh_period"]
-    n_steps = periods * steps_per_period if steps is None else int(steps)
-    name = results_name(case, label, in_process, steps,
-                        None if fmus is None else fmus["bearings"][0])
+    spec = RunSpec.of(case, in_process, fmus, fmu_dir, steps)
+    name = run_files.results_name(spec.case, spec.label, in_process, steps,
+                                  None if fmus is None else fmus["bearings"][0])
     try:
         where = run_files.target(out_dir, name, overwrite)
     except run_files.TargetError as exc:
         raise RunError(str(exc)) from None
-    attrs = {
-        "kind": "run", "case": case["case.name"], "case_file": str(case.source),
-        "case_toml": case.to_toml(), "bearing_model": label,
-        "mode": "in-process" if in_process else "fmu",
-        "bearing_fmu": "" if fmus is None else str(Path(fmus["bearings"][0]).resolve()),
-        "dt": description.time_step(case), "steps_per_mesh_period": steps_per_period,
-        "mesh_periods": periods, "steps_total": n_steps, "speed": case["operation.speed"],
-        "speeds": description.bearing_speeds(case), "teeth": list(case["gear_pair.teeth"]),
-        "torque": case["operation.torque"], "unbalance": list(case["operation.unbalance"]),
-        "clearance": _clearances(case), "tolerance": case["simulation.tolerance"],
-        "interrupted": "", "stopped_by": "",
-    }
-    return _run(case, attrs, where, 0, None, in_process, fmu_dir, fmus, progress, figures,
-                flush_seconds, echo=echo_warnings)
-
-
-def check_periods(periods) -> int:
-    """``periods`` (``--periods``, a case's ``simulation.mesh_periods``) as a whole number of
-    mesh periods >= 1; RunError naming the value otherwise."""
-    if isinstance(periods, bool) or not isinstance(periods, (int, np.integer)) or periods < 1:
-        raise RunError(f"--periods {periods!r}: need a whole number of mesh periods >= 1")
-    return int(periods)
+    return _run_to_file(spec, spec.attributes(), where, progress=progress, figures=figures,
+                        flush_seconds=flush_seconds, echo=echo_warnings)
 
 
 def resume_run(path: Path | str, periods: int | None = None, fmu_dir: Path | str | None = None,
@@ -371,10 +350,10 @@ def resume_run(path: Path | str, periods: int | None = None, fmu_dir: Path | str
 
     The case comes from the file (``case_toml``), the static solution is solved again and must
     equal the stored one, then the structure, the bearings' warm starts and the laws are
-    restored from the checkpoint (:meth:`orchestrator.coupling.master.Master.checkpoint`; through
-    FMUs,
-    their serialised FMU states) and the steps go on in the same file: the trajectory is that
-    of an uninterrupted run. ``periods`` extends the run (default: the file's own length).
+    restored from the checkpoint (:meth:`orchestrator.coupling.master.Master.checkpoint`;
+    through FMUs, their serialised FMU states) and the steps go on in the same file: the
+    trajectory is that of an uninterrupted run. ``periods`` extends the run (default: the
+    file's own length).
     """
     from fmu_src.case import CaseError
     from orchestrator.analysis.metrics import stored_case
@@ -409,33 +388,29 @@ def resume_run(path: Path | str, periods: int | None = None, fmu_dir: Path | str
         if clear_write_flags(path):  # what h5clear -s does
             print(f"note: {path} was not closed by its run (killed?): its rows after the last "
                   f"checkpoint (step {rows}) are computed again", file=sys.stderr, flush=True)
-    steps_per_period = int(a["steps_per_mesh_period"])
+    steps_per_period = case["simulation.steps_per_mesh_period"]
     if periods is not None:
-        periods = check_periods(periods)
-        n_steps = periods * steps_per_period
-    else:
-        n_steps = int(a["steps_total"])
-    if n_steps <= rows:
+        case = case.with_overrides({"simulation.mesh_periods": check_periods(periods)})
+    steps = None if periods is not None else int(a["steps_total"])
+    spec = RunSpec.of(case, a["mode"] == "in-process", None, fmu_dir, steps)
+    if spec.n_steps <= rows:
         raise RunError(f"--resume {path}: the file already holds {rows} steps "
                        f"({rows / steps_per_period:g} mesh periods); give --periods above "
                        f"{rows // steps_per_period} to extend it")
     attrs = {"mesh_periods": a["mesh_periods"] if periods is None else periods,
-             "steps_total": n_steps, "interrupted": "", "stopped_by": "",
+             "steps_total": spec.n_steps, "interrupted": "", "stopped_by": "",
              "resumed_at_step": rows}
     where = run_files.Target(path, path, path.with_suffix(""))
-    in_process = a["mode"] == "in-process"
-    return _run(case, attrs, where, rows, blob, in_process, fmu_dir, None, progress, figures,
-                flush_seconds, stored_x0=np.asarray(a["static_journal"]))
+    return _run_to_file(spec, attrs, where, rows, blob, progress, figures, flush_seconds,
+                        stored_x0=np.asarray(a["static_journal"]))
 
 
-def _run(case, attrs, where, first, blob, in_process, fmu_dir, fmus, progress, figures,
-         flush_seconds, stored_x0=None, echo: bool = True) -> RunSummary:
-    """Static solution, then steps ``first`` .. ``steps_total`` into ``where`` (from a
-    checkpoint ``blob`` when resuming)."""
-    dt = float(attrs.get("dt", description.time_step(case)))
-    n_steps = int(attrs["steps_total"])
-    path = where.write
-    name = where.final.stem
+def _run_to_file(spec: RunSpec, attrs: dict, where, first: int = 0, blob=None,
+                 progress: bool = True, figures: bool = True, flush_seconds: float = 1.0,
+                 stored_x0=None, echo: bool = True) -> RunSummary:
+    """The runner's steps with a results file as recorder: a new one (``blob`` None), or
+    ``where.write`` continued after its first ``first`` rows from the checkpoint ``blob``."""
+    path, name = where.write, where.final.stem
     writer = None  # this run's results file, once the transient starts
     kept = {}  # where the steps of a run that did not complete are
 
@@ -445,25 +420,12 @@ def _run(case, attrs, where, first, blob, in_process, fmu_dir, fmus, progress, f
         return kept["path"]
 
     with deferred_signals() as received:
-
-        def stop_if_asked(where_: str, writer: ResultsWriter | None = None) -> None:
-            if not received:
-                return
-            sig = signal.Signals(received[0]).name
-            kept = "nothing was written" if writer is None else f"{writer.rows} steps kept in"
-            if writer is not None:
-                kept += " " + str(give_up(stopped_by=f"interrupted by {sig} {where_}",
-                                          interrupted=sig))
-            raise RunInterrupted(received[0], f"interrupted by {sig} {where_}; {kept}")
-
-        master = build_master(case, None, in_process, fmu_dir, fmus)
-        structure = master.structure
+        runner = Runner(spec, received, echo)
         try:
-            stop_if_asked("before the static solution")
-            static, x0, static_mesh, warnings, static_time = _start(master, case, dt,
-                                                                     stop_if_asked, echo)
+            runner.start()
+            static = runner.static()
             if stored_x0 is not None:
-                diff = float(np.abs(x0 - stored_x0).max())
+                diff = float(np.abs(static.x0 - stored_x0).max())
                 if diff > 0.0:
                     print(f"warning: the static solution differs from the stored one by "
                           f"{diff:.3e} m (another code version or machine): the resumed "
@@ -471,63 +433,47 @@ def _run(case, attrs, where, first, blob, in_process, fmu_dir, fmus, progress, f
                           file=sys.stderr, flush=True)
             if blob is not None:
                 try:
-                    master.restore(blob)
+                    runner.master.restore(blob)
                 except Exception as exc:
                     raise RunError(f"--resume {path}: the checkpoint does not restore: "
                                    f"{exc}") from exc
             else:
-                attrs |= {"static_journal": x0, "static_bearing_force": static.bearing_force,
-                          "static_iterations": static.iterations,
-                          "static_mesh_force": static_mesh[0],
-                          "static_transmission_error": static_mesh[1],
-                          "warnings": "\n".join(warnings)}
-            stop_if_asked("after the static solution")
-
-            bar = Progress(n_steps, name, enabled=progress)
-            start_iterations = master.total_iterations
-            start_evals = master.total_bearing_evaluations
-            start_relaxed = master.relaxed_steps
-            t_start = time.perf_counter()
+                attrs |= _static_attributes(static)
+            runner.stop_if_asked("after the static solution")
             try:
                 if blob is None:
-                    writer = ResultsWriter(path, CHANNELS, _with_units(attrs),
+                    writer = ResultsWriter(path, CHANNELS, with_units(attrs),
                                            flush_seconds=flush_seconds,
-                                           checkpoint=master.checkpoint)
+                                           checkpoint=runner.master.checkpoint, dims=dims,
+                                           coords=COORDS)
                 else:
                     writer = ResultsWriter.resume(path, CHANNELS, first, attrs,
                                                   flush_seconds=flush_seconds,
-                                                  checkpoint=master.checkpoint)
+                                                  checkpoint=runner.master.checkpoint)
             except OSError as exc:
                 raise RunError(f"cannot write {path}: {exc}") from None
-            bar.update(first)
-            for i in range(first, n_steps):
-                t = i * dt
-                try:
-                    report = master.step(t, dt)
-                except Exception as exc:
-                    into = give_up(checkpoint=False, stopped_by=f"{type(exc).__name__}: {exc}")
-                    raise RunError(
-                        f"step {i + 1} of {n_steps} (t = {t + dt:.6e} s) failed: {exc}; "
-                        f"the {i} steps computed are in {into}") from exc
-                mesh_force, te, gear_nodes = structure.step_outputs()
-                writer.append(time=(i + 1) * dt, journal_position=report.states[:, :2],
-                              journal_velocity=report.states[:, 2:],
-                              bearing_force=report.bearing_force, mesh_force=mesh_force,
-                              transmission_error=te, gear_nodes=gear_nodes,
-                              iterations=report.iterations)
-                if progress and (i & 63) == 0:
-                    its = (master.total_iterations - start_iterations) / (i + 1 - first)
-                    bar.update(i + 1, f"{its:.2f} it/step")
-                stop_if_asked(f"after step {i + 1} of {n_steps}", writer)
-            wall = time.perf_counter() - t_start
-            its = (master.total_iterations - start_iterations) / max(n_steps - first, 1)
-            bar.update(n_steps, f"{its:.2f} it/step")
-            writer.close(complete=True, wall_time=wall)
+            bar = Progress(spec.n_steps, name, enabled=progress)
+            done = runner.transient(writer, first, bar)
+            writer.close(complete=True, wall_time=done["wall_time"])
             path = where.finish(True)
-        except (RunError, RunInterrupted):
-            if "path" in kept:  # report what the file kept; the run's error comes first
-                with contextlib.suppress(Exception):
-                    _store_report(kept["path"])
+        except Stop as stop:
+            if writer is None:
+                raise stop.message("nothing was written") from None
+            sig = signal.Signals(stop.signum).name
+            into = give_up(stopped_by=f"interrupted by {sig} {stop.where}", interrupted=sig)
+            with contextlib.suppress(Exception):
+                _store_report(into)
+            raise stop.message(f"{writer.rows} steps kept in {into}") from None
+        except StepFailed as failed:
+            into = give_up(checkpoint=False,
+                           stopped_by=f"{type(failed.cause).__name__}: {failed}")
+            with contextlib.suppress(Exception):
+                _store_report(into)
+            raise RunError(
+                f"step {failed.index + 1} of {spec.n_steps} (t = {failed.t + spec.dt:.6e} s) "
+                f"failed: {failed}; the {failed.index} steps computed are in {into}"
+            ) from failed.cause
+        except RunError:
             raise
         except BaseException as exc:  # a bug or a second Ctrl-C: keep the steps all the same
             if writer is not None and "path" not in kept:
@@ -535,11 +481,8 @@ def _run(case, attrs, where, first, blob, in_process, fmu_dir, fmus, progress, f
                     give_up(checkpoint=False, stopped_by=f"{type(exc).__name__}: {exc}")
             raise
         finally:
-            master.close()
-    summary = RunSummary(path, n_steps - first, wall, static_time,
-                         master.total_iterations - start_iterations,
-                         master.total_bearing_evaluations - start_evals, static.iterations, x0,
-                         warnings=warnings, relaxed_steps=master.relaxed_steps - start_relaxed)
+            runner.finish()
+    summary = runner.summary(static, done, path, spec.n_steps - first)
     summary.report = _store_report(path)
     if figures:
         from orchestrator.figures.run import run_figures
@@ -548,27 +491,31 @@ def _run(case, attrs, where, first, blob, in_process, fmu_dir, fmus, progress, f
     return summary
 
 
+def _report_attributes(report: dict) -> dict:
+    return {"dynamic_factor": report["dynamic_factor"],
+            "bearing_force_ptp": report["bearing_force_ptp"],
+            "line_amplitudes": report["line_amplitudes"], "line_orders": report["line_orders"],
+            "line_labels": report["line_labels"], "report_window": report["window_s"]}
+
+
 def _store_report(path: Path) -> dict | None:
-    """:func:`orchestrator.analysis.metrics.run_report` of a closed results file, stored as its root
-    attributes (module docstring); None (nothing stored) below 2 steps."""
+    """:func:`orchestrator.analysis.metrics.run_report` of a closed results file, stored as
+    its root attributes (module docstring); None (nothing stored) below 2 steps."""
     from orchestrator.analysis.metrics import run_report
 
     results = read_results(path)
     if results["time"].size < 2:
         return None
     report = run_report(results)
-    add_attributes(path, **_with_units({
-        "dynamic_factor": report["dynamic_factor"],
-        "bearing_force_ptp": report["bearing_force_ptp"],
-        "line_amplitudes": report["line_amplitudes"], "line_orders": report["line_orders"],
-        "line_labels": report["line_labels"], "report_window": report["window_s"]}))
+    add_attributes(path, **with_units(_report_attributes(report)))
     return report
 
 
 def static_report(case: Case, positions: np.ndarray) -> str:
     """Eccentricity ratio and position of each journal at X0 (clearance units)."""
     lines = []
-    for b, (pos, c) in enumerate(zip(positions, _clearances(case), strict=True)):
+    clearances = [float(c) for c in case["bearings.clearance"]]
+    for b, (pos, c) in enumerate(zip(positions, clearances, strict=True)):
         lines.append(f"bearing {b + 1}: s/C = {pos[0] / c:+.4f}, t/C = {pos[1] / c:+.4f}, "
                      f"eccentricity {math.hypot(*pos) / c:.4f}")
     return "\n".join(lines)

@@ -22,7 +22,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import tempfile
 import time
 from pathlib import Path
 
@@ -83,13 +82,12 @@ def run_point(case_name: str, overrides: dict, periods: int) -> dict:
     """One configuration (on a worker): the run's report and the damped mesh modes."""
     from fmu_src.case import load_case
     from orchestrator.analysis.campbell import linearise
-    from orchestrator.run.runner import run_case
+    from orchestrator.run.runner import simulate_case
+    from orchestrator.run.spec import RunSpec
 
-    case = load_case(case_name, overrides)
+    case = load_case(case_name, {**overrides, "simulation.mesh_periods": periods})
     t0 = time.perf_counter()
-    with tempfile.TemporaryDirectory() as tmp:
-        summary = run_case(case, periods=periods, in_process=True, out_dir=tmp,
-                           progress=False, figures=False)
+    summary = simulate_case(RunSpec.of(case, in_process=True), echo_warnings=False).summary
     wall = time.perf_counter() - t0
     lin = linearise(case, undamped=False)
     d = lin.damped

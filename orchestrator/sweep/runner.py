@@ -27,7 +27,6 @@ import contextlib
 import math
 import signal
 import sys
-import tempfile
 import threading
 import time
 import tomllib
@@ -38,7 +37,8 @@ from pathlib import Path
 import numpy as np
 
 from fmu_src.case import Case, CaseError, load_case, parse_case
-from orchestrator.run.runner import RunError, RunInterrupted, deferred_signals
+from orchestrator.run.progress import RunInterrupted, deferred_signals
+from orchestrator.run.spec import RunError
 from orchestrator.sweep import file as sweep_file
 from orchestrator.sweep.file import DATASETS, field_unit, read_sweep, read_sweep_attrs
 
@@ -127,28 +127,27 @@ def run_point(case, point: SweepPoint, periods: int, steady_periods: int,
     """Run one point and reduce it (executed on a worker). ``case``: the sweep's case as a
     :class:`~fmu_src.case.Case` or its TOML text (never a path); the point's overrides are
     applied here. Never raises (errors are returned) except
-    :class:`~orchestrator.run.runner.RunInterrupted`, a Ctrl-C of a serial sweep."""
-    folder = ""
+    :class:`~orchestrator.run.progress.RunInterrupted`, a Ctrl-C of a serial sweep."""
     try:
         from orchestrator.analysis.metrics import run_metrics, steady_window
-        from orchestrator.run.results import read_results
-        from orchestrator.run.runner import run_case
+        from orchestrator.run.runner import simulate_case
+        from orchestrator.run.spec import RunSpec
 
         if not isinstance(case, Case):  # TOML text; a path would name the client's folders
             if not (isinstance(case, str) and "\n" in case):
                 raise TypeError(f"run_point needs a Case or its TOML text, not {case!r}")
             case = as_case(case)
-        case = case.with_overrides(point.overrides)
+        run = {"simulation.mesh_periods": periods}
+        if point.bearing is not None:
+            run["bearings.model"] = point.bearing
+        case = case.with_overrides(point.overrides | run)
         z1 = case["gear_pair.teeth"][0]
         mesh_period = 2 * math.pi / (case["operation.speed"] * z1)
         steady_n = min(steady_periods, periods)
         steady = steady_n * mesh_period
         t0 = time.perf_counter()
-        with tempfile.TemporaryDirectory() as tmp:
-            folder = tmp
-            s = run_case(case, bearing=point.bearing, periods=periods, in_process=True,
-                         out_dir=tmp, progress=False, figures=False, echo_warnings=False)
-            r = read_results(s.results)
+        result = simulate_case(RunSpec.of(case, in_process=True), echo_warnings=False)
+        s, r = result.summary, result.as_dict()
         metrics = run_metrics(r, steady)
         win = steady_window(r["time"], steady)
         stride = max(1, int(np.count_nonzero(win)) // keep_steps)
@@ -166,8 +165,6 @@ def run_point(case, point: SweepPoint, periods: int, steady_periods: int,
         raise
     except Exception as exc:  # reported, the sweep goes on
         text = f"{type(exc).__name__}: {exc}"
-        if folder:  # the run's file is gone with its temporary folder
-            text = text.replace(folder, "<the point's temporary folder, removed>")
         return {"ok": False, "error": text, "traceback": traceback.format_exc()}
 
 
@@ -237,11 +234,10 @@ def run_sweep(case, points, path: str | Path, periods: int, steady_periods: int 
     ``case``: a :class:`~fmu_src.case.Case`, its TOML text, or a case file / shipped name read
     here (the workers get its content). ``vary_keys``: the fields varied (default: every key the
     points override, in order of appearance). ``worker_timeout`` [s]: stop when no worker is
-    connected to the scheduler for that long. Raises :class:`~orchestrator.run.runner.RunError` if
-    the
-    cluster cannot be reached (nothing written) and :class:`SweepInterrupted` on Ctrl-C (the
+    connected to the scheduler for that long. Raises :class:`~orchestrator.run.spec.RunError` if
+    the cluster cannot be reached (nothing written) and :class:`SweepInterrupted` on Ctrl-C (the
     finished points kept in the file)."""
-    from orchestrator.run.runner import Progress
+    from orchestrator.run.progress import Progress
 
     base = as_case(case)
     points = list(points)
@@ -327,7 +323,7 @@ def _gather(client, base, points, todo, periods, steady_periods, store, bar, don
             scheduler, worker_timeout, progress, asked):
     """Submit the points, store them as they complete; stop when no worker is connected for
     ``worker_timeout`` s, and with KeyboardInterrupt once ``asked`` (the signals received,
-    :func:`orchestrator.run.runner.deferred_signals`) is not empty. Returns (status, message,
+    :func:`orchestrator.run.progress.deferred_signals`) is not empty. Returns (status, message,
     done)."""
     from dask.distributed import wait
 

@@ -83,11 +83,10 @@ def system_from_files(case, gear_fmu, bearing_fmus, bearing_parameters=None):
     return structure, bearings
 
 
-def system_from_case(case, model: str | None = None, fmu_dir=None):
+def system_from_case(case, fmu_dir=None):
     """(FmuStructure, FmuBearings) of a case: the gear-shaft FMU and four instances of the
-    bearing FMU of ``model`` (default ``bearings.model``), from ``fmu_dir`` (default
-    :func:`default_fmu_dir`; built there if missing or stale)."""
-    model = case["bearings.model"] if model is None else model
-    bearing_fmu = fmu_name(model)
+    bearing FMU of its ``bearings.model``, from ``fmu_dir`` (default :func:`default_fmu_dir`;
+    built there if missing or stale)."""
+    bearing_fmu = fmu_name(case["bearings.model"])
     paths = ensure_fmus(["GearShaft", bearing_fmu], fmu_dir)
     return system_from_files(case, paths["GearShaft"], [paths[bearing_fmu]] * 4)

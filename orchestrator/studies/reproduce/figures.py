@@ -14,7 +14,7 @@ from fmu_src.case import load_case
 from fmu_src.examples import HELICAL, SPUR
 from orchestrator.analysis.metrics import fit_ellipse, steady_window
 from orchestrator.figures.base import normalised_spectrum, pyplot
-from orchestrator.run.runner import build_master
+from orchestrator.run.spec import build_master
 
 __all__ = ["draw_all", "has_line"]
 

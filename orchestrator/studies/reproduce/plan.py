@@ -13,7 +13,8 @@ from pathlib import Path
 
 from fmu_src.case import load_case
 from fmu_src.examples import HELICAL, SPUR, helix_overrides
-from orchestrator.run.runner import build_master, run_case
+from orchestrator.run.runner import run_case
+from orchestrator.run.spec import build_master
 from orchestrator.sweep.runner import SweepPoint, run_sweep
 
 __all__ = ["FULL", "QUICK", "Plan", "run_base_cases", "run_parameter_sweeps", "run_table4"]
@@ -56,7 +57,8 @@ def run_base_cases(plan: Plan, out: Path, progress: bool) -> dict:
                              ("helical_hybrid", HELICAL, "hybrid"),
                              ("helical_linear", HELICAL, "linear"),
                              ("helical_lumped", HELICAL, "lumped")):
-        s = run_case(load_case(path), bearing=model, periods=plan.periods, in_process=True,
+        case = load_case(path, {"bearings.model": model, "simulation.mesh_periods": plan.periods})
+        s = run_case(case, in_process=True,
                      out_dir=out / "runs", progress=progress, figures=False,
                      overwrite=True)  # a reproduction regenerates its runs
         runs[key] = s.results.name
@@ -70,12 +72,13 @@ def run_table4(plan: Plan, out: Path, progress: bool) -> list[dict]:
                ("4", "N.L. - M.M.", "fd", 192)]
     rows = []
     for case_no, label, model, nodes in methods:
-        case = load_case(SPUR, {"bearings.nodes": nodes})
-        master = build_master(case, model, in_process=True)
+        periods = plan.fd_periods if model == "fd" else plan.table4_periods
+        case = load_case(SPUR, {"bearings.nodes": nodes, "bearings.model": model,
+                                "simulation.mesh_periods": periods})
+        master = build_master(case, in_process=True)
         master.solve_static()
         ecc = math.hypot(*master.structure.journal_states()[0, :2]) / case["bearings.clearance"][0]
-        periods = plan.fd_periods if model == "fd" else plan.table4_periods
-        s = run_case(case, bearing=model, periods=periods, in_process=True,
+        s = run_case(case, in_process=True,
                      out_dir=out / "runs" / "table4", progress=progress, figures=False,
                      overwrite=True)
         per_step = s.wall_time / s.steps

@@ -1,0 +1,90 @@
+"""What a long run shows and how it stops: the progress line, and SIGINT/SIGTERM held until
+the end of the current step (:class:`RunInterrupted` then carries the shell's exit code)."""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import signal
+import sys
+import threading
+import time
+
+__all__ = ["Progress", "RunInterrupted", "deferred_signals"]
+
+
+class RunInterrupted(RuntimeError):
+    """A run stopped by SIGINT (Ctrl-C) or SIGTERM between two steps; ``exit_code`` is the
+    shell's convention, 128 + the signal number (130, 143)."""
+
+    def __init__(self, signum: int, message: str):
+        super().__init__(message)
+        self.signum = signum
+        self.exit_code = 128 + int(signum)
+
+
+@contextlib.contextmanager
+def deferred_signals(signals=(signal.SIGINT, signal.SIGTERM),
+                     stopping: str = "stopping after the current step"):
+    """Hold SIGINT and SIGTERM in a list instead of raising where they land.
+
+    A KeyboardInterrupt raised inside an FMU's Python code (pythonfmu runs it in this
+    interpreter) is fatal for that FMU and often for the process, and Dask's waits can swallow
+    one; the run (and a sweep's gather loop) checks the list between steps instead and stops
+    cleanly there. ``stopping`` is what the first signal's message says happens next. Only the
+    main thread can install handlers: elsewhere (a Dask worker thread) the list stays empty and
+    signals keep their handlers."""
+    received: list[int] = []
+    if threading.current_thread() is not threading.main_thread():
+        yield received
+        return
+
+    def hold(signum, frame):
+        if not received:
+            print(f"\n{signal.Signals(signum).name} received: {stopping} (again to stop at "
+                  "once)", file=sys.stderr, flush=True)
+        elif signum == signal.SIGINT:  # a second Ctrl-C: the user insists
+            raise KeyboardInterrupt
+        received.append(signum)
+
+    previous = {s: signal.signal(s, hold) for s in signals}
+    try:
+        yield received
+    finally:
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+
+
+class Progress:
+    """A one-line progress display on stderr, refreshed at most every ``every`` seconds; on a
+    stream that is not a terminal (a log file), one line every 10 s instead."""
+
+    def __init__(self, total: int, label: str = "", every: float = 0.5, stream=None,
+                 enabled: bool = True):
+        self.total = total
+        self.label = label
+        self.stream = sys.stderr if stream is None else stream
+        self.tty = bool(getattr(self.stream, "isatty", lambda: False)())
+        self.every = every if self.tty else max(every, 10.0)
+        self.enabled = enabled
+        self.start = time.perf_counter()
+        self._last = -math.inf
+
+    def update(self, done: int, extra: str = "") -> None:
+        if not self.enabled:
+            return
+        now = time.perf_counter()
+        if now - self._last < self.every and done < self.total:
+            return
+        self._last = now
+        elapsed = now - self.start
+        frac = done / self.total if self.total else 1.0
+        eta = elapsed / frac - elapsed if frac > 0 else math.inf
+        bar = "#" * int(30 * frac)
+        line = (f"{self.label} [{bar:<30}] {done}/{self.total} {100 * frac:5.1f} % "
+                f"{elapsed:6.1f} s, {eta:6.1f} s left {extra}")
+        if self.tty:
+            self.stream.write(f"\r{line}   " + ("\n" if done >= self.total else ""))
+        else:
+            self.stream.write(line + "\n")
+        self.stream.flush()

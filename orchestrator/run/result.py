@@ -1,0 +1,125 @@
+"""A run's result in memory: the channels with named dimensions, the settings and the report.
+
+:func:`orchestrator.simulate` returns a :class:`Result`; :meth:`Result.from_file` reads one
+from a results file. The channels and their dimensions are those of
+:mod:`orchestrator.run.channels` (``time``, ``bearing`` 1-4, ``axis`` s/t, ...), and
+:meth:`Result.to_xarray` labels them:
+
+>>> import numpy as np
+>>> r = Result({"time": np.array([1e-4, 2e-4]),
+...             "mesh_force": np.array([2250.0, 2260.0])}, {"case": "demo"})
+>>> r["mesh_force"].max()
+np.float64(2260.0)
+>>> r.to_xarray().mesh_force.sel(time=2e-4).item()
+2260.0
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from orchestrator.run.channels import CHANNELS, COORDS, dims
+
+__all__ = ["MemoryRecorder", "Result"]
+
+
+@dataclass
+class Result:
+    """The channels of a run (``time`` [s] first; arrays with ``time`` as first axis), the run's
+    settings and report (``attrs``: the root attributes a results file would hold, numbers in
+    SI units, each unit in ``<name>_unit``) and, for a run of this process, its
+    :class:`~orchestrator.run.runner.RunSummary` (``summary``; None when read from a file)."""
+
+    channels: dict[str, np.ndarray]
+    attrs: dict = field(default_factory=dict)
+    summary: object = None
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        try:
+            return self.channels[name]
+        except KeyError:
+            raise KeyError(f"no channel {name!r}; the result has "
+                           f"{', '.join(self.channels)}") from None
+
+    @property
+    def time(self) -> np.ndarray:
+        """The end time of each step [s]."""
+        return self.channels["time"]
+
+    @property
+    def report(self) -> dict | None:
+        """:func:`orchestrator.analysis.metrics.run_report` of the run (None below 2 steps)."""
+        return None if self.summary is None else self.summary.report
+
+    def as_dict(self) -> dict:
+        """The form :func:`orchestrator.run.results.read_results` gives (channels, ``units``,
+        ``attrs``), which the analysis functions take."""
+        units = {n: CHANNELS[n][1] if n in CHANNELS else "s" for n in self.channels}
+        return {**self.channels, "units": units, "attrs": dict(self.attrs)}
+
+    def to_xarray(self):
+        """An :class:`xarray.Dataset`: one variable per channel on its named dimensions,
+        the labels of ``bearing``, ``axis``, ``node`` and ``direction`` as coordinates, the
+        units in each variable's ``units`` attribute and the settings as its attributes."""
+        import xarray as xr
+
+        variables = {}
+        for name, values in self.channels.items():
+            if name == "time":
+                continue
+            unit, text = CHANNELS[name][1:]
+            variables[name] = (dims(name), np.asarray(values),
+                               {"units": unit, "description": text})
+        used = {d for name in variables for d in dims(name)}
+        coords = {"time": ("time", self.time, {"units": "s", "description": "end of the step"})}
+        coords |= {d: (d, list(labels)) for d, labels in COORDS.items() if d in used}
+        return xr.Dataset(variables, coords=coords, attrs=_netcdf_attributes(self.attrs))
+
+    @classmethod
+    def from_file(cls, path) -> Result:
+        """The channels and settings of a results file (all the rows written so far)."""
+        from orchestrator.run.results import read_results
+
+        data = read_results(path)
+        attrs = data.pop("attrs")
+        data.pop("units")
+        return cls(data, attrs)
+
+
+def _netcdf_attributes(attrs: dict) -> dict:
+    """Attributes netCDF can hold: numbers, strings and 1-D numeric arrays (a multi-dimensional
+    array, such as the static journal positions, flattened row by row; booleans as 0/1)."""
+    out = {}
+    for key, value in attrs.items():
+        if isinstance(value, (bool, np.bool_)):
+            value = int(value)
+        elif isinstance(value, np.ndarray) and value.ndim > 1:
+            value = value.ravel()
+        out[key] = value
+    return out
+
+
+class MemoryRecorder:
+    """Keeps the rows of a run in memory; the same ``append``/``close`` as
+    :class:`orchestrator.run.results.ResultsWriter`, so the runner writes to either."""
+
+    def __init__(self, channels: dict = CHANNELS, attrs: dict | None = None):
+        self.channel_shapes = {"time": ()} | {n: shape for n, (shape, _, _) in channels.items()}
+        self._rows: dict[str, list] = {n: [] for n in self.channel_shapes}
+        self.attrs = dict(attrs or {})
+        self.rows = 0
+
+    def append(self, **row) -> None:
+        for name, rows in self._rows.items():
+            rows.append(np.array(row[name], dtype=float))
+        self.rows += 1
+
+    def close(self, complete: bool = True, checkpoint: bool = True, **attrs) -> None:
+        self.attrs |= {"complete": bool(complete), **attrs}
+
+    def result(self, summary=None) -> Result:
+        channels = {n: (np.array(rows) if rows else np.empty((0, *self.channel_shapes[n])))
+                    for n, rows in self._rows.items()}
+        return Result(channels, self.attrs, summary)

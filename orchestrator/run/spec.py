@@ -1,0 +1,139 @@
+"""What a run is: the case (which carries every physical and numerical setting, the bearing
+model and the number of mesh periods included), the transport and how many steps.
+
+:class:`RunSpec` is built once from the case (:meth:`RunSpec.of`); the time step, the number
+of steps and the results file's settings attributes all derive from it, so no setting has a
+second carrier. :func:`build_master` builds the master of a case for either transport.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from fmu_src import description
+from fmu_src.case import Case
+from fmu_src.units import symbol
+from orchestrator.coupling.inprocess import InProcessStructure, ModelBearings
+from orchestrator.coupling.master import Master
+
+__all__ = ["ATTRIBUTE_UNITS", "RunError", "RunSpec", "build_master", "check_periods",
+           "with_units"]
+
+
+class RunError(RuntimeError):
+    """A run that stopped; the message says where and which file keeps the computed steps."""
+
+
+def check_periods(periods) -> int:
+    """``periods`` (``--periods``, a case's ``simulation.mesh_periods``) as a whole number of
+    mesh periods >= 1; RunError naming the value otherwise."""
+    if isinstance(periods, bool) or not isinstance(periods, (int, np.integer)) or periods < 1:
+        raise RunError(f"--periods {periods!r}: need a whole number of mesh periods >= 1")
+    return int(periods)
+
+
+@dataclass(frozen=True)
+class RunSpec:
+    """One run: ``case`` (checked, with every override applied), the transport (``in_process``;
+    through FMUs ``fmus`` names FMU files of the user's own, else ``fmu_dir`` the folder of
+    the built ones) and ``steps`` (None: all of ``simulation.mesh_periods``)."""
+
+    case: Case
+    in_process: bool = False
+    fmus: dict | None = None
+    fmu_dir: Path | str | None = None
+    steps: int | None = None
+
+    @classmethod
+    def of(cls, case: Case, in_process: bool = False, fmus: dict | None = None,
+           fmu_dir=None, steps: int | None = None) -> RunSpec:
+        """The spec of a case, its number of periods checked (:func:`check_periods`)."""
+        check_periods(case["simulation.mesh_periods"])
+        if steps is not None and (isinstance(steps, bool) or int(steps) < 1):
+            raise RunError(f"steps = {steps!r}: need at least one step")
+        return cls(case, in_process, fmus, fmu_dir, None if steps is None else int(steps))
+
+    @property
+    def dt(self) -> float:
+        """The time step [s]: a mesh period / ``simulation.steps_per_mesh_period``."""
+        return description.time_step(self.case)
+
+    @property
+    def n_steps(self) -> int:
+        return (self.case["simulation.mesh_periods"] * self.case["simulation.steps_per_mesh_period"]
+                if self.steps is None else self.steps)
+
+    @property
+    def label(self) -> str:
+        """The bearing model's name, or the stem of a bearing FMU of the user's own."""
+        return (self.case["bearings.model"] if self.fmus is None
+                else Path(self.fmus["bearings"][0]).stem)
+
+    def attributes(self) -> dict:
+        """The settings stored as root attributes of the results file (numbers in SI units;
+        :func:`with_units` adds the units)."""
+        case = self.case
+        return {
+            "kind": "run", "case": case["case.name"], "case_file": str(case.source),
+            "case_toml": case.to_toml(), "bearing_model": self.label,
+            "mode": "in-process" if self.in_process else "fmu",
+            "bearing_fmu": ("" if self.fmus is None
+                            else str(Path(self.fmus["bearings"][0]).resolve())),
+            "dt": self.dt, "steps_per_mesh_period": case["simulation.steps_per_mesh_period"],
+            "mesh_periods": case["simulation.mesh_periods"], "steps_total": self.n_steps,
+            "speed": case["operation.speed"], "speeds": description.bearing_speeds(case),
+            "teeth": list(case["gear_pair.teeth"]), "torque": case["operation.torque"],
+            "unbalance": list(case["operation.unbalance"]),
+            "clearance": [float(c) for c in case["bearings.clearance"]],
+            "tolerance": case["simulation.tolerance"], "interrupted": "", "stopped_by": "",
+        }
+
+
+#: units of the numeric root attributes, stored beside each as ``<name>_unit``
+ATTRIBUTE_UNITS = {
+    "dt": symbol("time"), "speed": symbol("angular_speed"),
+    "speeds": symbol("angular_speed"), "torque": symbol("torque"),
+    "unbalance": symbol("length"), "clearance": symbol("length"),
+    "static_journal": symbol("length"), "static_bearing_force": symbol("force"),
+    "static_mesh_force": symbol("force"), "static_transmission_error": symbol("length"),
+    "wall_time": symbol("time"), "dynamic_factor": symbol("dimensionless"),
+    "bearing_force_ptp": symbol("force"), "line_amplitudes": symbol("force"),
+    "line_orders": symbol("dimensionless"), "report_window": symbol("time"),
+}
+
+
+def with_units(attrs: dict) -> dict:
+    """``attrs`` and the unit of each that has one, as ``<name>_unit``."""
+    return attrs | {f"{k}_unit": ATTRIBUTE_UNITS[k] for k in attrs if k in ATTRIBUTE_UNITS}
+
+
+def build_master(case: Case, in_process: bool = False, fmu_dir: Path | str | None = None,
+                 fmus: dict | None = None) -> Master:
+    """The master of a case with its two slaves (``master.structure``, ``master.bearings``).
+
+    In-process the physics objects of :mod:`fmu_src.description` are driven directly; through
+    FMUs the bearing FMU of the case's ``bearings.model`` and the gear-shaft FMU are taken from
+    ``fmu_dir`` (default: the per-user cache; built there if missing), or ``fmus`` names the
+    files: ``{"gear": path, "bearings": [4 paths], "bearing_parameters": [4 dicts]
+    (optional)}`` (an SSP's, or a bearing FMU of the user's own). Release the slaves with
+    :meth:`orchestrator.coupling.master.Master.close`.
+    """
+    tol = case["simulation.tolerance"]
+    max_it = case["simulation.max_iterations"]
+    if in_process:
+        structure = InProcessStructure(description.structure(case))
+        bearings = ModelBearings(description.bearing_models(case), description.BEARING_FRAMES,
+                                 description.bearing_speeds(case))
+    elif fmus is not None:
+        from orchestrator.coupling import fmi
+
+        structure, bearings = fmi.system_from_files(case, fmus["gear"], fmus["bearings"],
+                                                    fmus.get("bearing_parameters"))
+    else:
+        from orchestrator.coupling import fmi
+
+        structure, bearings = fmi.system_from_case(case, fmu_dir=fmu_dir)
+    return Master(structure, bearings, tol, max_it)
