@@ -4,9 +4,9 @@ copy of that code.
 numba caches a compiled kernel beside its source and, to decide whether the entry is stale,
 looks at that one file only. A kernel that calls or inlines functions of other files (the
 hybrid kernels call the Ritz, LCP and Jacobian kernels and inline :mod:`bearing_fmu.reynolds`;
-the structure step calls the mesh and Newmark kernels) kept its old compiled body after one of
-those files changed: a run then computed with code that was no longer there, and its last
-digits depended on what the cache held.
+the structure step calls the mesh and Newmark kernels) keeps its stale compiled body after one
+of those files changes: a run then computes with code that is no longer there, and its last
+digits depend on what the cache holds.
 
 :func:`install` (called first by each package's ``__init__``) puts a locator in front of
 numba's own: a kernel of ``bearing_fmu``, ``gear_fmu`` or ``fmu_src`` is cached in

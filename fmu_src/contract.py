@@ -255,7 +255,7 @@ def pack_laws(laws: AffineLaws, out: np.ndarray) -> None:
 
 @njit(cache=True)
 def _pack(states, force, kb, cb, out):
-    """:func:`pack_laws` on the arrays, compiled (a numpy slice per block cost 10 us)."""
+    """:func:`pack_laws` on the arrays, compiled (a numpy slice per block pays a call each)."""
     for j in range(4):
         for r in range(2):
             out[j, r] = force[j, r]

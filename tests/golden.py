@@ -1,4 +1,4 @@
-"""The golden run and its physics tolerance (DESIGN.md section 6; no tests here).
+"""The golden run and its physics tolerance (docs/design.md section 6; no tests here).
 
 The fixture ``tests/data/golden_spur.json`` holds the paper's spur case (hybrid bearings) over
 :data:`PERIODS` mesh periods at the shipped step T/32 and at T/64, for the shipped settings and

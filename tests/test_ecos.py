@@ -127,8 +127,7 @@ def test_ecos_runs_the_ssp_as_a_jacobi_master_would(ecos_python):
     """ecos's trajectories equal the emulated Jacobi scheme's to round-off over 64 steps, not
     to the bit: the hybrid film solver starts from its last solution, and ecos calls the
     bearing FMUs in its own sequence (measured 6.9e-13 relative to the largest position,
-    9.0e-11 velocities; 1.2e-12 and 8.4e-11 before the kernels' arithmetic was made
-    deterministic; asserted with a margin of 3 on the larger)."""
+    9.0e-11 velocities; asserted with a margin of 3 on the larger)."""
     x, _ = ecos_python
     ref = jacobi(STEPS)
     scale = np.abs(ref[:, :, :2]).max()

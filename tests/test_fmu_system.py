@@ -117,7 +117,7 @@ def test_a_bearing_fmu_without_the_minimal_contract_is_refused(fmu_dir):
 
 def test_closed_bearing_fmus_refuse_to_evaluate(fmu_dir):
     """The bearing set reads each law into a buffer of its own: once its FMUs are freed, an
-    evaluation is an FmuError, not the last laws read (nor empty arrays, as before)."""
+    evaluation is an FmuError, not the last laws read nor empty arrays."""
     r = run_here(f"""
         import json
         import numpy as np
@@ -297,8 +297,8 @@ def test_ctrl_c_and_sigterm_stop_a_fmu_run_cleanly(fmu_dir, tmp_path):
 
 def test_fmus_built_after_an_fmu_was_loaded_carry_their_binaries(fmu_dir, tmp_path):
     """pythonfmu's library puts an instantiated FMU's resources first on sys.path, where a
-    pythonfmu FMU carries a copy of pythonfmu's modules without binaries: once an FMU had been
-    loaded in a process that had not imported pythonfmu, FMUs built there had no binary.
+    pythonfmu FMU carries a copy of pythonfmu's modules without binaries: once an FMU is loaded
+    in a process that has not imported pythonfmu, that copy is the one FMUs built there get.
     Through this package's FMU instances they build whole; after an FMU loaded by fmpy alone,
     the build stops with the reason instead."""
     out = run_isolated(f"""

@@ -1,8 +1,9 @@
 """The FMUs' native layer builds from the running interpreter, whatever else is on PATH, and
 from pythonfmu's pristine sources with this project's patch series applied exactly.
 
-Under pyenv, CMake's FindPython found a shim's ``python3.13-config`` before the interpreter it
-was given and the build failed; the FMUs then fell back, silently, to pythonfmu's own library.
+Under pyenv, CMake's FindPython finds a shim's ``python3.X-config`` before the interpreter it
+is given and the build fails; the FMUs would then fall back, silently, to pythonfmu's own
+library.
 A patch that no longer fits its upstream must stop the build, not apply approximately.
 """
 

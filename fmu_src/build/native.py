@@ -16,7 +16,8 @@ part comes from and how to update it) holds:
     that cannot be computed), the reason being in the FMU log. The library sets
     ``_fmi_status_protocol = True`` on the slave so that the slave knows it may do so;
   - the interpreter is never finalised by the library (the exit-time abort of C++ hosts);
-  - a borrowed reference is no longer released (the reason for ``pin_namespace``);
+  - a borrowed reference is not released (upstream releases it: the reason for
+    ``pin_namespace``);
   - the interpreter, when the library starts it (a C/C++ host), leaves the host's signal
     handlers alone (``Py_InitializeEx(0)``);
   - CMake takes the Python of the build from this interpreter's ``sysconfig``, and builds into

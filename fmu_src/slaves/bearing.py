@@ -157,8 +157,8 @@ class BearingSlave(ContractSlave):
         self._model.evaluate_global(q, state, v["omega"], self._out)
         v.update(zip(_LAW_NAMES, self._out_flat.tolist(), strict=True))
         v.update(zip(EVAL_NAMES, s, strict=True))
-        # the local position as the models form it (a numpy product of a 2 x 2 matrix cost
-        # 10 us here, a third of a hybrid evaluation, and rounded differently through BLAS)
+        # the local position as the models form it (a numpy product of a 2 x 2 matrix would
+        # cost a large share of a hybrid evaluation, and round differently, through BLAS)
         x, y, _, _ = state_to_local(q, state)
         v["eccentricity"] = math.hypot(x, y) / v["C"]
         v["n_solves"] = int(v["n_solves"]) + 1

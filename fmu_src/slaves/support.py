@@ -40,7 +40,7 @@ def pin_namespace(namespace: dict, count: int = 10_000) -> None:
     """Hold ``count`` extra references to a slave script's module namespace.
 
     pythonfmu 0.7.0's library drops one reference to the slave module's ``__dict__`` each time
-    an instance is created (a borrowed reference released; fixed in the patched library): the
+    an instance is created (a borrowed reference released; the patched library keeps it): the
     second instantiation of the same FMU in one process frees the namespace, then fails with
     "module has no attribute" or corrupts the heap. Every slave script calls this once at
     import; 10,000 instances per process are then safe.

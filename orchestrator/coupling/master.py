@@ -2,7 +2,7 @@
 
 The structure slave owns (X, Xdot, Xddot) and advances one Newmark step for given affine
 bearing laws ``F = F0 - Kb X - Cb Xdot`` (global frame, one per bearing). The bearing slaves
-are algebraic: journal state -> film force, Kb, Cb. One coupled step (DESIGN.md section 4):
+are algebraic: journal state -> film force, Kb, Cb. One coupled step (docs/design.md section 4):
 
 1. save the structure state;
 2. set the affine laws linearised at the last iterate; ``do_step``;

@@ -11,7 +11,7 @@ Runs (all in-process slaves; the FMU path is checked equal to it by the test sui
   helical speed x {lumped, linear, hybrid} (Fig. 16).
 
 Then every figure is drawn and ``report.md`` puts each next to what the paper states, with our
-numbers and the checks of issue 5 (pass/fail, never tuned). ``--quick`` uses fewer periods,
+numbers and checks of the paper's claims (pass/fail, never tuned). ``--quick`` uses fewer periods,
 speeds and parameter values so that it ends in minutes; its results are not steady state and
 say so.
 """
