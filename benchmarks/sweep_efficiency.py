@@ -17,7 +17,7 @@ import tempfile
 
 import numpy as np
 
-from orchestrator.sweep.runner import SweepPoint, run_sweep
+from orchestrator.sweeps.runner import SweepPoint, run_sweep
 
 CASE = "baguet2010_spur"
 

@@ -11,34 +11,30 @@ Run: ``python examples/ex03_coupled_run.py`` (a few seconds after numba's first 
 from __future__ import annotations
 
 import math
-import tempfile
 
 import numpy as np
 
+import orchestrator as gsb
 from fmu_src import description
-from fmu_src.examples import paper_case
 from orchestrator.analysis.metrics import run_metrics, steady_window
-from orchestrator.run.results import read_results
-from orchestrator.run.runner import run_case
 
 
 def main(periods: int = 64, bearing: str = "hybrid", **overrides) -> dict:
     """The run's figures; ``overrides``: case fields (e.g. ``**{"simulation.locate_contact":
     False}``)."""
-    case = paper_case(**overrides)
+    case = gsb.load_case("baguet2010_spur", overrides)
     z1 = case["gear_pair.teeth"][0]
     window = 2 * z1 * description.mesh_period(case)  # two pinion revolutions [s]
-    with tempfile.TemporaryDirectory() as tmp:
-        run = case.with_overrides({"bearings.model": bearing, "simulation.mesh_periods": periods})
-        s = run_case(run, in_process=True, out_dir=tmp, progress=False, figures=False)
-        r = read_results(s.results)
+    result = gsb.simulate(case, periods, bearing, in_process=True, progress=False)
+    r = result.as_dict()
     metrics = run_metrics(r, window)
-    win = steady_window(r["time"], window)
+    win = steady_window(result.time, window)
+    s = result.summary
     return {"steps": s.steps, "wall_time_s": s.wall_time,
             "iterations_per_step": s.iterations_per_step,
-            "static_bearing_force_N": np.asarray(r["attrs"]["static_bearing_force"]),
+            "static_bearing_force_N": np.asarray(result.attrs["static_bearing_force"]),
             "R": metrics["R"], "bearing1_ptp_N": float(metrics["force_ptp"][0]),
-            "mean_mesh_force_N": float(r["mesh_force"][win].mean()),
+            "mean_mesh_force_N": float(result["mesh_force"][win].mean()),
             "static_tooth_load_N": case["operation.torque"] / description.gear_pair(
                 case).base_radius[0]}
 

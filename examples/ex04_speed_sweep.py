@@ -3,7 +3,7 @@
 Each point is a full coupled run (hybrid bearings, in-process) at another input speed, reduced
 to the dynamic tooth load factor R and the peak-to-peak of the bearing forces over its last two
 pinion revolutions. ``scheduler="none"`` runs the points one after the other here; without it
-they go to a Dask LocalCluster (``orchestrator.sweep.runner``), or to any cluster by address.
+they go to a Dask LocalCluster (``orchestrator.sweeps.runner``), or to any cluster by address.
 
 Run: ``python examples/ex04_speed_sweep.py``
 """
@@ -13,7 +13,8 @@ from __future__ import annotations
 import tempfile
 from pathlib import Path
 
-from orchestrator.sweep.runner import SweepPoint, read_sweep, run_sweep
+import orchestrator as gsb
+from orchestrator.sweeps.file import read_sweep
 
 SPEEDS = (250.0, 325.0, 400.0)  # rad/s
 
@@ -21,11 +22,11 @@ SPEEDS = (250.0, 325.0, 400.0)  # rad/s
 def main(speeds=SPEEDS, periods: int = 64, scheduler: str | None = "none",
          overrides: dict | None = None) -> list[dict]:
     """One dict per speed; ``overrides``: further case fields for every point."""
-    points = [SweepPoint({"operation.speed": w, **(overrides or {})}, "hybrid", f"{w:g} rad/s")
-              for w in speeds]
+    case = gsb.load_case("baguet2010_spur", overrides)
     with tempfile.TemporaryDirectory() as tmp:
-        res = run_sweep("baguet2010_spur", points, Path(tmp) / "sweep.h5", periods=periods,
-                        steady_periods=52, scheduler=scheduler, progress=False)
+        res = gsb.sweep(case, {"operation.speed": list(speeds)}, Path(tmp) / "sweep.h5",
+                        periods, bearings=["hybrid"], steady_periods=52, scheduler=scheduler,
+                        progress=False)
         data = read_sweep(res.path)
     return [{"speed_rad_s": w, "R": float(d["R"]), "force_ptp_N": d["force_ptp"],
              "mean_mesh_force_N": float(d["mesh_force"].mean()), "error": d["error"]}

@@ -5,17 +5,22 @@
 >>> result["journal_position"].shape                               # doctest: +SKIP
 (2048, 4, 2)
 
-The API (:mod:`orchestrator.api`):
+The API (:mod:`orchestrator.api`), importable from ``orchestrator``:
 
-* :func:`load_case`, :func:`shipped_cases`: a case file or a shipped case, checked;
-* :func:`simulate`: a run in memory, :class:`Result` (channels with named dimensions,
-  ``to_xarray()``), :func:`read_result` for a results file;
-* :func:`sweep`: a parametric sweep on Dask; :func:`modes`: the linearised system at X0;
-* :class:`Case`, :class:`CaseError`, :class:`RunError`, :class:`RunInterrupted`.
+* ``load_case``, ``shipped_cases``: a case file or a shipped case, checked
+  (:func:`fmu_src.case.load_case`, :func:`fmu_src.case.shipped_cases`);
+* ``simulate``: a run kept in memory (:func:`orchestrator.api.simulate`), its ``Result``
+  (:class:`orchestrator.run.result.Result`: channels with named dimensions, ``to_xarray()``),
+  and ``read_result`` for a results file (:func:`orchestrator.api.read_result`);
+* ``sweep``: a parametric sweep on Dask (:func:`orchestrator.api.sweep`); ``modes``: the
+  linearised system at X0 (:func:`orchestrator.api.modes`);
+* ``Case``, ``CaseError`` (:mod:`fmu_src.case`), ``RunError``
+  (:class:`orchestrator.run.spec.RunError`), ``RunInterrupted``
+  (:class:`orchestrator.run.progress.RunInterrupted`).
 
 Subpackages, one concern each: :mod:`~orchestrator.coupling` (the master, in-process and FMI
 transports), :mod:`~orchestrator.run` (a run's life cycle, results files),
-:mod:`~orchestrator.analysis`, :mod:`~orchestrator.figures`, :mod:`~orchestrator.sweep`,
+:mod:`~orchestrator.analysis`, :mod:`~orchestrator.figures`, :mod:`~orchestrator.sweeps`,
 :mod:`~orchestrator.cli` (the ``gsb`` command), :mod:`~orchestrator.studies`.
 """
 

@@ -5,8 +5,9 @@
 >>> case["operation.speed"]  # SI units: rad/s
 325.0
 
-``gsb.simulate(case, periods=64)`` runs it and returns a :class:`~orchestrator.run.result.
-Result`; ``result["journal_position"]`` is an array (time, bearing, axis) [m] and
+``gsb.simulate(case, periods=64)`` runs it and returns a
+:class:`~orchestrator.run.result.Result`; ``result["journal_position"]`` is an array (time,
+bearing, axis) [m] and
 ``result.to_xarray()`` the same labelled. :func:`sweep` runs a parametric sweep on Dask and
 :func:`modes` linearises a case about its static solution.
 """
@@ -47,7 +48,7 @@ def simulate(case, periods: int | None = None, bearing: str | None = None, *,
     Parameters
     ----------
     case : Case or str or path
-        A case (:func:`load_case`), the name of a shipped case or a case file.
+        A case (:func:`fmu_src.case.load_case`), the name of a shipped case or a case file.
     periods : int, optional
         Mesh periods to simulate (the case's ``simulation.mesh_periods``).
     bearing : str, optional
@@ -107,9 +108,9 @@ def sweep(case, vary: dict, path: str | Path, periods: int, bearings=None,
     ...}``, values as in a case file) and of ``bearings`` (default: the case's model), each an
     in-process run of ``periods`` mesh periods on Dask (``scheduler``: a cluster's address;
     default: ``n_workers`` local processes), written to the sweep file ``path`` as the points
-    complete. Returns :class:`orchestrator.sweep.runner.SweepResult`; ``gsb plot path`` draws
+    complete. Returns :class:`orchestrator.sweeps.runner.SweepResult`; ``gsb plot path`` draws
     its figures."""
-    from orchestrator.sweep.runner import SweepPoint, run_sweep
+    from orchestrator.sweeps.runner import SweepPoint, run_sweep
 
     keys = list(vary)
     models = [None] if bearings is None else list(bearings)

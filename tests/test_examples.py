@@ -25,7 +25,7 @@ def load(name: str):
 
 def test_every_example_is_checked_here():
     checked = {"ex01_bearing_calculator", "ex02_paper_modes", "ex03_coupled_run",
-               "ex04_speed_sweep"}
+               "ex04_speed_sweep", "ex05_orbit"}
     assert {p.stem for p in EXAMPLES} == checked
 
 
@@ -101,3 +101,26 @@ def test_ex04_speed_sweep():
     at325 = next(p for p in points if p["speed_rad_s"] == 325.0)
     assert at325["R"] == r3["R"] and at325["force_ptp_N"][0] == r3["bearing1_ptp_N"]
     print("\nex04: R " + ", ".join(f"{p['speed_rad_s']:g} rad/s {p['R']:.3f}" for p in points))
+
+
+def test_ex05_orbit_through_the_fmus_equals_the_in_process_run(fmu_dir, tmp_path):
+    """The ten-line API script: 64 mesh periods through the FMUs, kept in memory, the orbit
+    drawn. Its journal positions equal an in-process run of the same case bit for bit (the
+    transports run the same code on the same numbers), stay inside the clearance (110 um,
+    eccentricity < 1) and the labelled selection is the raw array's bearing 1."""
+    ex = load("ex05_orbit")
+    png = tmp_path / "orbit.png"
+    result = ex.main(png, fmu_dir=fmu_dir, progress=False)
+    assert png.stat().st_size > 10_000
+    assert result["journal_position"].shape == (64 * 32, 4, 2)
+    assert result.attrs["mode"] == "fmu"
+    import orchestrator as gsb
+
+    here = gsb.simulate("baguet2010_spur", periods=64, in_process=True, progress=False)
+    assert np.array_equal(here["journal_position"], result["journal_position"])
+    ds = result.to_xarray()
+    assert np.array_equal(ds.journal_position.sel(bearing=1, axis="t").values,
+                          result["journal_position"][:, 0, 1])
+    clearance = np.asarray(result.attrs["clearance"])
+    ecc = np.hypot(*np.moveaxis(result["journal_position"], -1, 0)) / clearance
+    assert ecc.max() < 1.0

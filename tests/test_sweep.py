@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from orchestrator.analysis.metrics import fit_ellipse, steady_window
-from orchestrator.sweep.runner import SweepPoint, read_sweep, read_sweep_attrs, run_sweep
+from orchestrator.sweeps.runner import SweepPoint, read_sweep, read_sweep_attrs, run_sweep
 
 SPUR = "baguet2010_spur"
 

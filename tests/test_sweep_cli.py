@@ -21,7 +21,7 @@ import pytest
 
 from fmu_src.case import load_case, parse_case, shipped_cases
 from orchestrator.cli import main
-from orchestrator.sweep.runner import DATASETS, point_spectrum, read_sweep_attrs
+from orchestrator.sweeps.runner import DATASETS, point_spectrum, read_sweep_attrs
 
 SPUR = "baguet2010_spur"
 TINY = ["--periods", "2", "--set", "simulation.steps_per_mesh_period=16", "--bearing", "linear"]
@@ -167,7 +167,7 @@ def test_order_spectrum_of_a_synthetic_force_recovers_its_lines():
 def test_a_worker_takes_the_case_content_never_a_path():
     """What a worker runs: a Case or its TOML text (reloaded bit for bit); a path, which would
     name the client's folders, is refused as the point's error."""
-    from orchestrator.sweep.runner import SweepPoint, as_case, run_point
+    from orchestrator.sweeps.runner import SweepPoint, as_case, run_point
 
     case = load_case(SPUR, {"simulation.steps_per_mesh_period": 16})
     assert as_case(case.to_toml()).values == case.values

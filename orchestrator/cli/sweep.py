@@ -3,7 +3,7 @@
 The points are the Cartesian product of the ``--vary`` values and the ``--bearing`` models; each
 point's case is built and checked here before anything is submitted (a bad value stops the
 command with exit 2, naming the option, the value and the limit). The workers get the case's
-content, never a path (:mod:`orchestrator.sweep.runner`). The sweep file is
+content, never a path (:mod:`orchestrator.sweeps.runner`). The sweep file is
 ``OUT/<case>_sweep_<hash>.h5``, the hash of the effective case, the varied values, the bearing
 models and the periods; its figures go to ``OUT/<file stem>/``
 (:func:`orchestrator.figures.sweep.sweep_figures`).
@@ -177,7 +177,7 @@ def _bearings(text: str | None, case) -> list[str]:
 
 
 def _fmt(key: str, value) -> str:
-    from orchestrator.sweep.file import field_unit
+    from orchestrator.sweeps.file import field_unit
 
     unit = field_unit(key)
     return f"{key.split('.')[-1]} {value:g}{' ' + unit if unit not in ('', '1') else ''}"
@@ -195,7 +195,7 @@ def _plan(args):
     """The checked inputs: (case, vary [(key, values)], bearings, points, periods, steady)."""
     from fmu_src.case import load_case
     from orchestrator.run.spec import check_periods
-    from orchestrator.sweep.runner import SweepPoint, check_point
+    from orchestrator.sweeps.runner import SweepPoint, check_point
 
     case = load_case(args.case, dict(args.overrides))
     vary = []
@@ -252,7 +252,7 @@ def _checks(args) -> None:
 
 
 def sweep(args) -> int:
-    from orchestrator.sweep.runner import run_sweep
+    from orchestrator.sweeps.runner import run_sweep
 
     _checks(args)
     case, vary, bearings, points, periods, steady = _plan(args)

@@ -1,4 +1,4 @@
-"""Figures of a sweep file (``gsb sweep``, :mod:`orchestrator.sweep.runner`).
+"""Figures of a sweep file (``gsb sweep``, :mod:`orchestrator.sweeps.runner`).
 
 :func:`sweep_figures` draws, against the pinion speed when the sweep varies it (else against
 the first varied field):
@@ -108,7 +108,7 @@ def sweep_figures(path, out_dir=None) -> list[Path]:
 
     from orchestrator.analysis.metrics import stored_case
     from orchestrator.figures.base import pyplot
-    from orchestrator.sweep.file import read_sweep, read_sweep_attrs
+    from orchestrator.sweeps.file import read_sweep, read_sweep_attrs
 
     path = Path(path)
     out_dir = path.parent / path.stem if out_dir is None else Path(out_dir)

@@ -1,6 +1,6 @@
 """A run's result in memory: the channels with named dimensions, the settings and the report.
 
-:func:`orchestrator.simulate` returns a :class:`Result`; :meth:`Result.from_file` reads one
+:func:`orchestrator.api.simulate` returns a :class:`Result`; :meth:`Result.from_file` reads one
 from a results file. The channels and their dimensions are those of
 :mod:`orchestrator.run.channels` (``time``, ``bearing`` 1-4, ``axis`` s/t, ...), and
 :meth:`Result.to_xarray` labels them:

@@ -4,7 +4,7 @@ A run is a :class:`~orchestrator.run.spec.RunSpec` (the case, which carries ever
 and the transport) taken through the steps of a :class:`Runner`; the rows go to a recorder
 that observes the steps: a results file (:class:`~orchestrator.run.results.ResultsWriter`,
 :func:`run_case`, :func:`resume_run`) or memory (:class:`~orchestrator.run.result.MemoryRecorder`,
-:func:`simulate_case`, behind :func:`orchestrator.simulate`).
+:func:`simulate_case`, behind :func:`orchestrator.api.simulate`).
 
 1. Start: the structure slave and the bearing set, through FMUs (default; fmpy) or in-process
    (:func:`~orchestrator.run.spec.build_master`; the runner sees only the master's
@@ -166,8 +166,9 @@ class Runner:
     the end of initialisation), :meth:`transient` (the coupled steps, each row handed to a
     recorder) and :meth:`finish` (the slaves released).
 
-    ``received``: the signals received so far (:func:`~orchestrator.run.progress.
-    deferred_signals`), checked between two steps (:class:`Stop`); ``echo``: print the
+    ``received``: the signals received so far
+    (:func:`~orchestrator.run.progress.deferred_signals`), checked between two steps
+    (:class:`Stop`); ``echo``: print the
     checks' warnings on stderr."""
 
     def __init__(self, spec: RunSpec, received=(), echo: bool = True):
@@ -181,6 +182,7 @@ class Runner:
             raise Stop(self.received[0], where)
 
     def start(self) -> None:
+        """The master and its two slaves (:func:`~orchestrator.run.spec.build_master`)."""
         s = self.spec
         self.master = build_master(s.case, s.in_process, s.fmu_dir, s.fmus)
         self.stop_if_asked("before the static solution")
@@ -253,6 +255,7 @@ class Runner:
         return done
 
     def finish(self) -> None:
+        """Release the slaves (the FMU instances through FMUs)."""
         if self.master is not None:
             self.master.close()
 
@@ -271,8 +274,9 @@ def _static_attributes(static: Static) -> dict:
 
 
 def simulate_case(spec: RunSpec, progress: bool = False, echo_warnings: bool = True) -> Result:
-    """The run of ``spec`` kept in memory (:func:`orchestrator.simulate`); raises
-    :class:`RunError` or :class:`~orchestrator.run.progress.RunInterrupted` with the steps
+    """The run of ``spec`` kept in memory (:func:`orchestrator.api.simulate`); raises
+    :class:`~orchestrator.run.spec.RunError` or :class:`~orchestrator.run.progress.RunInterrupted`
+    with the steps
     computed so far in the exception's ``result``."""
     from orchestrator.analysis.metrics import run_report
 
@@ -327,7 +331,8 @@ def run_case(case: Case, in_process: bool = False, out_dir: Path | str = "result
 
     ``fmus``: run these FMU files instead of the built ones
     (:func:`~orchestrator.run.spec.build_master`); the results are then named after the
-    bearing FMU file. Raises :class:`RunError` (with the results file that keeps the steps
+    bearing FMU file. Raises :class:`~orchestrator.run.spec.RunError` (with the results file that
+    keeps the steps
     computed) if the static solution or a step fails, and
     :class:`~orchestrator.run.progress.RunInterrupted` after SIGINT or SIGTERM, which stop the
     run between two steps with the results file closed and marked interrupted.

@@ -108,7 +108,7 @@ def run_plan(periods: int, scheduler: str | None = None, workers: int = 2,
     """Every configuration of :data:`PLAN` (Dask), in the plan's order."""
     from dask.distributed import as_completed
 
-    from orchestrator.sweep.runner import _client
+    from orchestrator.sweeps.runner import _client
 
     client, cluster = _client(scheduler, workers, 60.0)
     try:

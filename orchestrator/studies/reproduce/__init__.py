@@ -6,7 +6,7 @@ Runs (all in-process slaves; the FMU path is checked equal to it by the test sui
   (Figs. 5-7, 12-15, 17);
 * Table 4: static eccentricity in bearing 1 against the finite-difference/multigrid reference
   (192 x 32) for each method, and the wall time of the transient per method;
-* sweeps on Dask (:mod:`orchestrator.sweep.runner`): speed x {hybrid, linear} (Fig. 8), torque
+* sweeps on Dask (:mod:`orchestrator.sweeps.runner`): speed x {hybrid, linear} (Fig. 8), torque
   (Fig. 9), unbalance x speed x {hybrid, linear} (Fig. 10), helix angle x speed (Figs. 11, 14),
   helical speed x {lumped, linear, hybrid} (Fig. 16).
 
@@ -34,7 +34,7 @@ from orchestrator.studies.reproduce.plan import (
     run_table4,
 )
 from orchestrator.studies.reproduce.report import json_default, write_report
-from orchestrator.sweep.file import read_sweep
+from orchestrator.sweeps.file import read_sweep
 
 __all__ = ["FULL", "QUICK", "Plan", "draw", "reproduce"]
 

@@ -1,7 +1,7 @@
 """What ``gsb reproduce`` runs: the plan (full or quick) and the runs and sweeps it makes.
 
 Every run is an in-process run of a shipped case (by name: any working directory); the sweeps
-go to Dask (:mod:`orchestrator.sweep.runner`). Results are kept under the output folder (``runs/``,
+go to Dask (:mod:`orchestrator.sweeps.runner`). Results are kept under the output folder (``runs/``,
 ``sweeps/``) before anything is drawn (:mod:`orchestrator.studies.reproduce.figures`).
 """
 
@@ -15,7 +15,7 @@ from fmu_src.case import load_case
 from fmu_src.examples import HELICAL, SPUR, helix_overrides
 from orchestrator.run.runner import run_case
 from orchestrator.run.spec import build_master
-from orchestrator.sweep.runner import SweepPoint, run_sweep
+from orchestrator.sweeps.runner import SweepPoint, run_sweep
 
 __all__ = ["FULL", "QUICK", "Plan", "run_base_cases", "run_parameter_sweeps", "run_table4"]
 

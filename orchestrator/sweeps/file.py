@@ -1,5 +1,5 @@
 """The sweep file: one HDF5 file per sweep, written one point at a time
-(:mod:`orchestrator.sweep.runner`).
+(:mod:`orchestrator.sweeps.runner`).
 
 Between two points the file is closed, complete and readable (``gsb plot`` of a running sweep),
 so a killed client loses no finished point. Every dataset carries ``unit`` and ``description``
@@ -143,7 +143,7 @@ def write_header(path: Path, base: Case, vary_keys, bearings, periods: int,
 def store_point(path: Path, index: int, point, base: Case, vary_keys, result: dict,
                 n_failed: int) -> None:
     """One point's group (module docstring): ``result`` is
-    :func:`orchestrator.sweep.runner.run_point`'s
+    :func:`orchestrator.sweeps.runner.run_point`'s
     (``ok``, ``data`` or ``error``); ``n_failed`` the failed points so far, this one included."""
     with _open(path, "a") as f:
         g = f["points"].create_group(f"{index:04d}")

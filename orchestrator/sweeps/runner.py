@@ -16,7 +16,7 @@ no worker is connected to the scheduler for ``worker_timeout`` seconds the sweep
 finished points are kept, the others recorded as failed with that reason. Ctrl-C
 (KeyboardInterrupt) does the same and raises :class:`SweepInterrupted`.
 
-The sweep's results are one HDF5 file, written one point at a time: :mod:`orchestrator.sweep.file`.
+The sweep's results are one HDF5 file, written one point at a time: :mod:`orchestrator.sweeps.file`.
 """
 
 from __future__ import annotations
@@ -39,8 +39,8 @@ import numpy as np
 from fmu_src.case import Case, CaseError, load_case, parse_case
 from orchestrator.run.progress import RunInterrupted, deferred_signals
 from orchestrator.run.spec import RunError
-from orchestrator.sweep import file as sweep_file
-from orchestrator.sweep.file import DATASETS, field_unit, read_sweep, read_sweep_attrs
+from orchestrator.sweeps import file as sweep_file
+from orchestrator.sweeps.file import DATASETS, field_unit, read_sweep, read_sweep_attrs
 
 __all__ = ["DATASETS", "SweepInterrupted", "SweepPoint", "SweepResult", "as_case",
            "check_point", "field_unit", "point_spectrum", "read_sweep", "read_sweep_attrs",
@@ -267,7 +267,7 @@ def run_sweep(case, points, path: str | Path, periods: int, steady_periods: int 
     stored: set[int] = set()
 
     def store(i, res):
-        """One point into the file (:func:`orchestrator.sweep.file.store_point`)."""
+        """One point into the file (:func:`orchestrator.sweeps.file.store_point`)."""
         if res["ok"] and res.get("warnings"):
             warned[i] = res["warnings"]
         elif not res["ok"]:
