@@ -1,4 +1,5 @@
-"""Figures of a run (orchestrator.figures.run), ``gsb plot``, and the normalised spectrum of Fig. 7.
+"""Figures of a run (orchestrator.figures.run) and ``gsb plot`` (their spectrum:
+tests/test_spectrum.py).
 
 The results files are synthetic, in the format orchestrator.run.runner writes (channels with a
 ``unit`` attribute, numeric root attributes): the paper's spur case (pinion 325 rad/s,
@@ -12,9 +13,8 @@ import h5py
 import numpy as np
 import pytest
 
-from orchestrator.analysis.metrics import order_amplitude_spectrum
 from orchestrator.cli import main
-from orchestrator.figures.base import normalised_spectrum, pyplot, run_title
+from orchestrator.figures.base import pyplot, run_title
 from orchestrator.figures.run import RUN_FIGURES, make_run_figures
 from orchestrator.run.results import ResultsWriter, read_results
 
@@ -78,34 +78,6 @@ def run_file(tmp_path_factory):
     return _write(tmp_path_factory.mktemp("run") / "spur.h5", 6000, True)
 
 
-def test_spectrum_lines_at_rotation_and_mesh_orders():
-    f_rot, z, dt = 51.7, 26, 1e-5
-    t = np.arange(0, 20 / f_rot, dt)
-    sig = 100 + 3 * np.cos(2 * np.pi * f_rot * t) + 1 * np.cos(2 * np.pi * z * f_rot * t + 0.3)
-    f, a = normalised_spectrum(sig, dt, f_rot)
-    peaks = f[np.argsort(a)[-2:]]
-    np.testing.assert_allclose(sorted(peaks), [1.0, z], atol=0.06)
-    assert abs(a[np.argmin(abs(f - z))] - 1 / 3) < 0.02  # amplitudes 3 and 1
-
-
-def test_order_spectrum_recovers_line_amplitudes_over_a_gear_revolution():
-    """Independent check: a gear revolution is 157 / 26 = 6.04 pinion revolutions (no whole
-    number of periods); the Hann, zero-padded spectrum still reads the peak amplitudes of the
-    1x, 26x and 52x lines. Measured error over phases and start times: 0.036 %; tolerance
-    0.1 %. (Gear 1x, one DFT bin from the mean, reads within 3.5 %: the figure lists the
-    least-squares amplitudes for it.)"""
-    for phase, t0 in [(0.0, 0.0), (1.0, 0.37), (2.5, 1.1)]:
-        t = t0 + np.arange(GEAR_REV_STEPS) * DT
-        sig = (2000 + 150 * np.cos(2 * np.pi * F1 * t + phase)
-               + 40 * np.cos(2 * np.pi * F1 * TEETH[0] / TEETH[1] * t + 1)
-               + 80 * np.cos(2 * np.pi * 26 * F1 * t + 0.3 * phase)
-               + 20 * np.cos(2 * np.pi * 52 * F1 * t))
-        q, a = order_amplitude_spectrum(sig, DT, F1)
-        for order, amplitude in [(1, 150.0), (26, 80.0), (52, 20.0)]:
-            peak = a[abs(q - order) < 0.08].max()
-            assert abs(peak / amplitude - 1) < 1e-3, (order, peak)
-
-
 def test_run_title_names_case_model_speed_torque():
     title = run_title(_attrs(False), 300, "orbits")
     for text in ("baguet2010_spur", "hybrid", "in-process", "325 rad/s", "3104 rpm",
@@ -122,6 +94,10 @@ def test_figures_show_the_run_and_its_lines(run_file):
             title = fig.get_suptitle()
             assert all(s in title for s in ("baguet2010_spur", "hybrid", "325", "220"))
             assert "incomplete" not in title
+        # the spectra's axes state their units: peak amplitude in N against pinion orders
+        spectra = [ax for ax in figures["spectra.png"].axes if ax.get_ylabel()]
+        assert [ax.get_ylabel() for ax in spectra] == ["amplitude [N] (peak)"] * 2
+        assert spectra[-1].get_xlabel().startswith("order [1/pinion rev]")
         # the least-squares amplitudes listed beside the spectra: 150, 80, 40, 120 N
         table = "\n".join(t.get_text() for ax in figures["spectra.png"].axes
                           for t in ax.texts)

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from fmu_src.case import load_case
-from orchestrator.analysis.metrics import order_lines, resolved_lines, run_report
+from orchestrator.analysis.metrics import run_report
+from orchestrator.analysis.spectrum import order_lines, resolved_lines
 from orchestrator.run.results import read_results
 from orchestrator.run.runner import run_case
 from orchestrator.run.spec import RunError

@@ -20,6 +20,7 @@ import numpy as np
 import pytest
 
 from fmu_src.case import load_case, parse_case, shipped_cases
+from orchestrator.analysis.spectrum import PAD
 from orchestrator.cli import main
 from orchestrator.sweeps.runner import DATASETS, point_spectrum, read_sweep_attrs
 
@@ -127,7 +128,8 @@ def test_sweep_file_attributes_units_and_values(dask_sweep):
             orders, spec = g["spectrum_orders"][()], g["spectrum"][()]
             z1 = 26
             assert spec.shape == (4, orders.size) and orders[-1] <= 3.5 * z1
-            np.testing.assert_allclose(np.diff(orders), z1)  # one mesh period: z1 resolution
+            # one mesh period: a resolution of z1, zero-padded PAD times
+            np.testing.assert_allclose(np.diff(orders), z1 / PAD)
             # the window is the steady window (one mesh period < one revolution): order 0 is
             # the mean of ||F_b|| over it
             np.testing.assert_allclose(spec[:, 0], g["force_mean"][()], rtol=1e-12)
@@ -136,8 +138,9 @@ def test_sweep_file_attributes_units_and_values(dask_sweep):
 
 def test_order_spectrum_of_a_synthetic_force_recovers_its_lines():
     """Known lines at orders 1, 2.5, z1, 2 z1, 3 z1 (pinion revolutions) in ||F_b||: the
-    spectrum over the last whole revolutions of the steady window reads them exactly; the
-    samples before the window (a large transient) are left out."""
+    spectrum over the last whole revolutions of the steady window reads them exactly at their
+    orders (on bins: orchestrator.analysis.spectrum.order_spectrum), and the mean at order 0;
+    the samples before the window (a large transient) are left out."""
     case = load_case(SPUR, {"simulation.steps_per_mesh_period": 16})
     z1, per_mesh = 26, 16
     n = 60 * per_mesh  # 60 mesh periods simulated
@@ -153,14 +156,12 @@ def test_order_spectrum_of_a_synthetic_force_recovers_its_lines():
                      axis=-1)
     out = point_spectrum(case, {"time": t, "bearing_force": force}, steady_periods=57)
     orders, spec = out["spectrum_orders"], out["spectrum"]
-    np.testing.assert_allclose(orders, np.arange(orders.size) * 0.5, rtol=0, atol=1e-12)
-    assert orders[-1] == 3.5 * z1
-    expected = np.zeros(orders.size)
-    expected[0] = 500.0
-    for q, a in lines.items():
-        expected[round(2 * q)] = a
-    np.testing.assert_allclose(spec, scale[:, None] * expected[None, :], rtol=0, atol=1e-9)
-    assert np.abs(spec / scale[:, None] - expected).max() < 1e-11
+    step = 0.5 / PAD  # two revolutions, zero-padded PAD times
+    np.testing.assert_allclose(orders, np.arange(orders.size) * step, rtol=1e-12, atol=0)
+    assert orders[-1] == pytest.approx(3.5 * z1, rel=1e-12)
+    for q, a in {0.0: 500.0, **lines}.items():
+        k = round(q / step)
+        np.testing.assert_allclose(spec[:, k] / scale, a, rtol=0, atol=1e-9, err_msg=f"order {q}")
     np.testing.assert_allclose(out["spectrum_window"], [t[n - 2 * z1 * per_mesh - 1], t[-1]])
 
 
@@ -173,7 +174,8 @@ def test_a_worker_takes_the_case_content_never_a_path():
     assert as_case(case.to_toml()).values == case.values
     point = SweepPoint({"operation.speed": 400.0}, "linear")
     res = run_point(case.to_toml(), point, 2, 1)
-    assert res["ok"] and res["data"]["spectrum"].shape == (4, 4)
+    # one mesh period (z1 orders) zero-padded PAD times, orders 0 to 3.5 z1
+    assert res["ok"] and res["data"]["spectrum"].shape == (4, math.floor(3.5 * PAD) + 1)
     res = run_point(str(shipped_cases()[SPUR]), point, 2, 1)
     assert not res["ok"] and "TOML text" in res["error"]
 
@@ -309,7 +311,9 @@ def test_sweep_figures_of_a_two_speed_sweep(dask_sweep, tmp_path, monkeypatch):
         assert SPUR in title and "linear" in title and "torque 220 N m" in title
         assert "unbalance 0.6 / 0.6 mm" in title and "speed" not in title.split(";")[1]
         assert ("pinion speed [rad/s]", "peak-to-peak ||F_b|| [N]") in labels or \
-            ("order [1] (cycles per pinion revolution)", "pinion speed [rad/s]") in labels
+            ("order [1/pinion rev]", "pinion speed [rad/s]") in labels
+    # the waterfall's colour scale: the peak amplitude of every spectrum, in N
+    assert ("", "bearing 1: ||F_b|| amplitude [N] (peak)") in seen["waterfall_bearing1.png"][1]
     # default folder: beside the file, named after its stem
     default = sf.sweep_figures(files[0])
     assert default[0].parent == files[0].with_suffix("")

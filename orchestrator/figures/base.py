@@ -1,6 +1,6 @@
 """What the figures of a run share: matplotlib without a display, the title built from a results
-file's attributes, the arrays and windows of a run (:class:`RunData`), the bearings' styles and
-the spectra (:mod:`orchestrator.figures.run` draws the run's figures with them, and
+file's attributes, the arrays and windows of a run (:class:`RunData`) and the bearings' styles
+(:mod:`orchestrator.figures.run` draws the run's figures with them, and
 :mod:`orchestrator.figures.sweep`, :mod:`orchestrator.analysis.campbell` and
 :mod:`orchestrator.studies.reproduce.figures` use :func:`pyplot`).
 """
@@ -14,9 +14,8 @@ import numpy as np
 
 from orchestrator.analysis.metrics import steady_window
 
-__all__ = ["BEARING_STYLE", "DPI", "FIGSIZE", "SHAFTS", "UM", "RunData", "normalised_spectrum",
-           "num_attr", "pyplot", "run_title", "text_attr",
-           "titled_figure"]
+__all__ = ["AMPLITUDE_LABEL", "BEARING_STYLE", "DPI", "FIGSIZE", "SHAFTS", "UM", "RunData",
+           "num_attr", "order_label", "pyplot", "run_title", "text_attr", "titled_figure"]
 
 FIGSIZE = (11, 8)
 DPI = 120
@@ -25,6 +24,14 @@ UM = 1e6
 #: second of each shaft is dashed with open markers offset by half a marker step
 BEARING_STYLE = [("C0", "-", "o"), ("C1", "--", "s"), ("C2", "-", "^"), ("C3", "--", "v")]
 SHAFTS = (("pinion shaft", (0, 1)), ("gear shaft", (2, 3)))
+#: the amplitude axis of every bearing-force spectrum
+#: (:func:`orchestrator.analysis.spectrum.order_spectrum`)
+AMPLITUDE_LABEL = "amplitude [N] (peak)"
+
+
+def order_label(shaft: str = "pinion") -> str:
+    """The order axis of a spectrum: cycles per revolution of the ``shaft``."""
+    return f"order [1/{shaft} rev]"
 
 
 def pyplot():
@@ -35,19 +42,6 @@ def pyplot():
     import matplotlib.pyplot as plt
 
     return plt
-
-
-def normalised_spectrum(signal, dt: float, rotation_frequency: float):
-    """One-sided amplitude spectrum on the paper's normalised axis (Fig. 7, 15).
-
-    Returns (f_tilde, amplitude / max amplitude), f_tilde = f / rotation_frequency, the mean
-    removed, so a line at f_tilde = 1 is once per revolution and at Z the mesh frequency.
-    """
-    x = np.asarray(signal, dtype=float)
-    x = x - x.mean()
-    amp = np.abs(np.fft.rfft(x)) * 2.0 / len(x)
-    f = np.fft.rfftfreq(len(x), dt) / rotation_frequency
-    return f, amp / max(amp.max(), 1e-300)
 
 
 # ---------------------------------------------------------------------------- attributes
@@ -128,12 +122,14 @@ class RunData:
     def title(self, what: str) -> str:
         return run_title(self.attrs, self.steps, what)
 
-    def long_window(self) -> tuple[np.ndarray, str]:
-        """The last gear revolution (the last half of a shorter run): mask and name."""
+    def long_window(self) -> tuple[np.ndarray, str, float]:
+        """The last gear revolution (the last half of a shorter run), the window of the report
+        of ``gsb run`` (:func:`orchestrator.analysis.metrics.run_report`): mask, name and
+        duration [s]."""
         end = self.time[-1]
         if self.gear_rev is not None and end >= self.gear_rev * (1 - 1e-9):
-            return steady_window(self.time, self.gear_rev), "last gear revolution"
-        return steady_window(self.time, 0.5 * end), "last half of the run"
+            return steady_window(self.time, self.gear_rev), "last gear revolution", self.gear_rev
+        return steady_window(self.time, 0.5 * end), "last half of the run", 0.5 * end
 
     def short_window(self) -> tuple[np.ndarray, str]:
         """The last pinion revolution (the whole run if shorter)."""

@@ -12,9 +12,10 @@
 ``bearing_forces.png``
     ||F_b|| of the four bearings over the last pinion revolution, one panel per shaft;
 ``spectra.png``
-    order spectra of ||F_b|| over the last gear revolution (Hann window, peak amplitude) with
-    the 1x, gear-1x and mesh-order lines marked, and their least-squares amplitudes
-    (:func:`orchestrator.analysis.metrics.order_lines`) listed;
+    order spectra of ||F_b|| over the last gear revolution in peak amplitude
+    (:func:`orchestrator.analysis.spectrum.order_spectrum`, :func:`run_spectrum`) with the 1x,
+    gear-1x and mesh-order lines marked, and their least-squares amplitudes on the same scale
+    (those of the report of ``gsb run``) drawn and listed;
 ``mesh.png``
     transmission error and dynamic mesh force over the last pinion revolution and over the
     whole run (min/max envelope per bin).
@@ -34,24 +35,27 @@ from pathlib import Path
 
 import numpy as np
 
-from orchestrator.analysis.metrics import (
-    order_amplitude_spectrum,
-    order_lines,
+from orchestrator.analysis.spectrum import (
+    PAD,
+    line_amplitudes,
+    order_spectrum,
     pinion_lines,
-    resolved_lines,
+    spectral_resolution,
 )
 from orchestrator.figures.base import (
+    AMPLITUDE_LABEL,
     BEARING_STYLE,
     DPI,
     SHAFTS,
     UM,
     RunData,
+    order_label,
     pyplot,
     titled_figure,
 )
 from orchestrator.run.results import read_results
 
-__all__ = ["RUN_FIGURES", "make_run_figures", "run_figures"]
+__all__ = ["RUN_FIGURES", "make_run_figures", "run_figures", "run_spectrum"]
 
 #: the PNGs :func:`run_figures` writes (and removes first when stale)
 RUN_FIGURES = ("orbits.png", "bearing_forces.png", "spectra.png", "mesh.png")
@@ -111,7 +115,7 @@ def _orbits(plt, run: RunData):
 
     fig = titled_figure(plt, run, "journal-centre orbits")
     axes = fig.subplots(2, 2)
-    win, kind = run.long_window()
+    win, kind, _ = run.long_window()
     span_ms = (run.time[win][-1] - run.time[win][0] + run.dt) * 1e3
     circle = np.linspace(0.0, 2.0 * np.pi, 361)
     insets = []
@@ -214,18 +218,27 @@ def _bearing_forces(plt, run: RunData):
     return fig
 
 
-def _line_table(run: RunData, win) -> tuple[np.ndarray, np.ndarray, list[str]]:
-    """Least-squares peak amplitudes (4, n) [N] of the pinion lines over ``win`` (NaN where
-    the window does not resolve a line), their orders and labels."""
-    orders, labels = pinion_lines(run.teeth)
-    freqs = orders * run.pinion_hz
-    t = run.time[win]
-    duration = t[-1] - t[0] + run.dt
-    ok = resolved_lines(freqs, duration, run.dt)
-    amp = np.full((4, orders.size), np.nan)
-    if ok.any() and t.size >= 1 + 2 * ok.sum():
-        amp[:, ok] = order_lines(t, run.force_norm[win], freqs[ok]).T
-    return amp, orders, labels
+def run_spectrum(run: RunData) -> dict:
+    """What ``spectra.png`` draws: the order spectrum of ||F_b|| over the last gear revolution
+    (the last half of a shorter run), ``orders`` (m,) [1/pinion rev] and ``amplitudes``
+    (m, 4) [N] (:func:`~orchestrator.analysis.spectrum.order_spectrum`), and the least-squares
+    peak amplitudes ``lines`` (4, n) [N] of the pinion lines at ``line_orders`` named
+    ``line_labels`` over the same window, as the report of ``gsb run`` computes them (None
+    without the teeth numbers); ``window`` the mask, ``kind`` its name, ``duration`` [s] and
+    ``resolution`` [orders]."""
+    win, kind, duration = run.long_window()
+    orders, amplitudes = order_spectrum(run.force_norm[win], run.dt, run.pinion_hz)
+    out = {"orders": orders, "amplitudes": amplitudes, "window": win, "kind": kind,
+           "duration": duration,
+           "resolution": spectral_resolution(int(win.sum()), run.dt, run.pinion_hz),
+           "lines": None, "line_orders": np.array([1.0]), "line_labels": ["1x"]}
+    if run.teeth is not None:
+        line_orders, labels = pinion_lines(run.teeth)
+        dt_s = (run.time[-1] - run.time[0]) / (run.steps - 1)  # as the report's
+        lines = line_amplitudes(run.time[win], run.force_norm[win], line_orders * run.pinion_hz,
+                                duration, dt_s)
+        out.update(lines=lines.T, line_orders=line_orders, line_labels=labels)
+    return out
 
 
 def _short(value: float) -> str:
@@ -243,15 +256,11 @@ def _spectra(plt, run: RunData):
     grid = fig.add_gridspec(2, 2, width_ratios=[3.3, 1])
     axes = [fig.add_subplot(grid[0, 0])]
     axes.append(fig.add_subplot(grid[1, 0], sharex=axes[0]))
-    win, kind = run.long_window()
-    q, amp = order_amplitude_spectrum(run.force_norm[win], run.dt, run.pinion_hz)
-    duration = (win.sum()) * run.dt
-    if run.teeth is not None:
-        lines, orders, labels = _line_table(run, win)
-        z1 = run.teeth[0]
-    else:
-        lines, orders, labels, z1 = None, np.array([1.0]), ["1x"], 1
-    resolution = 1.0 / (duration * run.pinion_hz)  # orders
+    spec = run_spectrum(run)
+    q, amp, lines = spec["orders"], spec["amplitudes"], spec["lines"]
+    orders, labels, resolution = spec["line_orders"], spec["line_labels"], spec["resolution"]
+    win, kind = spec["window"], spec["kind"]
+    z1 = 1 if run.teeth is None else run.teeth[0]
     q_lo = max(0.6 * min(orders.min(), 1.0), 0.5 * resolution)
     q_hi = min(3.6 * z1, q[-1])
     keep = (q >= q_lo * 0.9) & (q <= q_hi)
@@ -260,7 +269,7 @@ def _spectra(plt, run: RunData):
         for j, b in enumerate(pair):
             colour, ls, marker = BEARING_STYLE[b]
             ax.plot(q[keep], amp[keep, b], color=colour, ls=ls, lw=1.5 if j == 0 else 1.1,
-                    label=f"bearing {b + 1} (Hann spectrum)", zorder=2 + j)
+                    label=f"bearing {b + 1} (spectrum)", zorder=2 + j)
             if lines is not None:
                 ax.plot(orders, lines[b], ls="", marker=marker, color=colour, ms=8,
                         mfc=colour if j == 0 else "none", mew=1.5, zorder=5,
@@ -276,15 +285,15 @@ def _spectra(plt, run: RunData):
         ax.set_ylim(top * 1e-5, top * 3.0)
         ax.set_xlim(q_lo, q_hi)
         ax.grid(True, which="major", lw=0.4, alpha=0.5)
-        ax.set_ylabel("peak amplitude of ||F_b|| [N]")
+        ax.set_ylabel(AMPLITUDE_LABEL)
         ax.set_title(shaft, fontsize=11, loc="left")
         ticks = sorted({*orders[(orders >= q_lo) & (orders <= q_hi)],
                         *[v for v in (0.5, 2, 5, 10) if q_lo <= v <= q_hi]})
         ax.set_xticks(ticks, [f"{v:.3g}" for v in ticks])
         ax.set_xticks([], minor=True)
-    axes[-1].set_xlabel(f"pinion order (f / {run.pinion_hz:.4g} Hz)")
+    axes[-1].set_xlabel(f"{order_label('pinion')} (f / {run.pinion_hz:.4g} Hz)")
     # the table of least-squares amplitudes beside the panels
-    text = [f"{kind}", f"{duration * 1e3:.1f} ms, {win.sum()} steps",
+    text = [f"{kind}", f"{spec['duration'] * 1e3:.1f} ms, {win.sum()} steps",
             f"resolution {resolution:.3g} orders", "",
             "least-squares peak", "amplitudes [N]", ""]
     if lines is not None:
@@ -293,7 +302,8 @@ def _spectra(plt, run: RunData):
             cells = "".join(f" {_short(v):>6}" for v in lines[:, k])
             text.append(f"{label.replace('gear_1x', 'gear1x'):<7}" + cells)
         text += ["", "- : not resolved by the", "    window", "",
-                 "spectrum: Hann window,", "zero-padded x8"]
+                 "spectrum: peak amplitude,", f"Hann window, zero-padded x{PAD}",
+                 "(docs/equations.md)"]
     side = fig.add_subplot(grid[:, 1])
     side.axis("off")
     side.text(0.0, 1.0, "\n".join(text), family="monospace", fontsize=8.5, va="top",

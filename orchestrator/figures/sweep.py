@@ -8,8 +8,9 @@ the first varied field):
   bearings 1-4 differ in colour, line style and marker, so bearings that coincide (1 and 2, 3
   and 4 in the spur case) both stay visible;
 * ``waterfall_bearing1.png``: the order spectrum of ||F_b|| at bearing 1 against the swept
-  value (log colour scale), a panel per curve, with the pinion 1x and mesh orders z1, 2 z1,
-  3 z1 marked.
+  value (peak amplitude, the scale of the run figures: the spectra the points stored,
+  :func:`orchestrator.sweeps.runner.point_spectrum`; log colour scale), a panel per curve, with
+  the pinion 1x and mesh orders z1, 2 z1, 3 z1 marked.
 
 Every figure is titled with the case, the bearing models and the operating values the sweep
 keeps fixed.
@@ -22,9 +23,9 @@ from pathlib import Path
 
 import numpy as np
 
-from orchestrator.figures.base import BEARING_STYLE
+from orchestrator.figures.base import AMPLITUDE_LABEL, BEARING_STYLE, order_label
 
-__all__ = ["BEARING_STYLES", "sweep_figures"]
+__all__ = ["BEARING_STYLES", "sweep_figures", "waterfall_data"]
 
 #: matplotlib styles of bearings 1-4: the colours, lines and markers of the run figures
 #: (:data:`orchestrator.figures.base.BEARING_STYLE`), the second bearing of each shaft with open
@@ -100,6 +101,17 @@ def _grid(plt, n: int, ncols_max: int, width: float, height: float, **kw):
     return fig, flat[:n]
 
 
+def waterfall_data(points, ix: int, bearing: int = 0):
+    """What a waterfall panel draws for one curve of ``points`` (sorted by the swept value,
+    index ``ix`` of ``values``): the swept values (k,), the orders (m,) [1/pinion rev] of the
+    first point's spectrum without order 0 (the mean) and the peak amplitudes (k, m) [N] of
+    ||F_b|| at ``bearing``, each point's stored spectrum read at those orders."""
+    orders = np.asarray(points[0]["spectrum_orders"], dtype=float)
+    amp = np.array([np.interp(orders, p["spectrum_orders"], p["spectrum"][bearing])
+                    for p in points])
+    return np.array([p["values"][ix] for p in points]), orders[1:], amp[:, 1:]
+
+
 def sweep_figures(path, out_dir=None) -> list[Path]:
     """The PNG figures of a sweep file (module docstring) in ``out_dir`` (default: the folder
     named after the file's stem, beside it); returns their paths ([] when no point
@@ -173,10 +185,7 @@ def sweep_figures(path, out_dir=None) -> list[Path]:
     fig, axes = _grid(plt, len(groups), 2, 6.5, 4.6)
     spectra = {}
     for label, pts in groups.items():
-        orders = np.asarray(pts[0]["spectrum_orders"], dtype=float)
-        amp = np.array([np.interp(orders, p["spectrum_orders"], p["spectrum"][0])
-                        for p in pts])
-        spectra[label] = (np.array([p["values"][ix] for p in pts]), orders[1:], amp[:, 1:])
+        spectra[label] = waterfall_data(pts, ix)
     peak = max((float(a.max()) for _, _, a in spectra.values() if a.size), default=0.0)
     norm = LogNorm(vmin=peak * 1e-4, vmax=peak) if peak > 0 else None
     mesh = None
@@ -194,12 +203,13 @@ def sweep_figures(path, out_dir=None) -> list[Path]:
         sec.set_xticks([q for q, _ in marks], [name for _, name in marks], fontsize=8)
         sec.tick_params(direction="inout", length=8)
         ax.set_xlim(0.0, top)
-        ax.set_xlabel("order [1] (cycles per pinion revolution)")
+        ax.set_xlabel(order_label("pinion"))
         ax.set_ylabel(xlabel)
         ax.set_title(label, fontsize=10)
     if mesh is not None:
-        fig.colorbar(mesh, ax=axes, label="amplitude of ||F_b|| at bearing 1 [N]")
-    _suptitle(fig, f"{head}\norder spectrum of the bearing-1 force norm; {window}")
+        fig.colorbar(mesh, ax=axes, label=f"bearing 1: ||F_b|| {AMPLITUDE_LABEL}")
+    _suptitle(fig, f"{head}\norder spectrum of the bearing-1 force norm (peak amplitude, "
+              f"Hann window); {window}")
     paths.append(_save(fig, out_dir / "waterfall_bearing1.png", plt))
     return paths
 

@@ -29,6 +29,7 @@ import numpy as np
 
 from fmu_src.case import FIELDS, Case
 from fmu_src.units import DIMENSIONS, symbol
+from orchestrator.analysis.spectrum import PAD
 
 __all__ = ["DATASETS", "field_unit", "finish", "point_values", "read_sweep", "read_sweep_attrs",
            "store_point", "write_header"]
@@ -58,9 +59,10 @@ DATASETS = {
     "iterations_per_step": (symbol("dimensionless"), "coupled iterations per time step"),
     "spectrum_orders": (symbol("dimensionless"), "orders of the spectrum bins (cycles per "
                                                  "pinion revolution), 0 to 3.5 z1"),
-    "spectrum": (symbol("force"), "single-sided peak amplitude of ||F_b|| at bearings 1-4 per "
-                                  "order (full-resolution steady window, a whole number of "
-                                  "pinion revolutions when it holds one)"),
+    "spectrum": (symbol("force"), "peak amplitude of ||F_b|| at bearings 1-4 per order, "
+                                  f"order 0 the mean (Hann window zero-padded {PAD} times over "
+                                  "the full-resolution steady window, a whole number of "
+                                  "pinion revolutions when it holds one; docs/equations.md)"),
     "spectrum_window": (symbol("time"), "start and end of the spectrum's window"),
 }
 

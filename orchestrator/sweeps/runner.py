@@ -99,13 +99,16 @@ def as_case(case) -> Case:
 
 
 def point_spectrum(case: Case, results: dict, steady_periods: int) -> dict:
-    """Order spectrum of ||F_b|| (bearings 1-4) of a run, from its full-resolution samples.
+    """Order spectrum of ||F_b|| (bearings 1-4) of a run, from its full-resolution samples, in
+    peak amplitude (:func:`orchestrator.analysis.spectrum.order_spectrum`, the scale of every
+    figure), orders 0 to 3.5 z1 [1/pinion rev].
 
     The window is the last whole number of pinion revolutions of the steady window (the last
     ``steady_periods`` mesh periods), or the whole steady window if it is shorter than one
-    revolution; so the pinion orders 1, z1, 2 z1, ... fall on bins when it holds a revolution.
-    Orders 0 to 3.5 z1 (:func:`orchestrator.analysis.metrics.order_spectrum`)."""
-    from orchestrator.analysis.metrics import order_spectrum
+    revolution; so the pinion orders 1, z1, 2 z1, ... fall on bins when it holds a revolution
+    and read their amplitudes exactly."""
+    from fmu_src.description import time_step
+    from orchestrator.analysis.spectrum import order_spectrum
 
     z1 = int(case["gear_pair.teeth"][0])
     per_mesh = int(case["simulation.steps_per_mesh_period"])
@@ -116,10 +119,12 @@ def point_spectrum(case: Case, results: dict, steady_periods: int) -> dict:
     n = min(n, time_s.size)
     force = np.asarray(results["bearing_force"][-n:], dtype=float)
     norm = np.hypot(force[..., 0], force[..., 1])
-    orders, amp = order_spectrum(norm, z1 * per_mesh, MAX_MESH_ORDER * z1)
-    dt = time_s[1] - time_s[0] if time_s.size > 1 else 0.0
+    pinion_hz = abs(case["operation.speed"]) / (2.0 * math.pi)
+    orders, amp = order_spectrum(norm, time_step(case), pinion_hz,
+                                 max_order=MAX_MESH_ORDER * z1)
+    step = time_s[1] - time_s[0] if time_s.size > 1 else 0.0
     return {"spectrum_orders": orders, "spectrum": amp.T,
-            "spectrum_window": np.array([time_s[-n] - dt, time_s[-1]])}
+            "spectrum_window": np.array([time_s[-n] - step, time_s[-1]])}
 
 
 def run_point(case, point: SweepPoint, periods: int, steady_periods: int,

@@ -13,10 +13,11 @@ import numpy as np
 from fmu_src.case import load_case
 from fmu_src.examples import HELICAL, SPUR
 from orchestrator.analysis.metrics import fit_ellipse, steady_window
-from orchestrator.figures.base import normalised_spectrum, pyplot
+from orchestrator.analysis.spectrum import order_spectrum, spectral_resolution
+from orchestrator.figures.base import AMPLITUDE_LABEL, order_label, pyplot
 from orchestrator.run.spec import build_master
 
-__all__ = ["draw_all", "has_line"]
+__all__ = ["draw_all", "force_spectrum", "has_line"]
 
 
 def _attrs(results):
@@ -56,11 +57,31 @@ def _as_float(v):
     return float(v) if v is not None else math.nan
 
 
-def has_line(f, a, target, prominence=10.0, band=12):
-    """A spectral line near ``target``: the largest amplitude within one bin (or 2 % of the
-    target) stands ``prominence`` times above the median of the ``band`` bins on either side."""
+def force_spectrum(results, bearing: int, revolutions: float = 1.0):
+    """What Figs. 7 / 15 draw: the order spectrum of ||F_b|| at ``bearing`` over the last
+    ``revolutions`` of its shaft, in peak amplitude [N] against orders of that shaft
+    (:func:`orchestrator.analysis.spectrum.order_spectrum`): ``(orders, amplitudes,
+    resolution)``, the resolution in orders (:func:`has_line`)."""
+    a = _attrs(results)
+    rotation_hz = a["speeds"][bearing] / (2 * np.pi)
+    win = _window(results, revolutions, bearing)
+    fb = np.hypot(*np.asarray(results["bearing_force"], dtype=float)[win, bearing].T)
+    orders, amp = order_spectrum(fb, a["dt"], rotation_hz)
+    return orders, amp, spectral_resolution(fb.size, a["dt"], rotation_hz)
+
+
+def has_line(f, a, target, resolution=None, prominence=10.0, band=12):
+    """A spectral line near ``target``: on the bins one ``resolution`` apart (those of the
+    unpadded window, where a line on a bin of a Hann window leaks into its two neighbours
+    only; by default every bin), the largest amplitude within one bin (or 2 % of the target)
+    stands ``prominence`` times above the median of the ``band`` bins on either side. Order 0,
+    the mean, is no line."""
+    f, a = np.asarray(f, dtype=float), np.asarray(a, dtype=float)
+    if resolution is not None:
+        step = max(1, round(resolution / (f[1] - f[0])))
+        f, a = f[::step], a[::step]
     df = f[1] - f[0]
-    near = np.abs(f - target) <= max(1.01 * df, 0.02 * target)
+    near = (np.abs(f - target) <= max(1.01 * df, 0.02 * target)) & (f > 0)
     if not near.any():
         return False
     i0, i1 = np.flatnonzero(near)[[0, -1]]
@@ -111,8 +132,9 @@ def _fig_orbits(runs, fig_dir, plt) -> tuple[Path, dict]:
 
 
 def _fig_forces(runs, prefix, fig_dir, plt, name, title) -> tuple[Path, dict]:
-    """Figs. 7 / 15: ||F_b|| over the last orbit and its normalised spectrum, bearings 1 and 3,
-    nonlinear (hybrid) vs linear."""
+    """Figs. 7 / 15: ||F_b|| over the last orbit and its order spectrum in peak amplitude
+    (:func:`force_spectrum`; the paper normalises its own), bearings 1 and 3, nonlinear
+    (hybrid) vs linear."""
     fig, axes = plt.subplots(2, 2, figsize=(13, 7), constrained_layout=True)
     info = {}
     for col, (b, revs, unit) in enumerate(((0, 1.0, "pinion"), (2, 1.0, "gear"))):
@@ -125,29 +147,30 @@ def _fig_forces(runs, prefix, fig_dir, plt, name, title) -> tuple[Path, dict]:
             fb = np.hypot(*r["bearing_force"][win, b].T)
             axes[0, col].plot((t - t[0]) * a["speeds"][b] / (2 * np.pi), fb, style, lw=0.7,
                               label="nonlinear (hybrid)" if model == "hybrid" else "linear")
-            f, amp = normalised_spectrum(fb, a["dt"], a["speeds"][b] / (2 * np.pi))
-            spectra[model] = (f, amp, np.abs(np.fft.rfft(fb - fb.mean())).max())
+            spectra[model] = force_spectrum(r, b, revs)
             info[f"bearing{b + 1}_{model}_mean"] = float(fb.mean())
             info[f"bearing{b + 1}_{model}_ptp"] = float(np.ptp(fb))
-        ref = spectra["hybrid"][2]
         for model, style in (("hybrid", "C0-"), ("linear", "C1--")):
-            f, amp, peak = spectra[model]
-            axes[1, col].plot(f, amp * peak / ref, style, lw=0.7, label=model)
+            f, amp, _ = spectra[model]
+            axes[1, col].plot(f[1:], amp[1:], style, lw=0.7, label=model)  # order 0: the mean
         z1, z2 = _attrs(runs[f"{prefix}_hybrid"])["teeth"]
         fmax = 4.2 * (z1 if b == 0 else z2)
         axes[1, col].set_xlim(0, fmax)
-        axes[1, col].set_xlabel(f"f / ({unit} rotation frequency)")
+        axes[1, col].set_xlabel(order_label(unit))
+        axes[1, col].set_ylabel(f"||F_b|| bearing {b + 1}: {AMPLITUDE_LABEL}")
+        axes[1, col].set_title(f"bearing {b + 1}: spectrum over the last {unit} revolution",
+                               fontsize=10)
         axes[0, col].set_xlabel(f"{unit} revolutions")
         axes[0, col].set_ylabel(f"||F_b|| bearing {b + 1} [N]")
         axes[0, col].legend(fontsize=8)
         axes[1, col].legend(fontsize=8)
-        f, amp, _ = spectra["hybrid"]
+        f, amp, res = spectra["hybrid"]
         info[f"bearing{b + 1}_lines"] = {
-            "1": has_line(f, amp, 1.0), "z": has_line(f, amp, z1 if b == 0 else z2)}
+            "1": has_line(f, amp, 1.0, res), "z": has_line(f, amp, z1 if b == 0 else z2, res)}
         if b == 0:
-            info["bearing1_lines"]["2z"] = has_line(f, amp, 2 * z1)
+            info["bearing1_lines"]["2z"] = has_line(f, amp, 2 * z1, res)
         else:
-            info["bearing3_lines"]["z2/z1"] = has_line(f, amp, z2 / z1)
+            info["bearing3_lines"]["z2/z1"] = has_line(f, amp, z2 / z1, res)
     fig.suptitle(title)
     path = _save(fig, fig_dir / f"{name}.png", plt)
     return path, info
