@@ -14,22 +14,15 @@ from orchestrator.run.spec import RunError
 
 
 def make_parser() -> argparse.ArgumentParser:
-    from orchestrator.cli import bearing as bearing_calc
-    from orchestrator.cli import doctor
-    from orchestrator.cli import plot as plot_cli
-    from orchestrator.cli import run as run_cli
-    from orchestrator.cli import sweep as sweep_cli
+    from orchestrator.cli import bearing, doctor, fmus, modal, plot, reproduce, run, sweep
 
     parser = argparse.ArgumentParser(
         prog="gsb",
         description="Gear-shaft-bearing nonlinear dynamics (Baguet & Jacquenot 2010).",
     )
     sub = parser.add_subparsers(dest="command", required=True)
-    bearing_calc.add_parser(sub)
-    run_cli.add_parsers(sub)
-    sweep_cli.add_parser(sub)
-    plot_cli.add_parser(sub)
-    doctor.add_parser(sub)
+    for command_group in (bearing, run, reproduce, fmus, modal, sweep, plot, doctor):
+        command_group.add_parser(sub)
     return parser
 
 

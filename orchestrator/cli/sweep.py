@@ -43,7 +43,7 @@ _SPEC = re.compile(r"^\s*(\S+)\s*(.*?)\s*$")
 
 
 def add_parser(sub) -> None:
-    from orchestrator.cli.run import _override
+    from orchestrator.cli.options import parse_override
 
     p = sub.add_parser(
         "sweep", help="a parametric sweep of a case on Dask (speed, torque, any field)",
@@ -64,7 +64,7 @@ def add_parser(sub) -> None:
                         "in the field's SI unit (speed rad/s, torque N m, unbalance m), or "
                         "followed by a unit the case files accept: 'speed=1000:12000:12 rpm', "
                         "'unbalance=0.6,1.2 mm'")
-    p.add_argument("--set", dest="overrides", action="append", type=_override, default=[],
+    p.add_argument("--set", dest="overrides", action="append", type=parse_override, default=[],
                    metavar="SECTION.KEY=VALUE",
                    help="override a case field for every point (repeatable)")
     p.add_argument("--bearing", default=None, metavar="MODEL[,MODEL...]",

@@ -1,0 +1,57 @@
+"""``gsb build-fmus`` and ``gsb export-ssp``: the FMUs of a case, alone or as an SSP archive."""
+
+from __future__ import annotations
+
+from bearing_fmu import MODELS
+from orchestrator.cli.options import add_case_argument, case_from_args
+
+__all__ = ["add_parser"]
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("build-fmus", help="build the FMUs (pythonfmu) into a folder",
+                       description="Build every FMU into --dest; the gear-shaft FMU carries "
+                                   "the case (its parameters start at the case's values).")
+    add_case_argument(p, "case the gear-shaft FMU carries (file or shipped name; default "
+               "baguet2010_spur)", optional=True)
+    p.add_argument("--dest", default="build/fmus", help="output folder (default build/fmus)")
+    p.add_argument("--fmu", dest="names", action="append", default=[], metavar="NAME",
+                   help="build only this FMU (repeatable; e.g. GearShaft, BearingHybrid)")
+    p.set_defaults(func=build_fmus)
+
+    p = sub.add_parser("export-ssp", help="write a case's system as an SSP 1.0 archive",
+                       description="Build the FMUs of a case and write DEST/<case>.ssp: the "
+                                   "gear-shaft FMU, four bearing components, their "
+                                   "connections and parameter values (runs in SSP tools, "
+                                   "e.g. ecos, and in `gsb run`).")
+    add_case_argument(p)
+    p.add_argument("--bearing", choices=tuple(MODELS), help="bearing model (overrides the "
+                                                            "case)")
+    p.add_argument("--dest", default=".", help="output folder (default: the current folder)")
+    p.set_defaults(func=export_ssp)
+
+
+
+def build_fmus(args) -> int:
+    from fmu_src.build.fmus import build_fmus as build
+
+    for path in build(args.dest, args.names or None, case=case_from_args(args)):
+        print(path)
+    return 0
+
+
+def export_ssp(args) -> int:
+    from fmu_src.build.ssp import write_ssp
+    from fmu_src.description import time_step
+    from orchestrator.run.spec import build_master
+
+    case = case_from_args(args)
+    master = build_master(case, in_process=True)  # X0: start values for non-iterative masters
+    try:
+        master.solve_static()
+    finally:
+        master.close()
+    path = write_ssp(case, args.dest, laws=master.laws)
+    print(f"{path} (run: gsb run {path}; ecos simulate --path {path} --parameterSet case "
+          f"--stepSize {time_step(case)!r} --stopTime <s>)")
+    return 0

@@ -1,0 +1,161 @@
+"""``gsb modal``: the modes of a case linearised about X0, critical speeds, Campbell diagram."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from bearing_fmu import MODELS
+from fmu_src.case import CaseError
+from orchestrator.cli.options import add_case_argument, case_from_args
+
+__all__ = ["add_parser"]
+
+
+def add_parser(sub) -> None:
+    p = sub.add_parser("modal", help="natural and damped modes, tooth critical speeds, Campbell "
+                                     "diagram of a case",
+                       description="Modes of the gear-shaft system linearised about the static "
+                                   "solution X0 (paper Eq. 20): the exact mean mesh stiffness "
+                                   "over a mesh period, the undamped modes (symmetric part of "
+                                   "the bearings' Kb), the damped modes (structure damping C, "
+                                   "the bearings' Kb and Cb at X0), the pinion speeds where a "
+                                   "mesh harmonic meets a mesh mode, and optionally a Campbell "
+                                   "diagram over a speed range.")
+    add_case_argument(p)
+    p.add_argument("--bearing", choices=tuple(MODELS), help="bearing model (overrides the case)")
+    p.add_argument("--bearing-stiffness", type=float, default=None,
+                   help="isotropic bearing stiffness [N/m] instead of the film at X0 (then no "
+                        "bearing damping, Cb = 0)")
+    p.add_argument("--modes", type=int, default=20,
+                   help="modes listed in each text table (default 20; --json lists all)")
+    p.add_argument("--speed-range", nargs=2, type=float, default=[50.0, 1500.0],
+                   metavar=("LOW", "HIGH"),
+                   help="pinion speeds [rad/s] of the critical speeds and the Campbell diagram "
+                        "(default 50 1500)")
+    p.add_argument("--mesh-fraction", type=float, default=0.1,
+                   help="mesh modes: share of the strain energy in the mesh >= this "
+                        "(default 0.1)")
+    p.add_argument("--json", action="store_true",
+                   help="print one JSON object instead of the tables")
+    p.add_argument("--campbell", nargs="?", const="", default=None, metavar="PNG",
+                   help="draw a Campbell diagram (default file <case>_campbell.png in --out)")
+    p.add_argument("--campbell-speeds", type=int, default=16,
+                   help="speeds of the Campbell diagram over the speed range (default 16)")
+    p.add_argument("--out", default=".", help="folder of the default Campbell file "
+                                              "(default: the current folder)")
+    p.set_defaults(func=modal)
+
+
+def _modal_checks(args) -> tuple[float, float]:
+    """The numeric options of ``gsb modal``, checked (CaseError naming value and limit)."""
+    k = args.bearing_stiffness
+    if k is not None and not (math.isfinite(k) and k > 0.0):
+        raise CaseError(f"--bearing-stiffness {k!r} N/m must be finite and > 0")
+    low, high = args.speed_range
+    if not (math.isfinite(low) and low > 0.0):
+        raise CaseError(f"--speed-range LOW = {low!r} rad/s must be finite and > 0")
+    if not (math.isfinite(high) and high > low):
+        raise CaseError(f"--speed-range HIGH = {high!r} rad/s must be finite and > LOW = "
+                        f"{low!r} rad/s")
+    if args.modes < 1:
+        raise CaseError(f"--modes {args.modes!r} must be >= 1")
+    if not 0.0 <= args.mesh_fraction <= 1.0:
+        raise CaseError(f"--mesh-fraction {args.mesh_fraction!r} must lie in [0, 1]")
+    if not 3 <= args.campbell_speeds <= 200:
+        raise CaseError(f"--campbell-speeds {args.campbell_speeds!r} must lie in [3, 200]")
+    return low, high
+
+
+def _finite(x):
+    """A float for JSON, None for NaN or inf."""
+    x = float(x)
+    return x if math.isfinite(x) else None
+
+
+def modal(args) -> int:
+    import json
+
+    from gear_fmu.damped_modes import (
+        critical_speed_table,
+        damped_mode_table,
+        tooth_critical_speeds,
+    )
+    from gear_fmu.modal import mode_table
+    from orchestrator.analysis import campbell
+    from orchestrator.coupling.master import CouplingError
+    from orchestrator.run.spec import RunError
+
+    low, high = _modal_checks(args)
+    case = case_from_args(args)
+    try:
+        lin = campbell.linearise(case, args.bearing_stiffness)
+    except CouplingError as exc:
+        raise RunError(f"{case['case.name']}: {exc}") from None
+    found, dm = lin.modes, lin.damped
+    critical = tooth_critical_speeds(dm.frequency_hz, dm.damping_ratio, dm.mesh_energy_fraction,
+                                     lin.z1, (low, high), campbell.HARMONICS,
+                                     args.mesh_fraction)
+    per_width = lin.mesh_stiffness_loa / lin.contact_width / 1e9  # N/(mm um)
+    chart = None
+    if args.campbell is not None:
+        path = Path(args.campbell or Path(args.out) / f"{case['case.name']}_campbell.png")
+        speeds = np.linspace(low, high, args.campbell_speeds)
+        data = campbell.campbell_data(case, speeds, args.bearing_stiffness)
+        if not data["modes"]:
+            raise CaseError(f"--campbell: no static solution over {low:g}-{high:g} rad/s: "
+                            f"{data['skipped'][0][1]}")
+        model = (f"isotropic {args.bearing_stiffness:g} N/m bearings, Cb = 0"
+                 if args.bearing_stiffness else f"{case['bearings.model']} bearings")
+        title = (f"{case['case.name']}: Campbell diagram of the damped modes\n"
+                 f"T = {case['operation.torque']:g} N m, {model}, z1 = {lin.z1}")
+        chart = {"path": str(campbell.plot_campbell(data, path, title,
+                                                    min_mesh_fraction=args.mesh_fraction)),
+                 "speeds_rad_s": data["speeds"].tolist(),
+                 "crossings": campbell.crossings(data, min_mesh_fraction=args.mesh_fraction),
+                 "skipped": [{"speed_rad_s": w, "error": e} for w, e in data["skipped"]]}
+    if args.json:
+        out = {
+            "case": case["case.name"], "torque_N_m": case["operation.torque"],
+            "speed_rad_s": case["operation.speed"], "bearings": lin.bearings,
+            "mean_mesh_stiffness_N_per_m": lin.mesh_stiffness_loa,
+            "mean_mesh_stiffness_N_per_mm_um": per_width,
+            "undamped_modes": [
+                {"frequency_hz": float(f), "kind": kd, "mesh_energy_fraction": _finite(s)}
+                for f, kd, s in zip(found.frequency_hz, found.kinds,
+                                    found.mesh_strain_fraction, strict=True)],
+            "damped_modes": [
+                {"mode": i + 1, "frequency_hz": float(f), "damping_ratio": _finite(z),
+                 "mesh_energy_fraction": _finite(s), "kind": kd, "overdamped": bool(o)}
+                for i, (f, z, s, kd, o) in enumerate(zip(
+                    dm.frequency_hz, dm.damping_ratio, dm.mesh_energy_fraction, dm.kinds,
+                    dm.overdamped, strict=True))],
+            "critical_speeds": critical,
+            "speed_range_rad_s": [low, high], "mesh_fraction": args.mesh_fraction,
+            "campbell": chart}
+        print(json.dumps(out, allow_nan=False))
+        return 0
+    print(f"{case['case.name']}: modes with the mean mesh stiffness at T = "
+          f"{case['operation.torque']:g} N m; bearings: {lin.bearings}")
+    print(mode_table(found, args.modes))
+    ref = lin.reference_mesh_stiffness_loa
+    ref = "" if ref is None else (f"; 16 equally spaced angles (damping reference): "
+                                  f"{ref / lin.contact_width / 1e9:.3f} N/(mm um)")
+    print(f"\nmean mesh stiffness over a mesh period (Gauss-Legendre between the contact "
+          f"events), along the line of action: {lin.mesh_stiffness_loa:.5g} N/m = "
+          f"{per_width:.3f} N/(mm um) per unit width ({lin.contact_width * 1e3:g} mm){ref}")
+    print("\ndamped modes (Eq. 20: M, C0 = C + Cb(X0), K0 = K_shaft + K_mesh,mean + Kb(X0)); "
+          "f_d = |Im lambda| / 2 pi, zeta = -Re lambda / |lambda|, mesh = strain energy share"
+          + (f"; {dm.n_rigid // 2} rigid-body motion(s) left out" if dm.n_rigid else ""))
+    print(damped_mode_table(dm, args.modes))
+    print(f"\ntooth critical speeds: mesh harmonic k z1 omega / 2 pi (k = 1..{campbell.HARMONICS}"
+          f", z1 = {lin.z1}) = f_d of a mode with mesh >= {args.mesh_fraction:g}, "
+          f"{low:g} <= omega <= {high:g} rad/s")
+    print(critical_speed_table(critical) if critical else "(none)")
+    if chart is not None:
+        for w, e in data["skipped"]:
+            print(f"campbell: {w:g} rad/s skipped: {e}")
+        print(f"\ncampbell: {chart['path']} ({len(chart['speeds_rad_s'])} speeds)")
+    return 0
