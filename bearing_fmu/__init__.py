@@ -9,9 +9,9 @@ from it.
 
 from importlib import import_module
 
-from bearing_fmu import _numba_cache
+from bearing_fmu import numba_cache
 
-_numba_cache.install()  # before any kernel is defined: numba's cache per version of the code
+numba_cache.install()  # before any kernel is defined: numba's cache per version of the code
 
 from bearing_fmu.base import (  # noqa: E402
     BearingData,

@@ -296,7 +296,8 @@ class BearingModel(ABC):
         """Restore a state of :meth:`get_state` (on a model built with the same parameters)."""
 
 
-def _check_omega(omega: float) -> float:
+def check_omega(omega: float) -> float:
+    """``omega`` [rad/s] as a float; BearingError naming the value unless finite and > 0."""
     omega = float(omega)
     if not math.isfinite(omega) or omega <= 0.0:
         raise BearingError(f"shaft speed omega = {omega!r} rad/s: must be finite and > 0")
@@ -339,7 +340,7 @@ class FilmBearingModel(BearingModel):
     def evaluate(
         self, x: float, y: float, xdot: float, ydot: float, omega: float
     ) -> BearingResult:
-        omega = _check_omega(omega)
+        omega = check_omega(omega)
         c = self.bearing.clearance
         ff = self.dimensionless(x / c, y / c, xdot / (c * omega), ydot / (c * omega), True)
         fs = self.bearing.force_scale(omega)

@@ -29,7 +29,7 @@ from bearing_fmu.base import (
     FilmBearingModel,
     FilmForce,
     ModelOption,
-    _check_omega,
+    check_omega,
     check_state,
 )
 
@@ -146,7 +146,7 @@ class HybridBearing(FilmBearingModel):
         """One compiled call (``bearing_fmu._hybrid_kernels.hybrid_global``): the numbers of
         :meth:`~bearing_fmu.base.FilmBearingModel.evaluate` and the frame conversions of the
         base class."""
-        omega = _check_omega(omega)
+        omega = check_omega(omega)
         if omega != self._scale[0]:
             self._scale = (omega, self.bearing.force_scale(omega))
         status = _k.hybrid_global(self._state, self._active, self._ws, self._iws, self._trig,

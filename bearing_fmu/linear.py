@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from bearing_fmu.affine import AffineLaws, affine_global
-from bearing_fmu.base import BearingModel, BearingResult, _check_omega
+from bearing_fmu.base import BearingModel, BearingResult, check_omega
 from bearing_fmu.hybrid import HybridBearing
 
 __all__ = ["LinearBearing", "LinearisedBearing"]
@@ -60,7 +60,7 @@ class LinearBearing(BearingModel):
         super().__init__(bearing)
         self.position0 = np.array(position0, dtype=float).reshape(2)
         self.force0 = np.array(force0, dtype=float).reshape(2)
-        self.omega = _check_omega(omega)
+        self.omega = check_omega(omega)
         self.law = AffineLaws.linearise(np.concatenate([self.position0, [0.0, 0.0]]),
                                         self.force0, _as_matrix("stiffness", stiffness),
                                         _as_matrix("damping", damping))
@@ -82,7 +82,7 @@ class LinearBearing(BearingModel):
         return cls(model.bearing, (x0, y0), r.force, r.stiffness, r.damping, omega)
 
     def _check_speed(self, omega) -> float:
-        omega = _check_omega(omega)
+        omega = check_omega(omega)
         if not abs(omega - self.omega) <= 1e-12 * abs(self.omega):
             raise ValueError(
                 f"linear bearing coefficients hold at omega = {self.omega} rad/s, "

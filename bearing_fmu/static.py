@@ -19,7 +19,7 @@ from bearing_fmu.base import (
     BearingResult,
     EccentricityError,
     FilmBearingModel,
-    _check_omega,
+    check_omega,
 )
 
 __all__ = ["StaticSolution", "newton_equilibrium", "static_equilibrium"]
@@ -157,7 +157,7 @@ def static_equilibrium(
     BearingError
         If Newton does not converge (iterations and residual in the message).
     """
-    omega = _check_omega(omega)
+    omega = check_omega(omega)
     w = np.array(load, dtype=float).reshape(2)
     if not np.all(np.isfinite(w)):
         raise BearingError(f"static load {w!r} N is not finite")

@@ -1,5 +1,5 @@
 """pythonfmu slave classes exposing the physics as FMI 2.0 co-simulation FMUs."""
 
-from bearing_fmu import _numba_cache
+from bearing_fmu import numba_cache
 
-_numba_cache.install()  # before any kernel is defined: numba's cache per version of the code
+numba_cache.install()  # before any kernel is defined: numba's cache per version of the code

@@ -1,5 +1,5 @@
 """Gear-shaft structural model: Timoshenko shafts, gear mesh element, Newmark step."""
 
-from bearing_fmu import _numba_cache
+from bearing_fmu import numba_cache
 
-_numba_cache.install()  # before any kernel is defined: numba's cache per version of the code
+numba_cache.install()  # before any kernel is defined: numba's cache per version of the code

@@ -2,7 +2,7 @@
 
 What would break it: a kernel compiled with fastmath (LLVM then chooses the rounding by
 context: what it inlines, the vector width, the CPU's FMA), a kernel loaded from numba's cache
-with a stale callee compiled in (:mod:`bearing_fmu._numba_cache`), or two transports evaluating
+with a stale callee compiled in (:mod:`bearing_fmu.numba_cache`), or two transports evaluating
 the bearings along different sequences (the hybrid solver starts from its last solution).
 Here the paper's spur case runs in fresh interpreters with numba's cache empty (every kernel
 compiled in the process), full (every kernel loaded) and half full (callees loaded, their
@@ -126,7 +126,7 @@ def test_a_change_in_a_callee_file_recompiles_its_callers(tmp_path):
     stale kernel was loaded), and the cache must not change a result of the same code."""
     import shutil
 
-    from bearing_fmu._numba_cache import PACKAGES
+    from bearing_fmu.numba_cache import PACKAGES
 
     root = tmp_path / "code"
     for pkg in PACKAGES:

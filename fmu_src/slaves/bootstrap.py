@@ -5,7 +5,7 @@ else, so it uses the standard library only. :func:`stage_code` copies the FMU's 
 (``resources/gsb_code``, written by :mod:`fmu_src.build.fmus` with a content hash) once into the
 per-user cache and puts it first on ``sys.path``: the FMU then runs in any Python with numpy,
 scipy and numba, without this package installed. Its numba kernels are cached per version of
-the code, whatever copy of the code compiled them (:mod:`bearing_fmu._numba_cache`), so they
+the code, whatever copy of the code compiled them (:mod:`bearing_fmu.numba_cache`), so they
 compile once per machine and code version, not at every instantiation from a freshly
 extracted FMU. A host that has already imported the package's modules keeps them (one copy of
 a module per process).

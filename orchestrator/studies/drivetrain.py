@@ -108,9 +108,9 @@ def run_plan(periods: int, scheduler: str | None = None, workers: int = 2,
     """Every configuration of :data:`PLAN` (Dask), in the plan's order."""
     from dask.distributed import as_completed
 
-    from orchestrator.sweeps.runner import _client
+    from orchestrator.sweeps.runner import dask_client
 
-    client, cluster = _client(scheduler, workers, 60.0)
+    client, cluster = dask_client(scheduler, workers, 60.0)
     try:
         futures = {client.submit(run_point, case, overrides, periods, pure=False): i
                    for i, (_, _, case, overrides) in enumerate(PLAN)}

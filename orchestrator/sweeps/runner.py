@@ -199,7 +199,9 @@ def _children_ignore_sigint():
         signal.signal(signal.SIGINT, previous)
 
 
-def _client(scheduler, n_workers, timeout):
+def dask_client(scheduler, n_workers: int, timeout: float):
+    """``(client, cluster)``: a client of the scheduler at ``scheduler`` (cluster None), or of
+    a new LocalCluster of ``n_workers`` processes; ``timeout`` [s] to connect."""
     import logging
 
     from dask.distributed import Client, LocalCluster
@@ -215,7 +217,7 @@ def _client(scheduler, n_workers, timeout):
 
 def _connect(scheduler, n_workers, timeout):
     try:
-        return _client(scheduler, n_workers, timeout)
+        return dask_client(scheduler, n_workers, timeout)
     except KeyboardInterrupt:
         raise
     except Exception as exc:
