@@ -49,12 +49,10 @@ pressure field. Stopping test: the natural residual of the LCP,
 Jacobians by numerical differentiation of the force, as in the paper's case 4
 (``jacobian_scheme="forward"``, 4 extra solves; default ``"central"``, 8 extra solves), each
 warm-started from the base solution and converged to ``jacobian_tol``.
-:func:`~bearing_fmu.fd_reference.reference_film_force` Richardson-extrapolates successive
-refinements.
+:func:`reference_film_force` Richardson-extrapolates successive refinements.
 
 The kernels are in :mod:`bearing_fmu._fd_grid` (grids, smoothers, transfers) and
-:mod:`bearing_fmu._fd_kernels` (cycles); the direct solver and
-:func:`~bearing_fmu.fd_reference.reference_film_force` in :mod:`bearing_fmu.fd_reference`.
+:mod:`bearing_fmu._fd_kernels` (cycles); the direct solver in :mod:`bearing_fmu.fd_reference`.
 ``linear_solver="direct"`` replaces the multigrid by a primal-dual active set with sparse LU
 (:func:`~bearing_fmu.fd_reference.solve_complementarity`): slow, but an independent check of
 the multigrid.
@@ -62,6 +60,7 @@ the multigrid.
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -76,8 +75,7 @@ from bearing_fmu.base import (
     ModelOption,
     check_state,
 )
-from bearing_fmu.fd_reference import (  # the direct solver and the converged reference
-    reference_film_force,
+from bearing_fmu.fd_reference import (  # the direct solver
     reynolds_operator,
     solve_complementarity,
 )
@@ -393,3 +391,60 @@ class FiniteDifferenceBearing(FilmBearingModel):
         th = np.roll(th, -start)
         p = np.roll(p, -start, axis=0)
         return np.append(th, th[0] + 2.0 * math.pi), xi, np.vstack([p, p[:1]])
+
+
+def reference_film_force(lambda_, xbar, ybar, xbar_dot=0.0, ybar_dot=0.0,
+                         levels=((192, 32), (384, 64), (768, 128)), **kw):
+    """Richardson-extrapolated force from successive refinements (second-order scheme).
+
+    Parameters
+    ----------
+    lambda_ : float
+        L/D.
+    xbar, ybar, xbar_dot, ybar_dot : float
+        Dimensionless state (Eq. 3).
+    levels : sequence of (n_theta, n_xi)
+        At least two meshes, each the previous one refined by 2 in both directions.
+    **kw
+        Passed to :class:`FiniteDifferenceBearing` (e.g. ``pinned_start``).
+
+    Returns
+    -------
+    force : ndarray (2,)
+        ``F_fine + (F_fine - F_prev) / 3`` (Richardson with the theoretical order 2).
+    info : dict
+        ``forces`` per level; ``error_finest``: ``|F_fine - force| / |force|``; with three or more
+        levels also ``observed_order`` (from the force magnitudes), ``force_observed_order``
+        (extrapolated with it) and ``error_estimate``: the relative distance between the
+        extrapolations with order 2 and with the observed order, or between the last two
+        order-2 extrapolations if larger/3 (an estimate of the error of ``force``).
+    """
+    levels = [tuple(int(v) for v in lv) for lv in levels]
+    if len(levels) < 2:
+        raise ValueError(f"levels = {levels}: need at least two meshes")
+    for (a0, b0), (a1, b1) in itertools.pairwise(levels):
+        if a1 != 2 * a0 or b1 != 2 * b0:
+            raise ValueError(f"levels = {levels}: each mesh must double the previous one")
+    check_state(xbar, ybar, xbar_dot, ybar_dot)
+    forces = []
+    for nt, nx in levels:
+        model = FiniteDifferenceBearing.from_lambda(lambda_, n_theta=nt, n_xi=nx, **kw)
+        forces.append(model.dimensionless(xbar, ybar, xbar_dot, ybar_dot, jacobian=False).force)
+    forces = np.array(forces)
+    ext = forces[-1] + (forces[-1] - forces[-2]) / 3.0
+    norm = float(np.linalg.norm(ext))
+    info = dict(levels=[list(lv) for lv in levels], forces=forces.tolist(),
+                error_finest=float(np.linalg.norm(forces[-1] - ext) / norm))
+    if len(levels) >= 3:
+        mag = np.linalg.norm(forces, axis=1)
+        d1, d2 = mag[-3] - mag[-2], mag[-2] - mag[-1]
+        order = float(np.log2(abs(d1 / d2))) if d2 != 0.0 else float("inf")
+        info["observed_order"] = order
+        prev = forces[-2] + (forces[-2] - forces[-3]) / 3.0
+        est = float(np.linalg.norm(ext - prev)) / norm / 3.0
+        if math.isfinite(order) and order > 0.5:
+            f_obs = forces[-1] + (forces[-1] - forces[-2]) / (2.0**order - 1.0)
+            info["force_observed_order"] = f_obs.tolist()
+            est = max(est, float(np.linalg.norm(ext - f_obs)) / norm)
+        info["error_estimate"] = est
+    return ext, info
