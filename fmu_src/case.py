@@ -16,18 +16,19 @@ from __future__ import annotations
 import json
 import math
 import tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
 
 from bearing_fmu import MODELS as _BEARING_TABLE
 from bearing_fmu import model_class
 from fmu_src.units import UnitError, parse_quantity, symbol
-from gear_fmu.damping import BASES, DAMPING_KINDS
-from gear_fmu.drivetrain import OUTPUT_ENDS
+from gear_fmu.damping import BASES, DAMPING_KINDS, DampingModel
+from gear_fmu.drivetrain import OUTPUT_ENDS, Drivetrain
+from gear_fmu.geometry import GearGeometryError, GearPair, zero_backlash_centre_distance
 
-__all__ = ["BEARING_MODELS", "FIELDS", "Case", "CaseError", "Field", "load_case",
-           "model_option_fields", "schema_markdown", "shipped_cases"]
+__all__ = ["BEARING_MODELS", "FIELDS", "Case", "CaseError", "Field", "damping", "drivetrain",
+           "gear_pair", "load_case", "model_option_fields", "schema_markdown", "shipped_cases"]
 
 BEARING_MODELS = tuple(_BEARING_TABLE)
 
@@ -374,27 +375,63 @@ def _check_consistency(v: dict, source: str) -> None:
 
 def _check_physics(v: dict, source: str) -> None:
     """The gear geometry, the drivetrain and the damping model, checked by their classes; the
-    messages name the case fields (:func:`fmu_src.description.gear_pair`,
-    :func:`~fmu_src.description.drivetrain`, :func:`~fmu_src.description.damping`)."""
-    from fmu_src import description
-    from gear_fmu.geometry import GearGeometryError
-
+    messages name the case fields (:func:`gear_pair`, :func:`drivetrain`, :func:`damping`)."""
     try:
-        description.gear_pair(v)
+        gear_pair(v)
     except GearGeometryError as exc:
         raise CaseError(f"{source}: {_geometry_message(v, exc)}") from None
     try:
-        description.drivetrain(v)
-        description.damping(v)
+        drivetrain(v)
+        damping(v)
     except ValueError as exc:
         raise CaseError(f"{source}: {exc}") from None
+
+
+# --- the objects the checks build: fmu_src.description builds the system with these same
+# functions (it re-exports them), so that a case that loads is a case that builds.
+def gear_pair(case) -> GearPair:
+    """Table 1 fields -> :class:`gear_fmu.geometry.GearPair` (checked geometry; a Case or its
+    values)."""
+    return GearPair(
+        teeth=tuple(case["gear_pair.teeth"]),
+        module=case["gear_pair.module"],
+        pressure_angle=case["gear_pair.pressure_angle"],
+        centre_distance=case["gear_pair.centre_distance"],
+        face_width=tuple(case["gear_pair.face_width"]),
+        helix_angle=case["gear_pair.helix_angle"],
+        profile_shift=tuple(case["gear_pair.profile_shift"]),
+        addendum_coefficient=case["gear_pair.addendum_coefficient"],
+        dedendum_coefficient=case["gear_pair.dedendum_coefficient"],
+        young=case["shafts.young_modulus"],
+        poisson=case["shafts.poisson_ratio"],
+    )
+
+
+def drivetrain(case) -> Drivetrain:
+    """``drivetrain.*`` fields -> :class:`gear_fmu.drivetrain.Drivetrain` (a Case or its
+    values; one field per attribute, same name); its errors name the fields."""
+    return Drivetrain(**{f.name: case[f"drivetrain.{f.name}"] for f in fields(Drivetrain)})
+
+
+def damping(case) -> DampingModel:
+    """``simulation.damping_*``, ``rayleigh_*``, ``mesh_damping*`` fields ->
+    :class:`gear_fmu.damping.DampingModel` (a Case or its values)."""
+    try:
+        return DampingModel(
+            kind=case["simulation.damping_model"], ratio=case["simulation.damping_ratio"],
+            basis=case["simulation.damping_basis"],
+            rayleigh_frequencies=tuple(case["simulation.rayleigh_frequencies"]),
+            rayleigh_alpha=case["simulation.rayleigh_alpha"],
+            rayleigh_beta=case["simulation.rayleigh_beta"],
+            mesh_ratio=case["simulation.mesh_damping_ratio"],
+            mesh_coefficient=case["simulation.mesh_damping"])
+    except ValueError as exc:
+        raise ValueError(f"simulation damping fields: {exc}") from None
 
 
 def _geometry_message(v: dict, exc: Exception) -> str:
     """A gear-geometry error in the case's terms: the [gear_pair] fields that set the mesh,
     and the centre distance at which the profile shifts would mesh without backlash."""
-    from gear_fmu.geometry import zero_backlash_centre_distance
-
     a = v["gear_pair.centre_distance"]
     shifts = list(v["gear_pair.profile_shift"])
     try:

@@ -1,6 +1,6 @@
 """The FMI variable contracts of the FMUs and their wiring (one source of truth).
 
-:data:`BEARING_VARIABLES`: every bearing FMU (one per model of :data:`bearing_fmu.MODELS`)
+:func:`bearing_variables`: every bearing FMU (one per model of :data:`bearing_fmu.MODELS`)
 exposes exactly these variables, so a system swaps one for another by file name alone. The FMU
 works in the GLOBAL frame (s, t) of the gear system; its parameters ``frame_angle`` and
 ``rotation_sign`` place the bearing's local frame (:class:`bearing_fmu.frames.LocalFrame`) in
@@ -8,7 +8,7 @@ which the film model runs. Besides the force and its stiffness and damping (Eq. 
 the journal state they were evaluated at (its inputs, ``s_eval`` ...): what the gear-shaft FMU
 linearises about (Eq. 17).
 
-:data:`GEAR_VARIABLES`: the gear-shaft FMU (``GearShaft``): the structural fields of its case
+:func:`gear_variables`: the gear-shaft FMU (``GearShaft``): the structural fields of its case
 as parameters (:func:`gear_case_fields`); per bearing j = 1..4 the bearing FMU's outputs as
 inputs (``F_s_j``, ``K_ss_j``, ..., ``s_eval_j``, ...); the journal states, the shaft speeds at
 the bearings, mesh and gear outputs. A system is wired by plain output -> input connections
@@ -21,10 +21,15 @@ defined once (:func:`law_input_names`, :func:`pack_laws`, :func:`unpack_law_arra
 :func:`unpack_journal`). Units are the dimensions of :mod:`fmu_src.units`. The tables are
 rendered into ``docs/fmu-variables.md`` by :mod:`fmu_src.build.variables_doc` and into each FMU's
 modelDescription.xml by :mod:`fmu_src.build.fmus`.
+
+The two variable lists take start values from the shipped case ``baguet2010_spur``; they are
+built on first use and kept (:func:`bearing_variables`, :func:`gear_variables`), so importing
+this module reads no file.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 import re
 from dataclasses import dataclass
@@ -34,12 +39,14 @@ from numba import njit
 
 from bearing_fmu import MODELS, model_class
 from bearing_fmu.affine import AffineLaws
+from fmu_src.case import FIELDS, bound_violation, load_case, model_option_fields
+from fmu_src.description import BEARING_FRAMES
 from fmu_src.units import symbol
 
-__all__ = ["BEARINGS", "BEARING_VARIABLES", "GEAR_DEFAULT_CASE", "GEAR_VARIABLES", "FmiVar",
-           "ValueRefused", "bearing_option_keys", "connections", "gear_case_fields",
-           "gear_parameters", "gear_variables", "journal_output_names", "law_input_names",
-           "pack_laws", "parameter_field", "unpack_journal", "unpack_law_arrays"]
+__all__ = ["BEARINGS", "GEAR_DEFAULT_CASE", "FmiVar", "ValueRefused", "bearing_option_keys",
+           "bearing_variables", "connections", "gear_case_fields", "gear_parameters",
+           "gear_variables", "journal_output_names", "law_input_names", "pack_laws",
+           "parameter_field", "unpack_journal", "unpack_law_arrays"]
 
 
 class ValueRefused(ValueError):
@@ -82,8 +89,6 @@ class FmiVar:
                                f"{', '.join(map(str, self.choices))}")
         if self.minimum is None and self.maximum is None:
             return
-        from fmu_src.case import bound_violation
-
         violated = bound_violation(value, self.minimum, self.maximum, self.exclusive_minimum)
         if violated:
             unit = self._unit_text()
@@ -114,8 +119,6 @@ BEARING_OUTPUTS = (*FORCE_NAMES, *STIFFNESS_NAMES, *DAMPING_NAMES, *EVAL_NAMES)
 
 def _paper_bearing():
     """Start values of the bearing data: bearing 1 of the paper's spur case (Table 3)."""
-    from fmu_src.case import load_case
-
     case = load_case("baguet2010_spur")
     return {k: case[f"bearings.{k}"][0] for k in ("diameter", "length", "clearance",
                                                    "viscosity")}
@@ -136,64 +139,67 @@ def _field_variable(name: str, f, value, causality: str = _P) -> FmiVar:
 def _option_variables() -> tuple[FmiVar, ...]:
     """One parameter per option of the registered bearing models (:mod:`fmu_src.case` merges
     them the same way), so every bearing FMU has the same variables."""
-    from fmu_src.case import model_option_fields
-
     return tuple(_field_variable(f.key.split(".", 1)[1], f, f.default)
                  for f in model_option_fields())
 
 
-_B = _paper_bearing()
-#: The variables of every bearing FMU (module docstring).
-#:
-#: :meta hide-value:
-BEARING_VARIABLES: tuple[FmiVar, ...] = (
-    # bearing data (start values: the paper's pinion bearing, Table 3)
-    FmiVar("D", _P, "Real", "length", _B["diameter"], "bearing diameter D = 2R", **_POS),
-    FmiVar("L", _P, "Real", "length", _B["length"], "bearing length L", **_POS),
-    FmiVar("C", _P, "Real", "length", _B["clearance"], "radial clearance C (< D/2)", **_POS),
-    FmiVar("mu", _P, "Real", "viscosity", _B["viscosity"],
-           "dynamic viscosity of the lubricant", **_POS),
-    FmiVar("frame_angle", _P, "Real", "angle", 0.0,
-           "angle from the global s axis to the bearing's local x axis"),
-    FmiVar("rotation_sign", _P, "Integer", "", 1,
-           "+1 if the shaft turns about +z, -1 if about -z (local frame mirrored)",
-           choices=(1, -1)),
-    *_option_variables(),
-    # journal state at the bearing node, global frame
-    FmiVar("s", _I, "Real", "length", 0.0, "journal-centre displacement along s (global frame)"),
-    FmiVar("t", _I, "Real", "length", 0.0, "journal-centre displacement along t (global frame)"),
-    FmiVar("s_dot", _I, "Real", "velocity", 0.0, "journal-centre velocity along s"),
-    FmiVar("t_dot", _I, "Real", "velocity", 0.0, "journal-centre velocity along t"),
-    FmiVar("omega", _I, "Real", "angular_speed", 325.0, "shaft speed magnitude", **_POS),
-    # film force on the journal and its linearisation, global frame
-    FmiVar("F_s", _O, "Real", "force", 0.0, "film force on the journal along s"),
-    FmiVar("F_t", _O, "Real", "force", 0.0, "film force on the journal along t"),
-    FmiVar("K_ss", _O, "Real", "stiffness", 0.0, "stiffness -dF_s/ds"),
-    FmiVar("K_st", _O, "Real", "stiffness", 0.0, "stiffness -dF_s/dt"),
-    FmiVar("K_ts", _O, "Real", "stiffness", 0.0, "stiffness -dF_t/ds"),
-    FmiVar("K_tt", _O, "Real", "stiffness", 0.0, "stiffness -dF_t/dt"),
-    FmiVar("C_ss", _O, "Real", "damping", 0.0, "damping -dF_s/ds_dot"),
-    FmiVar("C_st", _O, "Real", "damping", 0.0, "damping -dF_s/dt_dot"),
-    FmiVar("C_ts", _O, "Real", "damping", 0.0, "damping -dF_t/ds_dot"),
-    FmiVar("C_tt", _O, "Real", "damping", 0.0, "damping -dF_t/dt_dot"),
-    FmiVar("s_eval", _O, "Real", "length", 0.0,
-           "the input s at which F, K and C were evaluated (what a structure linearises about)"),
-    FmiVar("t_eval", _O, "Real", "length", 0.0, "the input t at which F, K and C were evaluated"),
-    FmiVar("s_dot_eval", _O, "Real", "velocity", 0.0,
-           "the input s_dot at which F, K and C were evaluated"),
-    FmiVar("t_dot_eval", _O, "Real", "velocity", 0.0,
-           "the input t_dot at which F, K and C were evaluated"),
-    FmiVar("eccentricity", _O, "Real", "dimensionless", 0.0,
-           "eccentricity ratio e/C of the journal"),
-    FmiVar("n_solves", _O, "Integer", "", 0,
-           "film-force evaluations so far (Reynolds solves for film models)"),
-)
+@functools.cache
+def bearing_variables() -> tuple[FmiVar, ...]:
+    """The variables of every bearing FMU (module docstring); the start values of the bearing
+    data are the paper's pinion bearing (Table 3), read from the shipped case on first use."""
+    b = _paper_bearing()
+    return (
+        # bearing data (start values: the paper's pinion bearing, Table 3)
+        FmiVar("D", _P, "Real", "length", b["diameter"], "bearing diameter D = 2R", **_POS),
+        FmiVar("L", _P, "Real", "length", b["length"], "bearing length L", **_POS),
+        FmiVar("C", _P, "Real", "length", b["clearance"], "radial clearance C (< D/2)", **_POS),
+        FmiVar("mu", _P, "Real", "viscosity", b["viscosity"],
+               "dynamic viscosity of the lubricant", **_POS),
+        FmiVar("frame_angle", _P, "Real", "angle", 0.0,
+               "angle from the global s axis to the bearing's local x axis"),
+        FmiVar("rotation_sign", _P, "Integer", "", 1,
+               "+1 if the shaft turns about +z, -1 if about -z (local frame mirrored)",
+               choices=(1, -1)),
+        *_option_variables(),
+        # journal state at the bearing node, global frame
+        FmiVar("s", _I, "Real", "length", 0.0,
+               "journal-centre displacement along s (global frame)"),
+        FmiVar("t", _I, "Real", "length", 0.0,
+               "journal-centre displacement along t (global frame)"),
+        FmiVar("s_dot", _I, "Real", "velocity", 0.0, "journal-centre velocity along s"),
+        FmiVar("t_dot", _I, "Real", "velocity", 0.0, "journal-centre velocity along t"),
+        FmiVar("omega", _I, "Real", "angular_speed", 325.0, "shaft speed magnitude", **_POS),
+        # film force on the journal and its linearisation, global frame
+        FmiVar("F_s", _O, "Real", "force", 0.0, "film force on the journal along s"),
+        FmiVar("F_t", _O, "Real", "force", 0.0, "film force on the journal along t"),
+        FmiVar("K_ss", _O, "Real", "stiffness", 0.0, "stiffness -dF_s/ds"),
+        FmiVar("K_st", _O, "Real", "stiffness", 0.0, "stiffness -dF_s/dt"),
+        FmiVar("K_ts", _O, "Real", "stiffness", 0.0, "stiffness -dF_t/ds"),
+        FmiVar("K_tt", _O, "Real", "stiffness", 0.0, "stiffness -dF_t/dt"),
+        FmiVar("C_ss", _O, "Real", "damping", 0.0, "damping -dF_s/ds_dot"),
+        FmiVar("C_st", _O, "Real", "damping", 0.0, "damping -dF_s/dt_dot"),
+        FmiVar("C_ts", _O, "Real", "damping", 0.0, "damping -dF_t/ds_dot"),
+        FmiVar("C_tt", _O, "Real", "damping", 0.0, "damping -dF_t/dt_dot"),
+        FmiVar("s_eval", _O, "Real", "length", 0.0,
+               "the input s at which F, K and C were evaluated (what a structure "
+               "linearises about)"),
+        FmiVar("t_eval", _O, "Real", "length", 0.0,
+               "the input t at which F, K and C were evaluated"),
+        FmiVar("s_dot_eval", _O, "Real", "velocity", 0.0,
+               "the input s_dot at which F, K and C were evaluated"),
+        FmiVar("t_dot_eval", _O, "Real", "velocity", 0.0,
+               "the input t_dot at which F, K and C were evaluated"),
+        FmiVar("eccentricity", _O, "Real", "dimensionless", 0.0,
+               "eccentricity ratio e/C of the journal"),
+        FmiVar("n_solves", _O, "Integer", "", 0,
+               "film-force evaluations so far (Reynolds solves for film models)"),
+    )
 
 
 def bearing_option_keys() -> tuple[str, ...]:
     """Names of the bearing FMU parameters that are model options (all registered models)."""
     return tuple(sorted({o.key for name in MODELS for o in model_class(name).options},
-                        key=[v.name for v in BEARING_VARIABLES].index))
+                        key=[v.name for v in bearing_variables()].index))
 
 
 # --- gear-shaft FMU ------------------------------------------------------------------------
@@ -310,8 +316,6 @@ def gear_case_fields():
     the shafts, the drivetrain, the operating point, the damping model, the structure's
     tolerance and time-integration switches (the bearing fields belong to the bearing FMUs,
     the run length and the coupled iterations to the master)."""
-    from fmu_src.case import FIELDS
-
     master_only = ("simulation.steps_per_mesh_period", "simulation.mesh_periods",
                    "simulation.max_iterations")
     return tuple(f for f in FIELDS
@@ -346,11 +350,10 @@ def parameter_field(name: str) -> tuple[str, int | None]:
 
 def gear_variables(case=None) -> tuple[FmiVar, ...]:
     """The gear-shaft FMU's variables, the case parameters starting at the values of ``case``
-    (default: the shipped :data:`GEAR_DEFAULT_CASE`)."""
-    from fmu_src.case import load_case
-    from fmu_src.description import BEARING_FRAMES
-
-    case = load_case(GEAR_DEFAULT_CASE.removesuffix(".toml")) if case is None else case
+    (default: the shipped :data:`GEAR_DEFAULT_CASE`, read on first use and kept: the variables
+    of the gear-shaft FMU built for the shipped case)."""
+    if case is None:
+        return _shipped_gear_variables()
     params = [_field_variable(n, f, v) for n, f, v in gear_parameters(case)]
     return (
         *params,
@@ -378,10 +381,9 @@ def gear_variables(case=None) -> tuple[FmiVar, ...]:
     )
 
 
-#: The variables of the gear-shaft FMU built for the shipped case (module docstring).
-#:
-#: :meta hide-value:
-GEAR_VARIABLES: tuple[FmiVar, ...] = gear_variables()
+@functools.cache
+def _shipped_gear_variables() -> tuple[FmiVar, ...]:
+    return gear_variables(load_case(GEAR_DEFAULT_CASE.removesuffix(".toml")))
 
 
 def connections(gear: str = "gear_shaft", bearing: str = "bearing{j}") -> list[tuple]:

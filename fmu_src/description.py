@@ -3,7 +3,10 @@
 One place turns case fields (SI values) into the gear pair, the two-shaft structure, the mesh
 element, the loads and the bearing models; the in-process master, ``gsb modal``, ``gsb run``
 and the gear-shaft FMU all build their system here, so that they simulate the same thing. The
-bearing FMUs' parameters of a case come from here too (:func:`bearing_parameters`).
+bearing FMUs' parameters of a case come from here too (:func:`bearing_parameters`). The gear
+pair, the drivetrain and the damping model are built by :func:`fmu_src.case.gear_pair`,
+:func:`~fmu_src.case.drivetrain` and :func:`~fmu_src.case.damping` (re-exported here), with
+which the case loader checks those fields: a case that loads is a case that builds.
 
 Bearings: 1, 2 on the pinion shaft (turning about +z), 3, 4 on the gear shaft (turning about -z,
 mirrored local frame, :mod:`bearing_fmu.frames`); local x along s. Shaft speeds: omega and
@@ -13,13 +16,10 @@ omega z1 / z2 (:func:`gear_fmu.loads.shaft_speeds`).
 from __future__ import annotations
 
 import math
-from dataclasses import fields
 
 from bearing_fmu import BearingData, BearingModel, model_class
 from bearing_fmu.frames import LocalFrame
-from fmu_src.case import Case
-from gear_fmu.damping import DampingModel
-from gear_fmu.drivetrain import Drivetrain
+from fmu_src.case import Case, damping, drivetrain, gear_pair, model_option_fields
 from gear_fmu.geometry import GearPair
 from gear_fmu.loads import StructureLoads, shaft_speeds
 from gear_fmu.mesh import MeshElement
@@ -50,23 +50,6 @@ BEARING_FRAMES = (LocalFrame(0.0, 1), LocalFrame(0.0, 1), LocalFrame(0.0, -1),
                   LocalFrame(0.0, -1))
 
 
-def gear_pair(case: Case) -> GearPair:
-    """Table 1 fields -> :class:`gear_fmu.geometry.GearPair` (checked geometry)."""
-    return GearPair(
-        teeth=tuple(case["gear_pair.teeth"]),
-        module=case["gear_pair.module"],
-        pressure_angle=case["gear_pair.pressure_angle"],
-        centre_distance=case["gear_pair.centre_distance"],
-        face_width=tuple(case["gear_pair.face_width"]),
-        helix_angle=case["gear_pair.helix_angle"],
-        profile_shift=tuple(case["gear_pair.profile_shift"]),
-        addendum_coefficient=case["gear_pair.addendum_coefficient"],
-        dedendum_coefficient=case["gear_pair.dedendum_coefficient"],
-        young=case["shafts.young_modulus"],
-        poisson=case["shafts.poisson_ratio"],
-    )
-
-
 def gear_shaft_system(case: Case, pair: GearPair | None = None) -> GearShaftSystem:
     """Table 2 shafts and Table 1 gear bodies -> :class:`gear_fmu.system.GearShaftSystem`."""
     pair = gear_pair(case) if pair is None else pair
@@ -85,28 +68,6 @@ def gear_shaft_system(case: Case, pair: GearPair | None = None) -> GearShaftSyst
                            centre_distance=pair.centre_distance, teeth=pair.teeth,
                            helix_angle_deg=math.degrees(pair.helix_angle),
                            drivetrain=drivetrain(case))
-
-
-def drivetrain(case) -> Drivetrain:
-    """``drivetrain.*`` fields -> :class:`gear_fmu.drivetrain.Drivetrain` (a Case or its
-    values; one field per attribute, same name); its errors name the fields."""
-    return Drivetrain(**{f.name: case[f"drivetrain.{f.name}"] for f in fields(Drivetrain)})
-
-
-def damping(case) -> DampingModel:
-    """``simulation.damping_*``, ``rayleigh_*``, ``mesh_damping*`` fields ->
-    :class:`gear_fmu.damping.DampingModel` (a Case or its values)."""
-    try:
-        return DampingModel(
-            kind=case["simulation.damping_model"], ratio=case["simulation.damping_ratio"],
-            basis=case["simulation.damping_basis"],
-            rayleigh_frequencies=tuple(case["simulation.rayleigh_frequencies"]),
-            rayleigh_alpha=case["simulation.rayleigh_alpha"],
-            rayleigh_beta=case["simulation.rayleigh_beta"],
-            mesh_ratio=case["simulation.mesh_damping_ratio"],
-            mesh_coefficient=case["simulation.mesh_damping"])
-    except ValueError as exc:
-        raise ValueError(f"simulation damping fields: {exc}") from None
 
 
 def structure_loads(case: Case) -> StructureLoads:
@@ -178,14 +139,13 @@ def bearing_models(case: Case) -> list[BearingModel]:
 
 
 def bearing_parameters(case: Case) -> list[dict]:
-    """Parameters of the four bearing FMUs of a case (:data:`fmu_src.contract.BEARING_VARIABLES`:
+    """Parameters of the four bearing FMUs of a case (:func:`fmu_src.contract.bearing_variables`:
     geometry, lubricant, frame, and every model option, so one list serves every model)."""
-    from fmu_src.contract import bearing_option_keys
-
+    option_keys = [f.key.split(".", 1)[1] for f in model_option_fields()]
     out = []
     for data, frame in zip(bearing_data(case), BEARING_FRAMES, strict=True):
         params = dict(D=data.diameter, L=data.length, C=data.clearance, mu=data.viscosity,
                       frame_angle=frame.angle, rotation_sign=frame.rotation_sign)
-        params.update({k: case[f"bearings.{k}"] for k in bearing_option_keys()})
+        params.update({k: case[f"bearings.{k}"] for k in option_keys})
         out.append(params)
     return out

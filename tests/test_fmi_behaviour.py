@@ -19,7 +19,7 @@ from xml.etree import ElementTree as ET
 import pytest
 
 from bearing_fmu import MODELS, fmu_name
-from fmu_src.contract import BEARING_VARIABLES
+from fmu_src.contract import bearing_variables
 from tests.helpers import run_here, run_isolated
 
 BEARING_FMUS = [fmu_name(m) for m in MODELS]
@@ -63,7 +63,7 @@ def test_bearing_fmus_refuse_bad_values_when_set(fmu_dir, model):
     assert out["omega"][0] == 3 and "omega = -5.0 rad/s refused: must be > 0" in out["omega"][1]
     assert out["sign"][0] == 3 and "rotation_sign = 0 refused: must be one of 1, -1" \
         in out["sign"][1]
-    start = {v.name: v.start for v in BEARING_VARIABLES}
+    start = {v.name: v.start for v in bearing_variables()}
     assert out["kept"] == [start["C"], start["mu"], start["rotation_sign"]]
 
 

@@ -17,7 +17,7 @@ import textwrap
 import numpy as np
 import pytest
 
-from fmu_src.contract import GEAR_VARIABLES
+from fmu_src.contract import gear_variables
 from tests.helpers import run_here
 
 CASE = "baguet2010_spur"
@@ -56,9 +56,9 @@ def test_gear_fmu_passes_fmpy_validation_with_units_and_descriptions(gear_fmu):
     assert validate_fmu(str(gear_fmu)) == []
     md = read_model_description(str(gear_fmu))
     variables = {v.name: v for v in md.modelVariables}
-    assert [v.name for v in md.modelVariables] == [v.name for v in GEAR_VARIABLES]
+    assert [v.name for v in md.modelVariables] == [v.name for v in gear_variables()]
     assert all(v.description for v in md.modelVariables)
-    for v in GEAR_VARIABLES:
+    for v in gear_variables():
         if v.type == "Real":
             assert variables[v.name].unit == v.unit, v.name
     # the carried case's fields are parameters, with the bounds the case schema declares
@@ -81,7 +81,7 @@ def test_slave_registers_exactly_the_contract():
 
     slave = GearShaftSlave(instance_name="t")
     names = [(v.name, v.causality.name) for v in slave.vars.values()]
-    assert names == [(v.name, v.causality) for v in GEAR_VARIABLES]
+    assert names == [(v.name, v.causality) for v in gear_variables()]
 
 
 def test_a_case_that_does_not_fit_is_logged_not_raised():

@@ -6,7 +6,7 @@
 from __future__ import annotations
 
 from bearing_fmu import MODELS, fmu_name
-from fmu_src.contract import BEARING_VARIABLES, GEAR_VARIABLES, connections
+from fmu_src.contract import bearing_variables, connections, gear_variables
 
 __all__ = ["document", "markdown_table"]
 
@@ -32,8 +32,9 @@ def _bounds(v) -> str:
     return ", ".join(parts) or "-"
 
 
-def markdown_table(variables=BEARING_VARIABLES) -> str:
-    """A contract as a Markdown table."""
+def markdown_table(variables=None) -> str:
+    """A contract as a Markdown table (default: the bearing FMUs')."""
+    variables = bearing_variables() if variables is None else variables
     lines = ["| name | causality | type | unit | start | allowed | description |",
              "| --- | --- | --- | --- | --- | --- | --- |"]
     for v in variables:
@@ -169,8 +170,8 @@ def document() -> str:
     fmus = ", ".join(fmu_name(m) for m in MODELS)
     wiring = "\n".join(f"| `{a}` | `{o}` | `{b}` | `{i}` |" for a, o, b, i in connections()
                        if "bearing1" in (a, b))
-    return (_HEADER.format(fmus=fmus, wiring=wiring) + markdown_table(BEARING_VARIABLES) + "\n"
-            + _GEAR + markdown_table(GEAR_VARIABLES) + "\n")
+    return (_HEADER.format(fmus=fmus, wiring=wiring) + markdown_table(bearing_variables()) + "\n"
+            + _GEAR + markdown_table(gear_variables()) + "\n")
 
 
 if __name__ == "__main__":

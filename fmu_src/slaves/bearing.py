@@ -27,18 +27,17 @@ from pythonfmu.enums import Fmi2Status
 from bearing_fmu import BearingData, model_class
 from bearing_fmu.frames import LocalFrame, state_to_local
 from fmu_src.contract import (
-    BEARING_VARIABLES,
     DAMPING_NAMES,
     EVAL_NAMES,
     FORCE_NAMES,
     STATE_NAMES,
     STIFFNESS_NAMES,
+    bearing_variables,
 )
 from fmu_src.slaves.support import ContractSlave, describe_exception, pin_namespace
 
 __all__ = ["BearingSlave", "pin_namespace"]
 
-_OUTPUT_NAMES = {v.name for v in BEARING_VARIABLES if v.causality == "output"}
 #: the law's outputs in the order of BearingModel.evaluate_global's rows (force, Kb, Cb)
 _LAW_NAMES = FORCE_NAMES + STIFFNESS_NAMES + DAMPING_NAMES
 
@@ -54,7 +53,8 @@ class BearingSlave(ContractSlave):
             f"Journal bearing ({self.model_name} model): film force and its stiffness and "
             "damping at the journal state, global frame, SI units (Baguet & Jacquenot 2010)."
         )
-        self._values = {v.name: v.start for v in BEARING_VARIABLES}
+        variables = bearing_variables()
+        self._values = {v.name: v.start for v in variables}
         self._dirty_model = True
         self._dirty_outputs = True
         self._model = None
@@ -62,11 +62,12 @@ class BearingSlave(ContractSlave):
         self._failed = False
         self._out = np.zeros((5, 2))  # force, Kb, Cb of the last evaluation (global frame)
         self._out_flat = self._out.reshape(10)  # the same memory in the outputs' order
-        for v in BEARING_VARIABLES:
+        for v in variables:
             setter = None
             if v.causality in ("parameter", "input"):
                 setter = self._setter(v.name, model=v.causality == "parameter")
-            self.register_contract_variable(v, self._getter(v.name), setter)
+            self.register_contract_variable(v, self._getter(v.name, v.causality == "output"),
+                                            setter)
         vr = {var.name: var.value_reference for var in self.vars.values()}
         self._state_vrs = [vr[n] for n in STATE_NAMES]
         self._law_vrs = [vr[n] for n in _LAW_NAMES]
@@ -94,9 +95,9 @@ class BearingSlave(ContractSlave):
             return self._with_status([v[n] for n in _LAW_NAMES])
         return super().get_real(vrs)
 
-    def _getter(self, name):
+    def _getter(self, name, output: bool):
         values = self._values
-        if name in _OUTPUT_NAMES:
+        if output:
             def get():
                 if self._dirty_outputs:
                     self._update()

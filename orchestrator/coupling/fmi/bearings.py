@@ -2,7 +2,7 @@
 
 Two kinds of bearing FMU are accepted, told apart by their variables:
 
-* this package's bearing FMUs (:data:`fmu_src.contract.BEARING_VARIABLES`): force, stiffness
+* this package's bearing FMUs (:func:`fmu_src.contract.bearing_variables`): force, stiffness
   and damping are outputs;
 * any algebraic FMU with the minimal contract (:data:`MINIMAL_INPUTS`, :data:`MINIMAL_OUTPUTS`:
   the journal state in, the film force out, global frame, SI units): the stiffness and damping
@@ -49,7 +49,7 @@ class FmuBearings(BearingSet):
     fmus : sequence of path
         FMU file of each bearing.
     parameters : sequence of dict
-        Parameter values of each bearing (names of :data:`fmu_src.contract.BEARING_VARIABLES`).
+        Parameter values of each bearing (names of :func:`fmu_src.contract.bearing_variables`).
         This package's FMUs must accept all of them; a force-only FMU gets those it declares.
     omegas : sequence of float
         Shaft speed magnitude at each bearing [rad/s].
