@@ -84,7 +84,7 @@ def measure(slave, law, dt: float, n: int) -> dict:
 def bearing_sets(n: int) -> tuple[float, float]:
     """µs per evaluation of the four bearings (FMUs, in-process), best of 5 alternating blocks."""
     from fmu_src.case import load_case
-    from orchestrator.run.spec import build_master
+    from orchestrator.coupling.system import build_master
 
     case = load_case("baguet2010_spur")
     masters = [build_master(case, in_process=flag) for flag in (False, True)]

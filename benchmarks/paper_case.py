@@ -108,7 +108,7 @@ def timed_calls(targets=TIMED, counts: dict | None = None):
 
 def breakdown(periods: int, in_process: bool) -> None:
     """Per coupled iteration: the timed calls (:data:`TIMED`) and the rest."""
-    kw = dict(bearing="hybrid", in_process=in_process, progress=False, figures=False)
+    kw = dict(bearing="hybrid", in_process=in_process, progress=False)
     case = load_case(CASE)
     with tempfile.TemporaryDirectory() as tmp:
         run_case(case.with_overrides({"simulation.mesh_periods": 2}), out_dir=tmp + "/w",
@@ -169,8 +169,7 @@ def main() -> None:
     rows = {}
     with tempfile.TemporaryDirectory() as tmp:
         for model, in_process, *variant in configs:
-            kw = dict(bearing=model, in_process=in_process, out_dir=tmp, progress=False,
-                      figures=False)
+            kw = dict(bearing=model, in_process=in_process, out_dir=tmp, progress=False)
             name = variant[0] if variant else ""
             run = load_case("baguet2010_helical" if "helical" in name else CASE,
                             {"simulation.locate_contact": "no-location" not in name})

@@ -36,7 +36,7 @@ def measure(in_process: bool, periods: int) -> dict:
     try:
         with tempfile.TemporaryDirectory() as tmp, timed_calls(targets, counts) as totals:
             case = load_case("baguet2010_spur", {"simulation.mesh_periods": periods})
-            s = run_case(case, in_process=in_process, out_dir=tmp, progress=False, figures=False,
+            s = run_case(case, in_process=in_process, out_dir=tmp, progress=False,
                          echo_warnings=False)
     finally:
         Master.checkpoint = original

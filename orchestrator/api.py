@@ -89,7 +89,7 @@ def simulate(case, periods: int | None = None, bearing: str | None = None, *,
         return simulate_case(RunSpec.of(case, in_process, None, fmu_dir, steps),
                              progress=progress)
     summary = run_case(case, in_process=in_process, out_dir=results_dir, fmu_dir=fmu_dir,
-                       progress=progress, figures=False, steps=steps)
+                       progress=progress, steps=steps)
     result = Result.from_file(summary.results)
     result.summary = summary
     return result

@@ -42,7 +42,7 @@ export_library()
 with tempfile.TemporaryDirectory() as tmp:
     for case, model in (("baguet2010_spur", "lumped"), ("baguet2010_helical", "lumped")):
         run_case(load_case(case).with_overrides({"bearings.model": model}), steps=2,
-                 in_process=True, out_dir=tmp + "/" + case, progress=False, figures=False)
+                 in_process=True, out_dir=tmp + "/" + case, progress=False)
 """,
 )
 

@@ -104,7 +104,7 @@ def run_paper_case(out_dir, periods, in_process=True, fmu_dir=None, bearing="hyb
     run = {"bearings.model": bearing, "simulation.mesh_periods": periods}
     s = run_case(load_case(case, (overrides or {}) | run),
                  in_process=in_process, out_dir=out_dir, fmu_dir=fmu_dir, progress=False,
-                 figures=False, steps=steps)
+                 steps=steps)
     return read_results(s.results), s
 
 

@@ -128,7 +128,7 @@ def test_one_coupled_step_through_its_fmu_equals_in_process(name, fmu_dir):
     same bits (the same code, the same calls)."""
     from fmu_src.case import load_case
     from fmu_src.description import time_step
-    from orchestrator.run.spec import build_master
+    from orchestrator.coupling.system import build_master
 
     case = load_case("baguet2010_spur")
     res = {}

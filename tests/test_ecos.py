@@ -105,7 +105,7 @@ def jacobi(steps: int, lag: int = 1) -> np.ndarray:
     back (ecos: 1). Independent of ecos and of orchestrator.coupling.master's stepping."""
     from bearing_fmu.affine import AffineLaws
     from fmu_src.case import load_case
-    from orchestrator.run.spec import build_master
+    from orchestrator.coupling.system import build_master
 
     master = build_master(load_case(CASE), in_process=True)
     master.solve_static()
@@ -149,7 +149,7 @@ def test_the_non_iterative_coupling_error_at_the_papers_step(ecos_python, tmp_pa
 
     x, _ = ecos_python
     s = run_case(load_case(CASE), steps=STEPS, in_process=True, out_dir=tmp_path,
-                 progress=False, figures=False)
+                 progress=False)
     pos = read_results(s.results)["journal_position"]
     scale = np.abs(pos).max()
     diff = np.abs(x[1:, :, :2] - pos).max(axis=(1, 2)) / scale

@@ -160,7 +160,7 @@ def test_a_checkpointed_system_restarts_exactly_in_a_new_process(fmu_dir, tmp_pa
         import numpy as np
         from fmu_src import description
         from fmu_src.case import load_case
-        from orchestrator.run.spec import build_master
+        from orchestrator.coupling.system import build_master
         case = load_case("baguet2010_spur")
         dt = description.time_step(case)
         m = build_master(case, fmu_dir=r"{fmu_dir}")

@@ -30,7 +30,7 @@ def compare(fmu_dir, model, periods, tmp, steps=None, overrides=None) -> dict:
     for in_process in (True, False):
         run = case.with_overrides({"bearings.model": model, "simulation.mesh_periods": periods})
         s = run_case(run, in_process=in_process, out_dir=tmp, fmu_dir=fmu_dir, progress=False,
-                     figures=False, steps=steps)
+                     steps=steps)
         out[in_process] = (read_results(s.results), s)
     (a, sa), (b, sb) = out[True], out[False]
     return {"differ": [k for k in CHANNELS if not np.array_equal(a[k], b[k])]

@@ -82,9 +82,8 @@ def test_a_force_only_bearing_fmu_matches_the_built_in_lumped_model(fmu_dir, spr
         from orchestrator.run.runner import run_case
         case = load_case("baguet2010_spur", {{"bearings.model": "lumped",
                                                "bearings.lumped_damping": 2000.0}})
-        ref = run_case(case, steps=64, in_process=True, out_dir=r"{tmp_path}", progress=False,
-                       figures=False)
-        mine = run_case(case, steps=64, out_dir=r"{tmp_path}", progress=False, figures=False,
+        ref = run_case(case, steps=64, in_process=True, out_dir=r"{tmp_path}", progress=False)
+        mine = run_case(case, steps=64, out_dir=r"{tmp_path}", progress=False,
                         fmus=dict(gear=r"{fmu_dir / 'GearShaft.fmu'}",
                                   bearings=[r"{spring_fmu}"] * 4))
         a, b = read_results(ref.results), read_results(mine.results)
@@ -123,7 +122,7 @@ def test_closed_bearing_fmus_refuse_to_evaluate(fmu_dir):
         import numpy as np
         from fmu_src.case import load_case
         from orchestrator.coupling.fmi import FmuError
-        from orchestrator.run.spec import build_master
+        from orchestrator.coupling.system import build_master
         master = build_master(load_case("baguet2010_spur"), fmu_dir=r"{fmu_dir}")
         master.solve_static()
         states = master.laws.states
@@ -164,7 +163,7 @@ def test_the_ssp_archive_holds_the_system(ssp_file):
     clearance = load_case("baguet2010_spur")["bearings.clearance"]
     assert [float(values[(f"bearing{j}", "C")]) for j in range(1, 5)] == clearance  # exact
     # the static solution X0 as start values: a non-iterative master starts in equilibrium
-    from orchestrator.run.spec import build_master
+    from orchestrator.coupling.system import build_master
 
     master = build_master(load_case("baguet2010_spur"), in_process=True)
     x0 = master.solve_static().states

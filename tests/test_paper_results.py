@@ -13,16 +13,16 @@ import pytest
 from fmu_src.case import load_case
 from fmu_src.examples import HELICAL, SPUR
 from orchestrator.analysis.metrics import fit_ellipse, run_metrics, steady_window
+from orchestrator.coupling.system import build_master
 from orchestrator.run.results import read_results
 from orchestrator.run.runner import run_case
-from orchestrator.run.spec import build_master
 from orchestrator.studies.reproduce.figures import force_spectrum, has_line
 
 
 def short_run(tmp_path, path=SPUR, model="hybrid", periods=192, **overrides):
     case = load_case(path, overrides)
     s = run_case(case.with_overrides({"bearings.model": model, "simulation.mesh_periods": periods}),
-                 in_process=True, out_dir=tmp_path, progress=False, figures=False)
+                 in_process=True, out_dir=tmp_path, progress=False)
     return read_results(s.results), s
 
 

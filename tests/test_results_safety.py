@@ -136,7 +136,7 @@ def test_signals_and_a_kill_keep_the_steps_and_the_run_resumes_exactly(transport
     # the uninterrupted reference, in this process
     run_case(load_case("baguet2010_spur").with_overrides({"simulation.mesh_periods": int(periods)}),
              in_process=transport == "in-process", fmu_dir=fmu_dir, out_dir=tmp_path / "ref",
-             progress=False, figures=False)
+             progress=False)
     reference = read_results(only(tmp_path / "ref"))
     n = len(reference["time"])
     # SIGKILL (a crash, a power cut): no clean-up at all; the rows up to the last flush and
@@ -313,14 +313,13 @@ out = {{}}
 # coarse film grids (the FD model's solves dominate otherwise)
 case = load_case("baguet2010_spur", {{"simulation.steps_per_mesh_period": 8,
                                       "bearings.nodes": 48, "bearings.axial_intervals": 8}})
-kw = dict(in_process={in_process}, fmu_dir={fmu_dir!r}, progress=False, figures=False)
+kw = dict(in_process={in_process}, fmu_dir={fmu_dir!r}, progress=False)
 with tempfile.TemporaryDirectory() as tmp:
     for model in MODELS:
         one = case.with_overrides({{"bearings.model": model, "simulation.mesh_periods": 1}})
         ref = run_case(one, out_dir=tmp + "/ref_" + model, **kw)
         part = run_case(one, steps=4, out_dir=tmp + "/" + model, **kw)
-        resume_run(part.results, periods=1, fmu_dir={fmu_dir!r}, progress=False,
-                   figures=False)
+        resume_run(part.results, periods=1, fmu_dir={fmu_dir!r}, progress=False)
         a, b = read_results(ref.results), read_results(part.results)
         out[model] = [len(b["time"]), float(np.abs(a["journal_position"]
                                                     - b["journal_position"]).max())]

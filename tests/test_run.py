@@ -2,6 +2,8 @@
 symmetry, model swap, results kept on failure, bad case files rejected before the run."""
 
 import math
+import re
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -12,9 +14,10 @@ from gear_fmu.newmark import newmark_step
 from gear_fmu.structure import EVENT_SIDE
 from orchestrator.cli import main
 from orchestrator.coupling.inprocess import ModelBearings
+from orchestrator.coupling.system import build_master
 from orchestrator.run.results import read_results
 from orchestrator.run.runner import run_case
-from orchestrator.run.spec import RunError, build_master
+from orchestrator.run.spec import RunError
 from tests.helpers import fail_master_step, monolithic_structure
 
 SPUR = "baguet2010_spur"
@@ -130,14 +133,14 @@ def test_cosimulation_equals_the_monolithic_newton_solution(refined):
 def test_iterations_per_step(model, low, high, tmp_path):
     """Affine bearings converge in one pass; the film models in 2-4 on average (paper: ~3)."""
     case = paper_case().with_overrides({"bearings.model": model, "simulation.mesh_periods": 8})
-    s = run_case(case, in_process=True, out_dir=tmp_path, progress=False, figures=False)
+    s = run_case(case, in_process=True, out_dir=tmp_path, progress=False)
     print(f"\n{model}: {s.iterations_per_step:.2f} coupled iterations per step")
     assert low <= s.iterations_per_step <= high
 
 
 def test_spur_orbits_identical_in_bearings_1_2_and_3_4(tmp_path):
     s = run_case(paper_case().with_overrides({"simulation.mesh_periods": 16}), in_process=True,
-                 out_dir=tmp_path, progress=False, figures=False)
+                 out_dir=tmp_path, progress=False)
     r = read_results(s.results)
     for j in (r["journal_position"], r["journal_velocity"]):
         scale = np.abs(j).max()
@@ -145,15 +148,22 @@ def test_spur_orbits_identical_in_bearings_1_2_and_3_4(tmp_path):
         np.testing.assert_allclose(j[:, 2], j[:, 3], rtol=0, atol=1e-9 * scale)
     # and the helical pair breaks the symmetry (Fig. 12)
     h = run_case(paper_case(HELICAL).with_overrides({"simulation.mesh_periods": 2}),
-                 in_process=True, out_dir=tmp_path, progress=False, figures=False)
+                 in_process=True, out_dir=tmp_path, progress=False)
     jh = read_results(h.results)["journal_position"]
     assert np.abs(jh[:, 0] - jh[:, 1]).max() > 0.05 * 150e-6
 
 
-def test_results_file_is_self_describing_and_complete(tmp_path):
-    s = run_case(paper_case().with_overrides({"simulation.mesh_periods": 2}), in_process=True,
-                 out_dir=tmp_path, progress=False)
-    r = read_results(s.results)
+def test_results_file_is_self_describing_and_complete(tmp_path, capsys):
+    """``gsb run``: a complete results file that describes itself, and the run's four figures
+    in the folder beside it (the command draws them once the run is complete)."""
+    from orchestrator.cli import main
+
+    assert main(["run", "baguet2010_spur", "--periods", "2", "--in-process", "--quiet",
+                 "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    results = Path(re.search(r"^results: (.*)$", out, re.MULTILINE).group(1))
+    figures = [Path(p) for p in re.findall(r"^figure: (.*)$", out, re.MULTILINE)]
+    r = read_results(results)
     assert r["attrs"]["complete"]
     assert r["time"].shape == (64,)
     assert r["units"]["bearing_force"] == "N"
@@ -164,16 +174,16 @@ def test_results_file_is_self_describing_and_complete(tmp_path):
     f0 = r["attrs"]["static_bearing_force"]
     w = 220.0 / description.gear_pair(paper_case()).base_radius[0]
     assert np.hypot(*f0[0]) == pytest.approx(w / 2, rel=1e-4)
-    assert [p.name for p in s.figures] == ["orbits.png", "bearing_forces.png", "spectra.png",
-                                           "mesh.png"]
-    assert all(p.parent == s.results.with_suffix("") for p in s.figures)  # beside the file
+    assert [p.name for p in figures] == ["orbits.png", "bearing_forces.png", "spectra.png",
+                                         "mesh.png"]
+    assert all(p.is_file() and p.parent == results.with_suffix("") for p in figures)
 
 
 def test_a_failing_run_keeps_what_it_computed(tmp_path, monkeypatch):
     fail_master_step(monkeypatch, at=40)
     with pytest.raises(RunError, match=r"step 40 of 64 .* the 39 steps computed are in"):
         run_case(paper_case().with_overrides({"simulation.mesh_periods": 2}), in_process=True,
-                 out_dir=tmp_path, progress=False, figures=False)
+                 out_dir=tmp_path, progress=False)
     r = read_results(next(tmp_path.glob("baguet2010_spur_hybrid_inprocess_*.h5")))
     assert r["time"].shape == (39,)
     assert not r["attrs"]["complete"]

@@ -170,7 +170,7 @@ def test_gsb_run_stores_the_report_as_numeric_attributes(tmp_path):
     """Through the pipeline: the spur case, linear bearings, 8 mesh periods in-process."""
     case = load_case(SPUR, {"bearings.model": "linear"})
     s = run_case(case.with_overrides({"simulation.mesh_periods": 8}), in_process=True,
-                 out_dir=tmp_path, figures=False, progress=False)
+                 out_dir=tmp_path, progress=False)
     with h5py.File(s.results, "r") as f:
         a = {k: f.attrs[k] for k in ("dynamic_factor", "bearing_force_ptp", "line_amplitudes",
                                      "line_orders", "line_labels", "report_window")}
@@ -210,7 +210,7 @@ def test_a_failing_run_stores_the_report_of_what_it_kept(tmp_path, monkeypatch):
     case = load_case(SPUR, {"bearings.model": "linear"})
     with pytest.raises(RunError, match="step 201 of 256"):
         run_case(case.with_overrides({"simulation.mesh_periods": 8}), in_process=True,
-                 out_dir=tmp_path, figures=False, progress=False)
+                 out_dir=tmp_path, progress=False)
     r = read_results(next(tmp_path.glob("baguet2010_spur_linear_inprocess_*.h5")))
     assert r["time"].shape == (200,) and not r["attrs"]["complete"]
     win = slice(100, None)
@@ -219,7 +219,7 @@ def test_a_failing_run_stores_the_report_of_what_it_kept(tmp_path, monkeypatch):
 
 def test_a_single_step_has_no_report(tmp_path):
     case = load_case(SPUR, {"bearings.model": "linear"})
-    s = run_case(case, in_process=True, out_dir=tmp_path, figures=False, progress=False,
+    s = run_case(case, in_process=True, out_dir=tmp_path, progress=False,
                  steps=1)
     assert s.report is None
     assert s.report_text() == "no report: 1 step(s), at least 2 needed"
@@ -237,7 +237,7 @@ def test_the_fmu_transport_stores_the_report(fmu_dir, tmp_path):
         case = load_case("baguet2010_spur", {{"bearings.model": "linear",
                                               "simulation.mesh_periods": 8}})
         s = run_case(case, out_dir={str(tmp_path)!r},
-                     fmu_dir={str(fmu_dir)!r}, progress=False, figures=False)
+                     fmu_dir={str(fmu_dir)!r}, progress=False)
         r = read_results(s.results)
         a = r["attrs"]
         fb = np.hypot(r["bearing_force"][128:, :, 0], r["bearing_force"][128:, :, 1])

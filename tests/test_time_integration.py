@@ -15,7 +15,7 @@ import pytest
 from fmu_src import description
 from fmu_src.case import load_case
 from gear_fmu.newmark import newmark_step
-from orchestrator.run.spec import build_master
+from orchestrator.coupling.system import build_master
 
 
 def observed_order(steps, errors) -> float:
@@ -123,8 +123,7 @@ def test_run_warns_when_a_damped_mesh_mode_gets_under_10_steps(steps, warned, tm
 
     case = load_case("baguet2010_spur", {"bearings.model": "linear",
                                          "simulation.steps_per_mesh_period": steps})
-    s = run_case(case, steps=2, in_process=True, out_dir=tmp_path, progress=False,
-                 figures=False)
+    s = run_case(case, steps=2, in_process=True, out_dir=tmp_path, progress=False)
     err = capsys.readouterr().err
     with h5py.File(s.results) as f:
         stored = f.attrs["warnings"]

@@ -43,7 +43,7 @@ def build_fmus(args) -> int:
 def export_ssp(args) -> int:
     from fmu_src.build.ssp import write_ssp
     from fmu_src.description import time_step
-    from orchestrator.run.spec import build_master
+    from orchestrator.coupling.system import build_master
 
     case = case_from_args(args)
     master = build_master(case, in_process=True)  # X0: start values for non-iterative masters

@@ -86,6 +86,7 @@ def modal(args) -> int:
     from gear_fmu.modal import mode_table
     from orchestrator.analysis import campbell
     from orchestrator.coupling.master import CouplingError
+    from orchestrator.figures.campbell import plot_campbell
     from orchestrator.run.spec import RunError
 
     low, high = _modal_checks(args)
@@ -111,7 +112,7 @@ def modal(args) -> int:
                  if args.bearing_stiffness else f"{case['bearings.model']} bearings")
         title = (f"{case['case.name']}: Campbell diagram of the damped modes\n"
                  f"T = {case['operation.torque']:g} N m, {model}, z1 = {lin.z1}")
-        chart = {"path": str(campbell.plot_campbell(data, path, title,
+        chart = {"path": str(plot_campbell(data, path, title,
                                                     min_mesh_fraction=args.mesh_fraction)),
                  "speeds_rad_s": data["speeds"].tolist(),
                  "crossings": campbell.crossings(data, min_mesh_fraction=args.mesh_fraction),

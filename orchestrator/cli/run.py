@@ -126,8 +126,8 @@ def run(args) -> int:
                             f"{', '.join(ignored)} (only --periods, --fmu-dir, --no-figures "
                             f"and --quiet apply)")
         summary = resume_run(args.resume, periods=args.periods, fmu_dir=args.fmu_dir,
-                             progress=not args.quiet, figures=not args.no_figures)
-        _print_summary(summary)
+                             progress=not args.quiet)
+        _print_summary(summary, _figures(summary, args))
         return 0
     if args.case is None:
         raise CaseError("a case is needed: a case file, a shipped case name (gsb cases) or an "
@@ -158,21 +158,32 @@ def run(args) -> int:
     try:
         summary = run_case(case, in_process=args.in_process,
                            out_dir=args.out, fmu_dir=args.fmu_dir, progress=not args.quiet,
-                           figures=not args.no_figures, fmus=fmus, overwrite=args.overwrite)
+                           fmus=fmus, overwrite=args.overwrite)
     finally:
         if folder is not None:
             shutil.rmtree(folder, ignore_errors=True)
+    figures = _figures(summary, args)
     print(f"static solution X0 ({case['case.name']}):")
     print(static_report(case, summary.static_positions))
-    _print_summary(summary)
+    _print_summary(summary, figures)
     return 0
 
 
-def _print_summary(summary) -> None:
+def _figures(summary, args) -> list[Path]:
+    """The figures of a finished run, in the folder beside its results file
+    (:func:`orchestrator.figures.run.run_figures`); none with ``--no-figures``."""
+    if args.no_figures:
+        return []
+    from orchestrator.figures.run import run_figures
+
+    return run_figures(summary.results)
+
+
+def _print_summary(summary, figures: list[Path]) -> None:
     """What ``gsb run`` prints of a finished (or resumed) run: its figures, the report and the
     files it wrote."""
     print(summary.describe())
     print(summary.report_text())
     print(f"results: {summary.results}")
-    for path in summary.figures:
+    for path in figures:
         print(f"figure: {path}")

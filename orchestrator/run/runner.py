@@ -7,7 +7,7 @@ that observes the steps: a results file (:class:`~orchestrator.run.results.Resul
 :func:`simulate_case`, behind :func:`orchestrator.api.simulate`).
 
 1. Start: the structure slave and the bearing set, through FMUs (default; fmpy) or in-process
-   (:func:`~orchestrator.run.spec.build_master`; the runner sees only the master's
+   (:func:`~orchestrator.coupling.system.build_master`; the runner sees only the master's
    interfaces).
 2. Static solution X0 (paper Sec. 2.2.3): the master iterates structure static solves and
    bearing linearisations with velocities zero
@@ -53,6 +53,7 @@ import numpy as np
 
 from fmu_src.case import Case
 from orchestrator.coupling.master import StepReport
+from orchestrator.coupling.system import build_master
 from orchestrator.run import files as run_files
 from orchestrator.run.channels import CHANNELS, COORDS, dims
 from orchestrator.run.checks import overload_message, time_step_warnings, unbalance_warnings
@@ -67,7 +68,7 @@ from orchestrator.run.results import (
     read_checkpoint,
     read_results,
 )
-from orchestrator.run.spec import RunError, RunSpec, build_master, check_periods, with_units
+from orchestrator.run.spec import RunError, RunSpec, check_periods, with_units
 
 __all__ = ["RunSummary", "Runner", "resume_run", "run_case", "simulate_case"]
 
@@ -84,7 +85,6 @@ class RunSummary:
     bearing_evaluations: int  # calls of the bearing set (4 bearings each)
     static_iterations: int
     static_positions: np.ndarray  # (4, 2) m
-    figures: list = field(default_factory=list)
     report: dict | None = None  # orchestrator.analysis.metrics.run_report, None below 2 steps
     warnings: list = field(default_factory=list)  # sentences of the checks before the transient
     relaxed_steps: int = 0  # steps whose coupled iteration was relaxed (coupling.master)
@@ -182,7 +182,7 @@ class Runner:
             raise Stop(self.received[0], where)
 
     def start(self) -> None:
-        """The master and its two slaves (:func:`~orchestrator.run.spec.build_master`)."""
+        """The master and its two slaves (:func:`~orchestrator.coupling.system.build_master`)."""
         s = self.spec
         self.master = build_master(s.case, s.in_process, s.fmu_dir, s.fmus)
         self.stop_if_asked("before the static solution")
@@ -315,9 +315,9 @@ def simulate_case(spec: RunSpec, progress: bool = False, echo_warnings: bool = T
 
 
 def run_case(case: Case, in_process: bool = False, out_dir: Path | str = "results",
-             fmu_dir: Path | str | None = None, progress: bool = True, figures: bool = True,
-             fmus: dict | None = None, steps: int | None = None, overwrite: bool = False,
-             flush_seconds: float = 1.0, echo_warnings: bool = True) -> RunSummary:
+             fmu_dir: Path | str | None = None, progress: bool = True, fmus: dict | None = None,
+             steps: int | None = None, overwrite: bool = False, flush_seconds: float = 1.0,
+             echo_warnings: bool = True) -> RunSummary:
     """Run a case into a results file (module docstring); returns a :class:`RunSummary`.
 
     The case carries every setting (the bearing model in ``bearings.model``, the length in
@@ -330,7 +330,7 @@ def run_case(case: Case, in_process: bool = False, out_dir: Path | str = "result
     replaced only by a complete run).
 
     ``fmus``: run these FMU files instead of the built ones
-    (:func:`~orchestrator.run.spec.build_master`); the results are then named after the
+    (:func:`~orchestrator.coupling.system.build_master`); the results are then named after the
     bearing FMU file. Raises :class:`~orchestrator.run.spec.RunError` (with the results file that
     keeps the steps
     computed) if the static solution or a step fails, and
@@ -344,13 +344,12 @@ def run_case(case: Case, in_process: bool = False, out_dir: Path | str = "result
         where = run_files.target(out_dir, name, overwrite)
     except run_files.TargetError as exc:
         raise RunError(str(exc)) from None
-    return _run_to_file(spec, spec.attributes(), where, progress=progress, figures=figures,
+    return _run_to_file(spec, spec.attributes(), where, progress=progress,
                         flush_seconds=flush_seconds, echo=echo_warnings)
 
 
 def resume_run(path: Path | str, periods: int | None = None, fmu_dir: Path | str | None = None,
-               progress: bool = True, figures: bool = True,
-               flush_seconds: float = 1.0) -> RunSummary:
+               progress: bool = True, flush_seconds: float = 1.0) -> RunSummary:
     """Continue the run of a results file from its last checkpoint (``gsb run --resume``).
 
     The case comes from the file (``case_toml``), the static solution is solved again and must
@@ -406,13 +405,13 @@ def resume_run(path: Path | str, periods: int | None = None, fmu_dir: Path | str
              "steps_total": spec.n_steps, "interrupted": "", "stopped_by": "",
              "resumed_at_step": rows}
     where = run_files.Target(path, path, path.with_suffix(""))
-    return _run_to_file(spec, attrs, where, rows, blob, progress, figures, flush_seconds,
+    return _run_to_file(spec, attrs, where, rows, blob, progress, flush_seconds,
                         stored_x0=np.asarray(a["static_journal"]))
 
 
 def _run_to_file(spec: RunSpec, attrs: dict, where, first: int = 0, blob=None,
-                 progress: bool = True, figures: bool = True, flush_seconds: float = 1.0,
-                 stored_x0=None, echo: bool = True) -> RunSummary:
+                 progress: bool = True, flush_seconds: float = 1.0, stored_x0=None,
+                 echo: bool = True) -> RunSummary:
     """The runner's steps with a results file as recorder: a new one (``blob`` None), or
     ``where.write`` continued after its first ``first`` rows from the checkpoint ``blob``."""
     path, name = where.write, where.final.stem
@@ -489,10 +488,6 @@ def _run_to_file(spec: RunSpec, attrs: dict, where, first: int = 0, blob=None,
             runner.finish()
     summary = runner.summary(static, done, path, spec.n_steps - first)
     summary.report = _store_report(path)
-    if figures:
-        from orchestrator.figures.run import run_figures
-
-        summary.figures = run_figures(path, where.figures)
     return summary
 
 

@@ -3,7 +3,7 @@ model and the number of mesh periods included), the transport and how many steps
 
 :class:`RunSpec` is built once from the case (:meth:`RunSpec.of`); the time step, the number
 of steps and the results file's settings attributes all derive from it, so no setting has a
-second carrier. :func:`build_master` builds the master of a case for either transport.
+second carrier. :func:`orchestrator.coupling.system.build_master` builds its master.
 """
 
 from __future__ import annotations
@@ -16,11 +16,8 @@ import numpy as np
 from fmu_src import description
 from fmu_src.case import Case
 from fmu_src.units import symbol
-from orchestrator.coupling.inprocess import InProcessStructure, ModelBearings
-from orchestrator.coupling.master import Master
 
-__all__ = ["ATTRIBUTE_UNITS", "RunError", "RunSpec", "build_master", "check_periods",
-           "with_units"]
+__all__ = ["ATTRIBUTE_UNITS", "RunError", "RunSpec", "check_periods", "with_units"]
 
 
 class RunError(RuntimeError):
@@ -108,32 +105,3 @@ ATTRIBUTE_UNITS = {
 def with_units(attrs: dict) -> dict:
     """``attrs`` and the unit of each that has one, as ``<name>_unit``."""
     return attrs | {f"{k}_unit": ATTRIBUTE_UNITS[k] for k in attrs if k in ATTRIBUTE_UNITS}
-
-
-def build_master(case: Case, in_process: bool = False, fmu_dir: Path | str | None = None,
-                 fmus: dict | None = None) -> Master:
-    """The master of a case with its two slaves (``master.structure``, ``master.bearings``).
-
-    In-process the physics objects of :mod:`fmu_src.description` are driven directly; through
-    FMUs the bearing FMU of the case's ``bearings.model`` and the gear-shaft FMU are taken from
-    ``fmu_dir`` (default: the per-user cache; built there if missing), or ``fmus`` names the
-    files: ``{"gear": path, "bearings": [4 paths], "bearing_parameters": [4 dicts]
-    (optional)}`` (an SSP's, or a bearing FMU of the user's own). Release the slaves with
-    :meth:`orchestrator.coupling.master.Master.close`.
-    """
-    tol = case["simulation.tolerance"]
-    max_it = case["simulation.max_iterations"]
-    if in_process:
-        structure = InProcessStructure(description.structure(case))
-        bearings = ModelBearings(description.bearing_models(case), description.BEARING_FRAMES,
-                                 description.bearing_speeds(case))
-    elif fmus is not None:
-        from orchestrator.coupling import fmi
-
-        structure, bearings = fmi.system_from_files(case, fmus["gear"], fmus["bearings"],
-                                                    fmus.get("bearing_parameters"))
-    else:
-        from orchestrator.coupling import fmi
-
-        structure, bearings = fmi.system_from_case(case, fmu_dir=fmu_dir)
-    return Master(structure, bearings, tol, max_it)

@@ -14,8 +14,8 @@ from fmu_src.case import load_case
 from fmu_src.examples import HELICAL, SPUR
 from orchestrator.analysis.metrics import fit_ellipse, steady_window
 from orchestrator.analysis.spectrum import order_spectrum, spectral_resolution
+from orchestrator.coupling.system import build_master
 from orchestrator.figures.base import AMPLITUDE_LABEL, order_label, pyplot
-from orchestrator.run.spec import build_master
 
 __all__ = ["draw_all", "force_spectrum", "has_line"]
 

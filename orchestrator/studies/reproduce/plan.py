@@ -13,8 +13,8 @@ from pathlib import Path
 
 from fmu_src.case import load_case
 from fmu_src.examples import HELICAL, SPUR, helix_overrides
+from orchestrator.coupling.system import build_master
 from orchestrator.run.runner import run_case
-from orchestrator.run.spec import build_master
 from orchestrator.sweeps.runner import SweepPoint, run_sweep
 
 __all__ = ["FULL", "QUICK", "Plan", "run_base_cases", "run_parameter_sweeps", "run_table4"]
@@ -59,7 +59,7 @@ def run_base_cases(plan: Plan, out: Path, progress: bool) -> dict:
                              ("helical_lumped", HELICAL, "lumped")):
         case = load_case(path, {"bearings.model": model, "simulation.mesh_periods": plan.periods})
         s = run_case(case, in_process=True,
-                     out_dir=out / "runs", progress=progress, figures=False,
+                     out_dir=out / "runs", progress=progress,
                      overwrite=True)  # a reproduction regenerates its runs
         runs[key] = s.results.name
     return runs
@@ -79,7 +79,7 @@ def run_table4(plan: Plan, out: Path, progress: bool) -> list[dict]:
         master.solve_static()
         ecc = math.hypot(*master.structure.journal_states()[0, :2]) / case["bearings.clearance"][0]
         s = run_case(case, in_process=True,
-                     out_dir=out / "runs" / "table4", progress=progress, figures=False,
+                     out_dir=out / "runs" / "table4", progress=progress,
                      overwrite=True)
         per_step = s.wall_time / s.steps
         evals_per_step = 4 * s.bearing_evaluations / s.steps

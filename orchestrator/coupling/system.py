@@ -1,0 +1,48 @@
+"""The coupled system of a case: the master with its structure slave and its bearing set.
+
+:func:`build_master` is the one place a case becomes a
+:class:`~orchestrator.coupling.master.Master`, in-process
+(:mod:`orchestrator.coupling.inprocess`, on the physics objects of :mod:`fmu_src.description`)
+or through FMUs (:mod:`orchestrator.coupling.fmi`): runs, ``gsb modal``, the SSP export and
+the studies all couple a case through it.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from fmu_src import description
+from fmu_src.case import Case
+from orchestrator.coupling.inprocess import InProcessStructure, ModelBearings
+from orchestrator.coupling.master import Master
+
+__all__ = ["build_master"]
+
+
+def build_master(case: Case, in_process: bool = False, fmu_dir: Path | str | None = None,
+                 fmus: dict | None = None) -> Master:
+    """The master of a case with its two slaves (``master.structure``, ``master.bearings``).
+
+    In-process the physics objects of :mod:`fmu_src.description` are driven directly; through
+    FMUs the bearing FMU of the case's ``bearings.model`` and the gear-shaft FMU are taken from
+    ``fmu_dir`` (default: the per-user cache; built there if missing), or ``fmus`` names the
+    files: ``{"gear": path, "bearings": [4 paths], "bearing_parameters": [4 dicts]
+    (optional)}`` (an SSP's, or a bearing FMU of the user's own). Release the slaves with
+    :meth:`orchestrator.coupling.master.Master.close`.
+    """
+    tol = case["simulation.tolerance"]
+    max_it = case["simulation.max_iterations"]
+    if in_process:
+        structure = InProcessStructure(description.structure(case))
+        bearings = ModelBearings(description.bearing_models(case), description.BEARING_FRAMES,
+                                 description.bearing_speeds(case))
+    elif fmus is not None:
+        from orchestrator.coupling import fmi
+
+        structure, bearings = fmi.system_from_files(case, fmus["gear"], fmus["bearings"],
+                                                    fmus.get("bearing_parameters"))
+    else:
+        from orchestrator.coupling import fmi
+
+        structure, bearings = fmi.system_from_case(case, fmu_dir=fmu_dir)
+    return Master(structure, bearings, tol, max_it)

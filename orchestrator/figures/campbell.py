@@ -1,0 +1,88 @@
+"""The Campbell diagram of ``gsb modal --campbell``: the damped modes of a case over pinion
+speeds (:func:`orchestrator.analysis.campbell.campbell_data`) against the mesh-order and 1x
+lines, with their crossings (:func:`orchestrator.analysis.campbell.crossings`).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from gear_fmu.damped_modes import MESH_MODE_FRACTION
+from orchestrator.analysis.campbell import HARMONICS, crossings
+from orchestrator.figures.base import pyplot
+
+__all__ = ["plot_campbell"]
+
+
+def plot_campbell(data: dict, path, title: str, harmonics: int = HARMONICS,
+                  min_mesh_fraction: float = MESH_MODE_FRACTION) -> Path:
+    """Campbell diagram PNG (module docstring): damped frequencies [Hz] against pinion speed
+    [rad/s] up to ``data["max_frequency"]``, coloured by damping ratio, marker area by mesh
+    energy share; mesh-order and 1x lines; crossings marked
+    (:func:`orchestrator.analysis.campbell.crossings`)."""
+    from matplotlib.colors import LogNorm
+
+    plt = pyplot()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    w, z1, f_max = data["speeds"], data["z1"], data["max_frequency"]
+    fig, ax = plt.subplots(figsize=(10, 7), constrained_layout=True)
+    if w.size:
+        x = np.linspace(0.0, w.max() * 1.05, 2)
+        for k in range(1, harmonics + 1):
+            ax.plot(x, k * z1 * x / (2 * math.pi), "--", color="tab:red", lw=1.0, alpha=0.8,
+                    label="mesh orders f = k z1 ω / 2π" if k == 1 else None)
+            at = min(0.95 * f_max, k * z1 * w.max() / (2 * math.pi))  # label inside the axes
+            ax.annotate(f"k = {k}", (at * 2 * math.pi / (k * z1), at),
+                        textcoords="offset points", xytext=(-3, 0), ha="right", va="center",
+                        color="tab:red", fontsize=9)
+        ax.plot(x, x / (2 * math.pi), ":", color="k", lw=1.0, label="1× pinion speed")
+        ax.annotate("1× pinion speed", (w.max(), w.max() / (2 * math.pi)),
+                    textcoords="offset points", xytext=(-4, 4), ha="right", fontsize=9)
+    for a, i, j in data["segments"]:
+        ax.plot([w[a], w[a + 1]], [data["modes"][a]["frequency_hz"][i],
+                                   data["modes"][a + 1]["frequency_hz"][j]],
+                "-", color="0.6", lw=0.8, zorder=1)
+    norm = LogNorm(vmin=0.01, vmax=1.0)
+    sc = None
+    for wi, m in zip(w, data["modes"], strict=True):
+        share = np.nan_to_num(m["mesh_energy_fraction"], nan=0.0).clip(0.0, 1.0)
+        sc = ax.scatter(np.full(m["frequency_hz"].size, wi), m["frequency_hz"],
+                        c=m["damping_ratio"].clip(0.01, 1.0), cmap="viridis_r", norm=norm,
+                        s=12 + 110 * share, edgecolors="k", linewidths=0.3, zorder=3)
+    if sc is not None:
+        fig.colorbar(sc, ax=ax, label="damping ratio ζ [-]")
+    cross = crossings(data, harmonics, min_mesh_fraction)
+    mesh = [c for c in cross if c["order"] > 0 and c["frequency_hz"] <= f_max]
+    once = [c for c in cross if c["order"] == 0 and c["frequency_hz"] <= f_max]
+    if mesh:
+        ax.plot([c["speed_rad_s"] for c in mesh], [c["frequency_hz"] for c in mesh], "x",
+                color="tab:red", ms=11, mew=2.2, zorder=4,
+                label=f"mesh order × mode with ≥ {min_mesh_fraction:.0%} mesh energy "
+                      "(ω in rad/s)")
+        for c in mesh:
+            ax.annotate(f"{c['speed_rad_s']:.0f}", (c["speed_rad_s"], c["frequency_hz"]),
+                        textcoords="offset points", xytext=(0, 9), ha="center",
+                        va="bottom", rotation=90, color="tab:red", fontsize=8)
+    if once:
+        ax.plot([c["speed_rad_s"] for c in once], [c["frequency_hz"] for c in once], "o",
+                mfc="none", mec="k", ms=8, zorder=4, label="1× line × mode")
+    ax.set_xlim(0.0, (w.max() if w.size else 1.0) * 1.05)
+    ax.set_ylim(0.0, f_max)
+    ax.set_xlabel("pinion speed ω [rad/s]")
+    ax.set_ylabel("damped natural frequency f_d [Hz]")
+    rpm = ax.secondary_xaxis("top", functions=(lambda v: v * 30 / math.pi,
+                                               lambda v: v * math.pi / 30))
+    rpm.set_xlabel("pinion speed [rpm]")
+    ax.grid(True, alpha=0.3)
+    ax.set_title(title, fontsize=11)
+    handles, labels = ax.get_legend_handles_labels()
+    handles.append(plt.Line2D([], [], ls="none", marker="o", mfc="0.7", mec="k", ms=10))
+    labels.append("damped mode (marker area: mesh strain energy share)")
+    fig.legend(handles, labels, loc="outside lower center", ncols=2, fontsize=9)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
