@@ -12,10 +12,13 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
 from fmu_src.slaves.bootstrap import locked
+
+ROOT = Path(__file__).resolve().parents[1]
 
 #: what the xdist controller runs before the workers start, in two processes at once: every
 #: bearing model's kernels; the native layer, the structure's and the master's kernels (short
@@ -48,8 +51,13 @@ with tempfile.TemporaryDirectory() as tmp:
 
 
 def pytest_configure(config):
-    """In the xdist controller (not in a worker, not in a run without xdist): :data:`WARM_UP`.
+    """Every module of :data:`LONGEST_FIRST` exists (a moved one would silently lose its place);
+    in the xdist controller (not in a worker, not in a run without xdist): :data:`WARM_UP`.
     A failure there is not reported: the tests that need the same things report it."""
+    missing = [path for path in LONGEST_FIRST if not (ROOT / path).is_file()]
+    if missing:
+        raise pytest.UsageError(f"tests/conftest.py LONGEST_FIRST names missing modules: "
+                                f"{', '.join(missing)}")
     if hasattr(config, "workerinput") or not getattr(config.option, "numprocesses", None):
         return
     procs = [subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.DEVNULL,
@@ -62,15 +70,16 @@ def pytest_configure(config):
 #: so that no worker is left alone with one of them at the end (xdist keeps this order with
 #: --no-loadscope-reorder; it would otherwise send the modules with most tests first)
 LONGEST_FIRST = (
-    "tests/test_determinism.py",  # 35: the kernels compiled from an empty cache, then in part
-    "tests/test_results_safety.py",  # 41
-    "tests/test_ecos.py",  # 14
-    "tests/test_fmu_system.py",  # 12
-    "tests/test_fmu_run.py",  # 11
-    "tests/test_paper_results.py",  # 10
-    "tests/test_sweep_cli.py",  # 10
-    "tests/test_api_docs.py",  # 9
-    "tests/test_native_build.py",  # 9
+    # 35: the kernels compiled from an empty cache, then in part
+    "tests/system/test_determinism.py",
+    "tests/system/test_results_safety.py",  # 41
+    "tests/system/test_ecos.py",  # 14
+    "tests/system/test_fmu_system.py",  # 12
+    "tests/system/test_fmu_run.py",  # 11
+    "tests/system/test_paper_results.py",  # 10
+    "tests/orchestrator/sweep/test_sweep_cli.py",  # 10
+    "tests/docs/test_api_docs.py",  # 9
+    "tests/fmu_src/test_native_build.py",  # 9
 )
 
 

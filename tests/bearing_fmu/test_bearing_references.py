@@ -20,7 +20,7 @@ from bearing_fmu.hybrid import HybridBearing
 from bearing_fmu.short_bearing import ShortBearing
 from bearing_fmu.static import static_equilibrium
 
-DATA = Path(__file__).parent / "data"
+DATA = Path(__file__).resolve().parents[1] / "data"
 
 
 def unit_bearing(lambda_):

@@ -1,5 +1,6 @@
 """The paper's case run through real FMUs (gear-shaft FMU + four bearing FMUs, fmpy) against the
-in-process master, which tests/test_run.py checks against a monolithic Newton-Raphson.
+in-process master, which tests/orchestrator/run/test_run.py checks against a monolithic
+Newton-Raphson.
 
 Both transports run the same code on the same numbers along the same sequence of calls (one
 static first guess, :meth:`orchestrator.coupling.master.BearingSet.static_position`), so every

@@ -23,7 +23,7 @@ from orchestrator.run.results import read_checkpoint, read_results
 from tests.helpers import paced_gsb, run_here
 
 GSB = [sys.executable, "-m", "orchestrator.cli"]
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 QUICK = ["--bearing", "linear", "--in-process", "--no-figures", "--quiet"]
 
 

@@ -181,8 +181,9 @@ def test_a_failing_run_keeps_what_it_computed(tmp_path, monkeypatch):
 def test_swapping_the_bearing_model_is_a_name():
     """Same case, another bearing model by name. Table 4: short-bearing theory puts bearing
     1's static eccentricity 12.40 % below the paper's reference; here 12.65 % below the hybrid
-    method (which is within 0.005 % of the FD reference, tests/test_bearing_references.py).
-    Asserted within 0.4 points of the paper's value (measured: 0.25)."""
+    method (which is within 0.005 % of the FD reference,
+    tests/bearing_fmu/test_bearing_references.py). Asserted within 0.4 points of the paper's
+    value (measured: 0.25)."""
     ecc = {}
     for model in ("hybrid", "short"):
         master = build_master(paper_case(), model, in_process=True)

@@ -107,7 +107,7 @@ def test_pythonfmu_is_pinned_to_the_release_whose_library_is_vendored():
 
     from fmu_src.build.native import VENDORED_PYTHONFMU
 
-    root = Path(__file__).resolve().parents[1]
+    root = Path(__file__).resolve().parents[2]
     deps = tomllib.loads((root / "pyproject.toml").read_text())["project"]["dependencies"]
     assert f"pythonfmu=={VENDORED_PYTHONFMU}" in deps
     assert importlib.metadata.version("pythonfmu") == VENDORED_PYTHONFMU

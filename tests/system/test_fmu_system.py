@@ -263,8 +263,8 @@ INTERRUPT_TRIES = 10
 def test_ctrl_c_and_sigterm_stop_a_fmu_run_cleanly(fmu_dir, tmp_path):
     """SIGINT or SIGTERM at a random moment of a run through FMUs: exit 130 / 143, no crash
     or traceback, and the results file closed, marked interrupted, with the steps done.
-    (Ten random moments: slow; tests/test_results_safety.py interrupts each transport once
-    per signal in the default run and resumes the runs.)"""
+    (Ten random moments: slow; tests/system/test_results_safety.py interrupts each transport
+    once per signal in the default run and resumes the runs.)"""
     from orchestrator.run.results import read_results
 
     rng = random.Random(10)
