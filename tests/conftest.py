@@ -17,37 +17,14 @@ from pathlib import Path
 import pytest
 
 from fmu_src.slaves.bootstrap import locked
+from tests.helpers import probe_command, probe_env
 
 ROOT = Path(__file__).resolve().parents[1]
 
-#: what the xdist controller runs before the workers start, in two processes at once: every
-#: bearing model's kernels; the native layer, the structure's and the master's kernels (short
-#: in-process runs)
-WARM_UP = (
-    """
-import numpy as np
-from bearing_fmu import MODELS, BearingData, model_class
-from bearing_fmu.static import static_equilibrium
-from orchestrator.coupling.inprocess import ModelBearings
-b = BearingData(0.07, 0.05, 150e-6, 0.0288)
-for name in MODELS:
-    model = model_class(name).from_parameters(b)
-    model.evaluate(6e-5, -6e-5, 1e-3, -1e-3, 325.0)
-    ModelBearings([model], [(0.3, -1)], [325.0]).evaluate(np.array([[6e-5, -6e-5, 0.0, 0.0]]))
-static_equilibrium(model_class("hybrid").from_parameters(b), (0.0, -2251.0), 325.0)
-""",
-    """
-import tempfile
-from fmu_src.case import load_case
-from fmu_src.build.native import export_library
-from orchestrator.run.runner import run_case
-export_library()
-with tempfile.TemporaryDirectory() as tmp:
-    for case, model in (("baguet2010_spur", "lumped"), ("baguet2010_helical", "lumped")):
-        run_case(load_case(case), bearing=model, steps=2, in_process=True,
-                 out_dir=tmp + "/" + case, progress=False, figures=False)
-""",
-)
+#: what the xdist controller runs before the workers start, in two processes at once
+#: (:mod:`tests.probes.warm_up`): every bearing model's kernels; the native layer, the
+#: structure's and the master's kernels (short in-process runs)
+WARM_UP = ("bearing_kernels", "native_and_structure")
 
 
 def pytest_configure(config):
@@ -60,8 +37,9 @@ def pytest_configure(config):
                                 f"{', '.join(missing)}")
     if hasattr(config, "workerinput") or not getattr(config.option, "numprocesses", None):
         return
-    procs = [subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.DEVNULL,
-                              stderr=subprocess.DEVNULL) for code in WARM_UP]
+    procs = [subprocess.Popen(probe_command("tests.probes.warm_up", probe), env=probe_env(),
+                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+             for probe in WARM_UP]
     for proc in procs:
         proc.wait(timeout=900)
 

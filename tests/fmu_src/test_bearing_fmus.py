@@ -13,6 +13,7 @@ from bearing_fmu import MODELS, fmu_name
 from tests.helpers import ROOT, run_here
 
 BEARING_FMUS = [fmu_name(m) for m in MODELS]
+PROBES = "tests.probes.bearing_fmus"
 
 
 @pytest.mark.parametrize("name", BEARING_FMUS)
@@ -67,48 +68,15 @@ def test_fmu_equals_in_process_model_in_global_frame(fmu_dir, model):
 
 
 def test_fmu_error_is_reported_not_fatal_and_state_round_trips(fmu_dir):
-    out = run_here(f"""
-        import json, numpy as np
-        from orchestrator.coupling.fmi import FmuBearings, FmuError
-        fmu = FmuBearings([r"{fmu_dir / 'BearingShort.fmu'}"], [dict()], [325.0])
-        good = np.array([[6e-5, -6e-5, 0.0, 0.0]])
-        f_good = fmu.evaluate(good)[0]
-        s = fmu.slaves[0].fmu
-        st = s.getFMUstate()
-        try:
-            fmu.evaluate(np.array([[2e-4, 0.0, 0.0, 0.0]]))  # eccentricity 1.33
-            msg = None
-        except FmuError as exc:
-            msg = str(exc)
-        s.setFMUstate(st)
-        f_back = fmu.evaluate(good)[0]
-        fmu.close()
-        print(json.dumps(dict(msg=msg, same=bool(np.array_equal(f_good, f_back)))))
-    """)
+    out = run_here(module=PROBES, args=["error_and_state_round_trip",
+                                        {"fmu": fmu_dir / "BearingShort.fmu"}])
     assert out["msg"] is not None and "eccentricity ratio 1.33333" in out["msg"]
     assert out["same"]
 
 
 def test_linear_fmu_freezes_at_initialisation_exit(fmu_dir):
     """Hybrid until initialisation ends, then exactly affine with the coefficients at X0."""
-    out = run_here(f"""
-        import json, numpy as np
-        from orchestrator.coupling.fmi import FmuBearings
-        fmu = FmuBearings([r"{fmu_dir / 'BearingLinear.fmu'}"], [dict()], [325.0])
-        x0 = np.array([[6e-5, -6e-5, 0.0, 0.0]])
-        f0, k0, c0 = fmu.evaluate(x0)
-        fmu.exit_initialization()
-        fa, ka, ca = fmu.evaluate(x0)
-        x1 = x0 + np.array([[5e-6, 2e-6, 1e-4, -1e-4]])
-        f1, k1, c1 = fmu.evaluate(x1)
-        pred = fa[0] - ka[0] @ (x1[0, :2] - x0[0, :2]) - ca[0] @ x1[0, 2:]
-        fmu.close()
-        scale = np.abs(f0).max()
-        print(json.dumps(dict(affine=float(np.abs(f1[0] - pred).max() / scale),
-                              at_x0=float(np.abs(fa - f0).max() / scale),
-                              k=float(np.abs(ka - k0).max() / np.abs(k0).max()),
-                              same_k=bool(np.array_equal(ka, k1)))))
-    """)
+    out = run_here(module=PROBES, args=["linear_freeze", {"fmu": fmu_dir / "BearingLinear.fmu"}])
     assert out["affine"] < 1e-13  # an affine law, to round-off
     assert out["at_x0"] < 1e-7 and out["k"] < 1e-4  # the hybrid's own tolerance at X0
     assert out["same_k"]
@@ -128,17 +96,7 @@ def test_fmpy_simulate_from_a_fresh_process(fmu_dir, tmp_path):
 
 
 def test_many_instances_of_one_fmu_in_one_process(fmu_dir):
-    out = run_here(f"""
-        import json, numpy as np
-        from orchestrator.coupling.fmi import FmuBearings
-        path = r"{fmu_dir / 'BearingShort.fmu'}"
-        sets = [FmuBearings([path] * 4, [dict()] * 4, [325.0] * 4) for _ in range(5)]
-        st = np.tile([6e-5, -6e-5, 0.0, 0.0], (4, 1))
-        f = [s.evaluate(st)[0] for s in sets]
-        for s in sets:
-            s.close()
-        print(json.dumps(dict(same=bool(all(np.array_equal(f[0], g) for g in f)))))
-    """)
+    out = run_here(module=PROBES, args=["many_instances", {"fmu": fmu_dir / "BearingShort.fmu"}])
     assert out["same"]
 
 

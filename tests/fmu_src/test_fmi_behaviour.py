@@ -25,38 +25,16 @@ from tests.helpers import run_here, run_isolated
 BEARING_FMUS = [fmu_name(m) for m in MODELS]
 #: models whose film has a clearance (the lumped spring has none: any state is valid)
 FILM_MODELS = [m for m in MODELS if m != "lumped"]
+PROBES = "tests.probes.fmi_behaviour"
+
+
+def fmu_file(fmu_dir, model):
+    return fmu_dir / (fmu_name(model) + ".fmu")
 
 
 @pytest.mark.parametrize("model", list(MODELS))
 def test_bearing_fmus_refuse_bad_values_when_set(fmu_dir, model):
-    out = run_here(f"""
-        import json, math
-        from fmpy.fmi1 import FMICallException
-        from orchestrator.coupling.fmi import FmuInstance
-        s = FmuInstance(r"{fmu_dir / (fmu_name(model) + '.fmu')}", "b")
-        s.fmu.setupExperiment(startTime=0.0)
-        s.fmu.enterInitializationMode()
-        vr = s.vr
-        r = {{}}
-        for key, name, value in (("C", "C", -1e-4), ("mu", "mu", 0.0), ("nan", "s", math.nan),
-                                 ("omega", "omega", -5.0)):
-            since = len(s.messages)
-            try:
-                s.fmu.setReal([vr[name]], [value])
-                r[key] = ["accepted"]
-            except FMICallException as exc:
-                r[key] = [exc.status, s.log_tail(since=since)]
-        since = len(s.messages)
-        try:
-            s.fmu.setInteger([vr["rotation_sign"]], [0])
-            r["sign"] = ["accepted"]
-        except FMICallException as exc:
-            r["sign"] = [exc.status, s.log_tail(since=since)]
-        r["kept"] = [s.fmu.getReal([vr["C"]])[0], s.fmu.getReal([vr["mu"]])[0],
-                     s.fmu.getInteger([vr["rotation_sign"]])[0]]
-        s.close()
-        print(json.dumps(r))
-    """)
+    out = run_here(module=PROBES, args=["refuse_bad_values", {"fmu": fmu_file(fmu_dir, model)}])
     assert out["C"][0] == 3 and "C = -0.0001 m refused: must be > 0 m" in out["C"][1]
     assert out["mu"][0] == 3 and "mu = 0.0 Pa.s refused: must be > 0 Pa.s" in out["mu"][1]
     assert out["nan"][0] == 3 and "s = nan m refused: not a finite number" in out["nan"][1]
@@ -69,27 +47,8 @@ def test_bearing_fmus_refuse_bad_values_when_set(fmu_dir, model):
 
 @pytest.mark.parametrize("model", FILM_MODELS)
 def test_a_journal_outside_the_clearance_fails_the_read_not_nan(fmu_dir, model):
-    out = run_here(f"""
-        import json
-        from fmpy.fmi1 import FMICallException
-        from orchestrator.coupling.fmi import FmuInstance
-        s = FmuInstance(r"{fmu_dir / (fmu_name(model) + '.fmu')}", "b")
-        s.fmu.setupExperiment(startTime=0.0)
-        s.fmu.enterInitializationMode()
-        vr = s.vr
-        c = s.fmu.getReal([vr["C"]])[0]
-        s.fmu.setReal([vr["s"], vr["t"]], [1.2 * c, 0.0])  # accepted: an input, not yet used
-        since = len(s.messages)
-        try:
-            values = s.fmu.getReal([vr["F_s"], vr["K_ss"]])
-            r = dict(status=0, values=values)
-        except FMICallException as exc:
-            r = dict(status=exc.status, log=s.log_tail(since=since))
-        s.fmu.setReal([vr["s"]], [0.5 * c])  # back inside: the next read works
-        r["after"] = s.fmu.getReal([vr["F_s"], vr["eccentricity"]])
-        s.close()
-        print(json.dumps(r))
-    """)
+    out = run_here(module=PROBES, args=["read_outside_the_clearance",
+                                        {"fmu": fmu_file(fmu_dir, model)}])
     assert out["status"] == 3, out
     assert "eccentricity ratio 1.2" in out["log"] and "must be < 1" in out["log"]
     assert out["after"][1] == pytest.approx(0.5, abs=1e-15)
@@ -113,40 +72,7 @@ def test_bounds_are_declared_in_the_model_description(fmu_dir):
 def test_bearing_fmu_state_round_trip_is_bit_exact(fmu_dir, model):
     """A saved state, restored after evaluations that moved the warm start elsewhere, gives
     the same outputs to the last bit as the first time; so does a serialised one."""
-    out = run_here(f"""
-        import json
-        from orchestrator.coupling.fmi import FmuInstance
-        s = FmuInstance(r"{fmu_dir / (fmu_name(model) + '.fmu')}", "b")
-        f, vr = s.fmu, s.vr
-        f.setupExperiment(startTime=0.0)
-        f.enterInitializationMode()
-        f.setReal([vr["omega"]], [325.0])
-        outs = [vr[n] for n in ("F_s", "F_t", "K_ss", "K_st", "K_ts", "K_tt", "C_ss", "C_st",
-                                "C_ts", "C_tt")]
-        c = f.getReal([vr["C"]])[0]
-        ins = [vr[n] for n in ("s", "t", "s_dot", "t_dot")]
-        def at(x):
-            f.setReal(ins, x)
-            return f.getReal(outs)
-        at([0.5 * c, -0.3 * c, 0.0, 0.0])
-        f.exitInitializationMode()
-        at([0.55 * c, -0.3 * c, 1e-3, 0.0])  # the warm start now holds this solve
-        state = f.getFMUstate()
-        blob = f.serializeFMUstate(state)
-        first = at([0.6 * c, -0.25 * c, 2e-3, -1e-3])
-        for k in range(5):  # move the warm start far away
-            at([-0.4 * c, 0.5 * c * (k + 1) / 5, -3e-3, 2e-3])
-        f.setFMUstate(state)
-        again = at([0.6 * c, -0.25 * c, 2e-3, -1e-3])
-        at([-0.4 * c, 0.5 * c, -3e-3, 2e-3])
-        back = f.deSerializeFMUstate(blob)
-        f.setFMUstate(back)
-        restored = at([0.6 * c, -0.25 * c, 2e-3, -1e-3])
-        f.freeFMUstate(back)
-        f.freeFMUstate(state)
-        s.close()
-        print(json.dumps(dict(same=first == again, serialised=first == restored)))
-    """)
+    out = run_here(module=PROBES, args=["state_round_trip", {"fmu": fmu_file(fmu_dir, model)}])
     assert out["same"] and out["serialised"]
 
 
@@ -155,51 +81,7 @@ def test_a_checkpointed_system_restarts_exactly_in_a_new_process(fmu_dir, tmp_pa
     every FMU's state serialised to a file after step 6. Process 2: fresh instances restored
     from the file (and the master's laws) run steps 7-12: the same journal states, bit for
     bit."""
-    common = f"""
-        import json, pickle
-        import numpy as np
-        from fmu_src import description
-        from fmu_src.case import load_case
-        from orchestrator.run.runner import build_master
-        case = load_case("baguet2010_spur")
-        dt = description.time_step(case)
-        m = build_master(case, fmu_dir=r"{fmu_dir}")
-        fmus = [m.structure.slave.fmu] + [s.fmu for s in m.bearings.slaves]
-        path = r"{tmp_path / 'checkpoint.pkl'}"
-    """
-    first = run_isolated(common + """
-        m.solve_static()
-        m.exit_initialization()
-        for k in range(6):
-            m.step(k * dt, dt)
-        blobs = []
-        for f in fmus:
-            st = f.getFMUstate()
-            blobs.append(f.serializeFMUstate(st))
-            f.freeFMUstate(st)
-        with open(path, "wb") as fh:
-            pickle.dump(dict(blobs=blobs, laws=m.laws, t=m.structure.t,
-                             n=m.structure.n_steps), fh)
-        for k in range(6, 12):
-            m.step(k * dt, dt)
-        x = m.structure.journal_states().tolist()
-        m.close()
-        print(json.dumps(dict(x=x)))
-    """)
-    second = run_isolated(common + """
-        with open(path, "rb") as fh:
-            saved = pickle.load(fh)
-        m.bearings.exit_initialization()
-        m.structure.exit_initialization()
-        for f, blob in zip(fmus, saved["blobs"]):
-            st = f.deSerializeFMUstate(blob)
-            f.setFMUstate(st)
-            f.freeFMUstate(st)
-        m.laws, m.structure.t, m.structure.n_steps = saved["laws"], saved["t"], saved["n"]
-        for k in range(6, 12):
-            m.step(k * dt, dt)
-        x = m.structure.journal_states().tolist()
-        m.close()
-        print(json.dumps(dict(x=x)))
-    """)
+    where = {"fmu_dir": fmu_dir, "path": tmp_path / "checkpoint.pkl"}
+    first = run_isolated(module=PROBES, args=["checkpoint", {**where, "phase": "first"}])
+    second = run_isolated(module=PROBES, args=["checkpoint", {**where, "phase": "second"}])
     assert second["x"] == first["x"]

@@ -14,30 +14,15 @@ import hashlib
 
 import numpy as np
 
-from tests.helpers import ROOT, run_isolated
+from tests.helpers import PROBES, ROOT, run_isolated
 
 PERIODS = 2
 
 
-def _runs(fmu_dir) -> str:
-    return f"""
-        import hashlib, json, sys, tempfile
-        sys.path.insert(0, {str(ROOT)!r})
-        import numpy as np
-        from tests.helpers import run_paper_case
-        out = {{}}
-        for transport in ("in-process", "fmu"):
-            with tempfile.TemporaryDirectory() as tmp:
-                r, s = run_paper_case(tmp, periods={PERIODS}, in_process=transport == "in-process",
-                                      fmu_dir={str(fmu_dir)!r})
-            h = hashlib.sha256(np.ascontiguousarray(s.static_positions).tobytes())
-            for name in sorted(r):
-                if name not in ("units", "attrs"):
-                    h.update(name.encode() + np.ascontiguousarray(r[name]).tobytes())
-            out[transport] = h.hexdigest()
-            out[transport + " rows"] = len(r["time"])
-        print(json.dumps(out))
-    """
+def _runs(fmu_dir, numba_cache) -> dict:
+    """Both transports in a fresh interpreter (:func:`tests.probes.determinism.runs`)."""
+    return run_isolated(module="tests.probes.determinism", numba_cache=numba_cache,
+                        args=["runs", {"fmu_dir": fmu_dir, "periods": PERIODS}])
 
 
 #: kernels that call kernels of other files: the hybrid film's driver and the structure step
@@ -49,14 +34,14 @@ def test_same_bits_with_a_cold_a_warm_and_a_half_warm_numba_cache(fmu_dir, tmp_p
     against callees loaded from the cache."""
     import shutil
 
-    cold = run_isolated(_runs(fmu_dir), numba_cache=tmp_path / "a")
-    warm = run_isolated(_runs(fmu_dir), numba_cache=tmp_path / "a")
+    cold = _runs(fmu_dir, tmp_path / "a")
+    warm = _runs(fmu_dir, tmp_path / "a")
     shutil.copytree(tmp_path / "a", tmp_path / "b")
     dropped = [f for pattern in CALLERS for f in (tmp_path / "b").rglob(pattern)]
     assert len(dropped) >= 4, dropped
     for f in dropped:
         f.unlink()
-    half = run_isolated(_runs(fmu_dir), numba_cache=tmp_path / "b")
+    half = _runs(fmu_dir, tmp_path / "b")
     assert sorted(f.name for pattern in CALLERS for f in (tmp_path / "b").rglob(pattern)) == \
         sorted(f.name for f in dropped)  # compiled again
     assert cold["in-process rows"] == cold["fmu rows"] == 32 * PERIODS
@@ -86,35 +71,9 @@ def test_a_bearing_fmu_in_a_host_without_the_package_gives_the_same_bits(fmu_dir
         f, k, c = ref.evaluate(np.array([st]))
         expected.update(np.concatenate([f.ravel(), k.ravel(), c.ravel()]).tobytes())
     paths = [p for p in site.getsitepackages() if "site-packages" in p]
-    out = run_isolated(f"""
-        import sys
-        sys.path[:0] = {paths!r}
-        import hashlib, json
-        import numpy as np
-        from fmpy import extract, read_model_description
-        from fmpy.fmi2 import FMU2Slave
-        path = {str(fmu_dir / "BearingHybrid.fmu")!r}
-        md = read_model_description(path)
-        vr = {{v.name: v.valueReference for v in md.modelVariables}}
-        fmu = FMU2Slave(guid=md.guid, unzipDirectory=extract(path), instanceName="b",
-                        modelIdentifier=md.coSimulation.modelIdentifier)
-        fmu.instantiate()
-        fmu.setupExperiment(startTime=0.0)
-        fmu.enterInitializationMode()
-        params = {params!r}
-        fmu.setReal([vr[n] for n in params], list(params.values()))
-        fmu.setInteger([vr["rotation_sign"], vr["nodes"]], [-1, 96])
-        fmu.setReal([vr["omega"]], [54.0])
-        names = ["F_s", "F_t", "K_ss", "K_st", "K_ts", "K_tt", "C_ss", "C_st", "C_ts", "C_tt"]
-        h = hashlib.sha256()
-        for st in {states!r}:
-            fmu.setReal([vr[n] for n in ("s", "t", "s_dot", "t_dot")], st)
-            h.update(np.array(fmu.getReal([vr[n] for n in names])).tobytes())
-        module = sys.modules["bearing_fmu"].__file__
-        fmu.terminate()
-        fmu.freeInstance()
-        print(json.dumps({{"hash": h.hexdigest(), "module": module}}))
-    """, python_args=["-S"])
+    out = run_isolated(script=PROBES / "standalone" / "bearing_host.py", python_args=["-S"],
+                       args=[{"paths": paths, "fmu": fmu_dir / "BearingHybrid.fmu",
+                              "params": params, "states": states}])
     assert not out["module"].startswith(str(ROOT)), out["module"]  # the FMU's own code
     assert out["hash"] == expected.hexdigest()
 
@@ -132,22 +91,15 @@ def test_a_change_in_a_callee_file_recompiles_its_callers(tmp_path):
     for pkg in PACKAGES:
         shutil.copytree(ROOT / pkg, root / pkg,
                         ignore=shutil.ignore_patterns("__pycache__", "native"))
-    code = f"""
-        import json, sys
-        sys.path.insert(0, {str(root)!r})
-        from bearing_fmu import BearingData
-        from bearing_fmu.short_bearing import ShortBearing
-        r = ShortBearing(BearingData(0.07, 0.05, 150e-6, 0.0288)).evaluate(
-            60e-6, -60e-6, 0.0, 0.0, 325.0)
-        print(json.dumps({{"force": r.force.tolist(), "file": ShortBearing.__module__}}))
-    """
+    probe = {"module": "tests.probes.determinism",
+             "args": ["short_bearing_force", {"code": root}]}
     cache = tmp_path / "numba"
-    first = run_isolated(code, numba_cache=cache)
-    assert run_isolated(code, numba_cache=cache) == first
+    first = run_isolated(**probe, numba_cache=cache)
+    assert run_isolated(**probe, numba_cache=cache) == first
     reynolds = root / "bearing_fmu" / "reynolds.py"
     text = reynolds.read_text()
     old = "return y + 2.0 * x_dot, 2.0 * y_dot - x"
     assert old in text
     reynolds.write_text(text.replace(old, "return y + 2.0 * x_dot, 2.0 * y_dot - 1.001 * x"))
-    changed = run_isolated(code, numba_cache=cache)
+    changed = run_isolated(**probe, numba_cache=cache)
     assert changed["force"] != first["force"]

@@ -25,11 +25,12 @@ import shutil
 import stat
 import subprocess
 import sys
-import textwrap
 from pathlib import Path
 
 import numpy as np
 import pytest
+
+from tests.helpers import probe_command, probe_env
 
 _SPEC = importlib.util.find_spec("ecospy")  # not imported here: it needs libtbb at import
 if _SPEC is None:
@@ -73,25 +74,10 @@ def _dt() -> float:
 def ecos_python(ssp_file):
     """ecospy (ecos's library in a Python process): the 16 journal outputs after the
     initialisation and after each of STEPS steps, at full precision."""
-    code = textwrap.dedent(f"""
-        import json
-        from ecospy import EcosSimulation
-        names = [f"gear_shaft::{{v}}_{{j}}" for j in range(1, 5)
-                 for v in ("s", "t", "s_dot", "t_dot")]
-        ecc = [f"bearing{{j}}::eccentricity" for j in range(1, 5)]
-        x, e = [], []
-        with EcosSimulation(ssp_path=r"{ssp_file}", step_size={_dt()!r}) as sim:
-            sim.init(parameter_set="case")
-            for k in range({STEPS} + 1):
-                if k:
-                    sim.step(1)
-                x.append([sim.get_real(n) for n in names])
-                e.append([sim.get_real(n) for n in ecc])
-            sim.terminate()
-        print(json.dumps(dict(x=x, e=e)))
-    """)
-    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                          timeout=600, env=_env(), cwd=ssp_file.parent)
+    cmd = probe_command("tests.probes.ecos", "simulate",
+                        {"ssp": ssp_file, "step_size": _dt(), "steps": STEPS})
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=600,
+                          env=probe_env(_env()), cwd=ssp_file.parent)
     if proc.returncode != 0 and "libtbb" in proc.stderr:
         pytest.skip(f"ecos cannot run here: {proc.stderr.strip()[-300:]}")
     assert proc.returncode == 0, proc.stderr[-3000:]

@@ -67,18 +67,8 @@ def test_every_bearing_model_runs_coupled_through_fmus(fmu_dir, tmp_path, model)
 
 def test_swapping_the_bearing_fmu_is_a_file_name(fmu_dir):
     """The bearing set of a case differs between models only by the FMU file it loads."""
-    r = run_isolated(f"""
-        import json
-        from fmu_src.case import load_case
-        from orchestrator.coupling.fmi import system_from_case
-        case = load_case("baguet2010_spur")
-        out = {{}}
-        for model in ("hybrid", "lumped"):
-            st, b = system_from_case(case, model, {str(fmu_dir)!r})
-            out[model] = sorted({{s.path.name for s in b.slaves}})
-            b.close(); st.close()
-        print(json.dumps(out))
-    """)
+    r = run_isolated(module="tests.probes.fmu_run",
+                     args=["bearing_fmu_files", {"fmu_dir": fmu_dir}])
     assert r == {"hybrid": ["BearingHybrid.fmu"], "lumped": ["BearingLumped.fmu"]}
 
 

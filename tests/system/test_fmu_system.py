@@ -9,11 +9,11 @@ from __future__ import annotations
 
 import os
 import random
+import shutil
 import signal
 import subprocess
 import sys
 import sysconfig
-import textwrap
 import time
 import zipfile
 from pathlib import Path
@@ -21,38 +21,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tests.helpers import paced_gsb, run_here, run_isolated
+from tests.helpers import paced_gsb, probe_command, probe_env, run_here, run_isolated
 
 GSB = [sys.executable, "-m", "orchestrator.cli"]
 
+PROBES = "tests.probes.fmu_system"
 #: a bearing model of one's own with the minimal contract only: the journal state in, the film
 #: force out (global frame); here an isotropic spring and damper, the built-in lumped model
-SPRING_BEARING = '''
-from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Real
-
-
-class SpringBearing(Fmi2Slave):
-    author = "a user"
-    description = "isotropic spring and damper: F = -k X - c Xdot (global frame, SI)"
-
-    def __init__(self, **kwargs):
-        super().__init__(**kwargs)
-        self.lumped_stiffness = 1e8
-        self.lumped_damping = 0.0
-        self.s = self.t = self.s_dot = self.t_dot = 0.0
-        for name in ("lumped_stiffness", "lumped_damping"):
-            self.register_variable(Real(name, causality=Fmi2Causality.parameter,
-                                        variability=Fmi2Variability.fixed))
-        for name in ("s", "t", "s_dot", "t_dot"):
-            self.register_variable(Real(name, causality=Fmi2Causality.input))
-        self.register_variable(Real("F_s", causality=Fmi2Causality.output, getter=lambda: (
-            -self.lumped_stiffness * self.s - self.lumped_damping * self.s_dot)))
-        self.register_variable(Real("F_t", causality=Fmi2Causality.output, getter=lambda: (
-            -self.lumped_stiffness * self.t - self.lumped_damping * self.t_dot)))
-
-    def do_step(self, current_time, step_size):
-        return True
-'''
+SPRING_BEARING = Path(__file__).with_name("springbearing.py")
 
 
 @pytest.fixture(scope="module")
@@ -64,7 +40,7 @@ def spring_fmu(tmp_path_factory):
 
     folder = tmp_path_factory.mktemp("byo")
     script = folder / "springbearing.py"
-    script.write_text(SPRING_BEARING)
+    shutil.copyfile(SPRING_BEARING, script)
     built = FmuBuilder.build_FMU(script, dest=folder / "stock")
     return patch_fmu(built, folder / "SpringBearing.fmu")
 
@@ -74,27 +50,8 @@ def test_a_force_only_bearing_fmu_matches_the_built_in_lumped_model(fmu_dir, spr
     """Bring your own bearing: the master gets Kb and Cb by central differences of the FMU's
     force (steps 1e-5 C and 1e-5 C omega) and the run equals the in-process lumped model
     (exact Kb, Cb) over 64 steps, with lumped damping so that Cb matters too."""
-    r = run_here(f"""
-        import json
-        import numpy as np
-        from fmu_src.case import load_case
-        from orchestrator.run.results import read_results
-        from orchestrator.run.runner import run_case
-        case = load_case("baguet2010_spur", {{"bearings.model": "lumped",
-                                               "bearings.lumped_damping": 2000.0}})
-        ref = run_case(case, steps=64, in_process=True, out_dir=r"{tmp_path}", progress=False,
-                       figures=False)
-        mine = run_case(case, steps=64, out_dir=r"{tmp_path}", progress=False, figures=False,
-                        fmus=dict(gear=r"{fmu_dir / 'GearShaft.fmu'}",
-                                  bearings=[r"{spring_fmu}"] * 4))
-        a, b = read_results(ref.results), read_results(mine.results)
-        def rel(k):
-            return float(np.abs(b[k] - a[k]).max() / np.abs(a[k]).max())
-        print(json.dumps(dict(position=rel("journal_position"),
-                              velocity=rel("journal_velocity"),
-                              label=b["attrs"]["bearing_model"],
-                              its=[ref.iterations_per_step, mine.iterations_per_step])))
-    """)
+    r = run_here(module=PROBES, args=["force_only_bearings", {
+        "out_dir": tmp_path, "gear_fmu": fmu_dir / "GearShaft.fmu", "bearing_fmu": spring_fmu}])
     print(f"\nforce-only FMU vs lumped in process, 64 steps: positions {r['position']:.1e}, "
           f"velocities {r['velocity']:.1e}; iterations per step {r['its']}")
     assert r["label"] == "SpringBearing"
@@ -104,37 +61,14 @@ def test_a_force_only_bearing_fmu_matches_the_built_in_lumped_model(fmu_dir, spr
 
 
 def test_a_bearing_fmu_without_the_minimal_contract_is_refused(fmu_dir):
-    r = run_here(f"""
-        import json
-        from orchestrator.coupling.fmi import FmuBearings, FmuError
-        try:
-            FmuBearings([r"{fmu_dir / 'GearShaft.fmu'}"], [dict()], [325.0])
-        except FmuError as exc:
-            print(json.dumps(str(exc)))
-    """)
+    r = run_here(module=PROBES, args=["not_a_bearing", {"fmu": fmu_dir / "GearShaft.fmu"}])
     assert "bearing 1 (GearShaft.fmu) lacks the minimal bearing contract: input s" in r
 
 
 def test_closed_bearing_fmus_refuse_to_evaluate(fmu_dir):
     """The bearing set reads each law into a buffer of its own: once its FMUs are freed, an
     evaluation is an FmuError, not the last laws read (nor empty arrays, as before)."""
-    r = run_here(f"""
-        import json
-        import numpy as np
-        from fmu_src.case import load_case
-        from orchestrator.coupling.fmi import FmuError
-        from orchestrator.run.runner import build_master
-        master = build_master(load_case("baguet2010_spur"), fmu_dir=r"{fmu_dir}")
-        master.solve_static()
-        states = master.laws.states
-        force = master.bearings.evaluate(states)[0]
-        master.close()
-        try:
-            master.bearings.evaluate(states)
-            print(json.dumps("evaluated"))
-        except FmuError as exc:
-            print(json.dumps([str(exc), bool(np.isfinite(force).all())]))
-    """)
+    r = run_here(module=PROBES, args=["closed_bearings", {"fmu_dir": fmu_dir}])
     assert r == ["the bearing FMUs are closed", True]
 
 
@@ -212,18 +146,10 @@ def test_build_fmus_carries_the_case_and_names_a_bad_one(tmp_path):
 def test_two_runs_building_the_fmus_at_once_build_once(tmp_path):
     """Two processes ask for the FMUs of one empty folder at the same moment: the lock makes
     one build and the other wait; both get the same complete files."""
-    code = textwrap.dedent(f"""
-        import json, time
-        from orchestrator.coupling.fmi import ensure_fmus
-        from fmpy.validation import validate_fmu
-        while time.time() < {time.time() + 3.0}:  # start together
-            time.sleep(0.001)
-        paths = ensure_fmus(["GearShaft", "BearingShort"], r"{tmp_path / 'fmus'}")
-        print(json.dumps({{n: [p.stat().st_mtime_ns, validate_fmu(str(p))]
-                           for n, p in paths.items()}}))
-    """)
-    procs = [subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE,
-                              stderr=subprocess.PIPE, text=True) for _ in range(2)]
+    cmd = probe_command(PROBES, "build_at", {"start": time.time() + 3.0,  # start together
+                                             "dest": tmp_path / "fmus"})
+    procs = [subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                              env=probe_env()) for _ in range(2)]
     outs = [p.communicate(timeout=600) for p in procs]
     assert all(p.returncode == 0 for p in procs), [o[1][-2000:] for o in outs]
     import json
@@ -301,29 +227,7 @@ def test_fmus_built_after_an_fmu_was_loaded_carry_their_binaries(fmu_dir, tmp_pa
     loaded in a process that had not imported pythonfmu, FMUs built there had no binary.
     Through this package's FMU instances they build whole; after an FMU loaded by fmpy alone,
     the build stops with the reason instead."""
-    out = run_isolated(f"""
-        import json, sys, zipfile
-        from fmpy import extract, read_model_description
-        from fmpy.fmi2 import FMU2Slave
-        from orchestrator.coupling.fmi import FmuBearings
-        path = r"{fmu_dir / 'BearingLumped.fmu'}"
-        FmuBearings([path], [dict()], [325.0]).close()
-        from fmu_src.build.fmus import build_fmus
-        (built,) = build_fmus(r"{tmp_path / 'a'}", ["BearingShort"])
-        whole = any(n.startswith("binaries/linux64/") for n in zipfile.ZipFile(built).namelist())
-        for name in [m for m in sys.modules if m == "pythonfmu" or m.startswith("pythonfmu.")]:
-            del sys.modules[name]  # as in a process whose first pythonfmu came from an FMU
-        md = read_model_description(path)
-        fmu = FMU2Slave(guid=md.guid, unzipDirectory=extract(path), instanceName="x",
-                        modelIdentifier=md.coSimulation.modelIdentifier)
-        fmu.instantiate()
-        try:
-            build_fmus(r"{tmp_path / 'b'}", ["BearingShort"])
-            refused = ""
-        except RuntimeError as exc:
-            refused = str(exc)
-        fmu.freeInstance()
-        print(json.dumps({{"whole": whole, "refused": refused}}))
-    """)
+    out = run_isolated(module=PROBES, args=["build_after_a_load", {
+        "fmu": fmu_dir / "BearingLumped.fmu", "dest_a": tmp_path / "a", "dest_b": tmp_path / "b"}])
     assert out["whole"]
     assert "has no binaries" in out["refused"] and "fresh process" in out["refused"]

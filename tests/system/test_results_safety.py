@@ -12,7 +12,6 @@ import os
 import signal
 import subprocess
 import sys
-import textwrap
 import time
 from pathlib import Path
 
@@ -20,11 +19,12 @@ import numpy as np
 import pytest
 
 from orchestrator.run.results import read_checkpoint, read_results
-from tests.helpers import paced_gsb, run_here
+from tests.helpers import paced_gsb, probe_command, probe_env, run_here
 
 GSB = [sys.executable, "-m", "orchestrator.cli"]
 ROOT = Path(__file__).resolve().parents[2]
 QUICK = ["--bearing", "linear", "--in-process", "--no-figures", "--quiet"]
+PROBES = "tests.probes.results_safety"
 
 
 def gsb(*args, cwd, timeout=600, env=None):
@@ -70,18 +70,10 @@ def test_a_failing_run_leaves_a_complete_file_untouched(tmp_path):
     assert main(["run", "baguet2010_spur", "--periods", "2", *QUICK, "--out", str(out)]) == 0
     complete = only(out)
     data = complete.read_bytes()
-    code = textwrap.dedent(f"""
-        import sys
-        sys.path.insert(0, {str(ROOT)!r})
-        import pytest
-        from orchestrator import cli
-        from tests.helpers import fail_master_step
-        fail_master_step(pytest.MonkeyPatch(), at=40)
-        sys.exit(cli.main(["run", "baguet2010_spur", "--periods", "2", *{QUICK!r},
-                           "--out", {str(out)!r}, "--overwrite"]))
-    """)
-    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                          timeout=600, cwd=tmp_path)
+    args = ["run", "baguet2010_spur", "--periods", "2", *QUICK, "--out", str(out), "--overwrite"]
+    proc = subprocess.run(probe_command(PROBES, "failing_run", {"args": args, "at": 40}),
+                          capture_output=True, text=True, timeout=600, cwd=tmp_path,
+                          env=probe_env())
     assert proc.returncode == 2 and "Traceback" not in proc.stderr, proc.stderr[-2000:]
     assert "step 40 of 64" in proc.stderr and ".partial.h5" in proc.stderr
     assert complete.read_bytes() == data
@@ -245,22 +237,10 @@ BAD_INPUTS = [
 def test_bad_input_gives_one_line_and_exit_2(tmp_path):
     (tmp_path / "not_hdf5.h5").write_text("not HDF5")
     (tmp_path / "a_file").write_text("")
-    code = textwrap.dedent(f"""
-        import contextlib, io, json
-        from orchestrator import cli
-        out = []
-        for args in {[a for a, _ in BAD_INPUTS]!r}:
-            err = io.StringIO()
-            with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
-                try:
-                    code = cli.main(args)
-                except SystemExit as exc:  # argparse
-                    code = exc.code
-            out.append([code, err.getvalue()])
-        print(json.dumps(out))
-    """)
-    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                          timeout=600, cwd=tmp_path)
+    commands = [a for a, _ in BAD_INPUTS]
+    proc = subprocess.run(probe_command(PROBES, "bad_inputs", {"commands": commands}),
+                          capture_output=True, text=True, timeout=600, cwd=tmp_path,
+                          env=probe_env())
     assert proc.returncode == 0, proc.stderr[-3000:]
     results = json.loads(proc.stdout.strip().splitlines()[-1])
     for (args, words), (exit_code, stderr) in zip(BAD_INPUTS, results, strict=True):
@@ -300,43 +280,14 @@ def test_a_regular_install_runs_a_shipped_case_from_any_folder(fmu_dir, tmp_path
     assert listing.returncode == 0 and "baguet2010_helical" in listing.stdout
 
 
-RESUME_CODE = """
-import json, sys, tempfile
-sys.path.insert(0, {root!r})
-import numpy as np
-from bearing_fmu import MODELS
-from fmu_src.case import load_case
-from orchestrator.run.results import read_results
-from orchestrator.run.runner import resume_run, run_case
-out = {{}}
-# 8 steps per mesh period: 4 steps, then resumed to one period; against 8 steps in one go;
-# coarse film grids (the FD model's solves dominate otherwise)
-case = load_case("baguet2010_spur", {{"simulation.steps_per_mesh_period": 8,
-                                      "bearings.nodes": 48, "bearings.axial_intervals": 8}})
-kw = dict(in_process={in_process}, fmu_dir={fmu_dir!r}, progress=False, figures=False)
-with tempfile.TemporaryDirectory() as tmp:
-    for model in MODELS:
-        ref = run_case(case, bearing=model, periods=1, out_dir=tmp + "/ref_" + model, **kw)
-        part = run_case(case, bearing=model, periods=1, steps=4, out_dir=tmp + "/" + model,
-                        **kw)
-        resume_run(part.results, periods=1, fmu_dir={fmu_dir!r}, progress=False,
-                   figures=False)
-        a, b = read_results(ref.results), read_results(part.results)
-        out[model] = [len(b["time"]), float(np.abs(a["journal_position"]
-                                                    - b["journal_position"]).max())]
-print(json.dumps(out))
-"""
-
-
 @pytest.mark.parametrize("transport", ["in-process", "fmu"])
 def test_every_bearing_model_resumes_exactly(transport, fmu_dir):
     """The warm starts of every registered model (hybrid, FD, ...) are in the checkpoint:
     4 steps, resumed to 8, equal 8 steps in one go, in-process and through FMUs."""
     from bearing_fmu import MODELS
 
-    code = RESUME_CODE.format(root=str(ROOT), in_process=transport == "in-process",
-                              fmu_dir=str(fmu_dir))
-    out = run_here(code)
+    out = run_here(module=PROBES, args=["resume_every_model", {
+        "in_process": transport == "in-process", "fmu_dir": fmu_dir}])
     assert sorted(out) == sorted(MODELS)
     for model, (steps, diff) in out.items():
         assert steps == 8 and diff == 0.0, (transport, model, steps, diff)

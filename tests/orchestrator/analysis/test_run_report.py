@@ -226,26 +226,8 @@ def test_a_single_step_has_no_report(tmp_path):
 
 def test_the_fmu_transport_stores_the_report(fmu_dir, tmp_path):
     """The same through the FMUs (gear-shaft FMU + four linear bearing FMUs)."""
-    r = run_here(f"""
-        import json
-        import numpy as np
-        from fmu_src.case import load_case
-        from orchestrator.run.results import read_results
-        from orchestrator.run.runner import run_case
-        case = load_case("baguet2010_spur", {{"bearings.model": "linear"}})
-        s = run_case(case, periods=8, out_dir={str(tmp_path)!r}, fmu_dir={str(fmu_dir)!r},
-                     progress=False, figures=False)
-        r = read_results(s.results)
-        a = r["attrs"]
-        fb = np.hypot(r["bearing_force"][128:, :, 0], r["bearing_force"][128:, :, 1])
-        print(json.dumps({{
-            "mode": a["mode"], "steps": len(r["time"]), "R": float(a["dynamic_factor"]),
-            "max_mesh": float(r["mesh_force"][128:].max()),
-            "ptp": a["bearing_force_ptp"].tolist(), "ptp_data": np.ptp(fb, axis=0).tolist(),
-            "lines": np.nan_to_num(a["line_amplitudes"], nan=-1.0).tolist(),
-            "labels": [str(x) for x in a["line_labels"]],
-            "summary_R": s.report["dynamic_factor"]}}))
-    """)
+    r = run_here(module="tests.probes.run_report",
+                 args=["fmu_report", {"out_dir": tmp_path, "fmu_dir": fmu_dir}])
     assert r["mode"] == "fmu" and r["steps"] == 256
     assert r["R"] == r["summary_R"] == r["max_mesh"] / static_load()
     assert r["ptp"] == r["ptp_data"]

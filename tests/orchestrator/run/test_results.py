@@ -1,13 +1,12 @@
 """Results files keep what was computed when a run stops early."""
 
 import subprocess
-import sys
-import textwrap
 
 import numpy as np
 import pytest
 
 from orchestrator.run.results import ResultsWriter, export_csv, read_results
+from tests.helpers import probe_command, probe_env
 
 
 def test_units_and_attributes_are_stored(tmp_path):
@@ -43,15 +42,8 @@ def test_exception_keeps_flushed_rows_and_marks_incomplete(tmp_path):
 def test_killed_process_keeps_flushed_blocks(tmp_path):
     """A hard kill (no clean-up at all) still leaves every flushed block readable."""
     path = tmp_path / "r.h5"
-    code = textwrap.dedent(f"""
-        import os
-        from orchestrator.run.results import ResultsWriter
-        w = ResultsWriter(r"{path}", {{"x": ((), "m", "x")}}, capacity=5, flush_seconds=1e9)
-        for k in range(12):
-            w.append(time=float(k), x=float(k))
-        os._exit(9)
-    """)
-    proc = subprocess.run([sys.executable, "-c", code], timeout=120)
+    proc = subprocess.run(probe_command("tests.probes.results", "killed_writer", {"path": path}),
+                          timeout=120, env=probe_env())
     assert proc.returncode == 9
     r = read_results(path)
     np.testing.assert_array_equal(r["x"], np.arange(10.0))
