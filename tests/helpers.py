@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from gear_fmu.newmark import NonlinearForce
+from tests.gear_fmu.reference_newmark import NonlinearForce
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "tests" / "data"

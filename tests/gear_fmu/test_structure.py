@@ -13,8 +13,9 @@ import pytest
 
 from fmu_src.examples import paper_system
 from gear_fmu.analyses import support_loads
-from gear_fmu.newmark import NewmarkConvergenceError, newmark_step
+from gear_fmu.newmark import NewmarkConvergenceError
 from gear_fmu.structure import Structure, StructureLoads
+from tests.gear_fmu.reference_newmark import newmark_step
 from tests.helpers import ALPHA, OMEGA, R1, R2, RB1, T_IN, LineMesh, affine, monolithic_structure
 
 

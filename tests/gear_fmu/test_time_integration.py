@@ -1,64 +1,23 @@
-"""Observed order of the time integration: Newmark on a smooth problem, and the paper's case
-with and without the refinements of ``gear_fmu.structure`` (consistent start, contact
-location).
+"""Observed order of the time integration on the paper's case with and without the
+refinements of ``gear_fmu.structure`` (consistent start, contact location); on a smooth
+problem, against its exact solution, in ``test_newmark.py``.
 
 The observed order is the least-squares slope of log(error) against log(dt) over a ladder of
-time steps, the error taken against a run at a much finer step (the exact solution for the
-smooth problem).
+time steps, the error taken against a run at a much finer step.
 """
 
-import math
 
 import numpy as np
 import pytest
 
 from fmu_src import description
 from fmu_src.case import load_case
-from gear_fmu.newmark import newmark_step
 from orchestrator.run.runner import build_master
 
 
 def observed_order(steps, errors) -> float:
     """Slope of log(error) against log(1 / steps)."""
     return float(np.polyfit(np.log(1.0 / np.asarray(steps, float)), np.log(errors), 1)[0])
-
-
-def oscillator_error(n_steps, consistent):
-    """m x'' + c x' + k x = F cos(W t) from rest over 1 s: error at t = 1 s against the exact
-    solution (homogeneous part fitted to x(0) = x'(0) = 0)."""
-    m, c, k, f, w = 1.0, 0.4, 40.0, 3.0, 5.0
-    wn = math.sqrt(k / m)
-    zeta = c / (2 * math.sqrt(k * m))
-    wd = wn * math.sqrt(1 - zeta**2)
-    amp = f / complex(k - m * w * w, c * w)  # particular solution Re(amp e^{iWt})
-
-    def exact(t):
-        # x = Re(amp e^{iWt}) + e^{-zeta wn t} (A cos wd t + B sin wd t)
-        a_ = -amp.real
-        b_ = (zeta * wn * a_ + amp.imag * w) / wd
-        return (amp * np.exp(1j * w * t)).real + math.exp(-zeta * wn * t) * (
-            a_ * math.cos(wd * t) + b_ * math.sin(wd * t))
-
-    dt = 1.0 / n_steps
-    x, v = np.zeros(1), np.zeros(1)
-    a = np.array([f / m]) if consistent else np.zeros(1)  # M a0 = F(0) - C v0 - K x0
-    mm, cc, kk = (np.array([[q]]) for q in (m, c, k))
-    for i in range(n_steps):
-        t1 = (i + 1) * dt
-        x, v, a, _ = newmark_step(mm, cc, kk, dt, t1, x, v, a, np.array([f * math.cos(w * t1)]),
-                                  tol=1e-11)
-    return abs(x[0] - exact(1.0))
-
-
-def test_newmark_is_order_2_from_a_consistent_start_only():
-    steps = [50, 100, 200, 400, 800]
-    consistent = [oscillator_error(n, True) for n in steps]
-    at_rest = [oscillator_error(n, False) for n in steps]
-    p_c, p_r = observed_order(steps, consistent), observed_order(steps, at_rest)
-    print(f"\nNewmark on a forced oscillator: order {p_c:.3f} from Xdd_0 = M^-1 F(0), "
-          f"{p_r:.3f} from Xdd_0 = 0")
-    assert abs(p_c - 2.0) < 0.02  # measured 1.997
-    assert p_r < 1.5  # measured 1.23: the wrong Xdd_0 is carried along (Eq. 12)
 
 
 def paper_case_state(n, refined, model, periods=2):

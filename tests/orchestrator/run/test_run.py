@@ -8,12 +8,12 @@ import pytest
 
 from fmu_src import description
 from fmu_src.case import CaseError, load_case, shipped_cases
-from gear_fmu.newmark import newmark_step
 from gear_fmu.structure import EVENT_SIDE
 from orchestrator.cli import main
 from orchestrator.coupling.inprocess import ModelBearings
 from orchestrator.run.results import read_results
 from orchestrator.run.runner import RunError, build_master, run_case
+from tests.gear_fmu.reference_newmark import newmark_step
 from tests.helpers import fail_master_step, monolithic_structure
 
 SPUR = "baguet2010_spur"
