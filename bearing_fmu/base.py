@@ -210,9 +210,9 @@ class BearingModel(ABC):
     in its own module with a unique :attr:`name`, declare its case/FMU settings in
     :attr:`options`, implement :meth:`evaluate` (or :meth:`FilmBearingModel.film_force`), and
     add one line to :data:`bearing_fmu.MODELS`. Its FMU (``Bearing<Name>``), its case fields
-    and its command-line name follow from that; ``tests/test_bearing_models.py`` checks every
-    registered model (finite force, Jacobians against central differences, a coupled step
-    through its FMU).
+    and its command-line name follow from that;
+    ``tests/bearing_fmu/test_bearing_models.py`` checks every registered model (finite force,
+    Jacobians against central differences, a coupled step through its FMU).
     """
 
     #: key of the model in :data:`bearing_fmu.MODELS` and on the command line

@@ -36,7 +36,7 @@ with p = 0 get no correction; coarse nodes inherit the mask), then projects the 
 p >= 0 and takes the exact minimiser of the quadratic J along it. Each step can only decrease J,
 so the method converges from any start; once the cavitated set has settled it is a linear
 multigrid on the pressurised region, with mesh-independent convergence factors (measured by
-``tests/test_fd_model.py``: about 0.05-0.15 per cycle).
+``tests/bearing_fmu/test_fd_model.py``: about 0.05-0.15 per cycle).
 
 Coarse levels are rediscretised (h is analytic). Smoother: red-black point Gauss-Seidel;
 coarsening: in both directions, or only in the strongly coupled direction when the mesh is

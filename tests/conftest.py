@@ -12,48 +12,34 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
 from fmu_src.slaves.bootstrap import locked
+from tests.helpers import probe_command, probe_env
 
-#: what the xdist controller runs before the workers start, in two processes at once: every
-#: bearing model's kernels; the native layer, the structure's and the master's kernels (short
-#: in-process runs)
-WARM_UP = (
-    """
-import numpy as np
-from bearing_fmu import MODELS, BearingData, model_class
-from bearing_fmu.static import static_equilibrium
-from orchestrator.coupling.inprocess import ModelBearings
-b = BearingData(0.07, 0.05, 150e-6, 0.0288)
-for name in MODELS:
-    model = model_class(name).from_parameters(b)
-    model.evaluate(6e-5, -6e-5, 1e-3, -1e-3, 325.0)
-    ModelBearings([model], [(0.3, -1)], [325.0]).evaluate(np.array([[6e-5, -6e-5, 0.0, 0.0]]))
-static_equilibrium(model_class("hybrid").from_parameters(b), (0.0, -2251.0), 325.0)
-""",
-    """
-import tempfile
-from fmu_src.case import load_case
-from fmu_src.build.native import export_library
-from orchestrator.run.runner import run_case
-export_library()
-with tempfile.TemporaryDirectory() as tmp:
-    for case, model in (("baguet2010_spur", "lumped"), ("baguet2010_helical", "lumped")):
-        run_case(load_case(case).with_overrides({"bearings.model": model}), steps=2,
-                 in_process=True, out_dir=tmp + "/" + case, progress=False)
-""",
-)
+ROOT = Path(__file__).resolve().parents[1]
+
+#: what the xdist controller runs before the workers start, in two processes at once
+#: (:mod:`tests.probes.warm_up`): every bearing model's kernels; the native layer, the
+#: structure's and the master's kernels (short in-process runs)
+WARM_UP = ("bearing_kernels", "native_and_structure")
 
 
 def pytest_configure(config):
-    """In the xdist controller (not in a worker, not in a run without xdist): :data:`WARM_UP`.
+    """Every module of :data:`LONGEST_FIRST` exists (a moved one would silently lose its place);
+    in the xdist controller (not in a worker, not in a run without xdist): :data:`WARM_UP`.
     A failure there is not reported: the tests that need the same things report it."""
+    missing = [path for path in LONGEST_FIRST if not (ROOT / path).is_file()]
+    if missing:
+        raise pytest.UsageError(f"tests/conftest.py LONGEST_FIRST names missing modules: "
+                                f"{', '.join(missing)}")
     if hasattr(config, "workerinput") or not getattr(config.option, "numprocesses", None):
         return
-    procs = [subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.DEVNULL,
-                              stderr=subprocess.DEVNULL) for code in WARM_UP]
+    procs = [subprocess.Popen(probe_command("tests.probes.warm_up", probe), env=probe_env(),
+                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+             for probe in WARM_UP]
     for proc in procs:
         proc.wait(timeout=900)
 
@@ -62,15 +48,16 @@ def pytest_configure(config):
 #: so that no worker is left alone with one of them at the end (xdist keeps this order with
 #: --no-loadscope-reorder; it would otherwise send the modules with most tests first)
 LONGEST_FIRST = (
-    "tests/test_determinism.py",  # 35: the kernels compiled from an empty cache, then in part
-    "tests/test_results_safety.py",  # 41
-    "tests/test_ecos.py",  # 14
-    "tests/test_fmu_system.py",  # 12
-    "tests/test_fmu_run.py",  # 11
-    "tests/test_paper_results.py",  # 10
-    "tests/test_sweep_cli.py",  # 10
-    "tests/test_api_docs.py",  # 9
-    "tests/test_native_build.py",  # 9
+    # 35: the kernels compiled from an empty cache, then in part
+    "tests/system/test_determinism.py",
+    "tests/system/test_results_safety.py",  # 41
+    "tests/system/test_ecos.py",  # 14
+    "tests/system/test_fmu_system.py",  # 12
+    "tests/system/test_fmu_run.py",  # 11
+    "tests/system/test_paper_results.py",  # 10
+    "tests/orchestrator/sweep/test_sweep_cli.py",  # 10
+    "tests/docs/test_api_docs.py",  # 9
+    "tests/fmu_src/test_native_build.py",  # 9
 )
 
 

@@ -11,7 +11,7 @@ the largest difference over the run in both cases, and the 2048-period summary (
 bearing-force peak-to-peak, the line amplitudes) by at most :data:`SUMMARY_TOLERANCE`
 (relative). This is a tolerance of physics, not of arithmetic: anything within it is smaller
 than the time discretisation's own error. Bitwise reproducibility on one machine is tested
-apart (``tests/test_determinism.py``).
+apart (``tests/system/test_determinism.py``).
 """
 
 from __future__ import annotations

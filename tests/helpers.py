@@ -17,25 +17,60 @@ from pathlib import Path
 
 import numpy as np
 
-from gear_fmu.newmark import NonlinearForce
+from tests.gear_fmu.reference_newmark import NonlinearForce
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "tests" / "data"
 
 
-def run_isolated(code: str, timeout: float = 600, numba_cache: Path | None = None,
-                 python_args: tuple = ()) -> dict:
-    """Run ``code`` (dedented) in a fresh interpreter started in an empty temporary folder;
-    it prints one JSON object on its last line and exits normally. Returns that object.
+#: the probes: modules of code the tests run in a fresh interpreter or in their own process
+PROBES = ROOT / "tests" / "probes"
 
-    ``numba_cache``: numba's cache folder for that interpreter (``NUMBA_CACHE_DIR``; an empty
-    one compiles every kernel anew). ``python_args``: options of the interpreter (``-S``)."""
+
+def _argv(args) -> list[str]:
+    """Command-line arguments of a probe: strings as they are, anything else as JSON."""
+    return [a if isinstance(a, str) else json.dumps(a, default=str) for a in args]
+
+
+def probe_env(env: dict | None = None) -> dict:
+    """``env`` (default: this process's environment) with the repository first on
+    ``PYTHONPATH``, so that ``python -m tests.probes.<name>`` finds the probes from any
+    folder."""
+    env = dict(os.environ if env is None else env)
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (str(ROOT), env.get("PYTHONPATH", "")) if p)
+    return env
+
+
+def probe_command(module: str, *args, python_args=()) -> list[str]:
+    """The command line ``python [python_args] -m <module> <args>`` (arguments as
+    :func:`_argv`); run it with ``env=probe_env()``."""
+    return [sys.executable, *python_args, "-m", module, *_argv(args)]
+
+
+def run_isolated(code: str | None = None, timeout: float = 600, numba_cache: Path | None = None,
+                 python_args: tuple = (), *, module: str | None = None, script: Path | None = None,
+                 args=()) -> dict:
+    """Run a probe in a fresh interpreter started in an empty temporary folder; it prints one
+    JSON object on its last line and exits normally. Returns that object.
+
+    The probe: ``module`` (``python -m module args``, the repository on the path:
+    :func:`probe_env`), or ``script`` (``python script args``, the environment as it is: for
+    an interpreter that must not find this repository), or ``code`` (dedented, ``python -c``:
+    a line or two; longer code belongs in a probe module, where it is linted and readable).
+    ``args`` as :func:`_argv`. ``numba_cache``: numba's cache folder for that interpreter
+    (``NUMBA_CACHE_DIR``; an empty one compiles every kernel anew). ``python_args``: options of
+    the interpreter (``-S``)."""
+    if module is not None:
+        env, cmd = probe_env(), probe_command(module, *args, python_args=python_args)
+    elif script is not None:
+        env, cmd = dict(os.environ), [sys.executable, *python_args, str(script), *_argv(args)]
+    else:
+        env, cmd = dict(os.environ), [sys.executable, *python_args, "-c", textwrap.dedent(code)]
+    if numba_cache is not None:
+        env["NUMBA_CACHE_DIR"] = str(numba_cache)
     with tempfile.TemporaryDirectory(prefix="gsb_test_") as cwd:
-        env = dict(os.environ)
-        if numba_cache is not None:
-            env["NUMBA_CACHE_DIR"] = str(numba_cache)
-        proc = subprocess.run([sys.executable, *python_args, "-c", textwrap.dedent(code)],
-                              capture_output=True, text=True, timeout=timeout, cwd=cwd, env=env)
+        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, cwd=cwd,
+                              env=env)
     assert proc.returncode == 0, f"exit code {proc.returncode}: {proc.stderr[-3000:]}"
     return json.loads(proc.stdout.strip().splitlines()[-1])
 
@@ -47,31 +82,27 @@ PACE = 0.004
 
 def paced_gsb(*args) -> list[str]:
     """The command line of ``gsb *args`` whose coupled steps each last at least :data:`PACE`
-    (a sleep before the step), with everything else as in ``gsb``."""
-    code = textwrap.dedent(f"""
-        import sys, time
-        from orchestrator.coupling import master
-        step = master.Master.step
-        def paced(self, t, dt):
-            time.sleep({PACE!r})
-            return step(self, t, dt)
-        master.Master.step = paced
-        from orchestrator.cli import main
-        sys.exit(main(sys.argv[1:]))
-    """)
-    return [sys.executable, "-c", code, *map(str, args)]
+    (a sleep before the step: :mod:`tests.probes.standalone.paced_gsb`), with everything else
+    as in ``gsb``."""
+    script = PROBES / "standalone" / "paced_gsb.py"
+    return [sys.executable, str(script), repr(PACE), *map(str, args)]
 
 
-def run_here(code: str) -> dict:
-    """Run ``code`` (dedented, written for :func:`run_isolated`) in this process and return the
-    JSON object it prints last. FMUs may load here: the patched native layer the test FMUs
+def run_here(code: str | None = None, *, module: str | None = None, args=()) -> dict:
+    """Run a probe in this process and return the JSON object it prints last: ``main(args)``
+    of ``module`` (``args`` as :func:`_argv`), or ``code`` (dedented, written for
+    :func:`run_isolated`). FMUs may load here: the patched native layer the test FMUs
     carry keeps instances independent and the host alive; a fresh host process is tested where
     it is the point (exit, staging, ``python -S``), and a start-up saved everywhere else."""
     import contextlib
+    import importlib
     import io
 
     with contextlib.redirect_stdout(io.StringIO()) as printed:
-        exec(textwrap.dedent(code), {"__name__": "__run_here__"})
+        if module is not None:
+            importlib.import_module(module).main(_argv(args))
+        else:
+            exec(textwrap.dedent(code), {"__name__": "__run_here__"})
     return json.loads(printed.getvalue().strip().splitlines()[-1])
 
 

@@ -91,8 +91,8 @@ centre to the gear centre, z along the shafts, t = z x s), SI units. Build the F
 - Non-iterative, Jacobi type (ecos, and most fixed-step masters): every FMU steps with the
   inputs of the last exchange, then outputs are exchanged. The bearing outputs exchanged after
   step n were evaluated at the journal states of step n - 1, so the gear-shaft FMU steps from
-  X_n with laws linearised at X_n-1. `tests/test_ecos.py` reproduces ecos's trajectories to
-  1e-12 with an emulation of exactly this scheme. At the paper's time step (mesh period / 32)
+  X_n with laws linearised at X_n-1. `tests/system/test_ecos.py` reproduces ecos's trajectories
+  to 1e-12 with an emulation of exactly this scheme. At the paper's time step (mesh period / 32)
   the coupling error is large: over 1024 steps of the paper's spur case, ecos's journal
   positions differ from the iterative solution by up to 5.2 % of the largest displacement,
   26 % of the orbit's peak-to-peak amplitude (2.0e-5 m); the difference grows over the first

@@ -13,8 +13,9 @@ linearised system of each configuration (:func:`orchestrator.analysis.campbell.l
 damped mesh modes that explain it. The page also carries the models' own documentation
 (the module docstrings of :mod:`gear_fmu.drivetrain` and :mod:`gear_fmu.damping`, with the
 formula of each damping model) and states the plan it was generated from (:func:`plan_text`);
-``tests/test_drivetrain_study.py`` checks that both still match the code. The raw results are
-saved beside the page (``<page>.json``) so that ``--render`` redraws it without the runs.
+``tests/orchestrator/studies/test_drivetrain_study.py`` checks that both still match the code.
+The raw results are saved beside the page (``<page>.json``) so that ``--render`` redraws it
+without the runs.
 """
 
 from __future__ import annotations

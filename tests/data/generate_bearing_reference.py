@@ -57,8 +57,8 @@ def write_table(points):
         "finite-difference solver (`bearing_fmu/fd.py`) on 384x64 and 768x128 meshes,",
         "Richardson-extrapolated (observed order ~2 from the three meshes 192x32 ... 768x128).",
         "Journal at (eps, 0), zero velocity. Errors of the hybrid method: force magnitude in %,",
-        "direction in degrees. `tests/test_bearing_references.py` asserts 0.6 % and 0.1 deg",
-        "for eps <= 0.8 against the stored reference (`tests/data/fd_reference.json`).",
+        "direction in degrees. `tests/bearing_fmu/test_bearing_references.py` asserts 0.6 % and",
+        "0.1 deg for eps <= 0.8 against the stored reference (`tests/data/fd_reference.json`).",
         "",
         "| L/D | eps | |F| ref | order | hybrid n=192 d|F| % | d angle deg | n=384 d|F| % |"
         " FD 192x32 d|F| % |",

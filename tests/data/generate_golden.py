@@ -1,4 +1,5 @@
-"""Re-record the golden run of tests/test_golden.py, on purpose (the reason goes in the commit).
+"""Re-record the golden run of tests/system/test_golden.py, on purpose (the reason goes in the
+commit).
 
     python tests/data/generate_golden.py
 

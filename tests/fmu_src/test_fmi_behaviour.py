@@ -1,0 +1,87 @@
+"""FMI 2.0 behaviour of every FMU, through fmpy as any FMI master would call it.
+
+* a bad value is refused by the call that receives it (fmi2Error, the value and the limit in
+  the log, the variable unchanged);
+* an output that cannot be computed (a journal outside the clearance) makes the read return
+  fmi2Error, never fmi2OK with NaN;
+* bounds are declared in modelDescription.xml;
+* fmi2GetFMUstate/SetFMUstate and Serialize/DeSerialize restore every FMU bit for bit, the
+  bearing models' warm starts included, and a system checkpointed to bytes restarts in a new
+  process exactly where it stopped.
+
+The FMUs load in the test's process (tests.helpers.run_here), but for the restart in a new
+process.
+"""
+
+import zipfile
+from xml.etree import ElementTree as ET
+
+import pytest
+
+from bearing_fmu import MODELS, fmu_name
+from fmu_src.contract import bearing_variables
+from tests.helpers import run_here, run_isolated
+
+BEARING_FMUS = [fmu_name(m) for m in MODELS]
+#: models whose film has a clearance (the lumped spring has none: any state is valid)
+FILM_MODELS = [m for m in MODELS if m != "lumped"]
+PROBES = "tests.probes.fmi_behaviour"
+
+
+def fmu_file(fmu_dir, model):
+    return fmu_dir / (fmu_name(model) + ".fmu")
+
+
+@pytest.mark.parametrize("model", list(MODELS))
+def test_bearing_fmus_refuse_bad_values_when_set(fmu_dir, model):
+    out = run_here(module=PROBES, args=["refuse_bad_values", {"fmu": fmu_file(fmu_dir, model)}])
+    assert out["C"][0] == 3 and "C = -0.0001 m refused: must be > 0 m" in out["C"][1]
+    assert out["mu"][0] == 3 and "mu = 0.0 Pa.s refused: must be > 0 Pa.s" in out["mu"][1]
+    assert out["nan"][0] == 3 and "s = nan m refused: not a finite number" in out["nan"][1]
+    assert out["omega"][0] == 3 and "omega = -5.0 rad/s refused: must be > 0" in out["omega"][1]
+    assert out["sign"][0] == 3 and "rotation_sign = 0 refused: must be one of 1, -1" \
+        in out["sign"][1]
+    start = {v.name: v.start for v in bearing_variables()}
+    assert out["kept"] == [start["C"], start["mu"], start["rotation_sign"]]
+
+
+@pytest.mark.parametrize("model", FILM_MODELS)
+def test_a_journal_outside_the_clearance_fails_the_read_not_nan(fmu_dir, model):
+    out = run_here(module=PROBES, args=["read_outside_the_clearance",
+                                        {"fmu": fmu_file(fmu_dir, model)}])
+    assert out["status"] == 3, out
+    assert "eccentricity ratio 1.2" in out["log"] and "must be < 1" in out["log"]
+    assert out["after"][1] == pytest.approx(0.5, abs=1e-15)
+
+
+def test_bounds_are_declared_in_the_model_description(fmu_dir):
+    with zipfile.ZipFile(fmu_dir / "BearingHybrid.fmu") as z:
+        root = ET.fromstring(z.read("modelDescription.xml"))
+    typed = {sv.get("name"): next(iter(sv)) for sv in root.iter("ScalarVariable")}
+    assert typed["C"].get("min") == "0.0" and typed["mu"].get("min") == "0.0"
+    assert typed["nodes"].get("min") == "8" and typed["omega"].get("min") == "0.0"
+    assert typed["s"].get("min") is None  # an input any real value may take
+    with zipfile.ZipFile(fmu_dir / "GearShaft.fmu") as z:
+        root = ET.fromstring(z.read("modelDescription.xml"))
+    typed = {sv.get("name"): next(iter(sv)) for sv in root.iter("ScalarVariable")}
+    assert typed["gear_pair.pressure_angle"].get("max") == "0.7"
+    assert typed["gear_pair.teeth[2]"].get("min") == "5"
+
+
+@pytest.mark.parametrize("model", list(MODELS))
+def test_bearing_fmu_state_round_trip_is_bit_exact(fmu_dir, model):
+    """A saved state, restored after evaluations that moved the warm start elsewhere, gives
+    the same outputs to the last bit as the first time; so does a serialised one."""
+    out = run_here(module=PROBES, args=["state_round_trip", {"fmu": fmu_file(fmu_dir, model)}])
+    assert out["same"] and out["serialised"]
+
+
+def test_a_checkpointed_system_restarts_exactly_in_a_new_process(fmu_dir, tmp_path):
+    """Process 1: static solution and 12 steps of the paper's case through the five FMUs,
+    every FMU's state serialised to a file after step 6. Process 2: fresh instances restored
+    from the file (and the master's laws) run steps 7-12: the same journal states, bit for
+    bit."""
+    where = {"fmu_dir": fmu_dir, "path": tmp_path / "checkpoint.pkl"}
+    first = run_isolated(module=PROBES, args=["checkpoint", {**where, "phase": "first"}])
+    second = run_isolated(module=PROBES, args=["checkpoint", {**where, "phase": "second"}])
+    assert second["x"] == first["x"]

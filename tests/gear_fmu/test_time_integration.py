@@ -1,0 +1,113 @@
+"""Observed order of the time integration on the paper's case with and without the
+refinements of ``gear_fmu.structure`` (consistent start, contact location); on a smooth
+problem, against its exact solution, in ``test_newmark.py``.
+
+The observed order is the least-squares slope of log(error) against log(dt) over a ladder of
+time steps, the error taken against a run at a much finer step.
+"""
+
+
+import numpy as np
+import pytest
+
+from fmu_src import description
+from fmu_src.case import load_case
+from orchestrator.coupling.system import build_master
+
+
+def observed_order(steps, errors) -> float:
+    """Slope of log(error) against log(1 / steps)."""
+    return float(np.polyfit(np.log(1.0 / np.asarray(steps, float)), np.log(errors), 1)[0])
+
+
+def paper_case_state(n, refined, model, periods=2):
+    """Journal positions [m] after ``periods`` mesh periods at ``n`` steps per period, with the
+    coupled iterations converged to 1e-10."""
+    case = load_case("baguet2010_spur", {
+        "bearings.model": model, "simulation.tolerance": 1e-10,
+        "simulation.steps_per_mesh_period": n, "simulation.consistent_start": refined,
+        "simulation.locate_contact": refined})
+    master = build_master(case, in_process=True)
+    master.solve_static()
+    master.exit_initialization()
+    dt = description.time_step(case)
+    for i in range(periods * n):
+        master.step(i * dt, dt)
+    return master.structure.journal_states()[:, :2].copy()
+
+
+def paper_case_orders(model):
+    """Observed orders with the refinements off and on. The ladder starts at 128 steps per
+    mesh period: the damped 4.4 kHz mesh mode then has 20 steps per period and the errors are
+    in the asymptotic range (from 64 with hybrid bearings they are not yet: order 1.76 over
+    64-512, 2.0 over 128-512)."""
+    steps = [128, 256, 512]
+    out = {}
+    for refined in (False, True):
+        ref = paper_case_state(2048, refined, model)
+        errors = [np.abs(paper_case_state(n, refined, model) - ref).max() for n in steps]
+        out[refined] = observed_order(steps, errors)
+        print(f"\npaper's case ({model} bearings), refinements {'on' if refined else 'off'}: "
+              f"journal errors {', '.join(f'{e:.2e}' for e in errors)} m at "
+              f"{', '.join(map(str, steps))} steps per mesh period: observed order "
+              f"{out[refined]:.2f}")
+    return out
+
+
+def test_paper_case_order_with_and_without_contact_location():
+    """Linear bearings (the paper's Sec. 3.3 model; fast): refinements off, the contact jumps
+    inside steps and the zero start acceleration make the order about 1; on, 2."""
+    orders = paper_case_orders("linear")
+    assert 1.8 <= orders[True] <= 2.2  # measured 1.93
+    assert orders[False] <= 1.6  # measured 0.94
+
+
+@pytest.mark.slow
+def test_paper_case_order_hybrid_bearings():
+    """The paper's case itself (hybrid bearings): order 2 with the refinements. Without them
+    the error of a step depends on where the contact exit falls inside it, which moves with
+    the step size: the apparent order over a ladder is not a property of the scheme (measured
+    1.85 here over 128-512, 0.93 with linear bearings), so it is printed, not asserted."""
+    orders = paper_case_orders("hybrid")
+    assert 1.8 <= orders[True] <= 2.2  # measured 2.00
+
+
+@pytest.mark.parametrize("steps, warned", [(32, True), (48, False)])
+def test_run_warns_when_a_damped_mesh_mode_gets_under_10_steps(steps, warned, tmp_path, capsys):
+    """The spur case's damped mesh mode near 4.4 kHz gets 9.9 steps per period at T/32
+    (f_mesh = 1345 Hz): ``gsb run`` says so, names the field to raise, and stores it."""
+    import h5py
+
+    from orchestrator.run.runner import run_case
+
+    case = load_case("baguet2010_spur", {"bearings.model": "linear",
+                                         "simulation.steps_per_mesh_period": steps})
+    s = run_case(case, steps=2, in_process=True, out_dir=tmp_path, progress=False)
+    err = capsys.readouterr().err
+    with h5py.File(s.results) as f:
+        stored = f.attrs["warnings"]
+    if warned:
+        assert "warning: the damped mesh mode at 43" in err
+        assert "9.9 time steps per period" in err
+        assert "simulation.steps_per_mesh_period >= 33 (now 32)" in err
+        assert "9.9 time steps per period" in str(stored)
+    else:
+        assert "warning" not in err and str(stored) == ""
+
+
+@pytest.mark.parametrize("helix", [0.0, 20.0])
+def test_event_schedule_repeats_the_events_of_one_mesh_period(helix):
+    """The structure's periodic event schedule equals the mesh's events computed directly over
+    any interval (spur: 2 per mesh period, helical: one entry and one exit per slice)."""
+    from fmu_src.examples import paper_structure
+
+    st = paper_structure(helix)
+    period = st.mesh.event_period
+    rng = np.random.default_rng(3)
+    for lo in rng.uniform(0.0, 500.0, 200):
+        hi = lo + rng.uniform(0.0, 2.5) * period
+        direct = st.mesh.event_angles(lo, hi)
+        scheduled = np.array(st._events_in(lo, hi))
+        assert scheduled.size == direct.size
+        np.testing.assert_allclose(scheduled, direct, rtol=0, atol=1e-12)
+    assert len(st._events_in(0.0, period)) == (2 if helix == 0.0 else 40)

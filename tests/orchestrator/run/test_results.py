@@ -1,0 +1,49 @@
+"""Results files keep what was computed when a run stops early."""
+
+import subprocess
+
+import numpy as np
+import pytest
+
+from orchestrator.run.results import ResultsWriter, export_csv, read_results
+from tests.helpers import probe_command, probe_env
+
+
+def test_units_and_attributes_are_stored(tmp_path):
+    path = tmp_path / "r.h5"
+    with ResultsWriter(path, {"F": ((4, 2), "N", "bearing forces")},
+                       attrs={"case": "demo", "clearance": [1e-4, 2e-4]}, capacity=3) as w:
+        for k in range(7):
+            w.append(time=k * 1e-4, F=np.full((4, 2), k))
+    r = read_results(path)
+    assert r["units"]["F"] == "N" and r["units"]["time"] == "s"
+    assert r["F"].shape == (7, 4, 2) and r["F"][6, 3, 1] == 6
+    assert r["attrs"]["complete"] and r["attrs"]["case"] == "demo"
+    assert r["attrs"]["clearance"].dtype == np.float64  # numeric, not JSON text
+    csv = export_csv(path, tmp_path / "r.csv")
+    head, first = csv.read_text().splitlines()[:2]
+    assert head.startswith("time [s],F[0][0] [N],F[0][1] [N],F[1][0] [N]")
+    assert [float(x) for x in first.split(",")] == [0.0] * 9
+
+
+def test_exception_keeps_flushed_rows_and_marks_incomplete(tmp_path):
+    path = tmp_path / "r.h5"
+    with pytest.raises(KeyboardInterrupt):
+        with ResultsWriter(path, {"x": ((), "m", "x")}, capacity=4) as w:
+            for k in range(10):
+                w.append(time=float(k), x=float(k))
+                if k == 8:
+                    raise KeyboardInterrupt
+    r = read_results(path)
+    assert not r["attrs"]["complete"] and "KeyboardInterrupt" in r["attrs"]["stopped_by"]
+    np.testing.assert_array_equal(r["x"], np.arange(9.0))
+
+
+def test_killed_process_keeps_flushed_blocks(tmp_path):
+    """A hard kill (no clean-up at all) still leaves every flushed block readable."""
+    path = tmp_path / "r.h5"
+    proc = subprocess.run(probe_command("tests.probes.results", "killed_writer", {"path": path}),
+                          timeout=120, env=probe_env())
+    assert proc.returncode == 9
+    r = read_results(path)
+    np.testing.assert_array_equal(r["x"], np.arange(10.0))

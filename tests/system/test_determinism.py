@@ -1,0 +1,105 @@
+"""Same inputs, same bits on one machine: whatever numba's cache holds, whatever the transport.
+
+What would break it: a kernel compiled with fastmath (LLVM then chooses the rounding by
+context: what it inlines, the vector width, the CPU's FMA), a kernel loaded from numba's cache
+with a stale callee compiled in (:mod:`bearing_fmu.numba_cache`), or two transports evaluating
+the bearings along different sequences (the hybrid solver starts from its last solution).
+Here the paper's spur case runs in fresh interpreters with numba's cache empty (every kernel
+compiled in the process), full (every kernel loaded) and half full (callees loaded, their
+callers compiled), each in-process and through the FMUs: every channel of every run,
+and the static solution, must be the same bits.
+"""
+
+import hashlib
+
+import numpy as np
+
+from tests.helpers import PROBES, ROOT, run_isolated
+
+PERIODS = 2
+
+
+def _runs(fmu_dir, numba_cache) -> dict:
+    """Both transports in a fresh interpreter (:func:`tests.probes.determinism.runs`)."""
+    return run_isolated(module="tests.probes.determinism", numba_cache=numba_cache,
+                        args=["runs", {"fmu_dir": fmu_dir, "periods": PERIODS}])
+
+
+#: kernels that call kernels of other files: the hybrid film's driver and the structure step
+CALLERS = ("_hybrid_kernels.*", "step_kernel.*")
+
+
+def test_same_bits_with_a_cold_a_warm_and_a_half_warm_numba_cache(fmu_dir, tmp_path):
+    """Half warm: the full cache without the :data:`CALLERS`' entries, which are then compiled
+    against callees loaded from the cache."""
+    import shutil
+
+    cold = _runs(fmu_dir, tmp_path / "a")
+    warm = _runs(fmu_dir, tmp_path / "a")
+    shutil.copytree(tmp_path / "a", tmp_path / "b")
+    dropped = [f for pattern in CALLERS for f in (tmp_path / "b").rglob(pattern)]
+    assert len(dropped) >= 4, dropped
+    for f in dropped:
+        f.unlink()
+    half = _runs(fmu_dir, tmp_path / "b")
+    assert sorted(f.name for pattern in CALLERS for f in (tmp_path / "b").rglob(pattern)) == \
+        sorted(f.name for f in dropped)  # compiled again
+    assert cold["in-process rows"] == cold["fmu rows"] == 32 * PERIODS
+    assert cold["in-process"] == cold["fmu"], "FMUs and in-process differ"
+    assert warm == cold, "a warm numba cache changes the results"
+    assert half == cold, "callees loaded from numba's cache change the results"
+
+
+def test_a_bearing_fmu_in_a_host_without_the_package_gives_the_same_bits(fmu_dir, tmp_path):
+    """``python -S`` with only the dependencies on its path: the FMU runs the code it carries
+    (staged apart from the package, with the kernels numba's cache holds for this code version,
+    whichever copy compiled them); along a sequence of states (the hybrid solver warm-starts
+    from its last solution) its force, Kb and Cb equal the in-process model's bit for bit."""
+    import site
+
+    from bearing_fmu import BearingData
+    from bearing_fmu.frames import LocalFrame
+    from bearing_fmu.hybrid import HybridBearing
+    from orchestrator.coupling.inprocess import ModelBearings
+
+    params = {"D": 0.09, "L": 0.065, "C": 110e-6, "mu": 0.0288, "frame_angle": 0.3}
+    states = [[4e-5 + 1e-6 * k, -6e-5 + 2e-6 * k, 1e-4 * k, -2e-4] for k in range(8)]
+    ref = ModelBearings([HybridBearing(BearingData(0.09, 0.065, 110e-6, 0.0288), n=96)],
+                        [LocalFrame(0.3, -1)], [54.0])
+    expected = hashlib.sha256()
+    for st in states:
+        f, k, c = ref.evaluate(np.array([st]))
+        expected.update(np.concatenate([f.ravel(), k.ravel(), c.ravel()]).tobytes())
+    paths = [p for p in site.getsitepackages() if "site-packages" in p]
+    out = run_isolated(script=PROBES / "standalone" / "bearing_host.py", python_args=["-S"],
+                       args=[{"paths": paths, "fmu": fmu_dir / "BearingHybrid.fmu",
+                              "params": params, "states": states}])
+    assert not out["module"].startswith(str(ROOT)), out["module"]  # the FMU's own code
+    assert out["hash"] == expected.hexdigest()
+
+
+def test_a_change_in_a_callee_file_recompiles_its_callers(tmp_path):
+    """numba checks only a kernel's own file for changes; the short-bearing kernel inlines the
+    source coefficients of Eq. (3) from :mod:`bearing_fmu.reynolds`. In a copy of the code
+    with a warm cache, a change of ``reynolds.py`` alone must change the force (it did not: the
+    stale kernel was loaded), and the cache must not change a result of the same code."""
+    import shutil
+
+    from bearing_fmu.numba_cache import PACKAGES
+
+    root = tmp_path / "code"
+    for pkg in PACKAGES:
+        shutil.copytree(ROOT / pkg, root / pkg,
+                        ignore=shutil.ignore_patterns("__pycache__", "native"))
+    probe = {"module": "tests.probes.determinism",
+             "args": ["short_bearing_force", {"code": root}]}
+    cache = tmp_path / "numba"
+    first = run_isolated(**probe, numba_cache=cache)
+    assert run_isolated(**probe, numba_cache=cache) == first
+    reynolds = root / "bearing_fmu" / "reynolds.py"
+    text = reynolds.read_text()
+    old = "return y + 2.0 * x_dot, 2.0 * y_dot - x"
+    assert old in text
+    reynolds.write_text(text.replace(old, "return y + 2.0 * x_dot, 2.0 * y_dot - 1.001 * x"))
+    changed = run_isolated(**probe, numba_cache=cache)
+    assert changed["force"] != first["force"]
