@@ -206,7 +206,7 @@ def comparison(gear_fmu):
         for k in range(5):
             fmu.do_step(t + k * dt, dt)
         r["replayed"] = bool((fmu.journal_states() == x55).all())
-        # serialised states (pickle inside the FMU) restore exactly too
+        # serialised states (numeric arrays, fmu_src.state_codec) restore exactly too
         f = fmu.slave.fmu
         blob = f.serializeFMUstate(saved._handle)
         back = f.deSerializeFMUstate(blob)

@@ -47,9 +47,10 @@ import numpy as np
 
 from fmu_src import description
 from fmu_src.case import Case
+from fmu_src.state_codec import StateFormatError
 from fmu_src.units import symbol
 from orchestrator.coupling.inprocess import InProcessStructure, ModelBearings
-from orchestrator.coupling.master import Master
+from orchestrator.coupling.master import Master, decode_checkpoint
 from orchestrator.run import files as run_files
 from orchestrator.run.checks import overload_message, time_step_warnings, unbalance_warnings
 from orchestrator.run.files import results_name
@@ -372,9 +373,13 @@ def resume_run(path: Path | str, periods: int | None = None, fmu_dir: Path | str
     The case comes from the file (``case_toml``), the static solution is solved again and must
     equal the stored one, then the structure, the bearings' warm starts and the laws are
     restored from the checkpoint (:meth:`orchestrator.coupling.master.Master.checkpoint`; through
-    FMUs,
-    their serialised FMU states) and the steps go on in the same file: the trajectory is that
-    of an uninterrupted run. ``periods`` extends the run (default: the file's own length).
+    FMUs, their serialised FMU states) and the steps go on in the same file: the trajectory is
+    that of an uninterrupted run. ``periods`` extends the run (default: the file's own length).
+
+    The checkpoint is numeric arrays (:mod:`fmu_src.state_codec`), checked before anything is
+    computed: a pickle (the format of older versions, which can run code when loaded), another
+    format, version or kind is refused with a :class:`RunError` naming the file and the reason;
+    entries that do not fit the case are refused when restored.
     """
     from fmu_src.case import CaseError
     from orchestrator.analysis.metrics import stored_case
@@ -400,7 +405,12 @@ def resume_run(path: Path | str, periods: int | None = None, fmu_dir: Path | str
         case = stored_case(a, str(path))
     except CaseError as exc:
         raise RunError(f"--resume {path}: the stored case does not load: {exc}") from None
-    ckpt = read_checkpoint(path)
+    try:
+        ckpt = read_checkpoint(path)
+        if ckpt is not None:
+            decode_checkpoint(ckpt[1])  # the format, version and kind, before any work
+    except StateFormatError as exc:
+        raise RunError(f"--resume {path}: {exc}") from None
     if ckpt is None:
         raise RunError(f"--resume {path}: the file holds no checkpoint (the run stopped before "
                        "its first flush); run it again")
@@ -472,6 +482,8 @@ def _run(case, attrs, where, first, blob, in_process, fmu_dir, fmus, progress, f
             if blob is not None:
                 try:
                     master.restore(blob)
+                except StateFormatError as exc:  # "the checkpoint ...": what does not fit
+                    raise RunError(f"--resume {path}: {exc}") from None
                 except Exception as exc:
                     raise RunError(f"--resume {path}: the checkpoint does not restore: "
                                    f"{exc}") from exc
