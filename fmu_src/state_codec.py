@@ -147,6 +147,9 @@ def _read_members(data: bytes, what: str) -> dict:
             try:
                 with zf.open(info) as fh:
                     version = npy.read_magic(fh)
+                    if version not in ((1, 0), (2, 0)):
+                        raise StateFormatError(f"{what}: entry {name!r} is an .npy array of "
+                                               f"version {version}; a state uses 1.0 or 2.0")
                     reader = (npy.read_array_header_1_0 if version == (1, 0)
                               else npy.read_array_header_2_0)
                     shape, fortran, dtype = reader(fh)

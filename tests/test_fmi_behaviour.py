@@ -7,7 +7,10 @@
 * bounds are declared in modelDescription.xml;
 * fmi2GetFMUstate/SetFMUstate and Serialize/DeSerialize restore every FMU bit for bit, the
   bearing models' warm starts included, and a system checkpointed to bytes restarts in a new
-  process exactly where it stopped.
+  process exactly where it stopped;
+* serialised states are numeric arrays (numpy reads them without pickle), and bytes that are
+  not the FMU's own state (a pickle, another kind, an entry of the wrong shape) are refused
+  with fmi2Error, the reason in the log, without running them and without losing the instance.
 
 The FMUs load in the test's process (tests.helpers.run_here), but for the restart in a new
 process.
@@ -156,7 +159,7 @@ def test_a_checkpointed_system_restarts_exactly_in_a_new_process(fmu_dir, tmp_pa
     from the file (and the master's laws) run steps 7-12: the same journal states, bit for
     bit."""
     common = f"""
-        import json, pickle
+        import json
         import numpy as np
         from fmu_src import description
         from fmu_src.case import load_case
@@ -165,7 +168,7 @@ def test_a_checkpointed_system_restarts_exactly_in_a_new_process(fmu_dir, tmp_pa
         dt = description.time_step(case)
         m = build_master(case, fmu_dir=r"{fmu_dir}")
         fmus = [m.structure.slave.fmu] + [s.fmu for s in m.bearings.slaves]
-        path = r"{tmp_path / 'checkpoint.pkl'}"
+        path = r"{tmp_path / 'checkpoint.npz'}"
     """
     first = run_isolated(common + """
         m.solve_static()
@@ -177,9 +180,9 @@ def test_a_checkpointed_system_restarts_exactly_in_a_new_process(fmu_dir, tmp_pa
             st = f.getFMUstate()
             blobs.append(f.serializeFMUstate(st))
             f.freeFMUstate(st)
-        with open(path, "wb") as fh:
-            pickle.dump(dict(blobs=blobs, laws=m.laws, t=m.structure.t,
-                             n=m.structure.n_steps), fh)
+        np.savez(path, *[np.frombuffer(b, dtype=np.uint8) for b in blobs], f0=m.laws.f0,
+                 kb=m.laws.kb, cb=m.laws.cb, states=m.laws.states, force_at=m.laws.force_at,
+                 t=m.structure.t, n=m.structure.n_steps)
         for k in range(6, 12):
             m.step(k * dt, dt)
         x = m.structure.journal_states().tolist()
@@ -187,15 +190,16 @@ def test_a_checkpointed_system_restarts_exactly_in_a_new_process(fmu_dir, tmp_pa
         print(json.dumps(dict(x=x)))
     """)
     second = run_isolated(common + """
-        with open(path, "rb") as fh:
-            saved = pickle.load(fh)
+        from bearing_fmu.affine import AffineLaws
+        saved = np.load(path, allow_pickle=False)
         m.bearings.exit_initialization()
         m.structure.exit_initialization()
-        for f, blob in zip(fmus, saved["blobs"]):
-            st = f.deSerializeFMUstate(blob)
+        for k, f in enumerate(fmus):
+            st = f.deSerializeFMUstate(saved[f"arr_{k}"].tobytes())
             f.setFMUstate(st)
             f.freeFMUstate(st)
-        m.laws, m.structure.t, m.structure.n_steps = saved["laws"], saved["t"], saved["n"]
+        m.laws = AffineLaws(*(saved[n] for n in ("f0", "kb", "cb", "states", "force_at")))
+        m.structure.t, m.structure.n_steps = float(saved["t"]), int(saved["n"])
         for k in range(6, 12):
             m.step(k * dt, dt)
         x = m.structure.journal_states().tolist()
@@ -203,3 +207,93 @@ def test_a_checkpointed_system_restarts_exactly_in_a_new_process(fmu_dir, tmp_pa
         print(json.dumps(dict(x=x)))
     """)
     assert second["x"] == first["x"]
+
+
+@pytest.mark.parametrize("fmu", ["GearShaft", *BEARING_FMUS])
+def test_bytes_that_are_not_the_fmus_own_state_are_refused_with_fmi2error(fmu_dir, fmu,
+                                                                          tmp_path):
+    """fmi2DeSerializeFMUstate of a pickle (one that would create a file when loaded), of
+    text, of another kind of state: fmi2Error with the reason in the log, nothing loaded.
+    A state of the FMU's own kind with an entry of the wrong shape: fmi2Error at
+    fmi2SetFMUstate, where the entry is checked against the structure or the model (at
+    fmi2DeSerializeFMUstate for a memoryless model's scalar). The instance lives on: its own
+    state restores exactly afterwards."""
+    marker = tmp_path / "marker"
+    out = run_here(f"""
+        import io, json, pickle
+        import numpy as np
+        from fmpy.fmi1 import FMICallException
+        from fmu_src.state_codec import encode
+        from orchestrator.coupling.fmi import FmuInstance
+        class WritesAFile:
+            def __reduce__(self):
+                return (open, (r"{marker}", "w"))
+        s = FmuInstance(r"{fmu_dir / (fmu + '.fmu')}", "x")
+        f, vr = s.fmu, s.vr
+        f.setupExperiment(startTime=0.0)
+        f.enterInitializationMode()
+        gear = {fmu == "GearShaft"}
+        if gear:
+            names = ["s_1", "t_1", "s_dot_1", "mesh_force"]
+        else:
+            names = ["F_s", "F_t", "K_ss", "C_tt"]
+            c = f.getReal([vr["C"]])[0]
+            f.setReal([vr[n] for n in ("omega", "s", "t")], [325.0, 0.5 * c, -0.3 * c])
+        outs = [vr[n] for n in names]
+        f.getReal(outs)
+        f.exitInitializationMode()
+        if gear:
+            f.doStep(0.0, 1e-5)
+        else:
+            f.setReal([vr["s"], vr["s_dot"]], [0.55 * c, 1e-3])
+        saved = f.getReal(outs)
+        state = f.getFMUstate()
+        good = f.serializeFMUstate(state)
+        f.freeFMUstate(state)
+        with np.load(io.BytesIO(good), allow_pickle=False) as z:  # numpy reads it, no pickle
+            arrays = {{n: z[n] for n in z.files}}
+        kind = str(arrays.pop("__kind__"))
+        arrays.pop("__format_version__")
+        # an entry of another shape: one checked against the live structure or model when the
+        # state is set (a scalar for memoryless models: checked when deserialised)
+        vectors = [n for n in sorted(arrays) if n.startswith(("structure/x", "model/"))
+                   and arrays[n].ndim == 1]
+        big = vectors[0] if vectors else "values/D"
+        other = arrays | {{big: np.zeros(3, arrays[big].dtype)}}
+        r = {{"kind": kind, "refused": {{}}}}
+        for name, blob in (("pickle", pickle.dumps(WritesAFile())), ("text", b"a state"),
+                           ("kind", encode("gsb.other", {{"x": 1.0}})),
+                           ("shape", encode(kind, other))):
+            since = len(s.messages)
+            stage = "fmi2DeSerializeFMUstate"
+            try:
+                st = f.deSerializeFMUstate(blob)
+                stage = "fmi2SetFMUstate"
+                try:
+                    f.setFMUstate(st)
+                    r["refused"][name] = ["accepted"]
+                finally:
+                    f.freeFMUstate(st)
+            except FMICallException as exc:
+                r["refused"][name] = [exc.status, s.log_tail(since=since), stage, big]
+        st = f.deSerializeFMUstate(good)
+        f.setFMUstate(st)
+        f.freeFMUstate(st)
+        r["again"] = f.getReal(outs) == saved
+        s.close()
+        print(json.dumps(r))
+    """)
+    assert out["kind"] == ("gsb.gear_shaft_fmu_state" if fmu == "GearShaft"
+                           else f"gsb.bearing_fmu_state.{fmu.removeprefix('Bearing').lower()}")
+    refused = out["refused"]
+    assert all(v[0] == 3 for v in refused.values()), refused  # fmi2Error, never fatal
+    assert "StateFormatError: the serialised FMU state is a Python pickle" in refused["pickle"][1]
+    assert "is not a saved state of this format" in refused["text"][1]
+    assert f"is a 'gsb.other' state, not a '{out['kind']}' state" in refused["kind"][1]
+    assert "has shape (3,), expected" in refused["shape"][1], refused["shape"]
+    memoryless = fmu in ("BearingShort", "BearingLumped")
+    assert refused["shape"][2] == ("fmi2DeSerializeFMUstate" if memoryless
+                                   else "fmi2SetFMUstate"), refused["shape"]
+    assert all(v[2] == "fmi2DeSerializeFMUstate" for k, v in refused.items() if k != "shape")
+    assert not marker.exists()
+    assert out["again"]
