@@ -288,8 +288,10 @@ class BearingModel(ABC):
         linearised model freezes its 8 coefficients here (paper Sec. 3.3)."""
 
     def get_state(self):
-        """What :meth:`set_state` needs to restore the model's behaviour (picklable; None for a
-        model without memory). Used for the FMU state (fmi2GetFMUstate)."""
+        """What :meth:`set_state` needs to restore the model's behaviour (copied arrays and
+        numbers; None for a model without memory). Used for the FMU state (fmi2GetFMUstate)
+        and the resume checkpoint; a model with memory needs its array layout in
+        :mod:`fmu_src.states` to be saved to bytes."""
         return None
 
     def set_state(self, state) -> None:  # noqa: B027 - a model without memory: nothing

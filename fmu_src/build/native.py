@@ -22,6 +22,9 @@ part comes from and how to update it) holds:
     handlers alone (``Py_InitializeEx(0)``);
   - CMake takes the Python of the build from this interpreter's ``sysconfig``, and builds into
     a given folder;
+  - bytes fmi2DeSerializeFMUstate's slave refuses (not a state it wrote: the slaves read only
+    :mod:`fmu_src.state_codec` states) make the call return fmi2Error, the instance kept, and
+    ``_set_fmu_state`` may return a status as a setter does;
 
 * ``loader/``: this project's loader (Linux), the FMU's binary: it has no Python dependency,
   so a C/C++ host can load it; it loads libpython when the host has none (the paths of

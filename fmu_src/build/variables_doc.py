@@ -160,7 +160,10 @@ Behaviour:
   `fmi2SetFMUstate` returns to a saved state.
 - `fmi2GetFMUstate` / `fmi2SetFMUstate` / `fmi2SerializeFMUstate` save and restore the
   structural state (t, X, Xdot, Xddot, contact set, mesh outputs), the inputs, the parameters
-  and the outputs exactly (pickle).
+  and the outputs exactly. Serialised states are numeric arrays in an npz archive with a
+  format version and a kind (`fmu_src/state_codec.py`), never a pickle: bytes that are not
+  such a state of this FMU are refused by `fmi2DeSerializeFMUstate` with fmi2Error (the
+  reason in the log), the instance intact.
 
 """
 

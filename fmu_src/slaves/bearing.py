@@ -32,9 +32,17 @@ from fmu_src.contract import (
     FORCE_NAMES,
     STATE_NAMES,
     STIFFNESS_NAMES,
+    ValueRefused,
     bearing_variables,
 )
-from fmu_src.slaves.support import ContractSlave, describe_exception, pin_namespace
+from fmu_src.slaves.support import (
+    FMI_ERROR,
+    ContractSlave,
+    describe_exception,
+    pin_namespace,
+)
+from fmu_src.state_codec import StateArrays, StateFormatError, nest
+from fmu_src.states import bearing_state_arrays, restore_bearing_state
 
 __all__ = ["BearingSlave", "pin_namespace"]
 
@@ -185,22 +193,26 @@ class BearingSlave(ContractSlave):
 
     # --- FMU state: the variables and the model's own state (the hybrid and FD solvers' warm
     # starts, the frozen law of the linear model), so that a restored state reproduces the
-    # outputs bit for bit ---------------------------------------------------------------------
+    # outputs bit for bit. Serialised: ``values/<variable>`` (its FMI type), ``dirty_outputs``,
+    # ``failed``, ``has_model`` and ``model/...`` (fmu_src.states) --------------------------
     def _get_fmu_state(self):
         state = {"values": dict(self._values), "dirty_outputs": self._dirty_outputs,
                  "failed": self._failed}
         if self._model is not None and not self._dirty_model:
-            state["model"] = self._model.get_state()
+            state["model"] = bearing_state_arrays(self._model)
         return state
 
     def _set_fmu_state(self, state):
         try:
+            model = state.get("model")
             self._values.clear()
             self._values.update(state["values"])
             self._dirty_model = True
             self._build_model()
-            if state.get("model") is not None:
-                self._model.set_state(state["model"])
+            if model is not None:
+                arrays = StateArrays(model, "the FMU state's model state")
+                restore_bearing_state(self._model, arrays)
+                arrays.check_all_read()
             self._dirty_outputs = state["dirty_outputs"]
             self._failed = state["failed"]
         except Exception as exc:  # anything raised here would be fatal for the host
@@ -208,3 +220,40 @@ class BearingSlave(ContractSlave):
             self._dirty_outputs = True
             self.log(f"{self.instance_name}: cannot restore the FMU state: "
                      f"{describe_exception(exc)}", Fmi2Status.error)
+            return FMI_ERROR
+        return None
+
+    @classmethod
+    def _state_kind(cls) -> str:
+        return f"gsb.bearing_fmu_state.{cls.model_name}"
+
+    @classmethod
+    def _state_to_arrays(cls, state) -> dict:
+        out = {f"values/{v.name}": _AS_TYPE[v.type](state["values"][v.name])
+               for v in bearing_variables()}
+        out |= {"dirty_outputs": np.bool_(state["dirty_outputs"]),
+                "failed": np.bool_(state["failed"]), "has_model": np.bool_("model" in state)}
+        return out | nest("model", state.get("model", {}))
+
+    @classmethod
+    def _state_from_arrays(cls, arrays: StateArrays):
+        values = arrays.sub("values")
+        state = {"values": {}, "dirty_outputs": arrays.bool("dirty_outputs"),
+                 "failed": arrays.bool("failed")}
+        for v in bearing_variables():
+            value = _READ_TYPE[v.type](values, v.name)
+            if v.causality in ("parameter", "input"):
+                try:
+                    v.check(value)
+                except ValueRefused as exc:
+                    raise StateFormatError(f"{arrays.what}: {exc}") from None
+            state["values"][v.name] = value
+        if arrays.bool("has_model"):
+            state["model"] = arrays.part("model")  # checked against the model when set
+        return state
+
+
+#: a variable's value as the array of its FMI type, and back
+_AS_TYPE = {"Real": np.float64, "Integer": np.int64, "Boolean": np.bool_, "String": np.str_}
+_READ_TYPE = {"Real": StateArrays.float, "Integer": StateArrays.int, "Boolean": StateArrays.bool,
+              "String": StateArrays.text}

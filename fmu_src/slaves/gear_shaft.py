@@ -13,7 +13,8 @@ maps the FMI calls onto the structure:
 * ``doStep(t, dt)``: one ``Structure.step`` from t (must be the structure's time) to t + dt;
 * ``get/setFMUstate``: structure state, parameters, laws, outputs and the bearing stiffness
   the modal damping was built with (exact rollback, and a restart in another instance or
-  process); pickle serialises.
+  process); serialised as numeric arrays (:mod:`fmu_src.state_codec`, never a pickle: bytes
+  that are not such a state are refused with fmi2Error).
 
 A refused value (out of its bounds, non-finite) is reported by the set call (fmi2Error); a
 failed solution or a case whose fields do not fit together by the read of the outputs
@@ -26,6 +27,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+import numpy as np
 from pythonfmu.default_experiment import DefaultExperiment
 
 from fmu_src.contract import (
@@ -39,7 +41,9 @@ from fmu_src.contract import (
     support_load_names,
     unpack_law_arrays,
 )
-from fmu_src.slaves.support import ContractSlave
+from fmu_src.slaves.support import FMI_ERROR, ContractSlave
+from fmu_src.state_codec import StateArrays, nest
+from fmu_src.states import structure_state_arrays, structure_state_from_arrays
 
 __all__ = ["CASE_RESOURCE", "GearShaftSlave"]
 
@@ -51,6 +55,9 @@ _OUTPUTS = [*journal_output_names(), *(f"omega_{j}" for j in range(1, 5)),
             *(name for name, _, _ in GEAR_OUTPUTS)]
 _SUPPORT = support_load_names()
 _NAN_OUTPUTS = [math.nan] * len(_OUTPUTS)
+_FLAGS = ("stepping", "need_static", "have_static", "dirty", "failed")
+#: the kind tag of this slave's serialised states (fmu_src.state_codec)
+STATE_KIND = "gsb.gear_shaft_fmu_state"
 
 
 class GearShaftSlave(ContractSlave):
@@ -339,20 +346,28 @@ class GearShaftSlave(ContractSlave):
 
     def _set_fmu_state(self, state):
         try:
-            if state["overrides"] != self._overrides:
-                self._overrides = dict(state["overrides"])
+            overrides = state["overrides"]
+            if overrides != self._overrides:
+                if overrides:
+                    self._base.with_overrides(overrides)  # a case error before any change
+                self._overrides = dict(overrides)
                 self._reset_structure()
-            self._laws[:] = state["laws"]
-            if state["structure"] is None:
+            saved = state["structure"]
+            if saved is None:
                 self._structure = None  # saved before the structure was built
                 self._damping_kb = None
             else:
                 st = self._ensure_structure()
+                if isinstance(saved, dict):  # deserialised: checked against this structure
+                    arrays = StateArrays(saved, "the FMU state's structure state")
+                    saved = structure_state_from_arrays(arrays, st)
+                    arrays.check_all_read()
                 kb = state["damping_kb"]
                 if kb is not None and kb is not self._damping_kb and (
                         self._damping_kb is None or not (kb == self._damping_kb).all()):
                     self._set_damping(kb)  # another instance, or another reference
-                st.set_state(state["structure"])
+                st.set_state(saved)
+            self._laws[:] = state["laws"]
             self._outputs = list(state["outputs"])
             self._iterations = state["iterations"]
             self._stepping = state["stepping"]
@@ -363,3 +378,44 @@ class GearShaftSlave(ContractSlave):
             self._error = state["error"]
         except Exception as exc:  # anything raised here would be fatal for the host
             self._error = self.output_failed("cannot restore the FMU state", exc)
+            return FMI_ERROR
+        return None
+
+    # Serialised: ``overrides/<case field>``, ``laws`` (56,), ``outputs``, ``iterations``,
+    # the flags, ``error`` (text, absent for none), ``damping_kb`` (4, 2, 2) and
+    # ``structure/...`` (fmu_src.states) once built (``has_structure``)
+    @classmethod
+    def _state_kind(cls) -> str:
+        return STATE_KIND
+
+    @classmethod
+    def _state_to_arrays(cls, state) -> dict:
+        out = {f"overrides/{key}": np.asarray(value)
+               for key, value in state["overrides"].items()}
+        out |= {"laws": np.array(state["laws"], dtype=np.float64),
+                "outputs": np.array(state["outputs"], dtype=np.float64),
+                "iterations": np.int64(state["iterations"]),
+                "has_structure": np.bool_(state["structure"] is not None)}
+        out |= {name: np.bool_(state[name]) for name in _FLAGS}
+        if state["error"] is not None:
+            out["error"] = np.str_(state["error"])
+        if state["damping_kb"] is not None:
+            out["damping_kb"] = state["damping_kb"]
+        if state["structure"] is not None:
+            out |= nest("structure", structure_state_arrays(state["structure"]))
+        return out
+
+    @classmethod
+    def _state_from_arrays(cls, arrays: StateArrays):
+        ov = arrays.sub("overrides")  # values the case checks when the state is set
+        state = {"overrides": {key: ov.value(key) for key in ov.names()},
+                 "laws": arrays.array("laws", "float64", (len(_LAWS),)).tolist(),
+                 "outputs": arrays.array("outputs", "float64", (len(_OUTPUTS),)).tolist(),
+                 "iterations": arrays.int("iterations"),
+                 "error": arrays.text("error") if arrays.has("error") else None,
+                 "damping_kb": (arrays.array("damping_kb", "float64", (4, 2, 2))
+                                if arrays.has("damping_kb") else None),
+                 # checked against the structure when set
+                 "structure": arrays.part("structure") if arrays.bool("has_structure") else None}
+        state |= {name: arrays.bool(name) for name in _FLAGS}
+        return state

@@ -22,6 +22,7 @@ from pythonfmu import Boolean, Fmi2Causality, Fmi2Slave, Fmi2Variability, Intege
 from pythonfmu.enums import Fmi2Status
 
 from fmu_src.contract import ValueRefused
+from fmu_src.state_codec import StateArrays, decode, encode
 
 __all__ = [
     "FMI_ERROR",
@@ -214,15 +215,35 @@ class ContractSlave(Fmi2Slave):
     def get_string(self, vrs):
         return self._get(String, vrs)
 
-    # --- FMU state serialisation (fmi2SerializeFMUstate): the state objects are pickled ------
-    @staticmethod
-    def _fmu_state_to_bytes(state) -> bytes:
-        import pickle
+    # --- FMU state serialisation (fmi2SerializeFMUstate) ---------------------------------------
+    # The library calls these two on the class. The bytes are a state of fmu_src.state_codec
+    # (numeric arrays, kind _state_kind()): a state from anywhere may be deserialised without
+    # running code. Bytes that are not such a state raise StateFormatError, which the patched
+    # library (fmu_src.build.native) returns as fmi2Error with the message in the log, the
+    # instance intact (pythonfmu's own library makes it fmi2Fatal).
+    @classmethod
+    def _state_kind(cls) -> str:
+        """The kind tag of this slave's serialised states."""
+        raise NotImplementedError
 
-        return pickle.dumps(state, protocol=pickle.HIGHEST_PROTOCOL)
+    @classmethod
+    def _state_to_arrays(cls, state) -> dict:
+        """The flat arrays of a state of ``_get_fmu_state``."""
+        raise NotImplementedError
 
-    @staticmethod
-    def _fmu_state_from_bytes(state: bytes):
-        import pickle
+    @classmethod
+    def _state_from_arrays(cls, arrays: StateArrays):
+        """The ``_get_fmu_state`` form of decoded arrays, checked as far as can be without
+        an instance (``_set_fmu_state`` checks the rest)."""
+        raise NotImplementedError
 
-        return pickle.loads(state)
+    @classmethod
+    def _fmu_state_to_bytes(cls, state) -> bytes:
+        return encode(cls._state_kind(), cls._state_to_arrays(state))
+
+    @classmethod
+    def _fmu_state_from_bytes(cls, state: bytes):
+        arrays = decode(state, cls._state_kind(), what="the serialised FMU state")
+        out = cls._state_from_arrays(arrays)
+        arrays.check_all_read()
+        return out

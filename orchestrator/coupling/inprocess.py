@@ -14,6 +14,13 @@ import numpy as np
 from bearing_fmu.affine import AffineLaws
 from bearing_fmu.base import BearingModel
 from bearing_fmu.frames import LocalFrame
+from fmu_src.state_codec import StateArrays, nest
+from fmu_src.states import (
+    bearing_state_arrays,
+    bearing_state_from_arrays,
+    structure_state_arrays,
+    structure_state_from_arrays,
+)
 from gear_fmu.analyses import support_loads
 from gear_fmu.structure import Structure
 from orchestrator.coupling.master import BearingSet, StructureSlave
@@ -68,11 +75,11 @@ class InProcessStructure(StructureSlave):
         kb = self._require_laws().kb
         self.structure.set_damping_reference(0.5 * (kb + np.transpose(kb, (0, 2, 1))))
 
-    def checkpoint(self):
-        return self.structure.get_state()
+    def checkpoint(self) -> dict:
+        return structure_state_arrays(self.structure.get_state())
 
-    def restore(self, checkpoint) -> None:
-        self.structure.set_state(checkpoint)
+    def restore(self, checkpoint: StateArrays) -> None:
+        self.structure.set_state(structure_state_from_arrays(checkpoint, self.structure))
 
     def journal_states(self) -> np.ndarray:
         return self.structure.journal_states()
@@ -130,12 +137,19 @@ class ModelBearings(BearingSet):
         self.evaluations += nb
         return out[:, 0], out[:, 1:3], out[:, 3:5]
 
-    def checkpoint(self):
-        return [model.get_state() for model in self.models]
+    def checkpoint(self) -> dict:
+        """Each model's state (:func:`fmu_src.states.bearing_state_arrays`) under its index."""
+        out = {}
+        for b, model in enumerate(self.models):
+            out |= nest(str(b), bearing_state_arrays(model))
+        return out
 
-    def restore(self, checkpoint) -> None:
-        for model, state in zip(self.models, checkpoint, strict=True):
-            model.set_state(state)
+    def restore(self, checkpoint: StateArrays) -> None:
+        states = [bearing_state_from_arrays(model, checkpoint.sub(str(b)))
+                  for b, model in enumerate(self.models)]  # all checked before any is set
+        for model, state in zip(self.models, states, strict=True):
+            if state is not None:
+                model.set_state(state)
 
     def exit_initialization(self) -> None:
         if self._states is None:

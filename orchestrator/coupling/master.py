@@ -39,7 +39,6 @@ objects directly) and :mod:`orchestrator.coupling.fmi` (the FMUs through fmpy) i
 from __future__ import annotations
 
 import math
-import pickle
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 
@@ -47,13 +46,17 @@ import numpy as np
 
 from bearing_fmu.affine import AffineLaws
 from bearing_fmu.static import newton_equilibrium
+from fmu_src.state_codec import StateArrays, decode, encode, nest
+from fmu_src.states import laws_arrays, laws_from_arrays
 
 __all__ = [
+    "CHECKPOINT_KIND",
     "BearingSet",
     "CouplingError",
     "Master",
     "StepReport",
     "StructureSlave",
+    "decode_checkpoint",
 ]
 
 #: weight of the new linearisation in a relaxed iteration (module docstring): the law used next
@@ -62,6 +65,8 @@ RELAXATION = 0.5
 #: a step is relaxed from the iteration whose mismatch exceeds STALL times the one two
 #: iterations earlier (Newton's mismatch falls quadratically; a two-cycle's repeats)
 STALL = 0.5
+#: the kind tag of :meth:`Master.checkpoint` states (:mod:`fmu_src.state_codec`)
+CHECKPOINT_KIND = "gsb.master_checkpoint"
 
 
 class CouplingError(RuntimeError):
@@ -132,13 +137,15 @@ class StructureSlave(ABC):
         FMU)."""
         return self.mesh_force(), self.transmission_error(), self.gear_displacements()
 
-    def checkpoint(self):
-        """A picklable copy of the state after the last accepted step, from which
-        :meth:`restore` continues bit for bit in another process (resumed runs)."""
+    def checkpoint(self) -> dict:
+        """The state after the last accepted step as flat arrays (name -> numpy array,
+        :mod:`fmu_src.state_codec`), from which :meth:`restore` continues bit for bit in
+        another process (resumed runs)."""
         raise NotImplementedError(f"{type(self).__name__} cannot save its state")
 
-    def restore(self, checkpoint) -> None:
-        """Continue from a :meth:`checkpoint` (after the same static solution)."""
+    def restore(self, checkpoint: StateArrays) -> None:
+        """Continue from the arrays of a :meth:`checkpoint` (after the same static solution);
+        :class:`~fmu_src.state_codec.StateFormatError` for arrays that do not fit."""
         raise NotImplementedError(f"{type(self).__name__} cannot restore a state")
 
     def close(self) -> None:  # noqa: B027 - optional: nothing to release by default
@@ -182,13 +189,13 @@ class BearingSet(ABC):
         """End of the static phase (at the journal states of the last evaluation): the linear
         model freezes its coefficients there."""
 
-    def checkpoint(self):
-        """A picklable copy of what the bearings remember between calls (the solvers' warm
-        starts); None for memoryless bearings."""
-        return None
+    def checkpoint(self) -> dict:
+        """What the bearings remember between calls (the solvers' warm starts) as flat arrays
+        (:mod:`fmu_src.state_codec`); empty for memoryless bearings."""
+        return {}
 
-    def restore(self, checkpoint) -> None:  # noqa: B027 - memoryless by default
-        """Restore a :meth:`checkpoint`."""
+    def restore(self, checkpoint: StateArrays) -> None:  # noqa: B027 - memoryless by default
+        """Restore the arrays of a :meth:`checkpoint`."""
 
     def close(self) -> None:  # noqa: B027 - optional: nothing to release by default
         """Release what the set holds (FMU instances); idempotent."""
@@ -268,19 +275,27 @@ class Master:
     def checkpoint(self) -> bytes:
         """The coupled state after the last accepted step (structure, bearing warm starts,
         the laws the next step starts from) as bytes: :meth:`restore` on a master built from
-        the same case, after the same static solution, continues bit for bit."""
-        laws = self.laws
-        return pickle.dumps({
-            "structure": self.structure.checkpoint(), "bearings": self.bearings.checkpoint(),
-            "laws": (laws.f0, laws.kb, laws.cb, laws.states, laws.force_at)},
-            protocol=pickle.HIGHEST_PROTOCOL)
+        the same case, after the same static solution, continues bit for bit.
+
+        The bytes are a state of kind :data:`CHECKPOINT_KIND` (:mod:`fmu_src.state_codec`:
+        numeric arrays in an npz archive, never a pickle): ``structure/...``,
+        ``bearings/...`` (each slave's :meth:`StructureSlave.checkpoint` and
+        :meth:`BearingSet.checkpoint`) and ``laws/...`` (:func:`fmu_src.states.laws_arrays`).
+        """
+        return encode(CHECKPOINT_KIND, nest("structure", self.structure.checkpoint())
+                      | nest("bearings", self.bearings.checkpoint())
+                      | nest("laws", laws_arrays(self.laws)))
 
     def restore(self, checkpoint: bytes) -> None:
-        """Continue from :meth:`checkpoint` bytes (a pickle: restore only files you trust)."""
-        state = pickle.loads(checkpoint)
-        self.structure.restore(state["structure"])
-        self.bearings.restore(state["bearings"])
-        self.laws = AffineLaws(*state["laws"])
+        """Continue from :meth:`checkpoint` bytes; a
+        :class:`~fmu_src.state_codec.StateFormatError` names what is wrong with bytes that are
+        not such a checkpoint (:func:`decode_checkpoint`) or do not fit this master."""
+        arrays = decode_checkpoint(checkpoint)
+        laws = laws_from_arrays(arrays.sub("laws"), self.structure.n_bearings)
+        self.structure.restore(arrays.sub("structure"))
+        self.bearings.restore(arrays.sub("bearings"))
+        arrays.check_all_read()
+        self.laws = laws
 
     def close(self) -> None:
         """Release both slaves (FMU instances; nothing in-process); idempotent."""
@@ -319,3 +334,10 @@ class Master:
             f"{self.max_iterations} iterations: relative bearing-force mismatch "
             f"{mismatch:.3e} > tol {self.tol:.1e}"
         )
+
+
+def decode_checkpoint(data, what: str = "the checkpoint") -> StateArrays:
+    """The arrays of :meth:`Master.checkpoint` bytes; a
+    :class:`~fmu_src.state_codec.StateFormatError` starting with ``what`` for anything else
+    (a pickle, another format, version or kind): what a resumed run checks before it starts."""
+    return decode(data, CHECKPOINT_KIND, what)

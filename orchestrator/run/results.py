@@ -9,11 +9,18 @@ read it during the run. Units and descriptions are attributes of each dataset; t
 run's settings are root attributes, numbers and numeric arrays (not JSON text), each with its
 unit in ``<name>_unit``.
 
-Resume checkpoint: at every flush the writer can store an opaque state (bytes, from its
-``checkpoint`` callable: the structure's state and the bearing laws after the last row written)
-in the group ``resume``. Two slots are written in turn and ``resume/index`` names the valid one
-only once its bytes are flushed, so a kill in the middle of a checkpoint leaves the previous one
-intact. :func:`read_checkpoint` returns it with the number of rows it belongs to.
+Resume checkpoint: at every flush the writer can store a state (bytes, from its ``checkpoint``
+callable: :meth:`orchestrator.coupling.master.Master.checkpoint`, the structure's state, the
+bearings' warm starts or serialised FMU states and the laws after the last row written) in the
+group ``resume``. The bytes are a state of :mod:`fmu_src.state_codec`: numeric arrays (float64,
+int64, bool, uint8, text) in an npz archive, never a pickle, so that resuming a file from
+anyone runs no code from it; the group's attribute ``format_version`` is
+:data:`fmu_src.state_codec.FORMAT_VERSION`, and :func:`read_checkpoint` refuses a file with
+another (the checkpoints of older versions were pickles). Two slots (uint8 datasets: the npz
+bytes, ``np.load(io.BytesIO(slot[:n].tobytes()), allow_pickle=False)`` reads them) are
+written in turn and ``resume/index`` names the valid one only once its bytes are flushed, so a
+kill in the middle of a checkpoint leaves the previous one intact. :func:`read_checkpoint`
+returns it with the number of rows it belongs to.
 
 >>> import tempfile, os, numpy as np
 >>> path = os.path.join(tempfile.mkdtemp(), "r.h5")
@@ -33,6 +40,8 @@ import time
 from pathlib import Path
 
 import numpy as np
+
+from fmu_src.state_codec import FORMAT_VERSION, StateFormatError
 
 __all__ = ["ResultsWriter", "add_attributes", "attribute_value", "clear_write_flags",
            "export_csv", "live_writer", "open_results", "read_attributes", "read_checkpoint",
@@ -220,6 +229,8 @@ class ResultsWriter:
                                    chunks=(65536,))
             # [valid slot, bytes, rows] of the last checkpoint; slot -1: none yet
             grp.create_dataset("index", data=np.array([-1, 0, 0], dtype=np.int64))
+            grp.attrs["format_version"] = FORMAT_VERSION  # before SWMR: no new attributes
+            grp.attrs["format"] = "npz of numeric arrays (fmu_src.state_codec)"
             self.rows = 0
         else:  # continue an existing file after its first _resume_rows rows
             self.file = _open_append(self.path, strict=True)
@@ -371,13 +382,23 @@ def _is_channel(item) -> bool:
 
 
 def read_checkpoint(path) -> tuple[int, bytes] | None:
-    """``(rows, state)`` of the last checkpoint of a results file, None if it has none."""
+    """``(rows, state)`` of the last checkpoint of a results file, None if it has none;
+    :class:`~fmu_src.state_codec.StateFormatError` if its ``format_version`` is not this
+    version's (module docstring; the state's bytes are checked when decoded)."""
     with open_results(path) as f:
         if "resume" not in f:
             return None
         slot, nbytes, rows = (int(v) for v in f["resume/index"][()])
         if slot < 0:
             return None
+        version = f["resume"].attrs.get("format_version")
+        if version is None:
+            raise StateFormatError("the checkpoint has no format_version (a file of an older "
+                                   "version, whose checkpoints were Python pickles: refused, "
+                                   "loading a pickle can run any code)")
+        if not isinstance(version, (int, np.integer)) or int(version) != FORMAT_VERSION:
+            raise StateFormatError(f"the checkpoint has format version {version!r}; this "
+                                   f"version reads version {FORMAT_VERSION}")
         return rows, f[f"resume/slot{slot}"][:nbytes].tobytes()
 
 

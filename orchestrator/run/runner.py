@@ -52,7 +52,8 @@ from pathlib import Path
 import numpy as np
 
 from fmu_src.case import Case
-from orchestrator.coupling.master import StepReport
+from fmu_src.state_codec import StateFormatError
+from orchestrator.coupling.master import StepReport, decode_checkpoint
 from orchestrator.coupling.system import build_master
 from orchestrator.run import files as run_files
 from orchestrator.run.channels import CHANNELS, COORDS, dims
@@ -358,6 +359,11 @@ def resume_run(path: Path | str, periods: int | None = None, fmu_dir: Path | str
     through FMUs, their serialised FMU states) and the steps go on in the same file: the
     trajectory is that of an uninterrupted run. ``periods`` extends the run (default: the
     file's own length).
+
+    The checkpoint is numeric arrays (:mod:`fmu_src.state_codec`), checked before anything is
+    computed: a pickle (the format of older versions, which can run code when loaded), another
+    format, version or kind is refused with a :class:`~orchestrator.run.spec.RunError` naming
+    the file and the reason; entries that do not fit the case are refused when restored.
     """
     from fmu_src.case import CaseError
     from orchestrator.analysis.metrics import stored_case
@@ -383,7 +389,12 @@ def resume_run(path: Path | str, periods: int | None = None, fmu_dir: Path | str
         case = stored_case(a, str(path))
     except CaseError as exc:
         raise RunError(f"--resume {path}: the stored case does not load: {exc}") from None
-    ckpt = read_checkpoint(path)
+    try:
+        ckpt = read_checkpoint(path)
+        if ckpt is not None:
+            decode_checkpoint(ckpt[1])  # the format, version and kind, before any work
+    except StateFormatError as exc:
+        raise RunError(f"--resume {path}: {exc}") from None
     if ckpt is None:
         raise RunError(f"--resume {path}: the file holds no checkpoint (the run stopped before "
                        "its first flush); run it again")
@@ -438,6 +449,8 @@ def _run_to_file(spec: RunSpec, attrs: dict, where, first: int = 0, blob=None,
             if blob is not None:
                 try:
                     runner.master.restore(blob)
+                except StateFormatError as exc:  # "the checkpoint ...": what does not fit
+                    raise RunError(f"--resume {path}: {exc}") from None
                 except Exception as exc:
                     raise RunError(f"--resume {path}: the checkpoint does not restore: "
                                    f"{exc}") from exc

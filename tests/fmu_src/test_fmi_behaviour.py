@@ -7,7 +7,10 @@
 * bounds are declared in modelDescription.xml;
 * fmi2GetFMUstate/SetFMUstate and Serialize/DeSerialize restore every FMU bit for bit, the
   bearing models' warm starts included, and a system checkpointed to bytes restarts in a new
-  process exactly where it stopped.
+  process exactly where it stopped;
+* serialised states are numeric arrays (numpy reads them without pickle), and bytes that are
+  not the FMU's own state (a pickle, another kind, an entry of the wrong shape) are refused
+  with fmi2Error, the reason in the log, without running them and without losing the instance.
 
 The FMUs load in the test's process (tests.helpers.run_here), but for the restart in a new
 process.
@@ -81,7 +84,35 @@ def test_a_checkpointed_system_restarts_exactly_in_a_new_process(fmu_dir, tmp_pa
     every FMU's state serialised to a file after step 6. Process 2: fresh instances restored
     from the file (and the master's laws) run steps 7-12: the same journal states, bit for
     bit."""
-    where = {"fmu_dir": fmu_dir, "path": tmp_path / "checkpoint.pkl"}
+    where = {"fmu_dir": fmu_dir, "path": tmp_path / "checkpoint.npz"}
     first = run_isolated(module=PROBES, args=["checkpoint", {**where, "phase": "first"}])
     second = run_isolated(module=PROBES, args=["checkpoint", {**where, "phase": "second"}])
     assert second["x"] == first["x"]
+
+
+@pytest.mark.parametrize("fmu", ["GearShaft", *BEARING_FMUS])
+def test_bytes_that_are_not_the_fmus_own_state_are_refused_with_fmi2error(fmu_dir, fmu,
+                                                                          tmp_path):
+    """fmi2DeSerializeFMUstate of a pickle (one that would create a file when loaded), of
+    text, of another kind of state: fmi2Error with the reason in the log, nothing loaded.
+    A state of the FMU's own kind with an entry of the wrong shape: fmi2Error at
+    fmi2SetFMUstate, where the entry is checked against the structure or the model (at
+    fmi2DeSerializeFMUstate for a memoryless model's scalar). The instance lives on: its own
+    state restores exactly afterwards."""
+    marker = tmp_path / "marker"
+    out = run_here(module=PROBES, args=["refuse_foreign_states", {
+        "fmu": fmu_dir / (fmu + ".fmu"), "gear": fmu == "GearShaft", "marker": marker}])
+    assert out["kind"] == ("gsb.gear_shaft_fmu_state" if fmu == "GearShaft"
+                           else f"gsb.bearing_fmu_state.{fmu.removeprefix('Bearing').lower()}")
+    refused = out["refused"]
+    assert all(v[0] == 3 for v in refused.values()), refused  # fmi2Error, never fatal
+    assert "StateFormatError: the serialised FMU state is a Python pickle" in refused["pickle"][1]
+    assert "is not a saved state of this format" in refused["text"][1]
+    assert f"is a 'gsb.other' state, not a '{out['kind']}' state" in refused["kind"][1]
+    assert "has shape (3,), expected" in refused["shape"][1], refused["shape"]
+    memoryless = fmu in ("BearingShort", "BearingLumped")
+    assert refused["shape"][2] == ("fmi2DeSerializeFMUstate" if memoryless
+                                   else "fmi2SetFMUstate"), refused["shape"]
+    assert all(v[2] == "fmi2DeSerializeFMUstate" for k, v in refused.items() if k != "shape")
+    assert not marker.exists()
+    assert out["again"]

@@ -4,8 +4,11 @@ process and restarted in another."""
 
 from __future__ import annotations
 
+import io
 import math
 import pickle
+
+import numpy as np
 
 from tests.probes import dispatch, probes_of
 
@@ -129,19 +132,21 @@ def checkpoint(fmu_dir: str, path: str, phase: str) -> dict:
             st = f.getFMUstate()
             blobs.append(f.serializeFMUstate(st))
             f.freeFMUstate(st)
-        with open(path, "wb") as fh:
-            pickle.dump(dict(blobs=blobs, laws=m.laws, t=m.structure.t,
-                             n=m.structure.n_steps), fh)
+        np.savez(path, *[np.frombuffer(b, dtype=np.uint8) for b in blobs], f0=m.laws.f0,
+                 kb=m.laws.kb, cb=m.laws.cb, states=m.laws.states, force_at=m.laws.force_at,
+                 t=m.structure.t, n=m.structure.n_steps)
     elif phase == "second":
-        with open(path, "rb") as fh:
-            saved = pickle.load(fh)
+        from bearing_fmu.affine import AffineLaws
+
+        saved = np.load(path, allow_pickle=False)
         m.bearings.exit_initialization()
         m.structure.exit_initialization()
-        for f, blob in zip(fmus, saved["blobs"], strict=True):
-            st = f.deSerializeFMUstate(blob)
+        for k, f in enumerate(fmus):
+            st = f.deSerializeFMUstate(saved[f"arr_{k}"].tobytes())
             f.setFMUstate(st)
             f.freeFMUstate(st)
-        m.laws, m.structure.t, m.structure.n_steps = saved["laws"], saved["t"], saved["n"]
+        m.laws = AffineLaws(*(saved[n] for n in ("f0", "kb", "cb", "states", "force_at")))
+        m.structure.t, m.structure.n_steps = float(saved["t"]), int(saved["n"])
     else:
         raise ValueError(f"phase = {phase!r}: expected 'first' or 'second'")
     for k in range(6, 12):
@@ -151,7 +156,83 @@ def checkpoint(fmu_dir: str, path: str, phase: str) -> dict:
     return dict(x=x)
 
 
-PROBES = probes_of(refuse_bad_values, read_outside_the_clearance, state_round_trip, checkpoint)
+class WritesAFile:
+    """A pickle that creates ``path`` when it is loaded (what a crafted state could do)."""
+
+    def __init__(self, path: str):
+        self.path = path
+
+    def __reduce__(self):
+        return (open, (self.path, "w"))
+
+
+def refuse_foreign_states(fmu: str, gear: bool, marker: str) -> dict:
+    """fmi2DeSerializeFMUstate / fmi2SetFMUstate of bytes that are not the FMU's own state: a
+    pickle that would create ``marker``, text, another kind, the FMU's kind with an entry of
+    another shape. Per case the status, the log and the call that refused it; then whether the
+    FMU's own state still restores exactly."""
+    from fmpy.fmi1 import FMICallException
+
+    from fmu_src.state_codec import encode
+    from orchestrator.coupling.fmi import FmuInstance
+
+    s = FmuInstance(fmu, "x")
+    f, vr = s.fmu, s.vr
+    f.setupExperiment(startTime=0.0)
+    f.enterInitializationMode()
+    if gear:
+        names = ["s_1", "t_1", "s_dot_1", "mesh_force"]
+    else:
+        names = ["F_s", "F_t", "K_ss", "C_tt"]
+        c = f.getReal([vr["C"]])[0]
+        f.setReal([vr[n] for n in ("omega", "s", "t")], [325.0, 0.5 * c, -0.3 * c])
+    outs = [vr[n] for n in names]
+    f.getReal(outs)
+    f.exitInitializationMode()
+    if gear:
+        f.doStep(0.0, 1e-5)
+    else:
+        f.setReal([vr["s"], vr["s_dot"]], [0.55 * c, 1e-3])
+    saved = f.getReal(outs)
+    state = f.getFMUstate()
+    good = f.serializeFMUstate(state)
+    f.freeFMUstate(state)
+    with np.load(io.BytesIO(good), allow_pickle=False) as z:  # numpy reads it, no pickle
+        arrays = {n: z[n] for n in z.files}
+    kind = str(arrays.pop("__kind__"))
+    arrays.pop("__format_version__")
+    # an entry of another shape: one checked against the live structure or model when the
+    # state is set (a scalar for memoryless models: checked when deserialised)
+    vectors = [n for n in sorted(arrays) if n.startswith(("structure/x", "model/"))
+               and arrays[n].ndim == 1]
+    big = vectors[0] if vectors else "values/D"
+    other = arrays | {big: np.zeros(3, arrays[big].dtype)}
+    r = {"kind": kind, "refused": {}}
+    for name, blob in (("pickle", pickle.dumps(WritesAFile(marker))), ("text", b"a state"),
+                       ("kind", encode("gsb.other", {"x": 1.0})),
+                       ("shape", encode(kind, other))):
+        since = len(s.messages)
+        stage = "fmi2DeSerializeFMUstate"
+        try:
+            st = f.deSerializeFMUstate(blob)
+            stage = "fmi2SetFMUstate"
+            try:
+                f.setFMUstate(st)
+                r["refused"][name] = ["accepted"]
+            finally:
+                f.freeFMUstate(st)
+        except FMICallException as exc:
+            r["refused"][name] = [exc.status, s.log_tail(since=since), stage, big]
+    st = f.deSerializeFMUstate(good)
+    f.setFMUstate(st)
+    f.freeFMUstate(st)
+    r["again"] = f.getReal(outs) == saved
+    s.close()
+    return r
+
+
+PROBES = probes_of(refuse_bad_values, read_outside_the_clearance, state_round_trip, checkpoint,
+                   refuse_foreign_states)
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -128,7 +128,7 @@ def comparison(fmu: str, case: str) -> dict:
     for k in range(5):
         structure.do_step(t + k * dt, dt)
     r["replayed"] = bool((structure.journal_states() == x55).all())
-    # serialised states (pickle inside the FMU) restore exactly too
+    # serialised states (numeric arrays, fmu_src.state_codec) restore exactly too
     f = structure.slave.fmu
     blob = f.serializeFMUstate(saved._handle)
     back = f.deSerializeFMUstate(blob)

@@ -205,6 +205,85 @@ def test_resume_extends_a_run(tmp_path, capsys):
     assert [float(line.split(",")[col]) for line in lines[1:]] == r["mesh_force"].tolist()
 
 
+class _WritesAFile:
+    """Unpickling this creates ``path``: a pickle that runs code when it is loaded."""
+
+    def __init__(self, path):
+        self.path = str(path)
+
+    def __reduce__(self):
+        return (open, (self.path, "w"))
+
+
+def _put_checkpoint(path: Path, data: bytes, format_version: bool = True) -> None:
+    """Replace the last checkpoint of a results file by ``data`` (a crafted file); without
+    ``format_version``, as the files of older versions were."""
+    import h5py
+
+    with h5py.File(path, "a") as f:
+        grp = f["resume"]
+        slot, _, rows = (int(v) for v in grp["index"][()])
+        blob = np.frombuffer(data, dtype=np.uint8)
+        grp[f"slot{slot}"].resize(blob.size, axis=0)
+        grp[f"slot{slot}"][:] = blob
+        grp["index"][:] = np.array([slot, blob.size, rows], dtype=np.int64)
+        if not format_version:
+            del grp.attrs["format_version"]
+
+
+def test_a_checkpoint_that_is_not_plain_numbers_is_refused_and_never_loaded(tmp_path):
+    """A results file handed over by someone else: ``gsb run --resume`` refuses a checkpoint
+    that is a pickle (one that would create a file when loaded: it is not loaded), another
+    kind of state, or one lacking an entry, exit code 2 with the file and the reason, and the
+    file is left as it was."""
+    import hashlib
+    import io
+    import pickle
+    import shutil
+
+    from fmu_src.state_codec import decode, encode
+    from orchestrator.coupling.master import CHECKPOINT_KIND
+
+    run = gsb("run", "baguet2010_spur", "--periods", "1", *QUICK, "--out", tmp_path / "run",
+              cwd=tmp_path)
+    assert run.returncode == 0, run.stderr[-2000:]
+    original = only(tmp_path / "run")
+    rows, blob = read_checkpoint(original)
+    assert rows == 32
+    decode(blob, CHECKPOINT_KIND)  # what the run wrote is a checkpoint
+    with np.load(io.BytesIO(blob), allow_pickle=False) as z:
+        without_laws = {n: z[n] for n in z.files if not n.startswith("__") and n != "laws/f0"}
+    marker = tmp_path / "marker"
+    evil = pickle.dumps(_WritesAFile(marker))
+    cases = [
+        ("pickle", evil, True, ["the checkpoint is a Python pickle", "refused"]),
+        ("older", evil, False, ["no format_version", "pickles: refused"]),
+        ("kind", encode("gsb.gear_shaft_fmu_state", {"x": 1.0}), True,
+         ["is a 'gsb.gear_shaft_fmu_state' state, not a 'gsb.master_checkpoint' state"]),
+        ("entry", encode(CHECKPOINT_KIND, without_laws), True,
+         ["the checkpoint lacks the entry 'laws/f0'"]),
+    ]
+    for name, data, versioned, words in cases:
+        path = tmp_path / f"{name}.h5"
+        shutil.copy(original, path)
+        _put_checkpoint(path, data, versioned)
+        before = hashlib.sha256(path.read_bytes()).hexdigest()
+        proc = gsb("run", "--resume", path, "--periods", "2", "--no-figures", "--quiet",
+                   cwd=tmp_path)
+        lines = [ln for ln in proc.stderr.splitlines() if ln.strip()
+                 and not ln.startswith("warning:")]
+        assert proc.returncode == 2, (name, proc.stderr[-2000:])
+        assert "Traceback" not in proc.stderr and len(lines) == 1, (name, proc.stderr)
+        assert lines[0].startswith("gsb ") and f"--resume {path}: " in lines[0], lines[0]
+        for w in words:
+            assert w in lines[0], (name, w, lines[0])
+        assert not marker.exists(), name  # the pickle was never loaded
+        assert hashlib.sha256(path.read_bytes()).hexdigest() == before, name
+    # the marker would have been written, had the pickle been loaded
+    pickle.loads(evil).close()
+    assert marker.exists()
+
+
 #: (arguments, words the one-line message must contain); run in one subprocess (no traceback)
 BAD_INPUTS = [
     (["run", "baguet2010_spur", "--periods", "0"], ["--periods 0", ">= 1"]),

@@ -26,6 +26,7 @@ from fmu_src.contract import (
     STATE_NAMES,
     STIFFNESS_NAMES,
 )
+from fmu_src.state_codec import StateArrays
 from orchestrator.coupling.fmi.instance import FmuError, FmuInstance, all_finite, status_name
 from orchestrator.coupling.master import BearingSet
 
@@ -190,13 +191,17 @@ class FmuBearings(BearingSet):
                                f"{s.log_tail(since=since)}")
         self.in_init = False
 
-    def checkpoint(self) -> list:
-        """Each bearing FMU's state serialised (its solver's warm start); None for an FMU
-        that cannot serialise (a force-only FMU of the user's own: assumed memoryless)."""
-        return [s.serialize_state() if s.can_serialize else None for s in self.slaves]
+    def checkpoint(self) -> dict:
+        """Each bearing FMU's state serialised (its solver's warm start), ``<b>/fmu`` its
+        bytes as uint8; nothing for an FMU that cannot serialise (a force-only FMU of the
+        user's own: assumed memoryless)."""
+        return {f"{b}/fmu": np.frombuffer(s.serialize_state(), dtype=np.uint8)
+                for b, s in enumerate(self.slaves) if s.can_serialize}
 
-    def restore(self, checkpoint) -> None:
-        for s, data in zip(self.slaves, checkpoint, strict=True):
+    def restore(self, checkpoint: StateArrays) -> None:
+        blobs = [checkpoint.bytes(f"{b}/fmu") if s.can_serialize else None
+                 for b, s in enumerate(self.slaves)]
+        for s, data in zip(self.slaves, blobs, strict=True):
             if data is not None:
                 s.restore_serialized(data)
 

@@ -137,13 +137,24 @@ class FmuInstance:
 
     def restore_serialized(self, data: bytes) -> None:
         """Set the instance to a state of :meth:`serialize_state` (fmi2DeSerializeFMUstate,
-        fmi2SetFMUstate)."""
+        fmi2SetFMUstate); :class:`FmuError` with the FMU's log when the FMU refuses the
+        bytes (this package's FMUs read only their own state format: no pickle, another
+        model's state or a damaged one is refused with fmi2Error, the instance intact)."""
+        from fmpy.fmi1 import FMICallException
+
         f = self.fmu
-        state = f.deSerializeFMUstate(data)
+        since = len(self.messages)
+        state = None
         try:
+            state = f.deSerializeFMUstate(data)
             f.setFMUstate(state)
+        except FMICallException as exc:
+            what = "fmi2DeSerializeFMUstate" if state is None else "fmi2SetFMUstate"
+            raise FmuError(f"{self.path.name}: {what} refused the serialised state "
+                           f"({status_name(exc.status)}): {self.log_tail(since=since)}") from None
         finally:
-            f.freeFMUstate(state)
+            if state is not None:
+                f.freeFMUstate(state)
 
     def close(self) -> None:
         """Terminate and free the instance, remove the extracted folder (idempotent)."""

@@ -18,6 +18,7 @@ from fmu_src.contract import (
     support_load_names,
     unpack_journal,
 )
+from fmu_src.state_codec import StateArrays
 from orchestrator.coupling.fmi.instance import FmuError, FmuInstance, all_finite, status_name
 from orchestrator.coupling.master import StructureSlave
 
@@ -215,20 +216,24 @@ class FmuStructure(StructureSlave):
         self.t, self.n_steps = state.t, state.n_steps
 
     def checkpoint(self) -> dict:
-        """The FMU state serialised (fmi2SerializeFMUstate), with the time and step count."""
+        """The FMU state serialised (fmi2SerializeFMUstate, ``fmu``: its bytes as uint8),
+        with the time and step count (``t``, ``n_steps``)."""
         self._live()
         if not self.slave.can_serialize:
             raise FmuError(f"gear-shaft FMU ({self.slave.path.name}) cannot serialise its "
                            "state (canSerializeFMUstate is false)")
-        return {"fmu": self.slave.serialize_state(), "t": self.t, "n_steps": self.n_steps}
+        return {"fmu": np.frombuffer(self.slave.serialize_state(), dtype=np.uint8),
+                "t": np.float64(self.t), "n_steps": np.int64(self.n_steps)}
 
-    def restore(self, checkpoint: dict) -> None:
-        """Continue from :meth:`checkpoint` (fmi2DeSerializeFMUstate + fmi2SetFMUstate)."""
+    def restore(self, checkpoint: StateArrays) -> None:
+        """Continue from :meth:`checkpoint` arrays (fmi2DeSerializeFMUstate + fmi2SetFMUstate:
+        the FMU checks its own state)."""
         self._live()
+        blob, t, n_steps = checkpoint.bytes("fmu"), checkpoint.float("t"), checkpoint.int("n_steps")
         if self.in_init:
             self.exit_initialization()
-        self.slave.restore_serialized(checkpoint["fmu"])
-        self.t, self.n_steps = checkpoint["t"], checkpoint["n_steps"]
+        self.slave.restore_serialized(blob)
+        self.t, self.n_steps = t, n_steps
 
     def _free_handle(self, handle) -> None:
         if self.slave.fmu is not None:

@@ -1,5 +1,5 @@
 """Figures of a run (orchestrator.figures.run) and ``gsb plot`` (their spectrum:
-tests/test_spectrum.py).
+tests/orchestrator/analysis/test_spectrum.py).
 
 The results files are synthetic, in the format orchestrator.run.runner writes (channels with a
 ``unit`` attribute, numeric root attributes): the paper's spur case (pinion 325 rad/s,

@@ -1,7 +1,8 @@
 """Which ``.toml`` files importing some modules opens, in a fresh interpreter.
 
-``python -m tests.import_probe MODULE ... [--call MODULE:FUNCTION]`` imports the modules, then
-calls the function (a control: it should read a file), and prints one JSON object on its last
+``python -m tests.probes.import_probe MODULE ... [--call MODULE:FUNCTION]`` imports the
+modules, then calls the function (a control: it should read a file), and prints one JSON
+object on its last
 line: ``{"on_import": [paths], "on_call": [paths]}``, the ``.toml`` files opened during each
 phase. The paths are seen by an audit hook on the ``open`` event, which ``builtins.open``,
 ``io.open_code``, ``pathlib.Path.read_text`` and ``tomllib.load`` of a file all raise

@@ -2,7 +2,7 @@
 
 * Importing the component layer and the master opens no ``.toml`` file (the case files are read
   when a value needs them: :func:`fmu_src.contract.bearing_variables`, ...), checked in a fresh
-  interpreter by an audit hook (:mod:`tests.import_probe`).
+  interpreter by an audit hook (:mod:`tests.probes.import_probe`).
 * The module graph of the four packages (grimp, which reads function-level imports as well) has
   no cycle; a failure lists each cycle with the lines of its imports. ``lint-imports`` checks
   the same between sibling packages and the layers of pyproject.toml.
@@ -30,9 +30,9 @@ LAZY = ["fmu_src.contract", "fmu_src.case", "fmu_src.description", "orchestrator
 
 
 def probe(modules: list[str], call: str | None = None) -> dict:
-    """:mod:`tests.import_probe` in a fresh interpreter started in the repository (its code is
-    the one imported)."""
-    cmd = [sys.executable, "-m", "tests.import_probe", *modules]
+    """:mod:`tests.probes.import_probe` in a fresh interpreter started in the repository (its
+    code is the one imported)."""
+    cmd = [sys.executable, "-m", "tests.probes.import_probe", *modules]
     if call is not None:
         cmd += ["--call", call]
     proc = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=300)
