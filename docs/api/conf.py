@@ -45,7 +45,7 @@ autodoc_default_options = {
 # private modules (``bearing_fmu._fd_grid``, ...) that the reference leaves out.
 nitpicky = True
 nitpick_ignore_regex = [
-    (r"py:.*", r"(numpy|np|xarray|pathlib|abc|collections|ctypes|typing|pythonfmu|fmpy|scipy"
+    (r"py:.*", r"(numpy|np|xarray|enum|pathlib|abc|collections|ctypes|typing|pythonfmu|fmpy|scipy"
                r"|matplotlib|h5py|dask|argparse)\..*"),
     (r"py:mod", r"(bearing_fmu|gear_fmu|fmu_src|orchestrator)(\.\w+)*\._\w+"),
 ]

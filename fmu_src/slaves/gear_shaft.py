@@ -4,7 +4,8 @@ Nothing physical happens here: the slave builds :class:`gear_fmu.structure.Struc
 case (``resources/case.toml`` with the FMU parameters' values, through :mod:`fmu_src.case` and
 :mod:`fmu_src.description`, the system description shared with the in-process runs), keeps the
 56 law inputs (layout: :func:`fmu_src.contract.unpack_law_arrays`: each bearing FMU's outputs) and
-maps the FMI calls onto the structure:
+maps the FMI calls onto the structure through the life cycle the in-process transport shares
+(:class:`fmu_src.lifecycle.StructureCycle`, its phase a :class:`fmu_src.lifecycle.Phase`):
 
 * initialisation mode: outputs are the static solution for the current laws, solved in the
   getter when an input changed since the last solve (the master iterates X0 this way);
@@ -41,8 +42,9 @@ from fmu_src.contract import (
     support_load_names,
     unpack_law_arrays,
 )
+from fmu_src.lifecycle import Phase, StructureCycle
 from fmu_src.slaves.support import FMI_ERROR, ContractSlave
-from fmu_src.state_codec import StateArrays, nest
+from fmu_src.state_codec import StateArrays, StateFormatError, nest
 from fmu_src.states import structure_state_arrays, structure_state_from_arrays
 
 __all__ = ["CASE_RESOURCE", "GearShaftSlave"]
@@ -55,7 +57,7 @@ _OUTPUTS = [*journal_output_names(), *(f"omega_{j}" for j in range(1, 5)),
             *(name for name, _, _ in GEAR_OUTPUTS)]
 _SUPPORT = support_load_names()
 _NAN_OUTPUTS = [math.nan] * len(_OUTPUTS)
-_FLAGS = ("stepping", "need_static", "have_static", "dirty", "failed")
+_FLAGS = ("dirty", "failed")
 #: the kind tag of this slave's serialised states (fmu_src.state_codec)
 STATE_KIND = "gsb.gear_shaft_fmu_state"
 
@@ -84,15 +86,11 @@ class GearShaftSlave(ContractSlave):
         self._outputs = list(_NAN_OUTPUTS)
         self._iterations = 0
         self._support: list | None = None
-        self._structure = None
+        self._cycle = StructureCycle(self._build_structure)  # phases shared with in-process
         self._start_time = 0.0
-        self._stepping = False  # after exitInitializationMode
-        self._need_static = True  # initialisation: laws changed since the last static solve
-        self._have_static = False  # the structure holds a static solution
         self._dirty = True  # outputs must be recomputed from the structure
         self._failed = False  # the last output computation failed
         self._error: str | None = None  # a failure that forbids stepping (build, initialisation)
-        self._damping_kb = None  # the Kb the modal damping was built with (exit initialisation)
         self._register_all(variables)
 
     def _base_case(self):
@@ -139,11 +137,11 @@ class GearShaftSlave(ContractSlave):
                 return self.refuse(ValueRefused(
                     f"bearing laws refused: {bad} is not a finite number (no input applied)"))
             laws = self._laws
-            if self._stepping:
+            if self._cycle.stepping:
                 laws[:] = values
             elif laws != values:
                 laws[:] = values
-                self._need_static = True
+                self._cycle.laws_changed()
                 self._dirty = True
             return None
         return super().set_real(vrs, values)
@@ -181,11 +179,8 @@ class GearShaftSlave(ContractSlave):
         return set_
 
     def _reset_structure(self) -> None:
-        self._structure = None
-        self._damping_kb = None
+        self._cycle.reset()
         self._support = None
-        self._have_static = False
-        self._need_static = True
         self._dirty = True
         self._error = None
 
@@ -199,8 +194,8 @@ class GearShaftSlave(ContractSlave):
         def set_(value):
             if laws[i] != value:
                 laws[i] = value
-                if not self._stepping:  # step mode: the laws act at the next doStep only
-                    self._need_static = True
+                if not self._cycle.stepping:  # step mode: the laws act at the next doStep only
+                    self._cycle.laws_changed()
                     self._dirty = True
         return set_
 
@@ -232,29 +227,26 @@ class GearShaftSlave(ContractSlave):
         """The case the FMU simulates: its carried case with the parameters' values."""
         return self._base.with_overrides(self._overrides) if self._overrides else self._base
 
-    def _ensure_structure(self):
-        if self._structure is None:
-            from fmu_src.description import bearing_speeds, structure
+    def _build_structure(self):
+        from fmu_src.description import bearing_speeds, structure
 
-            case = self.case()
-            st = structure(case)
-            self._speeds = bearing_speeds(case)
-            st.t = self._start_time
-            self._structure = st
-        return self._structure
+        case = self.case()
+        st = structure(case)
+        self._speeds = bearing_speeds(case)
+        st.t = self._start_time
+        return st
+
+    def _ensure_structure(self):
+        return self._cycle.structure
 
     def _solve_static(self) -> None:
-        st = self._ensure_structure()
-        info = st.static(*unpack_law_arrays(self._laws))
-        self._iterations = info.iterations
-        self._need_static = False
-        self._have_static = True
+        self._iterations = self._cycle.solve_static(*unpack_law_arrays(self._laws)).iterations
 
     def _refresh(self) -> None:
         """Recompute the outputs (static solution first in initialisation mode); never raises."""
         try:
             st = self._ensure_structure()
-            if self._need_static and not self._stepping:
+            if self._cycle.needs_static:
                 self._solve_static()
             if st.mesh_state is None:
                 raise RuntimeError("the structure has no solution yet (no static solution)")
@@ -265,7 +257,7 @@ class GearShaftSlave(ContractSlave):
                              *st.gear_displacements()[:, :2].ravel().tolist()]  # u, v of each
             self._failed = False
         except Exception as exc:  # anything raised here would be fatal for the host
-            what = "static solution" if not self._stepping else "outputs"
+            what = "static solution" if not self._cycle.stepping else "outputs"
             self.output_failed(f"{what} failed", exc)
             self._outputs = list(_NAN_OUTPUTS)
             self._failed = True
@@ -283,39 +275,30 @@ class GearShaftSlave(ContractSlave):
     # --- FMI life cycle -----------------------------------------------------------------------
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):
         self._start_time = float(start_time)
-        if self._structure is not None and self._structure.n_steps == 0:
-            self._structure.t = self._start_time
+        st = self._cycle.built
+        if st is not None and st.n_steps == 0:
+            st.t = self._start_time
 
     def exit_initialization_mode(self):
-        self._stepping = True
         try:
-            self._ensure_structure()
-            if not self._have_static:
-                self._solve_static()
-            kb = unpack_law_arrays(self._laws)[1]
-            self._set_damping(0.5 * (kb + kb.transpose(0, 2, 1)))
+            info = self._cycle.exit_initialization(*unpack_law_arrays(self._laws))
+            if info is not None:
+                self._iterations = info.iterations
             self._error = None
         except Exception as exc:  # anything raised here would be fatal for the host
+            self._cycle.phase = Phase.STEPPING  # steps are refused with the reason
             self._error = self.output_failed("initialisation failed", exc)
         self._dirty = True
 
-    def _set_damping(self, kb) -> None:
-        """Modal damping on the modes with bearing stiffness ``kb`` (kept for the FMU state)."""
-        self._ensure_structure().set_damping_reference(kb)
-        self._damping_kb = kb.copy()  # never changed in place: FMU states share it
-
     def do_step(self, current_time, step_size):
         """One Newmark step with the current laws; False (FMI discard) with a logged reason."""
-        st = self._structure
+        st = self._cycle.built
         try:
             if self._error is not None:
                 raise RuntimeError(f"not stepping after an earlier failure ({self._error})")
-            if st is None or not self._stepping:
+            if st is None or not self._cycle.stepping:
                 raise RuntimeError("doStep before exitInitializationMode")
-            if abs(current_time - st.t) > 1e-9 * max(step_size, abs(current_time)):
-                raise ValueError(f"doStep from t = {current_time!r} s but the structure is at "
-                                 f"t = {st.t!r} s")
-            info = st.step(step_size, *unpack_law_arrays(self._laws))
+            info = self._cycle.step(current_time, step_size, *unpack_law_arrays(self._laws))
         except Exception as exc:  # anything raised here would be fatal for the host
             step = "?" if st is None else st.n_steps + 1
             self.output_failed(f"doStep {step} from t = {current_time:.9g} s, dt = "
@@ -328,20 +311,18 @@ class GearShaftSlave(ContractSlave):
 
     # --- FMU state ----------------------------------------------------------------------------
     def _get_fmu_state(self):
-        st = self._structure
+        st = self._cycle.built
         return {
             "overrides": dict(self._overrides),
             "structure": None if st is None else st.get_state(),
             "laws": list(self._laws),
             "outputs": list(self._outputs),
             "iterations": self._iterations,
-            "stepping": self._stepping,
-            "need_static": self._need_static,
-            "have_static": self._have_static,
+            "phase": self._cycle.phase.name,
             "dirty": self._dirty,
             "failed": self._failed,
             "error": self._error,
-            "damping_kb": self._damping_kb,
+            "damping_kb": self._cycle.damping_kb,
         }
 
     def _set_fmu_state(self, state):
@@ -353,9 +334,10 @@ class GearShaftSlave(ContractSlave):
                 self._overrides = dict(overrides)
                 self._reset_structure()
             saved = state["structure"]
+            cycle = self._cycle
             if saved is None:
-                self._structure = None  # saved before the structure was built
-                self._damping_kb = None
+                cycle.built = None  # saved before the structure was built
+                cycle.damping_kb = None
             else:
                 st = self._ensure_structure()
                 if isinstance(saved, dict):  # deserialised: checked against this structure
@@ -363,16 +345,14 @@ class GearShaftSlave(ContractSlave):
                     saved = structure_state_from_arrays(arrays, st)
                     arrays.check_all_read()
                 kb = state["damping_kb"]
-                if kb is not None and kb is not self._damping_kb and (
-                        self._damping_kb is None or not (kb == self._damping_kb).all()):
-                    self._set_damping(kb)  # another instance, or another reference
+                if kb is not None and kb is not cycle.damping_kb and (
+                        cycle.damping_kb is None or not (kb == cycle.damping_kb).all()):
+                    cycle.set_damping(kb)  # another instance, or another reference
                 st.set_state(saved)
             self._laws[:] = state["laws"]
             self._outputs = list(state["outputs"])
             self._iterations = state["iterations"]
-            self._stepping = state["stepping"]
-            self._need_static = state["need_static"]
-            self._have_static = state["have_static"]
+            cycle.phase = Phase[state["phase"]]
             self._dirty = state["dirty"]
             self._failed = state["failed"]
             self._error = state["error"]
@@ -382,7 +362,8 @@ class GearShaftSlave(ContractSlave):
         return None
 
     # Serialised: ``overrides/<case field>``, ``laws`` (56,), ``outputs``, ``iterations``,
-    # the flags, ``error`` (text, absent for none), ``damping_kb`` (4, 2, 2) and
+    # ``phase`` (a :class:`fmu_src.lifecycle.Phase` name), the flags, ``error`` (text, absent
+    # for none), ``damping_kb`` (4, 2, 2) and
     # ``structure/...`` (fmu_src.states) once built (``has_structure``)
     @classmethod
     def _state_kind(cls) -> str:
@@ -397,6 +378,7 @@ class GearShaftSlave(ContractSlave):
                 "iterations": np.int64(state["iterations"]),
                 "has_structure": np.bool_(state["structure"] is not None)}
         out |= {name: np.bool_(state[name]) for name in _FLAGS}
+        out["phase"] = np.str_(state["phase"])
         if state["error"] is not None:
             out["error"] = np.str_(state["error"])
         if state["damping_kb"] is not None:
@@ -418,4 +400,9 @@ class GearShaftSlave(ContractSlave):
                  # checked against the structure when set
                  "structure": arrays.part("structure") if arrays.bool("has_structure") else None}
         state |= {name: arrays.bool(name) for name in _FLAGS}
+        phase = arrays.text("phase")
+        if phase not in Phase.__members__:
+            raise StateFormatError(f"the FMU state's phase {phase!r} is not one of "
+                                   f"{', '.join(Phase.__members__)}")
+        state["phase"] = phase
         return state

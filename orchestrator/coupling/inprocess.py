@@ -14,6 +14,7 @@ import numpy as np
 from bearing_fmu.affine import AffineLaws
 from bearing_fmu.base import BearingModel
 from bearing_fmu.frames import LocalFrame
+from fmu_src.lifecycle import StructureCycle
 from fmu_src.state_codec import StateArrays, nest
 from fmu_src.states import (
     bearing_state_arrays,
@@ -29,7 +30,8 @@ __all__ = ["InProcessStructure", "ModelBearings"]
 
 
 class InProcessStructure(StructureSlave):
-    """The gear-shaft structure driven directly (what the gear-shaft FMU does through FMI).
+    """The gear-shaft structure driven directly (what the gear-shaft FMU does through FMI),
+    through the life cycle both transports share (:class:`fmu_src.lifecycle.StructureCycle`).
 
     Parameters
     ----------
@@ -40,6 +42,7 @@ class InProcessStructure(StructureSlave):
 
     def __init__(self, structure: Structure):
         self.structure = structure
+        self.cycle = StructureCycle(lambda: structure)
         self._laws: AffineLaws | None = None
 
     @property
@@ -59,21 +62,19 @@ class InProcessStructure(StructureSlave):
 
     def set_bearing_laws(self, laws: AffineLaws) -> None:
         self._laws = laws
+        self.cycle.laws_changed()
 
     def do_step(self, t: float, dt: float) -> None:
-        st = self.structure
-        if abs(t - st.t) > 1e-9 * max(dt, abs(t)):
-            raise ValueError(f"do_step from t = {t!r} s but the structure is at t = {st.t!r} s")
         laws = self._require_laws()
-        st.step(dt, laws.f0, laws.kb, laws.cb)
+        self.cycle.step(t, dt, laws.f0, laws.kb, laws.cb)
 
     def solve_static(self) -> None:
         laws = self._require_laws()
-        self.structure.static(laws.f0, laws.kb, laws.cb)
+        self.cycle.solve_static(laws.f0, laws.kb, laws.cb)
 
     def exit_initialization(self) -> None:
-        kb = self._require_laws().kb
-        self.structure.set_damping_reference(0.5 * (kb + np.transpose(kb, (0, 2, 1))))
+        laws = self._require_laws()
+        self.cycle.exit_initialization(laws.f0, laws.kb, laws.cb)
 
     def checkpoint(self) -> dict:
         return structure_state_arrays(self.structure.get_state())
