@@ -45,12 +45,6 @@ def model_class(name: str) -> type[BearingModel]:
     return getattr(import_module(module), cls)
 
 
-def fmu_name(name: str) -> str:
-    """File stem of the bearing FMU of model ``name`` (``hybrid`` -> ``BearingHybrid``)."""
-    model_class(name)  # an unknown name is an error here too
-    return "Bearing" + name.capitalize()
-
-
 def is_film_model(name: str) -> bool:
     """True for the models that solve the Reynolds equation (their force has a scale)."""
     return issubclass(model_class(name), FilmBearingModel)
@@ -66,7 +60,6 @@ __all__ = [
     "FilmBearingModel",
     "FilmForce",
     "ModelOption",
-    "fmu_name",
     "is_film_model",
     "model_class",
 ]

@@ -43,7 +43,8 @@ from fmu_src.case import FIELDS, bound_violation, load_case, model_option_fields
 from fmu_src.description import BEARING_FRAMES
 from fmu_src.units import symbol
 
-__all__ = ["BEARINGS", "GEAR_DEFAULT_CASE", "FmiVar", "ValueRefused", "bearing_option_keys",
+__all__ = ["BEARINGS", "GEAR_DEFAULT_CASE", "FmiVar", "ValueRefused", "bearing_fmu_name",
+           "bearing_option_keys",
            "bearing_variables", "connections", "gear_case_fields", "gear_parameters",
            "gear_variables", "journal_output_names", "law_input_names", "pack_laws",
            "parameter_field", "unpack_journal", "unpack_law_arrays"]
@@ -105,6 +106,14 @@ _P, _CP, _I, _O = "parameter", "calculatedParameter", "input", "output"
 _POS = dict(minimum=0.0, exclusive_minimum=True)
 
 # --- bearing FMUs --------------------------------------------------------------------------
+
+
+def bearing_fmu_name(model: str) -> str:
+    """File stem of the bearing FMU of model ``model`` (``hybrid`` -> ``BearingHybrid``): the
+    one place FMU names are made."""
+    model_class(model)  # an unknown name is an error here too
+    return "Bearing" + model.capitalize()
+
 
 #: names of the force, stiffness and damping outputs (row-major matrices)
 FORCE_NAMES = ("F_s", "F_t")

@@ -36,7 +36,8 @@ from pathlib import Path
 from xml.dom.minidom import parseString
 from xml.etree import ElementTree as ET
 
-from bearing_fmu import MODELS, fmu_name
+from bearing_fmu import MODELS
+from fmu_src.contract import bearing_fmu_name
 from fmu_src.contract import bearing_variables, gear_variables
 from fmu_src.units import DIMENSIONS
 
@@ -87,7 +88,7 @@ def slave_script(fmu: str, what: str, module: str, base: str, body: str = "    p
 
 #: FMU file stem -> build specification: one bearing FMU per registered model, the gear shaft
 FMUS = {
-    **{fmu_name(m): FmuSpec(slave_script(fmu_name(m), f"journal bearing, {m} model",
+    **{bearing_fmu_name(m): FmuSpec(slave_script(bearing_fmu_name(m), f"journal bearing, {m} model",
                                          "fmu_src.slaves.bearing", "BearingSlave",
                                          f"    model_name = {m!r}\n"), bearing_variables)
        for m in MODELS},

@@ -144,13 +144,13 @@ def write_ssp(case: Case, dest: Path | str, laws=None) -> Path:
     """Build the FMUs of a case (the gear shaft carrying it, the bearing FMU of its
     ``bearings.model``) and write ``dest/<case name>.ssp``; returns its path.
     ``laws``: the bearing laws at the static solution (:func:`ssd_text`)."""
-    from bearing_fmu import fmu_name
+    from fmu_src.contract import bearing_fmu_name
     from fmu_src.build.fmus import build_fmus
 
     dest = Path(dest)
     dest.mkdir(parents=True, exist_ok=True)
     out = dest / f"{case['case.name']}.ssp"
-    bearing = fmu_name(case["bearings.model"])
+    bearing = bearing_fmu_name(case["bearings.model"])
     with tempfile.TemporaryDirectory(prefix="gsb_ssp_") as tmp:
         fmus = build_fmus(tmp, ["GearShaft", bearing], case=case)
         part = Path(tmp) / "system.ssp"

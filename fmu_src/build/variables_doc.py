@@ -5,7 +5,8 @@
 
 from __future__ import annotations
 
-from bearing_fmu import MODELS, fmu_name
+from bearing_fmu import MODELS
+from fmu_src.contract import bearing_fmu_name
 from fmu_src.contract import bearing_variables, connections, gear_variables
 
 __all__ = ["document", "markdown_table"]
@@ -170,7 +171,7 @@ Behaviour:
 
 def document() -> str:
     """The text of docs/fmu-variables.md."""
-    fmus = ", ".join(fmu_name(m) for m in MODELS)
+    fmus = ", ".join(bearing_fmu_name(m) for m in MODELS)
     wiring = "\n".join(f"| `{a}` | `{o}` | `{b}` | `{i}` |" for a, o, b, i in connections()
                        if "bearing1" in (a, b))
     return (_HEADER.format(fmus=fmus, wiring=wiring) + markdown_table(bearing_variables()) + "\n"

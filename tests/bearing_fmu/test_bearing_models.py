@@ -21,12 +21,12 @@ from bearing_fmu import (
     MODELS,
     BearingData,
     EccentricityError,
-    fmu_name,
     is_film_model,
     model_class,
 )
 from bearing_fmu.frames import LocalFrame
 from fmu_src.build.fmus import FMUS
+from fmu_src.contract import bearing_fmu_name
 from tests.helpers import relative
 
 BEARING = BearingData(diameter=0.070, length=0.050, clearance=150e-6, viscosity=0.0288)
@@ -67,7 +67,7 @@ def test_every_model_has_an_fmu_and_declared_options():
     assert set(MODELS) == {"hybrid", "short", "fd", "linear", "lumped"}
     for name in MODELS:
         cls = model_class(name)
-        assert cls.name == name and fmu_name(name) in FMUS
+        assert cls.name == name and bearing_fmu_name(name) in FMUS
         assert set(cls.option_defaults()) == {o.key for o in cls.options}
 
 

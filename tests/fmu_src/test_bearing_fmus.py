@@ -9,10 +9,11 @@ import sys
 
 import pytest
 
-from bearing_fmu import MODELS, fmu_name
+from bearing_fmu import MODELS
+from fmu_src.contract import bearing_fmu_name
 from tests.helpers import ROOT, run_here
 
-BEARING_FMUS = [fmu_name(m) for m in MODELS]
+BEARING_FMUS = [bearing_fmu_name(m) for m in MODELS]
 PROBES = "tests.probes.bearing_fmus"
 
 
@@ -57,7 +58,7 @@ def test_fmu_equals_in_process_model_in_global_frame(fmu_dir, model):
     params = dict(D=0.09, L=0.065, C=110e-6, mu=0.0288, frame_angle=0.3, rotation_sign=-1,
                   **options)
     ref = ModelBearings([cls.from_parameters(b, **mine)], [LocalFrame(0.3, -1)], [54.0])
-    fmu = FmuBearings([fmu_dir / (fmu_name(model) + ".fmu")], [params], [54.0])
+    fmu = FmuBearings([fmu_dir / (bearing_fmu_name(model) + ".fmu")], [params], [54.0])
     try:
         for k in range(3):
             states = np.array([[40e-6 + 2e-6 * k, -30e-6, 1e-3, -2e-3 * k]])

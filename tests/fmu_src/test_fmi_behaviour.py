@@ -21,18 +21,18 @@ from xml.etree import ElementTree as ET
 
 import pytest
 
-from bearing_fmu import MODELS, fmu_name
-from fmu_src.contract import bearing_variables
+from bearing_fmu import MODELS
+from fmu_src.contract import bearing_fmu_name, bearing_variables
 from tests.helpers import run_here, run_isolated
 
-BEARING_FMUS = [fmu_name(m) for m in MODELS]
+BEARING_FMUS = [bearing_fmu_name(m) for m in MODELS]
 #: models whose film has a clearance (the lumped spring has none: any state is valid)
 FILM_MODELS = [m for m in MODELS if m != "lumped"]
 PROBES = "tests.probes.fmi_behaviour"
 
 
 def fmu_file(fmu_dir, model):
-    return fmu_dir / (fmu_name(model) + ".fmu")
+    return fmu_dir / (bearing_fmu_name(model) + ".fmu")
 
 
 @pytest.mark.parametrize("model", list(MODELS))

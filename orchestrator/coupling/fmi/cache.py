@@ -12,8 +12,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from bearing_fmu import fmu_name
 from fmu_src import description
+from fmu_src.contract import bearing_fmu_name
 from fmu_src.slaves.bootstrap import locked
 from orchestrator.coupling.fmi.bearings import FmuBearings
 from orchestrator.coupling.fmi.structure import FmuStructure
@@ -87,6 +87,6 @@ def system_from_case(case, fmu_dir=None):
     """(FmuStructure, FmuBearings) of a case: the gear-shaft FMU and four instances of the
     bearing FMU of its ``bearings.model``, from ``fmu_dir`` (default :func:`default_fmu_dir`;
     built there if missing or stale)."""
-    bearing_fmu = fmu_name(case["bearings.model"])
+    bearing_fmu = bearing_fmu_name(case["bearings.model"])
     paths = ensure_fmus(["GearShaft", bearing_fmu], fmu_dir)
     return system_from_files(case, paths["GearShaft"], [paths[bearing_fmu]] * 4)
