@@ -108,8 +108,8 @@ def timed_calls(targets=TIMED, counts: dict | None = None):
 
 def breakdown(periods: int, in_process: bool) -> None:
     """Per coupled iteration: the timed calls (:data:`TIMED`) and the rest."""
-    kw = dict(bearing="hybrid", in_process=in_process, progress=False)
-    case = load_case(CASE)
+    kw = dict(in_process=in_process, progress=False)
+    case = load_case(CASE, {"bearings.model": "hybrid"})
     with tempfile.TemporaryDirectory() as tmp:
         run_case(case.with_overrides({"simulation.mesh_periods": 2}), out_dir=tmp + "/w",
                  **kw)  # warm-up
@@ -169,10 +169,11 @@ def main() -> None:
     rows = {}
     with tempfile.TemporaryDirectory() as tmp:
         for model, in_process, *variant in configs:
-            kw = dict(bearing=model, in_process=in_process, out_dir=tmp, progress=False)
+            kw = dict(in_process=in_process, out_dir=tmp, progress=False)
             name = variant[0] if variant else ""
             run = load_case("baguet2010_helical" if "helical" in name else CASE,
-                            {"simulation.locate_contact": "no-location" not in name})
+                            {"simulation.locate_contact": "no-location" not in name,
+                             "bearings.model": model})
             run_case(run.with_overrides({"simulation.mesh_periods": 2}),
                      **kw)  # warm-up: numba, FMU extraction
             s = run_case(run.with_overrides({"simulation.mesh_periods": args.periods}), **kw)
