@@ -32,8 +32,8 @@ calls whatever the transport.
 
 The slaves are reached only through :class:`StructureSlave` and :class:`BearingSet`, which
 declare everything the master and the runner use; :mod:`orchestrator.coupling.inprocess` (the
-physics
-objects directly) and :mod:`orchestrator.coupling.fmi` (the FMUs through fmpy) implement them.
+physics objects directly) and :mod:`orchestrator.coupling.fmi` (the FMUs through fmpy)
+implement them.
 """
 
 from __future__ import annotations
