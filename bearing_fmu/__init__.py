@@ -26,9 +26,9 @@ from bearing_fmu.base import (  # noqa: E402
 
 #: model name -> "module:class"; film models solve the Reynolds equation (Eq. 2-5)
 MODELS = {
-    "hybrid": "bearing_fmu.hybrid:HybridBearing",
+    "hybrid": "bearing_fmu.hybrid.model:HybridBearing",
     "short": "bearing_fmu.short_bearing:ShortBearing",
-    "fd": "bearing_fmu.fd:FiniteDifferenceBearing",
+    "fd": "bearing_fmu.fd.model:FiniteDifferenceBearing",
     "linear": "bearing_fmu.linear:LinearisedBearing",
     "lumped": "bearing_fmu.lumped:LumpedSpringBearing",
 }

@@ -16,7 +16,7 @@ import numpy as np
 
 from bearing_fmu.affine import AffineLaws, affine_global
 from bearing_fmu.base import BearingModel, BearingResult, check_omega
-from bearing_fmu.hybrid import HybridBearing
+from bearing_fmu.hybrid.model import HybridBearing
 
 __all__ = ["LinearBearing", "LinearisedBearing"]
 

@@ -16,14 +16,14 @@ import time
 import numpy as np
 
 from bearing_fmu import BearingData
-from bearing_fmu.hybrid import HybridBearing
+from bearing_fmu.hybrid.model import HybridBearing
 
 try:
     from bearing_fmu.short_bearing import ShortBearing
 except ImportError:
     ShortBearing = None
 try:
-    from bearing_fmu.fd import FiniteDifferenceBearing
+    from bearing_fmu.fd.model import FiniteDifferenceBearing
 except ImportError:
     FiniteDifferenceBearing = None
 

@@ -64,7 +64,7 @@ TIMED = [
 #: the structure's step, the hybrid bearing, the master's update
 KERNELS = [
     ("compiled kernels", "gear_fmu.structure", "advance"),
-    ("compiled kernels", "bearing_fmu._hybrid_kernels", "hybrid_global"),
+    ("compiled kernels", "bearing_fmu.hybrid._kernels", "hybrid_global"),
     ("compiled kernels", "bearing_fmu.affine", "_relinearise"),
 ]
 

@@ -27,7 +27,7 @@ def main() -> None:
     st = paper_structure()
     t_build = time.perf_counter() - t0
     mesh = st.mesh
-    name = f"gear_fmu.mesh.MeshElement ({mesh.n_lines} x {mesh.n_slices} slices)"
+    name = f"gear_fmu.mesh.element.MeshElement ({mesh.n_lines} x {mesh.n_slices} slices)"
     kb = np.broadcast_to(1e8 * np.eye(2), (4, 2, 2)) + np.array([[0.0, 3e7], [-2e7, 0.0]])
     cb = np.broadcast_to(1e5 * np.eye(2), (4, 2, 2)) + np.array([[0.0, 1e4], [1e4, 0.0]])
     kb, cb = kb.copy(), cb.copy()

@@ -18,7 +18,7 @@ import numpy as np
 
 import orchestrator as gsb
 from fmu_src.examples import paper_system
-from gear_fmu.modal import mode_table, natural_modes
+from gear_fmu.modal.modes import mode_table, natural_modes
 
 STIFF = 1e12  # N/m, "stiff" bearings
 

@@ -23,9 +23,9 @@ from typing import Any
 from bearing_fmu import MODELS as _BEARING_TABLE
 from bearing_fmu import model_class
 from fmu_src.units import UnitError, parse_quantity, symbol
-from gear_fmu.damping import BASES, DAMPING_KINDS, DampingModel
 from gear_fmu.drivetrain import OUTPUT_ENDS, Drivetrain
-from gear_fmu.geometry import GearGeometryError, GearPair, zero_backlash_centre_distance
+from gear_fmu.mesh.geometry import GearGeometryError, GearPair, zero_backlash_centre_distance
+from gear_fmu.modal.damping import BASES, DAMPING_KINDS, DampingModel
 
 __all__ = ["BEARING_MODELS", "FIELDS", "Case", "CaseError", "Field", "damping", "drivetrain",
            "gear_pair", "load_case", "model_option_fields", "schema_markdown", "shipped_cases"]
@@ -144,7 +144,7 @@ FIELDS: tuple[Field, ...] = (
        "damping, or of the Rayleigh damping at rayleigh_frequencies", default=0.03,
        minimum=0.0, maximum=0.99),
     _f("simulation.damping_model", "choice", "structural damping: modal (zeta on every mode "
-       "of the damping_basis) or rayleigh (alpha M + beta K, gear_fmu.damping)",
+       "of the damping_basis) or rayleigh (alpha M + beta K, gear_fmu.modal.damping)",
        default="modal", choices=DAMPING_KINDS),
     _f("simulation.damping_basis", "choice", "modes of the modal damping: bearings (shafts, "
        "mean mesh and the bearings' static film stiffness) or structure (shafts and mean mesh)",
@@ -390,7 +390,7 @@ def _check_physics(v: dict, source: str) -> None:
 # --- the objects the checks build: fmu_src.description builds the system with these same
 # functions (it re-exports them), so that a case that loads is a case that builds.
 def gear_pair(case) -> GearPair:
-    """Table 1 fields -> :class:`gear_fmu.geometry.GearPair` (checked geometry; a Case or its
+    """Table 1 fields -> :class:`gear_fmu.mesh.geometry.GearPair` (checked geometry; a Case or its
     values)."""
     return GearPair(
         teeth=tuple(case["gear_pair.teeth"]),
@@ -415,7 +415,7 @@ def drivetrain(case) -> Drivetrain:
 
 def damping(case) -> DampingModel:
     """``simulation.damping_*``, ``rayleigh_*``, ``mesh_damping*`` fields ->
-    :class:`gear_fmu.damping.DampingModel` (a Case or its values)."""
+    :class:`gear_fmu.modal.damping.DampingModel` (a Case or its values)."""
     try:
         return DampingModel(
             kind=case["simulation.damping_model"], ratio=case["simulation.damping_ratio"],

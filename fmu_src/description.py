@@ -20,9 +20,9 @@ import math
 from bearing_fmu import BearingData, BearingModel, model_class
 from bearing_fmu.frames import LocalFrame
 from fmu_src.case import Case, damping, drivetrain, gear_pair, model_option_fields
-from gear_fmu.geometry import GearPair
 from gear_fmu.loads import StructureLoads, shaft_speeds
-from gear_fmu.mesh import MeshElement
+from gear_fmu.mesh.element import MeshElement
+from gear_fmu.mesh.geometry import GearPair
 from gear_fmu.structure import Structure
 from gear_fmu.system import GearBody, GearShaftSystem, Shaft
 from gear_fmu.timoshenko import HollowSection

@@ -8,8 +8,8 @@ Structure (:class:`gear_fmu.structure.StructureState`):
 
 * ``t`` float64, ``n_steps`` int64, ``x``, ``v``, ``a`` float64 (n_dof,);
 * ``active`` bool (n_slices,): the contact set of the last solution, absent before one;
-* ``mesh/...`` the mesh state of the last solution (:class:`gear_fmu.mesh.MeshState`), absent
-  before one: ``force`` (12,), ``stiffness`` (12, 12), ``delta``, ``load``, ``xi``, ``z``
+* ``mesh/...`` the mesh state of the last solution (:class:`gear_fmu.mesh.element.MeshState`),
+  absent before one: ``force`` (12,), ``stiffness`` (12, 12), ``delta``, ``load``, ``xi``, ``z``
   float64 (n_slices,), ``active``, ``inside`` bool (n_slices,), ``total_load``,
   ``transmission_error`` and ``extra/<name>`` float64 scalars.
 
@@ -32,11 +32,11 @@ import numpy as np
 
 from bearing_fmu.affine import AffineLaws
 from bearing_fmu.base import BearingModel
-from bearing_fmu.fd import FiniteDifferenceBearing
-from bearing_fmu.hybrid import HybridBearing
+from bearing_fmu.fd.model import FiniteDifferenceBearing
+from bearing_fmu.hybrid.model import HybridBearing
 from bearing_fmu.linear import LinearisedBearing
 from fmu_src.state_codec import StateArrays, StateFormatError, nest
-from gear_fmu.mesh import MeshState
+from gear_fmu.mesh.element import MeshState
 from gear_fmu.structure import StructureState
 
 __all__ = ["bearing_state_arrays", "bearing_state_from_arrays", "laws_arrays",

@@ -6,7 +6,7 @@
   the torque that balances T through the mesh (``T r_b2 / r_b1``).
 * Mass unbalance, Eq. (10): a force of magnitude ``M e_mu omega^2`` turning with each shaft,
   applied at its gear node, with M the shaft plus gear mass. The pinion shaft turns about +z
-  at omega, the gear shaft about -z at ``omega z1 / z2`` (:mod:`gear_fmu.geometry`).
+  at omega, the gear shaft about -z at ``omega z1 / z2`` (:mod:`gear_fmu.mesh.geometry`).
 * Gravity (optional): ``M g`` on every translational DOF.
 """
 
@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .dofs import DOF_PER_NODE, U, V
+from gear_fmu.dofs import DOF_PER_NODE, U, V
 
 __all__ = ["StructureLoads", "constant_loads", "shaft_speeds", "unbalance_amplitudes",
            "unbalance_force"]

@@ -18,7 +18,7 @@ Time integration refinements (switched on by the case file, :mod:`fmu_src.descri
   ``Xdd_0 = M^-1 F_unb(0)`` instead of zero (Newmark's update carries Xdd_n forward, and a
   wrong Xdd_0 leaves a first-order error).
 * ``locate_contact``: the mesh stiffness jumps when a contact line enters or leaves the path
-  of contact (:meth:`gear_fmu.mesh.MeshElement.event_angles`, known from the rigid-body
+  of contact (:meth:`gear_fmu.mesh.element.MeshElement.event_angles`, known from the rigid-body
   kinematics). A step containing such angles is cut into sub-steps ending on them; a sub-step
   ending on an event is solved with the contact set before it (mesh evaluated
   ``EVENT_SIDE`` base pitch earlier), then the acceleration is reset to the one after it,
@@ -28,11 +28,11 @@ Time integration refinements (switched on by the case file, :mod:`fmu_src.descri
   (a tooth pair separating under dynamic load) are not located.
 
 Solution method: the constant part of the tangent is condensed onto the 20 gear and bearing DOFs
-once per dt (:mod:`gear_fmu.condensation`); each step costs one matrix-vector product for the
+once per dt (:mod:`gear_fmu.step.condensation`); each step costs one matrix-vector product for the
 right-hand side and, per Newton/contact iteration, a mesh evaluation and a 20 x 20 solve
-(:mod:`gear_fmu.contact_loop`), then ``X_r = A_rr^-1 b_r - W X_c`` and the Newmark update
-(Eq. 12, :mod:`gear_fmu.newmark`). Analyses without dynamics (modes, quasi-static transmission
-error, support loads) are in :mod:`gear_fmu.analyses`.
+(:mod:`gear_fmu.step.contact_loop`), then ``X_r = A_rr^-1 b_r - W X_c`` and the Newmark update
+(Eq. 12, :mod:`gear_fmu.step.newmark`). Analyses without dynamics (modes, quasi-static transmission
+error, support loads) are in :mod:`gear_fmu.modal.analyses`.
 """
 
 from __future__ import annotations
@@ -45,30 +45,30 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
-from .analyses import reference_damping
-from .condensation import N_BEARING, N_GEAR, NC, Condensation
-from .contact_loop import StepInfo, solve_condensed
-from .damping import DampingModel
-from .dofs import THETA
-from .loads import (
+from gear_fmu.dofs import THETA
+from gear_fmu.loads import (
     StructureLoads,
     constant_loads,
     shaft_speeds,
     unbalance_amplitudes,
     unbalance_force,
 )
-from .mesh import MeshElement, MeshState
-from .newmark import NewmarkConvergenceError, newmark_coefficients
-from .step_assembly import check_laws, check_laws_fast, finish_step, prepare_step
-from .step_kernel import CONVERGED, SINGULAR, advance
-from .system import GearShaftSystem
+from gear_fmu.mesh.element import MeshElement, MeshState
+from gear_fmu.modal.analyses import reference_damping
+from gear_fmu.modal.damping import DampingModel
+from gear_fmu.step.assembly import check_laws, check_laws_fast, finish_step, prepare_step
+from gear_fmu.step.condensation import N_BEARING, N_GEAR, NC, Condensation
+from gear_fmu.step.contact_loop import StepInfo, solve_condensed
+from gear_fmu.step.kernel import CONVERGED, SINGULAR, advance
+from gear_fmu.step.newmark import NewmarkConvergenceError, newmark_coefficients
+from gear_fmu.system import GearShaftSystem
 
 __all__ = ["StepInfo", "Structure", "StructureLoads", "StructureState", "check_laws"]
 
 #: first static iterate: pinion torsion [rad] that closes every potential contact
 INITIAL_APPROACH_ROTATION = 1e-3
 #: contact location: the side of an event the mesh is evaluated on, in base pitches (above the
-#: mesh kernel's snap of 1e-9 pitch, :mod:`gear_fmu.mesh`)
+#: mesh kernel's snap of 1e-9 pitch, :mod:`gear_fmu.mesh.element`)
 EVENT_SIDE = 1e-8
 #: sub-step fractions of dt are rounded to multiples of 2**-30, so that the condensations of
 #: the recurring sub-steps are computed once (:meth:`Structure._dynamic`)
@@ -98,14 +98,14 @@ class Structure:
     system : GearShaftSystem
         Assembled shafts and discs.
     mesh : object
-        Mesh element with ``evaluate(pinion_angle, q12)`` (:mod:`gear_fmu.contact_loop`).
+        Mesh element with ``evaluate(pinion_angle, q12)`` (:mod:`gear_fmu.step.contact_loop`).
     loads : StructureLoads
     zeta : float or DampingModel
-        The damping model (:mod:`gear_fmu.damping`); a float is the modal damping factor on
+        The damping model (:mod:`gear_fmu.modal.damping`); a float is the modal damping factor on
         the ``"bearings"`` basis (paper 0.03).
     damping_bearing_stiffness : float or (4, 2, 2)
         Bearing stiffness of the reference configuration of the modal damping
-        (:mod:`gear_fmu.modal`) [N/m]; :meth:`set_damping_reference` replaces it.
+        (:mod:`gear_fmu.modal.modes`) [N/m]; :meth:`set_damping_reference` replaces it.
     damping : (n_dof, n_dof) array, optional
         Explicit damping matrix (full numbering) replacing the modal one.
     tol : float
@@ -159,8 +159,8 @@ class Structure:
         self.locate_contact = bool(locate_contact) and hasattr(mesh, "event_angles")
         self._m_gear = None  # M^-1 restricted to the gear-node columns, when first needed
         self._event_phases = None  # (mesh period [rad], event angles in it), when first needed
-        #: the mesh's constant arrays for the compiled step (gear_fmu.step_kernel), or None:
-        #: the Python loop of gear_fmu.contact_loop serves any other mesh object
+        #: the mesh's constant arrays for the compiled step (gear_fmu.step.kernel), or None:
+        #: the Python loop of gear_fmu.step.contact_loop serves any other mesh object
         self._mesh_arrays = mesh.kernel_arrays() if isinstance(mesh, MeshElement) else None
         self._forces()
         # the state: at rest at t = 0, no contact known yet
@@ -232,7 +232,7 @@ class Structure:
         """(Re)build the modal damping C on the modes of the reference configuration.
 
         ``bearing_stiffness``: isotropic [N/m] or (4, 2, 2) bearing stiffness (symmetric part
-        used) of the reference configuration (:func:`gear_fmu.analyses.reference_damping`).
+        used) of the reference configuration (:func:`gear_fmu.modal.analyses.reference_damping`).
         The master calls this with the bearings' stiffness at the static solution X0 before
         the transient.
         """
@@ -419,7 +419,7 @@ class Structure:
 
     def _events_in(self, lo: float, hi: float) -> list:
         """Contact event angles in ``(lo, hi]`` [rad]: those of one mesh period
-        (:meth:`gear_fmu.mesh.MeshElement.event_angles`, computed once) repeated with the
+        (:meth:`gear_fmu.mesh.element.MeshElement.event_angles`, computed once) repeated with the
         period ``2 pi / z1`` (the events of every slice recur with it)."""
         if self._event_phases is None:
             period = self.mesh.event_period
@@ -462,7 +462,7 @@ class Structure:
         return info
 
     def _advance_compiled(self, h, t1, angle, f0, kb, cb, what) -> StepInfo:
-        """:meth:`_advance` in one compiled call (:func:`gear_fmu.step_kernel.advance`, the
+        """:meth:`_advance` in one compiled call (:func:`gear_fmu.step.kernel.advance`, the
         same arithmetic as the Python loop)."""
         cond, hh, g_const = self._dynamic(h)
         mesh = self.mesh
@@ -531,7 +531,8 @@ class Structure:
         return float(self.mesh_state.total_load)
 
     def transmission_error(self) -> float:
-        """r_b1 theta1 + r_b2 theta2 of the current state [m] (:class:`gear_fmu.mesh.MeshState`)."""
+        """r_b1 theta1 + r_b2 theta2 of the current state [m]
+        (:class:`gear_fmu.mesh.element.MeshState`)."""
         return float(self.mesh_state.transmission_error)
 
     def full_vector(self, which: str = "x") -> np.ndarray:

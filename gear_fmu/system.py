@@ -51,9 +51,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .dofs import DOF_PER_NODE, THETA, U, V, W, dof
-from .drivetrain import Drivetrain
-from .timoshenko import HollowSection, disc_matrices, timoshenko_element
+from gear_fmu.dofs import DOF_PER_NODE, THETA, U, V, W, dof
+from gear_fmu.drivetrain import Drivetrain
+from gear_fmu.timoshenko import HollowSection, disc_matrices, timoshenko_element
 
 __all__ = [
     "GearBody",

@@ -37,7 +37,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .dofs import DOF_PER_NODE, PHI, PSI, THETA, U, V, W
+from gear_fmu.dofs import DOF_PER_NODE, PHI, PSI, THETA, U, V, W
 
 __all__ = [
     "HollowSection",

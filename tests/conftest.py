@@ -55,7 +55,7 @@ LONGEST_FIRST = (
     "tests/system/test_fmu_system.py",  # 12
     "tests/system/test_fmu_run.py",  # 11
     "tests/system/test_paper_results.py",  # 10
-    "tests/orchestrator/sweep/test_sweep_cli.py",  # 10
+    "tests/orchestrator/sweeps/test_sweep_cli.py",  # 10
     "tests/docs/test_api_docs.py",  # 9
     "tests/fmu_src/test_native_build.py",  # 9
 )

@@ -86,8 +86,7 @@ def compare(got: dict, recorded: dict, tolerances: dict) -> dict:
 
 def summary(report: dict) -> dict:
     """The numbers of a run report (:func:`orchestrator.analysis.metrics.run_report`) that the
-    summary
-    check compares, as lists."""
+    summary check compares, as lists."""
     return {k: np.asarray(report[k], dtype=float).tolist() for k in SUMMARY_KEYS}
 
 

@@ -164,7 +164,8 @@ RB1 = R1 * math.cos(ALPHA)
 
 
 class LineMesh:
-    """Stand-in mesh element: ``evaluate(pinion_angle, q12)`` as gear_fmu.mesh.MeshElement."""
+    """Stand-in mesh element: ``evaluate(pinion_angle, q12)`` as
+    gear_fmu.mesh.element.MeshElement."""
 
     def __init__(self, width=0.040, n_slices=10, k_per_length=1.4e10, deviation=None,
                  modulation=0.0, teeth=26):

@@ -42,7 +42,7 @@ autodoc_default_options = {
 
 # Cross-references must resolve (-W turns a broken one into an error). Without network access
 # there is no intersphinx, so targets outside the four packages are not checked, nor are the
-# private modules (``bearing_fmu._fd_grid``, ...) that the reference leaves out.
+# private modules (``bearing_fmu.fd._grid``, ...) that the reference leaves out.
 nitpicky = True
 nitpick_ignore_regex = [
     (r"py:.*", r"(numpy|np|xarray|enum|pathlib|abc|collections|ctypes|typing|pythonfmu|fmpy|scipy"

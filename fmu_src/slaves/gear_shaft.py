@@ -265,7 +265,7 @@ class GearShaftSlave(ContractSlave):
 
     def _compute_support(self) -> None:
         try:
-            from gear_fmu.analyses import support_loads
+            from gear_fmu.modal.analyses import support_loads
 
             self._support = support_loads(self._ensure_structure()).ravel().tolist()
         except Exception as exc:  # anything raised here would be fatal for the host

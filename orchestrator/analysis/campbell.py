@@ -2,16 +2,15 @@
 
 :func:`linearise` builds the case's master in-process, solves the static solution X0 with the
 bearings (:meth:`orchestrator.coupling.master.Master.solve_static`), ends the static phase so that
-the
-structure builds the damping C the transient uses
+the structure builds the damping C the transient uses
 (:meth:`~orchestrator.coupling.master.Master.exit_initialization`), and computes at X0 (paper Eq.
 20):
 
-* the exact mean mesh stiffness (:func:`gear_fmu.analyses.exact_mean_mesh_stiffness`);
+* the exact mean mesh stiffness (:func:`gear_fmu.modal.analyses.exact_mean_mesh_stiffness`);
 * the undamped modes of K0 with the symmetric part of the bearings' Kb
-  (:func:`gear_fmu.analyses.modes`);
+  (:func:`gear_fmu.modal.analyses.modes`);
 * the damped modes of M, C0 = C + Cb(X0), K0 = K_shaft + K_mesh,mean + Kb(X0), the bearings'
-  Kb and Cb full 2x2 (:func:`gear_fmu.damped_modes.damped_modes`).
+  Kb and Cb full 2x2 (:func:`gear_fmu.modal.damped_modes.damped_modes`).
 
 :func:`campbell_data` repeats it over pinion speeds (the bearings' equilibrium, Kb and Cb
 depend on the speed); :func:`crossings` finds where a mode crosses the mesh-order lines
@@ -31,9 +30,9 @@ import scipy.optimize
 
 from bearing_fmu.base import BearingError
 from fmu_src.case import Case
-from gear_fmu.analyses import exact_mean_mesh_stiffness, line_of_action_stiffness, modes
-from gear_fmu.damped_modes import MESH_MODE_FRACTION, DampedModes, damped_modes
-from gear_fmu.modal import Modes
+from gear_fmu.modal.analyses import exact_mean_mesh_stiffness, line_of_action_stiffness, modes
+from gear_fmu.modal.damped_modes import MESH_MODE_FRACTION, DampedModes, damped_modes
+from gear_fmu.modal.modes import Modes
 from orchestrator.coupling.master import CouplingError
 from orchestrator.coupling.system import build_master
 
@@ -60,7 +59,7 @@ class Linearised:
         Exact mean mesh stiffness [N/m, N, N m].
     mesh_stiffness_loa : float
         Its value along the line of action [N/m]
-        (:func:`gear_fmu.analyses.line_of_action_stiffness`).
+        (:func:`gear_fmu.modal.analyses.line_of_action_stiffness`).
     reference_mesh_stiffness_loa : float or None
         The same of the 16-angle mean the damping C was built on [N/m] (None without).
     contact_width : float

@@ -8,7 +8,7 @@ import sys
 
 from bearing_fmu.base import BearingError
 from fmu_src.case import CaseError
-from gear_fmu.geometry import GearGeometryError
+from gear_fmu.mesh.geometry import GearGeometryError
 from orchestrator.run.progress import RunInterrupted
 from orchestrator.run.spec import RunError
 

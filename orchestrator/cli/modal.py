@@ -78,12 +78,12 @@ def _finite(x):
 def modal(args) -> int:
     import json
 
-    from gear_fmu.damped_modes import (
+    from gear_fmu.modal.damped_modes import (
         critical_speed_table,
         damped_mode_table,
         tooth_critical_speeds,
     )
-    from gear_fmu.modal import mode_table
+    from gear_fmu.modal.modes import mode_table
     from orchestrator.analysis import campbell
     from orchestrator.coupling.master import CouplingError
     from orchestrator.figures.campbell import plot_campbell

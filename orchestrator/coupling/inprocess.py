@@ -22,7 +22,7 @@ from fmu_src.states import (
     structure_state_arrays,
     structure_state_from_arrays,
 )
-from gear_fmu.analyses import support_loads
+from gear_fmu.modal.analyses import support_loads
 from gear_fmu.structure import Structure
 from orchestrator.coupling.master import BearingSet, StructureSlave
 

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from gear_fmu.damped_modes import MESH_MODE_FRACTION
+from gear_fmu.modal.damped_modes import MESH_MODE_FRACTION
 from orchestrator.analysis.campbell import HARMONICS, crossings
 from orchestrator.figures.base import pyplot
 

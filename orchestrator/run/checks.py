@@ -8,9 +8,9 @@ a bearing's static load exceeds that capacity, in newtons and case fields.
 :func:`time_step_warnings` linearises the case about its static solution X0 (the bearings' Kb
 and Cb there, the damping the transient uses, the exact mean mesh stiffness, as ``gsb modal``)
 and flags the damped mesh modes that get fewer than
-:data:`gear_fmu.damped_modes.MIN_STEPS_PER_PERIOD` steps per period
-(:func:`gear_fmu.damped_modes.under_resolved`). ``gsb run`` prints the warnings and stores them
-in the results file.
+:data:`gear_fmu.modal.damped_modes.MIN_STEPS_PER_PERIOD` steps per period
+(:func:`gear_fmu.modal.damped_modes.under_resolved`). ``gsb run`` prints the warnings and stores
+them in the results file.
 """
 
 from __future__ import annotations
@@ -23,8 +23,8 @@ from bearing_fmu.affine import AffineLaws
 from bearing_fmu.base import FilmBearingModel
 from fmu_src import description
 from fmu_src.case import Case
-from gear_fmu.analyses import exact_mean_mesh_stiffness
-from gear_fmu.damped_modes import MIN_STEPS_PER_PERIOD, damped_modes, under_resolved
+from gear_fmu.modal.analyses import exact_mean_mesh_stiffness
+from gear_fmu.modal.damped_modes import MIN_STEPS_PER_PERIOD, damped_modes, under_resolved
 
 __all__ = ["EPS_LIMIT", "film_capacities", "overload_message", "time_step_warnings",
            "unbalance_warnings"]
@@ -82,7 +82,7 @@ def unbalance_warnings(case: Case) -> list[str]:
 def overload_message(case: Case) -> str | None:
     """Why a static solution cannot exist, in the case's terms, if a bearing's static load
     (the structure on stiff supports) exceeds its film's capacity; None otherwise."""
-    from gear_fmu.analyses import support_loads
+    from gear_fmu.modal.analyses import support_loads
 
     loads = np.hypot(*support_loads(description.structure(case)).T)
     capacity, model = film_capacities(case)

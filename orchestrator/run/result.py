@@ -8,8 +8,8 @@ from a results file. The channels and their dimensions are those of
 >>> import numpy as np
 >>> r = Result({"time": np.array([1e-4, 2e-4]),
 ...             "mesh_force": np.array([2250.0, 2260.0])}, {"case": "demo"})
->>> r["mesh_force"].max()
-np.float64(2260.0)
+>>> float(r["mesh_force"].max())
+2260.0
 >>> r.to_xarray().mesh_force.sel(time=2e-4).item()
 2260.0
 """

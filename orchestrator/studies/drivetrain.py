@@ -11,7 +11,7 @@ report of ``gsb run`` (:func:`orchestrator.analysis.metrics.run_report`: R, the 
 peak-to-peak and the lines of the bearing-1 force norm over the last gear revolution), and the
 linearised system of each configuration (:func:`orchestrator.analysis.campbell.linearise`) gives the
 damped mesh modes that explain it. The page also carries the models' own documentation
-(the module docstrings of :mod:`gear_fmu.drivetrain` and :mod:`gear_fmu.damping`, with the
+(the module docstrings of :mod:`gear_fmu.drivetrain` and :mod:`gear_fmu.modal.damping`, with the
 formula of each damping model) and states the plan it was generated from (:func:`plan_text`);
 ``tests/orchestrator/studies/test_drivetrain_study.py`` checks that both still match the code.
 The raw results are saved beside the page (``<page>.json``) so that ``--render`` redraws it
@@ -176,11 +176,11 @@ def render(results: list[dict], periods: int, wall_s: float) -> str:
 
 def model_docs() -> list[str]:
     """The drivetrain and damping models as their modules document them (one source)."""
-    import gear_fmu.damping
     import gear_fmu.drivetrain
+    import gear_fmu.modal.damping
 
     out = ["## The models", ""]
-    for mod in (gear_fmu.drivetrain, gear_fmu.damping):
+    for mod in (gear_fmu.drivetrain, gear_fmu.modal.damping):
         out += [f"From `{mod.__name__}`:", "", "```text", mod.__doc__.strip(), "```", ""]
     return out
 

@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 
 from bearing_fmu import BearingData
-from bearing_fmu.fd import FiniteDifferenceBearing
-from bearing_fmu.hybrid import HybridBearing
+from bearing_fmu.fd.model import FiniteDifferenceBearing
+from bearing_fmu.hybrid.model import HybridBearing
 from bearing_fmu.short_bearing import ShortBearing
 from bearing_fmu.static import static_equilibrium
 

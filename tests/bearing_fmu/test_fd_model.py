@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from bearing_fmu import EccentricityError
-from bearing_fmu.fd import (
+from bearing_fmu.fd.model import (
     FiniteDifferenceBearing,
     reynolds_operator,
     solve_complementarity,

@@ -1,4 +1,4 @@
-"""The hybrid Reynolds solver (bearing_fmu.hybrid): every step checked against something
+"""The hybrid Reynolds solver (bearing_fmu.hybrid.model): every step checked against something
 independent — quadrature for the axial integrals, central differences of the complete solver for
 the Jacobians, symmetry, convergence in n, Ocvirk's short-bearing limit.
 """
@@ -10,8 +10,8 @@ import pytest
 from scipy.integrate import quad
 
 from bearing_fmu import BearingData, EccentricityError
-from bearing_fmu.axial import AXIAL_COEF, T_SWITCH, axial_integrals, axial_shape
-from bearing_fmu.hybrid import HybridBearing, HybridConvergenceError
+from bearing_fmu.hybrid.axial import AXIAL_COEF, T_SWITCH, axial_integrals, axial_shape
+from bearing_fmu.hybrid.model import HybridBearing, HybridConvergenceError
 from tests.helpers import numeric_jacobian
 
 
@@ -28,7 +28,7 @@ def rotation(a):
     return np.array([[math.cos(a), -math.sin(a)], [math.sin(a), math.cos(a)]])
 
 
-# --- axial integrals (bearing_fmu.axial) ----------------------------------------------------
+# --- axial integrals (bearing_fmu.hybrid.axial) -----------------------------------------------
 
 def quadrature_integrals(t):
     """I0, I1, I2 of g(u; t) = (cosh k - cosh k u)/(cosh k - 1) by adaptive quadrature."""

@@ -21,7 +21,7 @@ PACKAGES = ("bearing_fmu", "gear_fmu", "fmu_src", "orchestrator")
 
 # a few key objects: (page, anchor id)
 KEY_OBJECTS = [
-    ("bearing_fmu.html", "bearing_fmu.hybrid.HybridBearing"),
+    ("bearing_fmu.html", "bearing_fmu.hybrid.model.HybridBearing"),
     ("bearing_fmu.html", "bearing_fmu.affine.AffineLaws"),
     ("bearing_fmu.html", "bearing_fmu.base.BearingModel"),
     ("gear_fmu.html", "gear_fmu.structure.Structure"),

@@ -159,7 +159,7 @@ def _bearing(model_name: str, nodes: int = 48):
     """A bearing model of the paper's pinion bearing on a coarse grid; ``"fd-direct"``: the
     FD model with its direct solver (whose active set is part of the state)."""
     from bearing_fmu import BearingData, model_class
-    from bearing_fmu.fd import FiniteDifferenceBearing
+    from bearing_fmu.fd.model import FiniteDifferenceBearing
 
     b = BearingData(0.07, 0.05, 150e-6, 0.0288)
     if model_name == "fd-direct":

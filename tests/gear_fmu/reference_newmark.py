@@ -7,7 +7,8 @@ code path, against which ``tests/gear_fmu/test_structure.py`` and
 ``tests/orchestrator/run/test_run.py`` hold the structure and the master (monolithic Newton).
 
 Residual at t_{n+1} (Eq. 11): ``G(X) = M Xdd + C Xd + K X - F(t_{n+1}) - F_nl(X, Xd)`` with the
-Newmark kinematics of Eq. (12) (gamma 1/2, beta 1/4, :func:`gear_fmu.newmark.newmark_kinematics`);
+Newmark kinematics of Eq. (12) (gamma 1/2, beta 1/4,
+:func:`gear_fmu.step.newmark.newmark_kinematics`);
 Newton-Raphson (Eq. 13-16): ``J dX = -G`` with ``J = 4/dt^2 M + 2/dt C + K - dF_nl/dX -
 2/dt dF_nl/dXd``. Contact loop (Fig. 4): the callback returns the active set of the iterate it
 is evaluated at and its tangent for that set; the step is converged when the relative residual
@@ -23,7 +24,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from gear_fmu.newmark import NewmarkConvergenceError, newmark_coefficients, newmark_kinematics
+from gear_fmu.step.newmark import NewmarkConvergenceError, newmark_coefficients, newmark_kinematics
 
 
 @dataclass

@@ -10,15 +10,15 @@ import pytest
 from fmu_src import description
 from fmu_src.case import load_case
 from fmu_src.examples import paper_system
-from gear_fmu.analyses import (
+from gear_fmu.modal.analyses import (
     _springs,
     damped,
     exact_mean_mesh_stiffness,
     line_of_action_stiffness,
     mean_mesh_stiffness,
 )
-from gear_fmu.damped_modes import damped_eigen, damped_modes, tooth_critical_speeds
-from gear_fmu.modal import modal_damping_matrix, natural_modes
+from gear_fmu.modal.damped_modes import damped_eigen, damped_modes, tooth_critical_speeds
+from gear_fmu.modal.modes import modal_damping_matrix, natural_modes
 from orchestrator.cli import main
 
 SPUR = "baguet2010_spur"

@@ -14,9 +14,9 @@ import scipy.linalg
 
 from fmu_src.case import CaseError, load_case
 from fmu_src.description import structure
-from gear_fmu.damping import DampingModel, damping_matrix
 from gear_fmu.drivetrain import Drivetrain
-from gear_fmu.modal import mesh_stiffness_matrix, natural_modes
+from gear_fmu.modal.damping import DampingModel, damping_matrix
+from gear_fmu.modal.modes import mesh_stiffness_matrix, natural_modes
 from gear_fmu.system import GearBody, GearShaftSystem, Shaft
 from gear_fmu.timoshenko import HollowSection
 

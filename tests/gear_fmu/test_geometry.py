@@ -5,7 +5,7 @@ import math
 import pytest
 
 from fmu_src.examples import paper_gear_pair
-from gear_fmu.geometry import GearGeometryError, GearPair, involute
+from gear_fmu.mesh.geometry import GearGeometryError, GearPair, involute
 
 DEG = math.pi / 180
 

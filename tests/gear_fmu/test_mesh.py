@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 
 from fmu_src.examples import paper_gear_pair, paper_system
-from gear_fmu.analyses import quasi_static
-from gear_fmu.mesh import MeshElement, ToothDeviations
+from gear_fmu.mesh.element import MeshElement, ToothDeviations
+from gear_fmu.mesh.tooth_stiffness import ToothPairCompliance
+from gear_fmu.modal.analyses import quasi_static
 from gear_fmu.structure import Structure, StructureLoads
-from gear_fmu.tooth_stiffness import ToothPairCompliance
 
 T_IN = 220.0
 SPUR = paper_gear_pair()

@@ -7,7 +7,7 @@ import pytest
 import scipy.linalg
 
 from fmu_src.examples import paper_system
-from gear_fmu.modal import (
+from gear_fmu.modal.modes import (
     bearing_stiffness_matrix,
     modal_damping_matrix,
     mode_table,

@@ -1,5 +1,5 @@
 """The structure's Newmark step (Eq. 11-16: :meth:`gear_fmu.structure.Structure.step` through
-:mod:`gear_fmu.step_assembly`, :mod:`gear_fmu.contact_loop` and :mod:`gear_fmu.step_kernel`)
+:mod:`gear_fmu.step.assembly`, :mod:`gear_fmu.step.contact_loop` and :mod:`gear_fmu.step.kernel`)
 against exact solutions.
 
 With a mesh whose springs never separate (:class:`BilateralMesh`) and affine bearing laws, the
@@ -24,7 +24,7 @@ import scipy.linalg
 from fmu_src import description
 from fmu_src.case import load_case
 from fmu_src.examples import paper_system
-from gear_fmu.newmark import NewmarkConvergenceError
+from gear_fmu.step.newmark import NewmarkConvergenceError
 from gear_fmu.structure import Structure, StructureLoads, StructureState
 from tests.helpers import T_IN, LineMesh
 
@@ -217,7 +217,7 @@ def test_the_step_is_order_2_from_the_consistent_start_only():
 
 def test_the_compiled_step_equals_the_python_loop_bit_for_bit():
     """The paper's spur case (distributed mesh element, contact located) over 96 steps with
-    anisotropic, cross-coupled laws: the compiled step (:func:`gear_fmu.step_kernel.advance`)
+    anisotropic, cross-coupled laws: the compiled step (:func:`gear_fmu.step.kernel.advance`)
     and the Python loop it mirrors (taken when the structure's timers are on) give the same
     states, contact sets and residual histories to the last bit."""
     case = load_case("baguet2010_spur")

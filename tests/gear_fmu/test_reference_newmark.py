@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from gear_fmu.newmark import newmark_kinematics
+from gear_fmu.step.newmark import newmark_kinematics
 from tests.gear_fmu.reference_newmark import NonlinearForce, newmark_step
 
 M = np.diag([2.0, 1.0])

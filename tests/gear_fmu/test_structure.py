@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 from fmu_src.examples import paper_system
-from gear_fmu.analyses import support_loads
-from gear_fmu.newmark import NewmarkConvergenceError
+from gear_fmu.modal.analyses import support_loads
+from gear_fmu.step.newmark import NewmarkConvergenceError
 from gear_fmu.structure import Structure, StructureLoads
 from tests.gear_fmu.reference_newmark import newmark_step
 from tests.helpers import ALPHA, OMEGA, R1, R2, RB1, T_IN, LineMesh, affine, monolithic_structure
@@ -219,10 +219,10 @@ def test_bad_laws_are_rejected():
 
 
 def test_the_compiled_force_norm_is_numpys():
-    """The residual scale inside the compiled step (``gear_fmu.step_kernel.sum_squares``) is
+    """The residual scale inside the compiled step (``gear_fmu.step.kernel.sum_squares``) is
     ``np.sum(f0 * f0)`` bit for bit (numpy's pairwise order), over 20,000 draws spanning
     ten decades: the steps accept exactly where the Python loop does."""
-    from gear_fmu.step_kernel import sum_squares
+    from gear_fmu.step.kernel import sum_squares
 
     rng = np.random.default_rng(3)
     for _ in range(20000):

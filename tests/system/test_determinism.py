@@ -26,7 +26,7 @@ def _runs(fmu_dir, numba_cache) -> dict:
 
 
 #: kernels that call kernels of other files: the hybrid film's driver and the structure step
-CALLERS = ("_hybrid_kernels.*", "step_kernel.*")
+CALLERS = ("hybrid/_kernels.*", "step/kernel.*")
 
 
 def test_same_bits_with_a_cold_a_warm_and_a_half_warm_numba_cache(fmu_dir, tmp_path):
@@ -59,7 +59,7 @@ def test_a_bearing_fmu_in_a_host_without_the_package_gives_the_same_bits(fmu_dir
 
     from bearing_fmu import BearingData
     from bearing_fmu.frames import LocalFrame
-    from bearing_fmu.hybrid import HybridBearing
+    from bearing_fmu.hybrid.model import HybridBearing
     from orchestrator.coupling.inprocess import ModelBearings
 
     params = {"D": 0.09, "L": 0.065, "C": 110e-6, "mu": 0.0288, "frame_angle": 0.3}

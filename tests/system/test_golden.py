@@ -44,15 +44,15 @@ def test_spur_case_stays_within_a_tenth_of_the_time_step_effect(setting, transpo
 
 
 def _scaled_mesh_stiffness(monkeypatch, factor):
-    import gear_fmu.mesh
+    import gear_fmu.mesh.element
 
-    table = gear_fmu.mesh.mesh_stiffness_table
+    table = gear_fmu.mesh.element.mesh_stiffness_table
 
     def scaled(*args, **kwargs):
         xi, k = table(*args, **kwargs)
         return xi, k * factor
 
-    monkeypatch.setattr(gear_fmu.mesh, "mesh_stiffness_table", scaled)
+    monkeypatch.setattr(gear_fmu.mesh.element, "mesh_stiffness_table", scaled)
 
 
 def test_the_golden_check_fails_on_a_real_change(monkeypatch):

@@ -30,10 +30,9 @@ def bearing_force_departure(ptp_bearing1: float, r_300: float, r_max: float) -> 
     """The paragraph on the bearing forces (the departure from the paper), with the damped
     modes, the film damping and the tooth critical speeds of the spur case computed here
     (:func:`orchestrator.analysis.campbell.linearise`); the sensitivity to the drivetrain, the
-    damping
-    and the time step is in ``docs/drivetrain.md``."""
+    damping and the time step is in ``docs/drivetrain.md``."""
     from fmu_src.case import load_case
-    from gear_fmu.damped_modes import tooth_critical_speeds
+    from gear_fmu.modal.damped_modes import tooth_critical_speeds
     from orchestrator.analysis.campbell import linearise
 
     lin = linearise(load_case("baguet2010_spur"))

@@ -9,7 +9,7 @@ diag(2 zeta omega_i)``) is built on the modes of
     K_ref = K_shaft + K_mesh,mean + sum_j B_j^T sym(Kb_ref_j) B_j
 
 with ``K_mesh,mean`` the mesh stiffness matrix averaged over one mesh period at the static load
-(:func:`gear_fmu.analyses.mean_mesh_stiffness`) and ``Kb_ref`` a reference bearing
+(:func:`gear_fmu.modal.analyses.mean_mesh_stiffness`) and ``Kb_ref`` a reference bearing
 stiffness supplied by the caller (the symmetric part of the bearings' static stiffness when it is
 known, otherwise an isotropic spring). C is constant during a run.
 """
@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
-from .system import GearShaftSystem
+from gear_fmu.system import GearShaftSystem
 
 __all__ = [
     "Modes",

@@ -1,7 +1,7 @@
 """Distributed nonlinear gear mesh element (paper Sec. 2.1, Eq. 9; Velex & Maatar 1996).
 
 The pinion and gear nodes (6 DOFs each, :mod:`gear_fmu.dofs`) are joined by elemental springs
-spread along the contact lines in the base plane (:mod:`gear_fmu.geometry` for the frames).
+spread along the contact lines in the base plane (:mod:`gear_fmu.mesh.geometry` for the frames).
 
 Contact lines (rigid-body kinematics)
 -------------------------------------
@@ -32,7 +32,7 @@ tooth deviations (tip relief, crowning, lead slope, pitch errors), which open th
 Contact condition and outputs (Eq. 9)
 -------------------------------------
 A slice carries ``k(xi) dl delta`` when ``delta > 0`` and nothing otherwise (unilateral; k from
-:mod:`gear_fmu.tooth_stiffness`, per unit contact length). For the current contact set::
+:mod:`gear_fmu.mesh.tooth_stiffness`, per unit contact length). For the current contact set::
 
     K_gear = sum k dl V V^T,   force on q = -sum k dl delta V = -(K_gear (q + q_err) - F_dev)
 
@@ -49,8 +49,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit
 
-from .geometry import GearPair
-from .tooth_stiffness import mesh_stiffness_table
+from gear_fmu.mesh.geometry import GearPair
+from gear_fmu.mesh.tooth_stiffness import mesh_stiffness_table
 
 __all__ = ["MeshElement", "MeshState", "ToothDeviations"]
 
@@ -254,7 +254,7 @@ class MeshElement:
 
     Examples
     --------
-    >>> from gear_fmu.geometry import GearPair
+    >>> from gear_fmu.mesh.geometry import GearPair
     >>> pair = GearPair(teeth=(20, 40), module=3e-3, pressure_angle=math.radians(20.0),
     ...                 centre_distance=0.09, face_width=(0.03, 0.03))
     >>> mesh = MeshElement(pair, line_load=6.5e4)
@@ -331,7 +331,7 @@ class MeshElement:
         --------
         A spur pair has two events per mesh period (an entry and an exit):
 
-        >>> from gear_fmu.geometry import GearPair
+        >>> from gear_fmu.mesh.geometry import GearPair
         >>> pair = GearPair(teeth=(20, 40), module=3e-3, pressure_angle=math.radians(20.0),
         ...                 centre_distance=0.09, face_width=(0.03, 0.03))
         >>> mesh = MeshElement(pair, line_load=6.5e4)
@@ -385,7 +385,7 @@ class MeshElement:
 
     def kernel_arrays(self) -> tuple:
         """The constant arguments of the mesh kernel after (angle, q), in its order: what a
-        compiled caller (:mod:`gear_fmu.step_kernel`) passes on."""
+        compiled caller (:mod:`gear_fmu.step.kernel`) passes on."""
         return (self._geo, self.xi_table, self.k_table, self.z_slices, self.dl, self.n_lines,
                 self._dev, self._pitch[0], self._pitch[1])
 

@@ -1,7 +1,7 @@
 """One structural Newmark step on the condensed DOFs: right-hand side, tangent and update.
 
-With the history terms of Eq. (12) (:func:`gear_fmu.newmark.newmark_history`) and the constant
-part of the tangent condensed onto the gear and bearing DOFs (:mod:`gear_fmu.condensation`),
+With the history terms of Eq. (12) (:func:`gear_fmu.step.newmark.newmark_history`) and the constant
+part of the tangent condensed onto the gear and bearing DOFs (:mod:`gear_fmu.step.condensation`),
 :func:`prepare_step` adds the external loads (Eq. 10 at the gear nodes) and the affine bearing
 laws F0 - Kb X - Cb Xdot (Eq. 17) to the right-hand side and ``Kb + c1 Cb`` to the tangent
 (Eq. 14, 16); after the Newton/contact loop :func:`finish_step` recovers the eliminated DOFs
@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .newmark import newmark_coefficients, newmark_history, newmark_kinematics
+from gear_fmu.step.newmark import newmark_coefficients, newmark_history, newmark_kinematics
 
 __all__ = ["check_laws", "check_laws_fast", "finish_step", "prepare_step"]
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from numba import njit
 
-from bearing_fmu._hybrid_workspace import CP, LO, NEW, PIV, A, B, D
+from bearing_fmu.hybrid._workspace import CP, LO, NEW, PIV, A, B, D
 
 #: extrapolating active-set passes before falling back to the plain primal-dual active set
 EXTRAP_PASSES = 12

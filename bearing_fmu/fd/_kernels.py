@@ -1,6 +1,6 @@
-"""Multigrid cycles of the finite-difference Reynolds solver (:mod:`bearing_fmu.fd`).
+"""Multigrid cycles of the finite-difference Reynolds solver (:mod:`bearing_fmu.fd.model`).
 
-Truncated nonsmooth Newton multigrid (TNNMG) on the grids of :mod:`bearing_fmu._fd_grid`: the
+Truncated nonsmooth Newton multigrid (TNNMG) on the grids of :mod:`bearing_fmu.fd._grid`: the
 linear V-cycle for the truncated defect equation, one TNNMG cycle, the solve to a tolerance,
 nested iteration from the coarsest level, and the force of Eq. (5) from the pressure.
 """
@@ -12,7 +12,7 @@ import math
 import numpy as np
 from numba import njit
 
-from bearing_fmu._fd_grid import (
+from bearing_fmu.fd._grid import (
     ROUND_FLOOR,
     _ct,
     _lv,

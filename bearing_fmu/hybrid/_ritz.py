@@ -1,7 +1,7 @@
 """Ritz discretisation of the hybrid method: element integrals and the tridiagonal system.
 
 With ``a(theta)`` piecewise linear on n periodic nodes (Eq. 7) and the axial shape of Eq. (6)
-integrated out (:mod:`bearing_fmu.axial`), the Ritz functional of Eq. (2) is
+integrated out (:mod:`bearing_fmu.hybrid.axial`), the Ritz functional of Eq. (2) is
 ``J(a) = 1/2 a.(G2 K + G1 M) a - G0 F.a`` with the h^3-weighted stiffness K and mass M of the
 hat functions and the load ``F_i = int f l_i`` (docs/hybrid-method.md, sections 2-3). This
 module computes K and M (and their derivatives in x and y for the Jacobians) by a 3-point Gauss
@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from numba import njit
 
-from bearing_fmu._hybrid_workspace import (
+from bearing_fmu.hybrid._workspace import (
     FB,
     G0,
     G1,

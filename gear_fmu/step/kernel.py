@@ -1,12 +1,12 @@
 """One Newmark (sub-)step of the condensed structure in one compiled call (the hot path).
 
 :meth:`gear_fmu.structure.Structure.step` with the distributed mesh element
-(:class:`gear_fmu.mesh.MeshElement`) spends most of its time between kernels when the pieces
+(:class:`gear_fmu.mesh.element.MeshElement`) spends most of its time between kernels when the pieces
 are called from Python: the right-hand side and tangent
-(:func:`~gear_fmu.step_assembly.prepare_step`, Eq. 12, 14, 16), the Newton/contact loop of
-:func:`~gear_fmu.contact_loop.solve_condensed` (a mesh evaluation, the residual and a 20 x 20
+(:func:`~gear_fmu.step.assembly.prepare_step`, Eq. 12, 14, 16), the Newton/contact loop of
+:func:`~gear_fmu.step.contact_loop.solve_condensed` (a mesh evaluation, the residual and a 20 x 20
 solve per pass, Fig. 4) and the recovery of the eliminated DOFs with the Newmark update
-(:func:`~gear_fmu.step_assembly.finish_step`, Eq. 12). :func:`advance` runs the same kernels in
+(:func:`~gear_fmu.step.assembly.finish_step`, Eq. 12). :func:`advance` runs the same kernels in
 the same order with the same arithmetic in one call, so it gives the Python loop's results bit
 for bit (the norms use ``np.dot`` as the loop does); the loop stays the reference and serves
 any other mesh object and the benchmark timers (``Structure.timing``).
@@ -22,11 +22,11 @@ import math
 import numpy as np
 from numba import njit
 
-from .condensation import N_GEAR, NC
-from .contact_loop import ROUNDOFF, _newton_solve, _residual_norm, _same_set
-from .mesh import _mesh_kernel
-from .newmark import newmark_kinematics
-from .step_assembly import prepare_step
+from gear_fmu.mesh.element import _mesh_kernel
+from gear_fmu.step.assembly import prepare_step
+from gear_fmu.step.condensation import N_GEAR, NC
+from gear_fmu.step.contact_loop import ROUNDOFF, _newton_solve, _residual_norm, _same_set
+from gear_fmu.step.newmark import newmark_kinematics
 
 __all__ = ["CONVERGED", "NOT_CONVERGED", "SINGULAR", "advance", "sum_squares"]
 
@@ -54,8 +54,8 @@ def advance(hh, g_const, s0, w, x, v, a, f_c, unb, f0, kb, cb, h,  # step (Eq. 1
     """One Newmark step of length ``h`` with the mesh element at pinion ``angle`` [rad]:
     Eq. (12), (14), (16) assembled, Newton-Raphson with the contact loop, Eq. (13), (15).
 
-    Inputs as :func:`gear_fmu.step_assembly.prepare_step` (``hh``, ``g_const``, ``s0``, ``w``
-    from the condensation at h) and :func:`gear_fmu.contact_loop.solve_condensed`
+    Inputs as :func:`gear_fmu.step.assembly.prepare_step` (``hh``, ``g_const``, ``s0``, ``w``
+    from the condensation at h) and :func:`gear_fmu.step.contact_loop.solve_condensed`
     (``used0`` / ``has_used``: the contact set the first iterate is consistent with); ``err``
     the error displacement of the gear nodes added to the mesh's input (runout, mounting) when
     ``has_err``; ``f_scale`` the largest external load [N], raised to the norm of the bearing
@@ -85,7 +85,7 @@ def advance(hh, g_const, s0, w, x, v, a, f_c, unb, f0, kb, cb, h,  # step (Eq. 1
         r = _residual_norm(s_lin, z0, xc, force) / scale
         residuals[k] = r
         limit = tol
-        if r > tol:  # the round-off floor at this iterate (gear_fmu.contact_loop)
+        if r > tol:  # the round-off floor at this iterate (gear_fmu.step.contact_loop)
             if z_norm < 0.0:
                 z_norm = math.sqrt(np.dot(z0, z0))
             limit = max(tol, ROUNDOFF * (z_norm + math.sqrt(ff)) / scale)

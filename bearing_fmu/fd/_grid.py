@@ -1,5 +1,6 @@
-"""Grids of the finite-difference Reynolds solver (:mod:`bearing_fmu.fd`): discrete Eq. (2)-(3),
-smoothers, residuals and the transfers between levels (the cycles: :mod:`bearing_fmu._fd_kernels`).
+"""Grids of the finite-difference Reynolds solver (:mod:`bearing_fmu.fd.model`): discrete Eq.
+(2)-(3),
+smoothers, residuals and the transfers between levels (the cycles: :mod:`bearing_fmu.fd._kernels`).
 
 Grid of one level: ``n_t`` periodic nodes ``theta_i = theta_0 + i dtheta`` and the half length
 ``xi_j = -lambda + j dxi``, ``j = 0 .. m`` (``j = 0``: the bearing edge, p = 0; ``j = m``: the

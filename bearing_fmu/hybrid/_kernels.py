@@ -1,10 +1,10 @@
-"""Numba kernels of the hybrid method (:mod:`bearing_fmu.hybrid`; docs/hybrid-method.md).
+"""Numba kernels of the hybrid method (:mod:`bearing_fmu.hybrid.model`; docs/hybrid-method.md).
 
 One call of :func:`hybrid_kernel` does the whole per-state computation: element integrals
-(:mod:`bearing_fmu._hybrid_ritz`), the tridiagonal LCP (:mod:`bearing_fmu._hybrid_lcp`), Newton
+(:mod:`bearing_fmu.hybrid._ritz`), the tridiagonal LCP (:mod:`bearing_fmu.hybrid._lcp`), Newton
 on t = (k lambda)^2 (:func:`solve_t`), the force of Eq. (5) and the analytic Jacobians
-(:mod:`bearing_fmu._hybrid_jacobian`). The memory it works in is laid out in
-:mod:`bearing_fmu._hybrid_workspace`.
+(:mod:`bearing_fmu.hybrid._jacobian`). The memory it works in is laid out in
+:mod:`bearing_fmu.hybrid._workspace`.
 """
 
 from __future__ import annotations
@@ -14,10 +14,11 @@ import math
 import numpy as np
 from numba import njit
 
-from bearing_fmu._hybrid_jacobian import film_jacobian
-from bearing_fmu._hybrid_lcp import solve_lcp, substitute
-from bearing_fmu._hybrid_ritz import assemble, element_integrals, km_apply
-from bearing_fmu._hybrid_workspace import (
+from bearing_fmu.frames import law_to_global, state_to_local
+from bearing_fmu.hybrid._jacobian import film_jacobian
+from bearing_fmu.hybrid._lcp import solve_lcp, substitute
+from bearing_fmu.hybrid._ritz import assemble, element_integrals, km_apply
+from bearing_fmu.hybrid._workspace import (
     COS,
     CV,
     FB,
@@ -36,8 +37,7 @@ from bearing_fmu._hybrid_workspace import (
     A,
     Z,
 )
-from bearing_fmu.axial import T_MAX, axial_integrals
-from bearing_fmu.frames import law_to_global, state_to_local
+from bearing_fmu.hybrid.axial import T_MAX, axial_integrals
 from bearing_fmu.reynolds import nodal_force, source, source_coefficients
 
 #: a last Newton step on t below CORRECTOR * tol (1 + |t|) is taken without a new solve
@@ -188,7 +188,7 @@ def _rotate(m, ca, sa):
 def hybrid_kernel(state, x0, y0, xd0, yd0, want_jac, active, ws, iws, trig, coef, res):
     """Force and Jacobians of the hybrid method at the dimensionless state (x0, y0, xd0, yd0).
 
-    ``state`` is the one-element record array of :data:`bearing_fmu._hybrid_workspace.STATE`
+    ``state`` is the one-element record array of :data:`bearing_fmu.hybrid._workspace.STATE`
     (settings, warm start, diagnostics). Results go to ``res`` (5, 2): row 0 Fbar, rows 1-2
     dFbar/d(x, y), rows 3-4 dFbar/d(xdot, ydot) (row = force component). Returns the status
     (0 ok; see the ``status`` field).

@@ -1,4 +1,4 @@
-"""Memory layout of the hybrid kernels (:mod:`bearing_fmu._hybrid_kernels`).
+"""Memory layout of the hybrid kernels (:mod:`bearing_fmu.hybrid._kernels`).
 
 Everything a call needs is allocated once per model instance (:func:`new_workspace`):
 
@@ -59,7 +59,7 @@ SCR = 38  # rows 38-41: small scratch arrays (views, no allocation in the hot pa
 WS_ROWS = 42
 
 # --- the axial-integral vector g ---------------------------------------------------------------
-G0, G1, G2 = 0, 1, 2  # G0 = lambda I0, G1 = I1 / lambda, G2 = lambda I2 (bearing_fmu.axial)
+G0, G1, G2 = 0, 1, 2  # G0 = lambda I0, G1 = I1 / lambda, G2 = lambda I2 (bearing_fmu.hybrid.axial)
 G0_T, G1_T, G2_T = 3, 4, 5  # d/dt
 G0_TT, G1_TT, G2_TT = 6, 7, 8  # d^2/dt^2
 

@@ -1,6 +1,6 @@
 """The Newton-Raphson / normal-contact loop of one structural solve (paper Sec. 3.2, Fig. 4).
 
-On the condensed DOFs (:mod:`gear_fmu.condensation`) the residual of Eq. (11) is
+On the condensed DOFs (:mod:`gear_fmu.step.condensation`) the residual of Eq. (11) is
 ``G_c = S X_c - z0 - F_mesh(X_c)`` with S the condensed tangent of the linear part and the
 bearing laws. The mesh force is piecewise linear in X (fixed active set), so Newton (Eq. 13-15)
 converges in one solve once the contact set is right; the loop ends when the contact set used by
@@ -27,8 +27,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit
 
-from .condensation import N_GEAR, gauss_solve
-from .newmark import NewmarkConvergenceError
+from gear_fmu.step.condensation import N_GEAR, gauss_solve
+from gear_fmu.step.newmark import NewmarkConvergenceError
 
 __all__ = ["ROUNDOFF", "StepInfo", "solve_condensed"]
 

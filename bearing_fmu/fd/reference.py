@@ -1,14 +1,14 @@
 """The finite-difference Reynolds problem on a full grid, solved directly: the independent
-check of the multigrid of :mod:`bearing_fmu.fd` (``linear_solver="direct"``).
+check of the multigrid of :mod:`bearing_fmu.fd.model` (``linear_solver="direct"``).
 
-* :func:`reynolds_operator`: the discrete Eq. (2)-(3) of :mod:`bearing_fmu.fd` (same stencil as
-  the multigrid kernels) as a sparse matrix on the full grid;
+* :func:`reynolds_operator`: the discrete Eq. (2)-(3) of :mod:`bearing_fmu.fd.model` (same stencil
+  as the multigrid kernels) as a sparse matrix on the full grid;
 * :func:`solve_complementarity`: the Swift-Stieber LCP (Eq. 4) by a primal-dual active set with
   sparse LU.
 
 The converged reference force built on the model
-(:func:`bearing_fmu.fd.reference_film_force`) is in :mod:`bearing_fmu.fd`, which this module
-stays below: it knows the grid, not the model.
+(:func:`bearing_fmu.fd.model.reference_film_force`) is in :mod:`bearing_fmu.fd.model`, which this
+module stays below: it knows the grid, not the model.
 """
 
 from __future__ import annotations

@@ -12,7 +12,7 @@ bearing springs and restores the structure's state afterwards:
 * :func:`modes`: natural modes with the exact mean mesh stiffness (``gsb modal``);
 * :func:`damped`: damped modes of the linearised system, Eq. (20) with C0 = C + Cb(X0);
 * :func:`reference_damping`: the modal damping matrix on the modes of the reference
-  configuration (:mod:`gear_fmu.modal`);
+  configuration (:mod:`gear_fmu.modal.modes`);
 * :func:`support_loads`: loads on stiff supports, the master's first guess of X0.
 """
 
@@ -23,8 +23,8 @@ import math
 
 import numpy as np
 
-from .damped_modes import damped_modes
-from .modal import natural_modes
+from gear_fmu.modal.damped_modes import damped_modes
+from gear_fmu.modal.modes import natural_modes
 
 __all__ = ["damped", "exact_mean_mesh_stiffness", "line_of_action_stiffness",
            "mean_mesh_stiffness", "modes", "quasi_static", "reference_damping", "support_loads"]
@@ -108,8 +108,8 @@ def exact_mean_mesh_stiffness(st, bearing_stiffness=1e8, n_gauss: int = 8) -> np
 
     Accuracy: without tooth deviations every slice on the path is in contact and the stiffness
     is smooth between events except for the kinks of the linearly interpolated tooth stiffness
-    table (:class:`gear_fmu.mesh.MeshElement`); on the spur case of the paper 8 and 32 points
-    agree to 1.5e-6 (relative), where 16 equally spaced angles are 1.4 % off. A contact lost
+    table (:class:`gear_fmu.mesh.element.MeshElement`); on the spur case of the paper 8 and 32
+    points agree to 1.5e-6 (relative), where 16 equally spaced angles are 1.4 % off. A contact lost
     inside a sub-interval (tip relief at a light load) is not a split point.
 
     Parameters
@@ -172,7 +172,7 @@ def modes(st, bearing_stiffness=1e8, n_gauss: int = 8, mesh_stiffness=None):
     ``bearing_stiffness``: isotropic [N/m] or (4, 2, 2) (symmetric part used);
     ``mesh_stiffness``: a (12, 12) mean mesh stiffness already computed, else
     :func:`exact_mean_mesh_stiffness` with these bearings and ``n_gauss``. Returns
-    :class:`gear_fmu.modal.Modes`; format with :func:`gear_fmu.modal.mode_table`.
+    :class:`gear_fmu.modal.modes.Modes`; format with :func:`gear_fmu.modal.modes.mode_table`.
     """
     if mesh_stiffness is None:
         mesh_stiffness = exact_mean_mesh_stiffness(st, bearing_stiffness, n_gauss)
@@ -184,10 +184,10 @@ def damped(st, kb, cb, mesh_stiffness=None, n_gauss: int = 8):
 
     M, the structure's damping ``st.damping_full`` (whatever built it), K_shaft, the mean mesh
     stiffness and the bearings' full 2x2 ``kb`` [N/m] and ``cb`` [N s/m] (4, 2, 2) in the
-    global frame (:func:`gear_fmu.damped_modes.damped_modes`). ``mesh_stiffness``: a (12, 12)
+    global frame (:func:`gear_fmu.modal.damped_modes.damped_modes`). ``mesh_stiffness``: a (12, 12)
     mean already computed, else :func:`exact_mean_mesh_stiffness` with the symmetric part of
     ``kb`` (as the modal damping reference). Returns
-    :class:`gear_fmu.damped_modes.DampedModes`.
+    :class:`gear_fmu.modal.damped_modes.DampedModes`.
     """
     kb = np.asarray(kb, dtype=float)
     if mesh_stiffness is None:
@@ -198,15 +198,15 @@ def damped(st, kb, cb, mesh_stiffness=None, n_gauss: int = 8):
 
 def reference_damping(st, model, bearing_stiffness):
     """The damping matrix ``C`` (full numbering) of a damping model
-    (:mod:`gear_fmu.damping`) on the reference configuration: shafts, the mean mesh stiffness
+    (:mod:`gear_fmu.modal.damping`) on the reference configuration: shafts, the mean mesh stiffness
     at the static load with these bearings, and the bearing stiffness (isotropic [N/m] or
     (4, 2, 2), symmetric part).
 
-    ``model``: a :class:`gear_fmu.damping.DampingModel`, or a float zeta (modal damping on the
+    ``model``: a :class:`gear_fmu.modal.damping.DampingModel`, or a float zeta (modal damping on the
     ``"bearings"`` basis). Returns ``(C, modes, mean mesh stiffness)``; the modes are those
     of the modal damping (None otherwise), the mean mesh stiffness None when nothing needs it.
     """
-    from .damping import DampingModel, damping_matrix
+    from gear_fmu.modal.damping import DampingModel, damping_matrix
 
     if not isinstance(model, DampingModel):
         model = DampingModel(ratio=float(model))

@@ -12,9 +12,9 @@ from __future__ import annotations
 
 from numba import njit
 
-from bearing_fmu._hybrid_lcp import substitute4
-from bearing_fmu._hybrid_ritz import km_apply
-from bearing_fmu._hybrid_workspace import (
+from bearing_fmu.hybrid._lcp import substitute4
+from bearing_fmu.hybrid._ritz import km_apply
+from bearing_fmu.hybrid._workspace import (
     COS,
     CV,
     DA,

@@ -8,8 +8,8 @@ With ``c0 = 4/dt^2``, ``c1 = 2/dt``, ``c2 = 4/dt`` (:func:`newmark_coefficients`
 so that ``M Xdd_{n+1} + C Xd_{n+1} = (c0 M + c1 C) X_{n+1} - M p - C q`` with the history terms
 ``p = c0 X_n + c2 Xd_n + Xdd_n``, ``q = c1 X_n + Xd_n`` (:func:`newmark_history`). The residual
 of Eq. (11) and its Newton-Raphson / contact loop (Eq. 13-16, Fig. 4) are solved on the
-condensed DOFs: :mod:`gear_fmu.step_assembly`, :mod:`gear_fmu.contact_loop`,
-:mod:`gear_fmu.step_kernel`, driven by :meth:`gear_fmu.structure.Structure.step`.
+condensed DOFs: :mod:`gear_fmu.step.assembly`, :mod:`gear_fmu.step.contact_loop`,
+:mod:`gear_fmu.step.kernel`, driven by :meth:`gear_fmu.structure.Structure.step`.
 """
 
 from __future__ import annotations

@@ -4,10 +4,10 @@ Linearised about the static solution X0 (paper Eq. 20), the free motion obeys
 
     M x'' + C0 x' + K0 x = 0,   C0 = C + Cb(X0),   K0 = K_shaft + K_mesh,mean + Kb(X0)
 
-with C the structure's damping (:mod:`gear_fmu.modal`), Kb and Cb the bearings' full 2x2
+with C the structure's damping (:mod:`gear_fmu.modal.modes`), Kb and Cb the bearings' full 2x2
 stiffness and damping at X0 (not symmetrised: a fluid film's Kb is not symmetric) and
 ``K_mesh,mean`` the mesh stiffness averaged over a mesh period
-(:func:`gear_fmu.analyses.exact_mean_mesh_stiffness`). With ``x = phi exp(lambda t)`` the
+(:func:`gear_fmu.modal.analyses.exact_mean_mesh_stiffness`). With ``x = phi exp(lambda t)`` the
 quadratic eigenproblem ``(lambda^2 M + lambda C0 + K0) phi = 0`` is solved in state space,
 
     [[0, I], [-M^-1 K0, -M^-1 C0]] [phi; lambda phi] = lambda [phi; lambda phi].
@@ -22,7 +22,7 @@ Energy shares of a complex shape phi (displacement part, ``phi^H M phi = 1``):
 
 * mesh strain energy share ``phi^H K_mesh phi / phi^H sym(K0) phi`` (Hermitian forms, real);
 * kinetic energy shares of bending / torsion / axial DOFs, ``Re(phi_c^H (M phi)_c)``, exact
-  since M does not couple DOF kinds; the mode is named by :func:`gear_fmu.modal.classify`.
+  since M does not couple DOF kinds; the mode is named by :func:`gear_fmu.modal.modes.classify`.
 
 Tooth critical speeds (:func:`tooth_critical_speeds`): the pinion speeds at which a harmonic k
 of the mesh frequency, ``k z1 omega / (2 pi)``, meets the damped frequency of a mode that
@@ -37,8 +37,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 import scipy.linalg
 
-from .modal import KINDS, bearing_block_matrix, classify, mesh_stiffness_matrix
-from .system import GearShaftSystem
+from gear_fmu.modal.modes import KINDS, bearing_block_matrix, classify, mesh_stiffness_matrix
+from gear_fmu.system import GearShaftSystem
 
 __all__ = [
     "DampedModes",
@@ -71,7 +71,7 @@ class DampedModes:
     mesh_energy_fraction : (n,)
         Share of the strain energy stored in the mesh (NaN when ``phi^H sym(K0) phi <= 0``).
     kinds : list of str
-        Mode type (:func:`gear_fmu.modal.classify`), ``"unclassified"`` without DOF kinds.
+        Mode type (:func:`gear_fmu.modal.modes.classify`), ``"unclassified"`` without DOF kinds.
     overdamped : (n,) bool
         Real roots.
     n_rigid : int

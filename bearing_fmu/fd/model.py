@@ -51,10 +51,10 @@ Jacobians by numerical differentiation of the force, as in the paper's case 4
 warm-started from the base solution and converged to ``jacobian_tol``.
 :func:`reference_film_force` Richardson-extrapolates successive refinements.
 
-The kernels are in :mod:`bearing_fmu._fd_grid` (grids, smoothers, transfers) and
-:mod:`bearing_fmu._fd_kernels` (cycles); the direct solver in :mod:`bearing_fmu.fd_reference`.
+The kernels are in :mod:`bearing_fmu.fd._grid` (grids, smoothers, transfers) and
+:mod:`bearing_fmu.fd._kernels` (cycles); the direct solver in :mod:`bearing_fmu.fd.reference`.
 ``linear_solver="direct"`` replaces the multigrid by a primal-dual active set with sparse LU
-(:func:`~bearing_fmu.fd_reference.solve_complementarity`): slow, but an independent check of
+(:func:`~bearing_fmu.fd.reference.solve_complementarity`): slow, but an independent check of
 the multigrid.
 """
 
@@ -65,8 +65,6 @@ import math
 
 import numpy as np
 
-from bearing_fmu import _fd_kernels as _k
-from bearing_fmu._fd_grid import BOTH, THETA_ONLY, XI_ONLY
 from bearing_fmu.base import (
     BearingData,
     BearingError,
@@ -75,7 +73,9 @@ from bearing_fmu.base import (
     ModelOption,
     check_state,
 )
-from bearing_fmu.fd_reference import (  # the direct solver
+from bearing_fmu.fd import _kernels as _k
+from bearing_fmu.fd._grid import BOTH, THETA_ONLY, XI_ONLY
+from bearing_fmu.fd.reference import (  # the direct solver
     reynolds_operator,
     solve_complementarity,
 )

@@ -32,7 +32,7 @@ Drivetrain couplings C_d
     The coupling dampers of the motor and the load (:mod:`gear_fmu.drivetrain`).
 
 K_mesh,mean is the mesh tangent averaged over one mesh period at the static load
-(:func:`gear_fmu.analyses.mean_mesh_stiffness`).
+(:func:`gear_fmu.modal.analyses.mean_mesh_stiffness`).
 """
 
 from __future__ import annotations
@@ -42,8 +42,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .dofs import THETA
-from .modal import Modes, mesh_stiffness_matrix, modal_damping_matrix, natural_modes
+from gear_fmu.dofs import THETA
+from gear_fmu.modal.modes import Modes, mesh_stiffness_matrix, modal_damping_matrix, natural_modes
 
 __all__ = ["BASES", "DAMPING_KINDS", "DampingModel", "damping_matrix", "mesh_damping_coefficient",
            "rayleigh_coefficients", "transverse_mesh_stiffness"]

@@ -63,7 +63,7 @@ import math
 import numpy as np
 from numba import njit
 
-from .geometry import GearPair
+from gear_fmu.mesh.geometry import GearPair
 
 __all__ = ["ToothPairCompliance", "mesh_stiffness_table", "tooth_compliance"]
 
@@ -167,7 +167,7 @@ class ToothPairCompliance:
     pair : GearPair
     line_load : float
         Reference load per unit contact length for the secant of the contact term [N/m]
-        (:meth:`gear_fmu.geometry.GearPair.nominal_line_load`).
+        (:meth:`gear_fmu.mesh.geometry.GearPair.nominal_line_load`).
     """
 
     def __init__(self, pair: GearPair, line_load: float):

@@ -1,7 +1,7 @@
 """Involute geometry of an external spur or helical gear pair (paper Table 1, Sec. 2.1).
 
-Frames (shared with :mod:`gear_fmu.mesh` and :mod:`gear_fmu.system`)
---------------------------------------------------------------------
+Frames (shared with :mod:`gear_fmu.mesh.element` and :mod:`gear_fmu.system`)
+----------------------------------------------------------------------------
 Global frame (s, t, z): pinion centre O1 = (0, 0), gear centre O2 = (a, 0), z along both axes.
 A positive input torque turns the pinion about +z; the gear turns about -z. The transverse line
 of action is the tangent to both base circles with unit vector ``u = (sin a', cos a')`` (a' the
@@ -87,14 +87,14 @@ class GearPair:
         spans the common width ``min(b1, b2)``.
     helix_angle : float
         Helix angle beta [rad] (0: spur). The hand is fixed by the contact-line convention of
-        :mod:`gear_fmu.mesh` (flank normal with a +z component ``sin(beta_b)``: the mesh pushes
-        the gear towards +z and the pinion towards -z).
+        :mod:`gear_fmu.mesh.element` (flank normal with a +z component ``sin(beta_b)``: the mesh
+        pushes the gear towards +z and the pinion towards -z).
     profile_shift : (float, float)
         Profile shift coefficients (x1, x2) [-].
     addendum_coefficient, dedendum_coefficient : float
         h_a*, h_f* of the wheels [-] (Table 1: 1.0 and 1.4, see the module docstring).
     young, poisson : float
-        Elastic constants of both wheels [Pa], [-] (tooth stiffness, :mod:`gear_fmu.mesh`).
+        Elastic constants of both wheels [Pa], [-] (tooth stiffness, :mod:`gear_fmu.mesh.element`).
 
     Examples
     --------

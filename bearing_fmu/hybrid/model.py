@@ -10,8 +10,8 @@ derivatives with respect to (x, y, xdot, ydot) come from the same factorisation 
 set frozen, differentiated through ``t`` (no numerical differentiation).
 
 The derivation, with the axial integrals and the Jacobian formulas, is in
-``docs/hybrid-method.md``; the kernels are in :mod:`bearing_fmu._hybrid_kernels`, the axial
-integrals in :mod:`bearing_fmu.axial`.
+``docs/hybrid-method.md``; the kernels are in :mod:`bearing_fmu.hybrid._kernels`, the axial
+integrals in :mod:`bearing_fmu.hybrid.axial`.
 """
 
 from __future__ import annotations
@@ -20,9 +20,6 @@ import math
 
 import numpy as np
 
-from bearing_fmu import _hybrid_kernels as _k
-from bearing_fmu import _hybrid_workspace as _ws
-from bearing_fmu.axial import AXIAL_COEF, axial_shape
 from bearing_fmu.base import (
     BearingError,
     BearingModel,
@@ -32,6 +29,9 @@ from bearing_fmu.base import (
     check_omega,
     check_state,
 )
+from bearing_fmu.hybrid import _kernels as _k
+from bearing_fmu.hybrid import _workspace as _ws
+from bearing_fmu.hybrid.axial import AXIAL_COEF, axial_shape
 
 __all__ = ["HybridBearing", "HybridConvergenceError"]
 
@@ -132,7 +132,7 @@ class HybridBearing(FilmBearingModel):
     def film_force(self, xbar, ybar, xbar_dot=0.0, ybar_dot=0.0, jacobian=True):
         """Dimensionless force (Eq. 5) and its analytic derivatives; warm-started.
 
-        One kernel call; see :mod:`bearing_fmu._hybrid_kernels`.
+        One kernel call; see :mod:`bearing_fmu.hybrid._kernels`.
         """
         res = np.empty((5, 2))
         if _k.hybrid_kernel(self._state, xbar, ybar, xbar_dot, ybar_dot, jacobian,
@@ -143,7 +143,7 @@ class HybridBearing(FilmBearingModel):
         return FilmForce(res[0], res[1:3], res[3:5])
 
     def evaluate_global(self, q, state, omega, out):
-        """One compiled call (``bearing_fmu._hybrid_kernels.hybrid_global``): the numbers of
+        """One compiled call (``bearing_fmu.hybrid._kernels.hybrid_global``): the numbers of
         :meth:`~bearing_fmu.base.FilmBearingModel.evaluate` and the frame conversions of the
         base class."""
         omega = check_omega(omega)
