@@ -47,3 +47,41 @@ def test_killed_process_keeps_flushed_blocks(tmp_path):
     assert proc.returncode == 9
     r = read_results(path)
     np.testing.assert_array_equal(r["x"], np.arange(10.0))
+
+
+def test_xarray_opens_a_run_file_with_the_names_and_dimensions_of_the_api(tmp_path):
+    """A results file of a run (4 mesh periods in-process) opened by xarray through h5netcdf:
+    every channel on its named dimensions (time, bearing 1-4, axis s/t, node, direction), the
+    labels as coordinates, the units in ``units``, the values those h5py reads, and the same
+    Dataset (variables, dimensions, coordinates) as the in-memory result's ``to_xarray()`` of
+    the same run."""
+    import xarray as xr
+
+    import orchestrator as gsb
+
+    written = gsb.simulate("baguet2010_spur", periods=4, in_process=True, progress=False,
+                           results_dir=tmp_path)
+    path = written.summary.results
+    raw = read_results(path)
+    with xr.open_dataset(path, engine="h5netcdf") as ds:
+        assert dict(ds.sizes) == {"time": 128, "bearing": 4, "axis": 2, "node": 2,
+                                  "direction": 2}
+        assert ds.journal_position.dims == ("time", "bearing", "axis")
+        assert ds.gear_nodes.dims == ("time", "node", "direction")
+        assert ds.mesh_force.dims == ("time",)
+        assert list(ds.bearing.values) == [1, 2, 3, 4]
+        assert list(ds.axis.values) == ["s", "t"]
+        assert ds.bearing_force.attrs["units"] == "N"
+        assert ds.journal_position.attrs["units"] == "m"
+        for name in ("journal_position", "bearing_force", "mesh_force", "gear_nodes"):
+            assert np.array_equal(ds[name].values, raw[name]), name
+        assert np.array_equal(ds.time.values, raw["time"])
+        # bearing 3, t: the labelled selection is the raw array's [:, 2, 1]
+        assert np.array_equal(ds.journal_position.sel(bearing=3, axis="t").values,
+                              raw["journal_position"][:, 2, 1])
+        memory = gsb.simulate("baguet2010_spur", periods=4, in_process=True,
+                              progress=False).to_xarray()
+        assert set(memory.data_vars) == set(ds.data_vars)
+        for name in memory.data_vars:
+            assert memory[name].dims == ds[name].dims, name
+            assert np.array_equal(memory[name].values, ds[name].values), name
