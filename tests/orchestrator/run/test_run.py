@@ -284,3 +284,42 @@ def test_gsb_modal_prints_the_modes(capsys):
     freqs = [float(r[1]) for r in rows]
     assert freqs == sorted(freqs) and freqs[0] > 10.0
     assert {r[2] for r in rows} & {"bending", "torsion", "axial"}
+
+
+def test_a_run_in_memory_keeps_its_steps_when_a_step_fails_or_ctrl_c_stops_it(monkeypatch):
+    """:func:`orchestrator.simulate` without a file: a step that fails raises RunError, a
+    SIGINT between two steps RunInterrupted (exit code 130); either way the exception's
+    ``result`` holds every step computed, the same bits as the uninterrupted run's first rows,
+    and says how the run ended."""
+    import os
+    import signal
+
+    import orchestrator as gsb
+    from orchestrator.coupling import master as master_module
+
+    full = gsb.simulate("baguet2010_spur", periods=2, in_process=True, progress=False)
+    fail_master_step(monkeypatch, at=40)
+    with pytest.raises(gsb.RunError, match=r"step 40 of 64 .* 39 steps computed") as failed:
+        gsb.simulate("baguet2010_spur", periods=2, in_process=True, progress=False)
+    kept = failed.value.result
+    assert kept["journal_position"].shape == (39, 4, 2)
+    assert np.array_equal(kept["journal_position"], full["journal_position"][:39])
+    assert kept.attrs["complete"] is False and "forced failure" in kept.attrs["stopped_by"]
+
+    monkeypatch.undo()
+    real_step = master_module.Master.step
+    calls = {"n": 0}
+
+    def interrupted(self, t, dt):
+        calls["n"] += 1
+        if calls["n"] == 20:  # Ctrl-C arrives during step 20: the run stops after it
+            os.kill(os.getpid(), signal.SIGINT)
+        return real_step(self, t, dt)
+
+    monkeypatch.setattr(master_module.Master, "step", interrupted)
+    with pytest.raises(gsb.RunInterrupted, match=r"after step 20 of 64") as stopped:
+        gsb.simulate("baguet2010_spur", periods=2, in_process=True, progress=False)
+    assert stopped.value.exit_code == 130
+    kept = stopped.value.result
+    assert np.array_equal(kept["bearing_force"], full["bearing_force"][:20])
+    assert kept.attrs["complete"] is False and kept.attrs["interrupted"] == "SIGINT"
