@@ -85,3 +85,21 @@ def test_xarray_opens_a_run_file_with_the_names_and_dimensions_of_the_api(tmp_pa
         for name in memory.data_vars:
             assert memory[name].dims == ds[name].dims, name
             assert np.array_equal(memory[name].values, ds[name].values), name
+
+
+def test_read_result_names_a_missing_or_foreign_file(tmp_path):
+    """``read_result`` of no file, of a file that is not HDF5, and of an HDF5 file that is no
+    run's: FileNotFoundError or ValueError naming the file and why, never h5py's own error."""
+    import orchestrator as gsb
+
+    with pytest.raises(FileNotFoundError, match="no such results file"):
+        gsb.read_result(tmp_path / "missing.h5")
+    text = tmp_path / "notes.h5"
+    text.write_text("not HDF5")
+    with pytest.raises(ValueError, match=r"notes\.h5: not a readable results file"):
+        gsb.read_result(text)
+    other = tmp_path / "other.h5"
+    with ResultsWriter(other, {"x": ((), "m", "a length")}, {"kind": "sweep"}) as w:
+        w.append(time=0.0, x=1.0)
+    with pytest.raises(ValueError, match=r"other\.h5: not the results file of a run"):
+        gsb.read_result(other)
