@@ -32,8 +32,7 @@ from pathlib import Path
 PACKAGES = ("bearing_fmu", "gear_fmu", "fmu_src")
 #: folders of those packages that an FMU does not carry (fmu_src's build tools): left out of
 #: the hash, so that the installed package and an FMU's copy of the code agree on it
-SKIP = ("__pycache__", "build")
-SKIP_PARTS = frozenset(SKIP)
+SKIP = frozenset(("__pycache__", "build"))
 #: code versions kept side by side in one cache folder
 KEEP = 8
 PREFIX = "gsb-"
@@ -46,7 +45,7 @@ def code_hash(root: str) -> str:
     digest = hashlib.sha256()
     for pkg in PACKAGES:
         for path in sorted((Path(root) / pkg).rglob("*.py")):
-            if not SKIP_PARTS.intersection(path.relative_to(root).parts):
+            if not SKIP.intersection(path.relative_to(root).parts):
                 digest.update(path.relative_to(root).as_posix().encode() + b"\0"
                               + path.read_bytes())
     return digest.hexdigest()[:16]

@@ -99,16 +99,15 @@ def read_result(path: str | Path) -> Result:
     """The channels and settings of a results file (``gsb run``'s, or :func:`simulate`'s with
     ``results_dir``), also while a run writes it. FileNotFoundError or ValueError naming the
     file when it is missing or not a run's results file (a sweep file: ``gsb plot``)."""
-    from orchestrator.run.files import describe_file
     from orchestrator.run.results import read_attributes
 
     path = Path(path)
     if not path.is_file():
         raise FileNotFoundError(f"{path}: no such results file")
-    state = describe_file(path)
-    if state.startswith("not a readable"):
-        raise ValueError(f"{path}: {state}")
-    kind = read_attributes(path).get("kind")
+    try:
+        kind = read_attributes(path).get("kind")
+    except OSError as exc:
+        raise ValueError(f"{path}: not a readable results file ({exc})") from None
     if kind != "run":
         raise ValueError(f"{path}: not the results file of a run (kind {kind!r}); a sweep's "
                          "file is read with orchestrator.sweeps.file.read_sweep")

@@ -61,7 +61,6 @@ class Target:
 
     write: Path
     final: Path
-    figures: Path
 
     def finish(self, complete: bool) -> Path:
         """Move the written file into place: always when complete; when not, only if no
@@ -97,9 +96,8 @@ def target(out_dir: Path | str, name: str, overwrite: bool) -> Target:
     if not os.access(out_dir, os.W_OK | os.X_OK):
         raise TargetError(f"--out {out_dir}: the folder is not writable")
     final = out_dir / f"{name}.h5"
-    figures = out_dir / name
     if not final.exists():
-        return Target(final, final, figures)
+        return Target(final, final)
     from orchestrator.run.results import live_writer
 
     pid = live_writer(final)
@@ -115,6 +113,6 @@ def target(out_dir: Path | str, name: str, overwrite: bool) -> Target:
     if complete:
         partial = out_dir / f"{name}.partial.h5"
         partial.unlink(missing_ok=True)
-        return Target(partial, final, figures)
+        return Target(partial, final)
     final.unlink()
-    return Target(final, final, figures)
+    return Target(final, final)

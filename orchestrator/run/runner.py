@@ -149,9 +149,18 @@ class Stop(Exception):
         self.signum = signum
         self.where = where
 
+    @property
+    def signame(self) -> str:
+        return signal.Signals(self.signum).name
+
+    @property
+    def stopped_by(self) -> str:
+        """How the run ended, as its results record it."""
+        return f"interrupted by {self.signame} {self.where}"
+
     def message(self, kept: str) -> RunInterrupted:
-        sig = signal.Signals(self.signum).name
-        return RunInterrupted(self.signum, f"interrupted by {sig} {self.where}; {kept}")
+        """The exception the run raises; ``kept``: where its steps are."""
+        return RunInterrupted(self.signum, f"{self.stopped_by}; {kept}")
 
 
 class StepFailed(Exception):
@@ -161,6 +170,17 @@ class StepFailed(Exception):
         super().__init__(str(cause))
         self.index, self.t, self.cause = index, t, cause
 
+    @property
+    def stopped_by(self) -> str:
+        """How the run ended, as its results record it."""
+        return f"{type(self.cause).__name__}: {self}"
+
+    def error(self, spec: RunSpec, kept: str) -> RunError:
+        """The exception the run raises; ``kept``: where its steps are."""
+        return RunError(f"step {self.index + 1} of {spec.n_steps} (t = "
+                        f"{self.t + spec.dt:.6e} s) failed: {self}; the {self.index} steps "
+                        f"computed are in {kept}")
+
 
 class Runner:
     """The steps of a run: :meth:`start` (the master and its slaves), :meth:`static` (X0 and
@@ -169,8 +189,7 @@ class Runner:
 
     ``received``: the signals received so far
     (:func:`~orchestrator.run.progress.deferred_signals`), checked between two steps
-    (:class:`Stop`); ``echo``: print the
-    checks' warnings on stderr."""
+    (:class:`Stop`); ``echo``: print the checks' warnings on stderr."""
 
     def __init__(self, spec: RunSpec, received=(), echo: bool = True):
         self.spec = spec
@@ -292,16 +311,13 @@ def simulate_case(spec: RunSpec, progress: bool = False, echo_warnings: bool = T
             bar = Progress(spec.n_steps, spec.case["case.name"], enabled=progress)
             done = runner.transient(recorder, 0, bar)
         except Stop as stop:
-            recorder.close(False, interrupted=signal.Signals(stop.signum).name,
-                           stopped_by=f"interrupted {stop.where}")
+            recorder.close(False, interrupted=stop.signame, stopped_by=stop.stopped_by)
             exc = stop.message(f"{recorder.rows} steps kept in the result")
             exc.result = recorder.result()
             raise exc from None
         except StepFailed as failed:
-            recorder.close(False, stopped_by=f"{type(failed.cause).__name__}: {failed}")
-            exc = RunError(f"step {failed.index + 1} of {spec.n_steps} (t = "
-                           f"{failed.t + spec.dt:.6e} s) failed: {failed}; the "
-                           f"{failed.index} steps computed are in the exception's result")
+            recorder.close(False, stopped_by=failed.stopped_by)
+            exc = failed.error(spec, "the exception's result")
             exc.result = recorder.result()
             raise exc from failed.cause
         finally:
@@ -415,7 +431,7 @@ def resume_run(path: Path | str, periods: int | None = None, fmu_dir: Path | str
     attrs = {"mesh_periods": a["mesh_periods"] if periods is None else periods,
              "steps_total": spec.n_steps, "interrupted": "", "stopped_by": "",
              "resumed_at_step": rows}
-    where = run_files.Target(path, path, path.with_suffix(""))
+    where = run_files.Target(path, path)
     return _run_to_file(spec, attrs, where, rows, blob, progress, flush_seconds,
                         stored_x0=np.asarray(a["static_journal"]))
 
@@ -476,20 +492,15 @@ def _run_to_file(spec: RunSpec, attrs: dict, where, first: int = 0, blob=None,
         except Stop as stop:
             if writer is None:
                 raise stop.message("nothing was written") from None
-            sig = signal.Signals(stop.signum).name
-            into = give_up(stopped_by=f"interrupted by {sig} {stop.where}", interrupted=sig)
+            into = give_up(stopped_by=stop.stopped_by, interrupted=stop.signame)
             with contextlib.suppress(Exception):
                 _store_report(into)
             raise stop.message(f"{writer.rows} steps kept in {into}") from None
         except StepFailed as failed:
-            into = give_up(checkpoint=False,
-                           stopped_by=f"{type(failed.cause).__name__}: {failed}")
+            into = give_up(checkpoint=False, stopped_by=failed.stopped_by)
             with contextlib.suppress(Exception):
                 _store_report(into)
-            raise RunError(
-                f"step {failed.index + 1} of {spec.n_steps} (t = {failed.t + spec.dt:.6e} s) "
-                f"failed: {failed}; the {failed.index} steps computed are in {into}"
-            ) from failed.cause
+            raise failed.error(spec, into) from failed.cause
         except RunError:
             raise
         except BaseException as exc:  # a bug or a second Ctrl-C: keep the steps all the same
