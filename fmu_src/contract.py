@@ -44,10 +44,11 @@ from fmu_src.description import BEARING_FRAMES
 from fmu_src.units import symbol
 
 __all__ = ["BEARINGS", "GEAR_DEFAULT_CASE", "FmiVar", "ValueRefused", "bearing_fmu_name",
-           "bearing_option_keys",
-           "bearing_variables", "connections", "gear_case_fields", "gear_parameters",
+           "bearing_option_keys", "bearing_variables", "case_parameters", "connections",
+           "gear_case_fields", "gear_parameters",
            "gear_variables", "journal_output_names", "law_input_names", "pack_laws",
-           "parameter_field", "unpack_journal", "unpack_law_arrays"]
+           "parameter_field", "transmission_fields", "transmission_variables", "unpack_journal",
+           "unpack_law_arrays"]
 
 
 class ValueRefused(ValueError):
@@ -338,8 +339,14 @@ def gear_parameters(case) -> list[tuple]:
     case: ``gear_pair.module``; a list field one per entry, ``gear_pair.teeth[1]``,
     ``gear_pair.teeth[2]`` (FMI's 1-based index notation; :func:`parameter_field` inverts
     the name)."""
+    return case_parameters(case, gear_case_fields())
+
+
+def case_parameters(case, fields) -> list[tuple]:
+    """``(FMU parameter name, case field, value)`` of the case ``fields`` (the naming of
+    :func:`gear_parameters`)."""
     out = []
-    for field in gear_case_fields():
+    for field in fields:
         if field.shape is None:
             out.append((field.key, field, case[field.key]))
         else:
@@ -393,6 +400,42 @@ def gear_variables(case=None) -> tuple[FmiVar, ...]:
 @functools.cache
 def _shipped_gear_variables() -> tuple[FmiVar, ...]:
     return gear_variables(load_case(GEAR_DEFAULT_CASE.removesuffix(".toml")))
+
+
+# --- transmission FMU ----------------------------------------------------------------------
+
+
+def transmission_fields():
+    """The case fields the transmission FMU exposes as parameters: all of them but the case's
+    description and the run length (the host's stop time decides it)."""
+    return tuple(f for f in FIELDS if f.key not in ("case.description", "simulation.mesh_periods"))
+
+
+def transmission_variables(case) -> tuple[FmiVar, ...]:
+    """The variables of the transmission FMU of ``case`` (the gear-shaft structure, the four
+    bearings and the iterative master in one FMU): every case field of
+    :func:`transmission_fields` as a parameter starting at the case's value (the naming of
+    :func:`gear_parameters`), the input ``torque``, the journal states, the film forces, the
+    mesh force and the transmission error."""
+    params = [_field_variable(n, f, v) for n, f, v in case_parameters(case, transmission_fields())]
+    return (
+        *params,
+        FmiVar("torque", _I, "Real", "torque", float(case["operation.torque"]),
+               "input torque T on the pinion shaft, held over a communication step; until a "
+               "host sets it, the parameter operation.torque acts"),
+        *(FmiVar(f"{n}_{j}", _O, "Real", _STATE_TEXT[n][0], 0.0, _STATE_TEXT[n][1].format(j=j))
+          for j in BEARINGS for n in STATE_NAMES),
+        *(FmiVar(f"{n}_{j}", _O, "Real", "force", 0.0,
+                 f"bearing {j}: film force on the journal along {n[-1]} (global frame)")
+          for j in BEARINGS for n in FORCE_NAMES),
+        *(FmiVar(n, _O, "Real", u, 0.0, d) for n, u, d in GEAR_OUTPUTS[:2]),
+        FmiVar("iterations", _O, "Integer", "", 0,
+               "coupled iterations of the master in the last communication step (the static "
+               "solution's before the first step)"),
+        FmiVar("steps", _O, "Integer", "", 0,
+               "internal Newmark steps taken since the start (each no longer than the case's "
+               "time step)"),
+    )
 
 
 def connections(gear: str = "gear_shaft", bearing: str = "bearing{j}") -> list[tuple]:

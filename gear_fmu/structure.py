@@ -40,7 +40,7 @@ from __future__ import annotations
 import bisect
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import scipy.linalg
@@ -266,6 +266,24 @@ class Structure:
         self._unb = unbalance_amplitudes(sys_.shaft_masses, ld.unbalance, self._omega)
         # residual scale: the largest external load (torque, gravity, unbalance)
         self._f_scale = max(float(np.linalg.norm(f)), *self._unb)
+
+    def set_torque(self, torque: float) -> None:
+        """Input torque T [N m] from the next static solution or step on.
+
+        The constant part of F0(t) (:func:`gear_fmu.loads.constant_loads`: T on the input
+        torsion DOF, ``T z2 / z1`` on a free load) and what is derived from it are recomputed
+        exactly as if the structure had been built with ``loads.torque = torque``; the
+        factorisations, which do not depend on the loads, are kept. The mesh element's contact
+        compliance stays linearised at the torque it was built for.
+        """
+        torque = float(torque)
+        if torque == self.loads.torque:
+            return
+        self.loads = replace(self.loads, torque=torque)  # checked: finite
+        self._forces()
+        f = self._f_const[NC:]
+        self._dyn_cache = {dt: (cond, h, cond.g @ f)
+                           for dt, (cond, h, _) in self._dyn_cache.items()}
 
     def pinion_angle(self, t: float) -> float:
         """Rigid-body pinion angle at t [rad]."""

@@ -104,3 +104,27 @@ def ssp_file(tmp_path_factory):
                                   capture_output=True, text=True, timeout=600, cwd=folder)
             assert proc.returncode == 0, proc.stderr[-2000:]
     return path
+
+
+def _transmission_fmu(tmp_path_factory, case: str):
+    folder = _shared(tmp_path_factory, "transmission")
+    path = folder / f"{case}.fmu"
+    with locked(folder):
+        if not path.is_file():
+            proc = subprocess.run([sys.executable, "-m", "orchestrator.cli", "export-fmu",
+                                   case, "--dest", str(folder)],
+                                  capture_output=True, text=True, timeout=600, cwd=folder)
+            assert proc.returncode == 0, proc.stderr[-2000:]
+    return path
+
+
+@pytest.fixture(scope="session")
+def transmission_fmu(tmp_path_factory):
+    """``gsb export-fmu baguet2010_spur``: the paper's transmission as one FMU."""
+    return _transmission_fmu(tmp_path_factory, "baguet2010_spur")
+
+
+@pytest.fixture(scope="session")
+def helical_transmission_fmu(tmp_path_factory):
+    """``gsb export-fmu baguet2010_helical``."""
+    return _transmission_fmu(tmp_path_factory, "baguet2010_helical")

@@ -52,6 +52,7 @@ class FmuSpec:
     script: str  # text of the slave script (one class deriving from a slave of fmu_src)
     contract: Callable[[], tuple]  # builds its variable contract (fmu_src.contract)
     feedthrough: bool = True  # outputs depend directly on the inputs (algebraic slave)
+    extra: tuple = ()  # code carried besides PACKAGES (_code_files)
 
     @property
     def variables(self) -> tuple:
@@ -107,29 +108,39 @@ _SKIP = ("__pycache__", "native", "build")
 _SHAPING = ("build/fmus.py", "build/native.py")
 
 
-def _code_files():
-    """(path in the FMU's code folder, source path) of every file the FMUs carry, sorted."""
+#: what the transmission FMU carries besides :data:`PACKAGES`: the master and its in-process
+#: slaves (the package ``orchestrator``'s lazy ``__init__`` and its ``coupling`` folder)
+TRANSMISSION_CODE = ("orchestrator/__init__.py", "orchestrator/coupling")
+
+
+def _code_files(extra=()):
+    """(path in the FMU's code folder, source path) of every file an FMU carries, sorted:
+    :data:`PACKAGES` and the ``extra`` paths (``package/relative path``, a file or folder)."""
     from importlib.resources import files
 
     out = []
-    for pkg in PACKAGES:
-        folder = Path(str(files(pkg)))  # gsb_models is the folder models/ in a checkout
-        for path in sorted(folder.rglob("*")):
-            rel = Path(pkg) / path.relative_to(folder)
+    roots = [(Path(pkg), Path(str(files(pkg)))) for pkg in PACKAGES]
+    for entry in extra:
+        pkg, _, sub = entry.partition("/")
+        roots.append((Path(entry), Path(str(files(pkg))) / sub))
+    for rel_root, folder in roots:  # gsb_models is the folder models/ in a checkout
+        paths = [folder] if folder.is_file() else sorted(folder.rglob("*"))
+        for path in paths:
+            rel = rel_root / path.relative_to(folder) if path != folder else rel_root
             if path.is_file() and not any(p in _SKIP for p in rel.parts) and \
                     path.suffix in (".py", ".toml"):
                 out.append((rel, path))
     return out
 
 
-def code_hash() -> str:
-    """Content hash of everything the FMUs are built from: the code they carry, the builder
-    and the native layer's sources (pythonfmu's copy, the patches, the loader; 20 hex
-    digits)."""
+def code_hash(extra=()) -> str:
+    """Content hash of everything the FMUs are built from: the code they carry (``extra``:
+    :func:`_code_files`), the builder and the native layer's sources (pythonfmu's copy, the
+    patches, the loader; 20 hex digits)."""
     from fmu_src.build.native import native_sources
 
     digest = hashlib.sha256()
-    for rel, path in _code_files():
+    for rel, path in _code_files(extra):
         digest.update(str(rel).encode() + b"\0" + path.read_bytes())
     for rel in _SHAPING:
         digest.update(rel.encode() + b"\0" + (HERE / rel).read_bytes())
@@ -138,15 +149,16 @@ def code_hash() -> str:
     return digest.hexdigest()[:20]
 
 
-def _stage_code(folder: Path) -> None:
-    """``folder/gsb_code`` (the packages and the code hash) and ``folder/fmu_bootstrap.py``."""
+def _stage_code(folder: Path, extra=()) -> None:
+    """``folder/gsb_code`` (the packages, ``extra`` and the code hash) and
+    ``folder/fmu_bootstrap.py``."""
     from fmu_src.slaves.bootstrap import CODE_DIR, HASH_FILE
 
     code = folder / CODE_DIR
-    for rel, path in _code_files():
+    for rel, path in _code_files(extra):
         (code / rel).parent.mkdir(parents=True, exist_ok=True)
         (code / rel).write_bytes(path.read_bytes())
-    (code / HASH_FILE).write_text(code_hash() + "\n")
+    (code / HASH_FILE).write_text(code_hash(extra) + "\n")
     shutil.copy2(HERE / "slaves" / "bootstrap.py", folder / "fmu_bootstrap.py")
 
 
@@ -274,10 +286,9 @@ def build_fmus(dest: Path | str, names=None, case=None) -> list[Path]:
 
     ``case`` (a :class:`fmu_src.case.Case`): the case the gear-shaft FMU carries (its
     parameters' start values; default: the shipped paper case)."""
+    from fmu_src.build.native import export_library
     from fmu_src.case import load_case
     from fmu_src.contract import GEAR_DEFAULT_CASE
-    from fmu_src.slaves.gear_shaft import CASE_RESOURCE
-    from fmu_src.build.native import export_library
 
     dest = Path(dest)
     dest.mkdir(parents=True, exist_ok=True)
@@ -293,30 +304,65 @@ def build_fmus(dest: Path | str, names=None, case=None) -> list[Path]:
         if name == "GearShaft":
             spec = FmuSpec(spec.script, functools.partial(gear_variables, case),
                            spec.feedthrough)
-        with tempfile.TemporaryDirectory(prefix="gsb_fmu_") as tmp:
-            tmp = Path(tmp)
-            # the script in a folder of its own, beside the code it carries
-            script_dir = tmp / "script"
-            script_dir.mkdir()
-            src = script_dir / f"{name.lower()}.py"
-            src.write_text(spec.script)
-            project = tmp / "project"
-            project.mkdir()
-            _stage_code(project)
-            if name == "GearShaft":
-                (project / CASE_RESOURCE).write_text(case.to_toml())
-            files = list(project.iterdir())
-            fmu = FmuBuilder.build_FMU(src, dest=tmp / f"{name}.fmu", project_files=files,
-                                       canGetAndSetFMUstate=True, canSerializeFMUstate=True,
-                                       needsExecutionTool=True)
-            # finished beside the destination, then moved into place in one step
-            fd, part = tempfile.mkstemp(prefix=f".{name}-", suffix=".part", dir=dest)
-            os.close(fd)
-            try:
-                _finish(Path(fmu), Path(part), spec, native)
-                os.replace(part, dest / f"{name}.fmu")
-            except BaseException:
-                Path(part).unlink(missing_ok=True)
-                raise
-        built.append(dest / f"{name}.fmu")
+        built.append(_build(FmuBuilder, native, name, spec, dest,
+                            case if name == "GearShaft" else None))
     return built
+
+
+def transmission_fmu_name(case) -> str:
+    """The transmission FMU's name (its file stem, model identifier and slave class): the
+    case's file stem (or name) made a valid identifier."""
+    stem = Path(case.source).stem if case.source else case["case.name"]
+    name = "".join(c if c.isalnum() or c == "_" else "_" for c in stem) or "transmission"
+    return name if name[0].isalpha() else f"T_{name}"
+
+
+def build_transmission_fmu(case, dest: Path | str) -> Path:
+    """Write ``dest/<case>.fmu``, the transmission FMU of ``case``
+    (:class:`orchestrator.coupling.transmission.TransmissionSlave`: the structure, the four
+    bearings and the iterative master in one FMU, the case in its resources); return its
+    path."""
+    from fmu_src.build.native import export_library
+    from fmu_src.contract import transmission_variables
+
+    dest = Path(dest)
+    dest.mkdir(parents=True, exist_ok=True)
+    name = transmission_fmu_name(case)
+    spec = FmuSpec(slave_script(name, f"the transmission of case {case['case.name']}",
+                                "orchestrator.coupling.transmission", "TransmissionSlave"),
+                   functools.partial(transmission_variables, case), feedthrough=False,
+                   extra=TRANSMISSION_CODE)
+    return _build(_pythonfmu_builder(), export_library(), name, spec, dest, case)
+
+
+def _build(FmuBuilder, native, name: str, spec: FmuSpec, dest: Path, case=None) -> Path:
+    """Build one FMU into ``dest/<name>.fmu`` (atomic), carrying ``case`` in its resources
+    (``case.toml``) when given."""
+    from fmu_src.slaves.gear_shaft import CASE_RESOURCE
+
+    with tempfile.TemporaryDirectory(prefix="gsb_fmu_") as tmp:
+        tmp = Path(tmp)
+        # the script in a folder of its own, beside the code it carries
+        script_dir = tmp / "script"
+        script_dir.mkdir()
+        src = script_dir / f"{name.lower()}.py"
+        src.write_text(spec.script)
+        project = tmp / "project"
+        project.mkdir()
+        _stage_code(project, spec.extra)
+        if case is not None:
+            (project / CASE_RESOURCE).write_text(case.to_toml())
+        files = list(project.iterdir())
+        fmu = FmuBuilder.build_FMU(src, dest=tmp / f"{name}.fmu", project_files=files,
+                                   canGetAndSetFMUstate=True, canSerializeFMUstate=True,
+                                   needsExecutionTool=True)
+        # finished beside the destination, then moved into place in one step
+        fd, part = tempfile.mkstemp(prefix=f".{name}-", suffix=".part", dir=dest)
+        os.close(fd)
+        try:
+            _finish(Path(fmu), Path(part), spec, native)
+            os.replace(part, dest / f"{name}.fmu")
+        except BaseException:
+            Path(part).unlink(missing_ok=True)
+            raise
+    return dest / f"{name}.fmu"

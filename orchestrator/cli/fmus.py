@@ -1,4 +1,5 @@
-"""``gsb build-fmus`` and ``gsb export-ssp``: the FMUs of a case, alone or as an SSP archive."""
+"""``gsb build-fmus``, ``gsb export-ssp`` and ``gsb export-fmu``: the FMUs of a case, alone,
+as an SSP archive, or the whole transmission as one FMU."""
 
 from __future__ import annotations
 
@@ -30,7 +31,17 @@ def add_parser(sub) -> None:
     p.add_argument("--dest", default=".", help="output folder (default: the current folder)")
     p.set_defaults(func=export_ssp)
 
-
+    p = sub.add_parser("export-fmu", help="write a case's transmission as one FMU",
+                       description="Write DEST/<case>.fmu: an FMI 2.0 co-simulation FMU of "
+                                   "the whole transmission (structure, four bearings and the "
+                                   "iterative master inside doStep), which gives `gsb run`'s "
+                                   "answer in any FMI tool, iterating or not. Parameters: the "
+                                   "case's fields; input: torque [N m].")
+    add_case_argument(p)
+    p.add_argument("--bearing", choices=tuple(MODELS), help="bearing model (overrides the "
+                                                            "case)")
+    p.add_argument("--dest", default=".", help="output folder (default: the current folder)")
+    p.set_defaults(func=export_fmu)
 
 def build_fmus(args) -> int:
     from fmu_src.build.fmus import build_fmus as build
@@ -54,4 +65,15 @@ def export_ssp(args) -> int:
     path = write_ssp(case, args.dest, laws=master.laws)
     print(f"{path} (run: gsb run {path}; ecos simulate --path {path} --parameterSet case "
           f"--stepSize {time_step(case)!r} --stopTime <s>)")
+    return 0
+
+
+def export_fmu(args) -> int:
+    from fmu_src.build.fmus import build_transmission_fmu
+    from fmu_src.description import time_step
+
+    case = case_from_args(args)
+    path = build_transmission_fmu(case, args.dest)
+    print(f"{path} (step {time_step(case)!r} s or a multiple of it; e.g. fmpy simulate {path} "
+          f"--step-size {time_step(case)!r})")
     return 0

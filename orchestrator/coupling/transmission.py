@@ -1,0 +1,341 @@
+"""pythonfmu slave of the transmission FMU: the whole coupled system in one FMU.
+
+The gear-shaft structure, the four bearings of the case's ``bearings.model`` and the iterative
+master (:class:`orchestrator.coupling.master.Master`, in-process slaves built by
+:func:`orchestrator.coupling.system.build_master`) inside one FMI 2.0 co-simulation slave, so
+that a tool that does not iterate FMUs (libcosim, OMSimulator, ecos) gets ``gsb run``'s answer.
+Written by ``gsb export-fmu`` (:func:`fmu_src.build.fmus.build_transmission_fmu`), which puts
+the case into its resources (``case.toml``).
+
+* Parameters: every case field but the run length (:func:`fmu_src.contract.transmission_fields`);
+  a change rebuilds the system.
+* Input ``torque`` [N m]: the input torque, held over a communication step
+  (:meth:`gear_fmu.structure.Structure.set_torque`); until set, the case's ``operation.torque``.
+* Initialisation: the outputs are the static solution X0 (Sec. 2.2.3), solved when first read
+  or at ``exitInitializationMode``.
+* ``doStep(t, h)``: ``n = ceil(h / (dt (1 + 1e-4)))`` equal coupled steps of ``h / n``, dt the
+  case's time step: a step a host rounds (libcosim keeps whole nanoseconds) is taken as it comes
+  if within 1e-4 of dt, and a longer one is cut, never longer than dt. With ``h = dt`` the steps
+  are ``gsb run``'s, bit for bit.
+* ``get/setFMUstate`` and serialisation: the master's checkpoint (structure, bearing warm starts,
+  laws) with the parameters, the torque and the time. A state set into an instance that has not
+  solved the same static problem solves it first (as a resumed run does), then continues bit
+  for bit.
+
+A failed step returns fmi2Discard with the reason in the log and refuses further steps until a
+state is set; a failed output read returns fmi2Error (a Python exception escaping a pythonfmu
+callback would be fatal for the host).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+from pythonfmu.default_experiment import DefaultExperiment
+
+from fmu_src.contract import (
+    BEARINGS,
+    FORCE_NAMES,
+    journal_output_names,
+    parameter_field,
+    transmission_variables,
+)
+from fmu_src.slaves.support import FMI_ERROR, ContractSlave
+from fmu_src.state_codec import StateArrays
+from orchestrator.coupling.system import build_master
+
+__all__ = ["CASE_RESOURCE", "STATE_KIND", "TransmissionSlave", "internal_steps"]
+
+#: the case a transmission FMU carries, in its resources
+CASE_RESOURCE = "case.toml"
+#: the kind tag of this slave's serialised states (fmu_src.state_codec)
+STATE_KIND = "gsb.transmission_fmu_state"
+#: a communication step within this fraction above the case's step is taken in one step
+STEP_SLACK = 1e-4
+
+_OUTPUTS = [*journal_output_names(), *(f"{n}_{j}" for j in BEARINGS for n in FORCE_NAMES),
+            "mesh_force", "transmission_error"]
+_NAN = [math.nan] * len(_OUTPUTS)
+
+
+def internal_steps(h: float, dt: float) -> int:
+    """How many equal steps a communication step ``h`` [s] takes, each at most ``dt`` [s]
+    (to :data:`STEP_SLACK`): ``internal_steps(2 * dt, dt) == 2``,
+    ``internal_steps(dt * (1 + 1e-6), dt) == 1``."""
+    return max(1, math.ceil(h / (dt * (1.0 + STEP_SLACK))))
+
+
+class TransmissionSlave(ContractSlave):
+    """The transmission (structure, bearings, master) as an FMI 2.0 slave (module docstring)."""
+
+    def __init__(self, **kwargs):
+        super().__init__(**kwargs)
+        self.description = (
+            "Gear-shaft-bearing transmission (Timoshenko shafts, distributed gear mesh, four "
+            "journal bearings) with its iterative co-simulation master inside; global frame, "
+            "SI units (Baguet & Jacquenot 2010).")
+        from fmu_src.description import mesh_period, time_step
+
+        self._base = self._base_case()
+        step = time_step(self._base)
+        stop = self._base["simulation.mesh_periods"] * mesh_period(self._base)
+        self.default_experiment = DefaultExperiment(start_time=0.0, stop_time=stop,
+                                                    step_size=step)
+        self._overrides: dict = {}  # case field -> value set through a parameter
+        self._torque: float | None = None  # the input, once a host has set it
+        self._start_time = 0.0
+        self._master = None
+        self._static_key = None  # (overrides, torque) of the master's static solution
+        self._stepping = False
+        self._outputs = list(_NAN)
+        self._iterations = 0
+        self._steps = 0
+        self._error: str | None = None  # a failure that forbids stepping
+        self._register_all(transmission_variables(self._base))
+
+    def _base_case(self):
+        from fmu_src.case import load_case
+
+        path = None if self.resources is None else Path(self.resources) / CASE_RESOURCE
+        if path is not None and path.is_file():
+            return load_case(path)
+        return load_case("baguet2010_spur")  # shipped with the package
+
+    # --- FMI plumbing ------------------------------------------------------------------------
+    def _register_all(self, variables) -> None:
+        out_index = {name: i for i, name in enumerate(_OUTPUTS)}
+        for v in variables:
+            if v.causality == "parameter":
+                self.register_contract_variable(v, self._param_getter(v.name),
+                                                self._param_setter(v.name))
+            elif v.name == "torque":
+                self.register_contract_variable(v, self._get_torque, self._set_torque)
+            elif v.name in out_index:
+                self.register_contract_variable(v, self._output_getter(out_index[v.name]))
+            elif v.name == "iterations":
+                self.register_contract_variable(v, lambda: self._refreshed()._iterations)
+            elif v.name == "steps":
+                self.register_contract_variable(v, lambda: self._steps)
+            else:  # pragma: no cover - the contract and this slave disagree
+                raise RuntimeError(f"transmission slave has no handler for {v.name!r}")
+
+    def _param_getter(self, name):
+        key, i = parameter_field(name)
+
+        def get():
+            value = self._overrides.get(key, self._base[key])
+            return value if i is None else value[i]
+        return get
+
+    def _param_setter(self, name):
+        key, i = parameter_field(name)
+
+        def set_(value):
+            current = self._overrides.get(key, self._base[key])
+            new = value if i is None else [*current[:i], value, *current[i + 1:]]
+            if new != current:
+                self._overrides[key] = new
+                self._drop_master()
+        return set_
+
+    def _get_torque(self) -> float:
+        return self.case()["operation.torque"] if self._torque is None else self._torque
+
+    def _set_torque(self, value) -> None:
+        self._torque = float(value)
+        if not self._stepping:  # in initialisation a new torque is a new static problem
+            self._outputs = None
+
+    def _output_getter(self, k):
+        def get():
+            return self._refreshed()._outputs[k]
+        return get
+
+    def _refreshed(self):
+        """Self, with the outputs computed (the static solution in initialisation); a failure
+        makes the current read return fmi2Error."""
+        if self._outputs is None or (not self._stepping and self._static_key != self._key()):
+            try:
+                self._solve_static()
+            except Exception as exc:  # anything raised here would be fatal for the host
+                self._error = self.output_failed("static solution failed", exc)
+                self._outputs = list(_NAN)
+        if self._error is not None and any(map(math.isnan, self._outputs)):
+            self._read_status = FMI_ERROR
+        return self
+
+    # --- the system ---------------------------------------------------------------------------
+    def case(self):
+        """The case the FMU simulates: its carried case with the parameters' values."""
+        return self._base.with_overrides(self._overrides) if self._overrides else self._base
+
+    def _key(self):
+        return repr(sorted(self._overrides.items())), self._get_torque()
+
+    def _drop_master(self) -> None:
+        if self._master is not None:
+            self._master.close()
+        self._master = None
+        self._static_key = None
+        self._stepping = False
+        self._outputs = None
+        self._error = None
+
+    def _solve_static(self) -> None:
+        """Build the master for the current parameters and torque and solve X0."""
+        self._drop_master()
+        case = self.case()
+        master = build_master(case, in_process=True)
+        master.structure.physics.t = self._start_time
+        master.structure.physics.set_torque(self._get_torque())
+        report = master.solve_static()
+        self._master, self._static_key = master, self._key()
+        self._iterations = report.iterations
+        self._record(report)
+
+    def _record(self, report) -> None:
+        s = self._master.structure
+        self._outputs = [*report.states.ravel().tolist(), *report.bearing_force.ravel().tolist(),
+                         float(s.mesh_force()), float(s.transmission_error())]
+
+    # --- FMI life cycle -----------------------------------------------------------------------
+    def setup_experiment(self, start_time, stop_time=None, tolerance=None):
+        if float(start_time) != self._start_time:
+            self._start_time = float(start_time)
+            self._drop_master()
+
+    def exit_initialization_mode(self):
+        self._refreshed()
+        if self._error is None:
+            try:
+                self._master.exit_initialization()
+                self._dt = _case_step(self.case())
+            except Exception as exc:  # anything raised here would be fatal for the host
+                self._error = self.output_failed("initialisation failed", exc)
+        self._stepping = True
+
+    def do_step(self, current_time, step_size):
+        """``internal_steps`` coupled steps over [t, t + h] with the torque held; False (FMI
+        discard) with a logged reason when one fails or cannot start."""
+        try:
+            if self._error is not None:
+                raise RuntimeError(f"not stepping after an earlier failure ({self._error})")
+            if not self._stepping:
+                raise RuntimeError("doStep before exitInitializationMode")
+            st = self._master.structure.physics
+            if abs(current_time - st.t) > 1e-9 * max(step_size, abs(current_time)):
+                raise ValueError(f"a step from t = {current_time!r} s but the transmission is "
+                                 f"at t = {st.t!r} s (restore a state to go back)")
+            if not (step_size > 0.0 and math.isfinite(step_size)):
+                raise ValueError(f"communication step {step_size!r} s must be finite and > 0")
+            n = internal_steps(step_size, self._dt)
+            h = step_size / n
+            st.set_torque(self._get_torque())
+            iterations = 0
+            for _ in range(n):
+                report = self._master.step(st.t, h)
+                iterations += report.iterations
+                self._steps += 1
+        except Exception as exc:  # anything raised here would be fatal for the host
+            self._error = self.output_failed(
+                f"doStep from t = {current_time:.9g} s, h = {step_size:.6g} s failed", exc)
+            self._read_status = 0  # the step reports discard, not the next read
+            self._outputs = list(_NAN)
+            return False
+        self._iterations = iterations
+        self._record(report)
+        return True
+
+    def terminate(self):
+        if self._master is not None:
+            self._master.close()
+
+    # --- FMU state ----------------------------------------------------------------------------
+    def _get_fmu_state(self):
+        master = self._master
+        return {"overrides": dict(self._overrides), "torque": self._torque,
+                "start_time": self._start_time, "stepping": self._stepping,
+                "static_key": self._static_key,
+                "checkpoint": None if master is None else master.checkpoint(),
+                "outputs": None if self._outputs is None else list(self._outputs),
+                "iterations": self._iterations, "steps": self._steps, "error": self._error}
+
+    def _set_fmu_state(self, state):
+        try:
+            if state["overrides"] != self._overrides:
+                if state["overrides"]:
+                    self._base.with_overrides(state["overrides"])  # a case error before a change
+                self._overrides = dict(state["overrides"])
+                self._drop_master()
+            self._start_time = state["start_time"]
+            blob = state["checkpoint"]
+            if blob is None:
+                self._drop_master()
+                self._torque = state["torque"]
+            else:
+                static_torque = state["static_key"][1]
+                self._torque = static_torque
+                if self._master is None or self._static_key != self._key():
+                    self._solve_static()  # the static problem the state continues from
+                if state["stepping"] and not self._stepping:
+                    self._master.exit_initialization()
+                    self._dt = _case_step(self.case())
+                self._master.restore(blob)
+                self._torque = state["torque"]
+            self._stepping = state["stepping"]
+            self._outputs = None if state["outputs"] is None else list(state["outputs"])
+            self._iterations, self._steps = state["iterations"], state["steps"]
+            self._error = state["error"]
+        except Exception as exc:  # anything raised here would be fatal for the host
+            self._error = self.output_failed("cannot restore the FMU state", exc)
+            return FMI_ERROR
+        return None
+
+    @classmethod
+    def _state_kind(cls) -> str:
+        return STATE_KIND
+
+    @classmethod
+    def _state_to_arrays(cls, state) -> dict:
+        out = {f"overrides/{key}": np.asarray(value)
+               for key, value in state["overrides"].items()}
+        out |= {"start_time": np.float64(state["start_time"]),
+                "stepping": np.bool_(state["stepping"]),
+                "iterations": np.int64(state["iterations"]), "steps": np.int64(state["steps"])}
+        if state["torque"] is not None:
+            out["torque"] = np.float64(state["torque"])
+        if state["static_key"] is not None:
+            out["static_torque"] = np.float64(state["static_key"][1])
+        if state["checkpoint"] is not None:
+            out["checkpoint"] = np.frombuffer(state["checkpoint"], dtype=np.uint8)
+        if state["outputs"] is not None:
+            out["outputs"] = np.array(state["outputs"], dtype=np.float64)
+        if state["error"] is not None:
+            out["error"] = np.str_(state["error"])
+        return out
+
+    @classmethod
+    def _state_from_arrays(cls, arrays: StateArrays):
+        ov = arrays.sub("overrides")
+        overrides = {key: ov.value(key) for key in ov.names()}
+        has = arrays.has
+        return {"overrides": overrides,
+                "torque": arrays.float("torque") if has("torque") else None,
+                "start_time": arrays.float("start_time"),
+                "stepping": arrays.bool("stepping"),
+                "static_key": ((repr(sorted(overrides.items())), arrays.float("static_torque"))
+                               if has("static_torque") else None),
+                "checkpoint": (arrays.array("checkpoint", "uint8").tobytes()
+                               if has("checkpoint") else None),
+                "outputs": (arrays.array("outputs", "float64", (len(_OUTPUTS),)).tolist()
+                            if has("outputs") else None),
+                "iterations": arrays.int("iterations"), "steps": arrays.int("steps"),
+                "error": arrays.text("error") if has("error") else None}
+
+
+def _case_step(case) -> float:
+    from fmu_src.description import time_step
+
+    return time_step(case)

@@ -1,0 +1,138 @@
+"""Probes of tests/system/test_transmission_fmu.py: the transmission FMU in fmpy, driven call
+by call as an FMI host does, in a fresh interpreter (the FMU runs the code it carries)."""
+
+from __future__ import annotations
+
+from tests.probes import dispatch, probes_of
+
+#: the outputs read after the initialisation and after every communication step
+OUTPUTS = ([f"{n}_{j}" for j in range(1, 5) for n in ("s", "t", "s_dot", "t_dot")]
+           + [f"F_{a}_{j}" for j in range(1, 5) for a in ("s", "t")]
+           + ["mesh_force", "transmission_error"])
+
+
+class Host:
+    """One instance of the FMU (fmpy's FMU2Slave) with its variables by name."""
+
+    def __init__(self, fmu: str, name: str = "transmission"):
+        from fmpy import extract, read_model_description
+        from fmpy.fmi2 import FMU2Slave
+
+        self.md = read_model_description(fmu)
+        self.vars = {v.name: v for v in self.md.modelVariables}
+        self.folder = extract(fmu)
+        self.slave = FMU2Slave(guid=self.md.guid, unzipDirectory=self.folder,
+                               modelIdentifier=self.md.coSimulation.modelIdentifier,
+                               instanceName=name)
+        self.slave.instantiate()
+        self.out_vrs = [self.vars[n].valueReference for n in OUTPUTS]
+
+    def set(self, values: dict) -> None:
+        for name, value in values.items():
+            v = self.vars[name]
+            setter = {"Real": self.slave.setReal, "Integer": self.slave.setInteger,
+                      "Boolean": self.slave.setBoolean, "String": self.slave.setString}[v.type]
+            setter([v.valueReference], [value])
+
+    def outputs(self) -> list[float]:
+        return list(self.slave.getReal(self.out_vrs))
+
+    def integer(self, name: str) -> int:
+        return self.slave.getInteger([self.vars[name].valueReference])[0]
+
+    def start(self, start_values: dict | None = None) -> list[float]:
+        self.slave.setupExperiment(startTime=0.0)
+        self.set(start_values or {})
+        self.slave.enterInitializationMode()
+        x0 = self.outputs()
+        self.slave.exitInitializationMode()
+        return x0
+
+    def steps(self, h: float, n: int, first: int = 0) -> list[list[float]]:
+        rows = []
+        for k in range(first, first + n):
+            self.slave.doStep(currentCommunicationPoint=k * h, communicationStepSize=h)
+            rows.append(self.outputs())
+        return rows
+
+    def close(self) -> None:
+        import shutil
+
+        self.slave.terminate()
+        self.slave.freeInstance()
+        shutil.rmtree(self.folder, ignore_errors=True)
+
+
+def run(fmu: str, runs: list) -> list:
+    """Each run ``{"start_values": {...}, "h": step [s], "n": steps}`` in a new instance: the
+    outputs after the initialisation, then after each step; the internal step count."""
+    out = []
+    for spec in runs:
+        host = Host(fmu)
+        rows = [host.start(spec.get("start_values"))]
+        rows += host.steps(spec["h"], spec["n"])
+        out.append({"rows": rows, "steps": host.integer("steps")})
+        host.close()
+    return out
+
+
+def state_round_trip(fmu: str, h: float, n: int, k: int) -> dict:
+    """n steps straight on; back to the state after k steps (fmi2SetFMUstate) and on again;
+    the state serialised, deserialised into a new instance and on again from there."""
+    host = Host(fmu)
+    host.start()
+    host.steps(h, k)
+    state = host.slave.getFMUstate()
+    blob = host.slave.serializeFMUstate(state)
+    straight = host.steps(h, n - k, first=k)
+    host.slave.setFMUstate(state)
+    again = host.steps(h, n - k, first=k)
+    host.slave.freeFMUstate(state)
+    other = Host(fmu, "other")
+    other.slave.setupExperiment(startTime=0.0)
+    other.slave.enterInitializationMode()
+    other.slave.exitInitializationMode()
+    other.slave.setFMUstate(other.slave.deSerializeFMUstate(blob))
+    restored = other.steps(h, n - k, first=k)
+    host.close()
+    other.close()
+    return {"straight": straight, "again": again, "restored": restored, "bytes": len(blob)}
+
+
+def impossible_step(fmu: str, h: float, torque: float) -> dict:
+    """A torque no bearing can carry set after the initialisation: the steps taken until a
+    doStep is refused, the FMI status of that doStep, of the next read and of a further
+    doStep (fmpy's messages), and the outputs that read returned, if any."""
+    from fmpy.fmi1 import FMICallException
+
+    host = Host(fmu)
+    host.start()
+    host.set({"torque": torque})
+    out = {"ok_steps": 0}
+    for k in range(50):
+        try:
+            host.slave.doStep(k * h, h)
+        except FMICallException as exc:
+            out["doStep"] = str(exc)
+            break
+        out["ok_steps"] = k + 1
+    for what, call in (("getReal", host.outputs),
+                       ("doStep again", lambda: host.slave.doStep(k * h, h))):
+        try:
+            out[what + " values"] = call()
+            out[what] = "fmi2OK"
+        except FMICallException as exc:
+            out[what] = str(exc)
+    host.close()
+    return out
+
+
+PROBES = probes_of(run, state_round_trip, impossible_step)
+
+
+def main(argv: list[str] | None = None) -> None:
+    dispatch(PROBES, argv)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,186 @@
+"""The transmission FMU (``gsb export-fmu``): the whole system, master inside, in FMI hosts.
+
+What it must give is ``gsb run``'s answer at the same step: the tests compare its outputs,
+read by a host in a fresh interpreter (the FMU runs the code it carries), with the in-process
+run of the same case (``orchestrator.simulate``) for every registered bearing model, spur and
+helical; through fmpy's one-call ``simulate_fmu`` (its own step arithmetic); at a
+whole-nanosecond step (libcosim's) and at a multiple of the case's step (cut into equal
+internal steps); across a state saved, restored and serialised into another instance; and at
+a step no bearing can carry (statuses). ecos, a C++ host without Python, runs it in
+tests/system/test_ecos.py.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from bearing_fmu import MODELS
+from tests.helpers import run_isolated
+from tests.probes.transmission import OUTPUTS
+
+CASE = "baguet2010_spur"
+STEPS = 32  # one mesh period of the paper's case
+
+
+def _case(name=CASE, **fields):
+    from fmu_src.case import load_case
+
+    return load_case(name).with_overrides(fields) if fields else load_case(name)
+
+
+def _dt(case) -> float:
+    from fmu_src.description import time_step
+
+    return time_step(case)
+
+
+def gsb_run_rows(case, steps: int) -> np.ndarray:
+    """(steps, 26) ``gsb run``'s channels in the order of the probe's outputs: per bearing
+    (s, t, s_dot, t_dot), the film forces, the mesh force and the transmission error."""
+    import orchestrator as gsb
+
+    r = gsb.simulate(case, in_process=True, steps=steps, progress=False)
+    journals = np.concatenate([r["journal_position"], r["journal_velocity"]], axis=2)
+    return np.hstack([journals.reshape(steps, 16), r["bearing_force"].reshape(steps, 8),
+                      r["mesh_force"][:, None], r["transmission_error"][:, None]])
+
+
+def master_rows(case, h: float, steps: int) -> np.ndarray:
+    """The same rows from the master of ``gsb run`` stepping at ``h`` (not the case's step),
+    X0 first."""
+    from orchestrator.coupling.system import build_master
+
+    master = build_master(case, in_process=True)
+    report = master.solve_static()
+    master.exit_initialization()
+    s = master.structure
+    rows = []
+    for k in range(steps + 1):
+        if k:
+            report = master.step(s.physics.t, h)
+        rows.append([*report.states.ravel(), *report.bearing_force.ravel(), s.mesh_force(),
+                     s.transmission_error()])
+    return np.array(rows)
+
+
+def _relative(a, b) -> float:
+    """Largest difference of each output over its largest magnitude, over all outputs."""
+    a, b = np.asarray(a), np.asarray(b)
+    scale = np.maximum(np.abs(b).max(axis=0), 1e-300)
+    return float((np.abs(a - b) / scale).max())
+
+
+def test_the_fmu_declares_the_case():
+    """Not built: the variables it would declare carry the case (the FMU's checks below run
+    what was built)."""
+    from fmu_src.contract import transmission_variables
+
+    case = _case()
+    by_name = {v.name: v for v in transmission_variables(case)}
+    assert by_name["torque"].causality == "input" and by_name["torque"].unit == "N.m"
+    assert by_name["torque"].start == case["operation.torque"]
+    assert by_name["bearings.model"].choices == tuple(MODELS)
+    assert by_name["gear_pair.teeth[2]"].start == case["gear_pair.teeth"][1]
+    assert "simulation.mesh_periods" not in by_name  # the host's stop time decides
+    assert [n for n in OUTPUTS if by_name[n].causality != "output"] == []
+
+
+def test_every_bearing_model_gives_gsb_runs_numbers(transmission_fmu):
+    """In a fresh interpreter, one instance per registered model (``bearings.model`` set as a
+    parameter) stepping at the case's step: the same bits as ``gsb run`` of that model."""
+    case = _case()
+    h = _dt(case)
+    runs = [{"start_values": {"bearings.model": m}, "h": h, "n": STEPS} for m in MODELS]
+    got = run_isolated(module="tests.probes.transmission",
+                       args=["run", {"fmu": str(transmission_fmu), "runs": runs}])
+    for model, out in zip(MODELS, got, strict=True):
+        ref = gsb_run_rows(_case(**{"bearings.model": model}), STEPS)
+        rows = np.array(out["rows"][1:])
+        print(f"\n{model}: largest relative difference to gsb run {_relative(rows, ref):.1e}")
+        assert np.array_equal(rows, ref), (model, _relative(rows, ref))
+        assert out["steps"] == STEPS
+
+
+def test_helical_gives_gsb_runs_numbers(helical_transmission_fmu):
+    case = _case("baguet2010_helical")
+    got = run_isolated(module="tests.probes.transmission",
+                       args=["run", {"fmu": str(helical_transmission_fmu),
+                                     "runs": [{"h": _dt(case), "n": 16}]}])
+    assert np.array_equal(np.array(got[0]["rows"][1:]), gsb_run_rows(case, 16))
+
+
+def test_fmpys_simulate_fmu_within_1e_9(transmission_fmu):
+    """fmpy's one call, whose communication steps differ from the case's step in their last
+    bits (it steps to ``k * output_interval``): within 1e-9 of gsb run, relative to each
+    output's largest magnitude (measured 3.4e-11, on the film forces)."""
+    from fmpy import simulate_fmu
+
+    case = _case()
+    dt = _dt(case)
+    res = simulate_fmu(str(transmission_fmu), step_size=dt, stop_time=STEPS * dt,
+                       output=OUTPUTS, output_interval=dt)
+    rows = np.stack([res[n] for n in OUTPUTS], axis=1)[1:]
+    diff = _relative(rows, gsb_run_rows(case, STEPS))
+    print(f"\nfmpy simulate_fmu vs gsb run: {diff:.1e}")
+    assert len(rows) == STEPS and diff < 1e-9
+
+
+@pytest.mark.parametrize("nanoseconds", [math.floor, math.ceil])
+def test_whole_nanosecond_steps(transmission_fmu, nanoseconds):
+    """libcosim's steps are whole nanoseconds: 23,236 or 23,237 ns for the paper's
+    23,236.6 ns, each taken as one internal step (within 1e-4 of the case's step), as the
+    master of gsb run takes that step."""
+    case = _case()
+    h = nanoseconds(_dt(case) * 1e9) * 1e-9
+    assert abs(h / _dt(case) - 1) < 1e-4
+    got = run_isolated(module="tests.probes.transmission",
+                       args=["run", {"fmu": str(transmission_fmu),
+                                     "runs": [{"h": h, "n": STEPS}]}])[0]
+    assert got["steps"] == STEPS
+    assert np.array_equal(np.array(got["rows"]), master_rows(case, h, STEPS))
+
+
+def test_a_longer_step_is_cut_into_equal_steps(transmission_fmu):
+    """A communication step of 4 dt is 4 internal steps of dt: the rows of gsb run at every
+    fourth step, bit for bit (4 dt / 4 is dt exactly); 3.5 dt is 4 steps of 0.875 dt."""
+    from orchestrator.coupling.transmission import internal_steps
+
+    case = _case()
+    dt = _dt(case)
+    assert internal_steps(4 * dt, dt) == 4 and internal_steps(3.5 * dt, dt) == 4
+    assert internal_steps(dt * (1 + 0.9e-4), dt) == 1 and internal_steps(dt * 1.001, dt) == 2
+    got = run_isolated(module="tests.probes.transmission",
+                       args=["run", {"fmu": str(transmission_fmu),
+                                     "runs": [{"h": 4 * dt, "n": STEPS // 4},
+                                              {"h": 3.5 * dt, "n": 2}]}])
+    assert got[0]["steps"] == STEPS
+    assert np.array_equal(np.array(got[0]["rows"][1:]), gsb_run_rows(case, STEPS)[3::4])
+    assert got[1]["steps"] == 8
+    assert np.array_equal(np.array(got[1]["rows"][2]), master_rows(case, 0.875 * dt, 8)[8])
+
+
+def test_states_round_trip_exactly(transmission_fmu):
+    """A state saved after 5 steps: set again in the same instance, and serialised then
+    deserialised into another instance (which first solves its own X0, as a resumed run
+    does), the next 7 steps repeat the straight run's bits."""
+    got = run_isolated(module="tests.probes.transmission",
+                       args=["state_round_trip", {"fmu": str(transmission_fmu),
+                                                  "h": _dt(_case()), "n": 12, "k": 5}])
+    assert got["straight"] == got["again"] == got["restored"]
+    assert np.isfinite(np.array(got["straight"])).all()
+
+
+def test_a_step_no_bearing_can_carry(transmission_fmu):
+    """A torque of 2e5 N m (900 times the paper's) drives the journals out of their
+    clearances within a few steps: that doStep returns fmi2Discard, the next read fmi2Error,
+    and no step is taken any more (fmi2Discard) until a state is set."""
+    got = run_isolated(module="tests.probes.transmission",
+                       args=["impossible_step", {"fmu": str(transmission_fmu),
+                                                 "h": _dt(_case()), "torque": 2e5}])
+    assert 0 < got["ok_steps"] < 50
+    assert "status 2 (discard)" in got["doStep"]
+    assert "status 3 (error)" in got["getReal"]
+    assert "status 2 (discard)" in got["doStep again"]
