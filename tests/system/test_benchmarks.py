@@ -19,6 +19,7 @@ SMALLEST = {
     "startup.py": ["--repeat", "1"],
     "sweep_efficiency.py": ["--periods", "1", "--speeds", "2"],
     "bearing_models.py": [],
+    "transmission_fmu.py": ["--periods", "1", "--repeat", "1"],
 }
 
 
@@ -27,10 +28,12 @@ def test_every_benchmark_is_run_here():
 
 
 @pytest.mark.parametrize("script", sorted(SMALLEST))
-def test_the_benchmark_runs_at_its_smallest_size(script, fmu_dir, tmp_path):
+def test_the_benchmark_runs_at_its_smallest_size(script, fmu_dir, tmp_path, request):
     args = SMALLEST[script]
     if script == "fmu_overhead.py":
         args = [*args, "--fmu", str(fmu_dir / "GearShaft.fmu")]
+    if script == "transmission_fmu.py":
+        args = [*args, "--fmu", str(request.getfixturevalue("transmission_fmu"))]
     proc = subprocess.run([sys.executable, str(ROOT / "benchmarks" / script), *args],
                           capture_output=True, text=True, timeout=600, cwd=tmp_path,
                           env=probe_env())

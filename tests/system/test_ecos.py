@@ -149,9 +149,11 @@ def test_the_non_iterative_coupling_error_at_the_papers_step(ecos_python, tmp_pa
 
 
 def _cli_run(exe: Path, ssp: Path, folder: Path, steps: int):
+    """The ecos command on an SSP (its parameter set ``case``) or an FMU."""
     folder.mkdir(parents=True, exist_ok=True)
     # ecos 0.7.2's command divides by zero (SIGFPE) below 10 steps (its progress display)
-    proc = subprocess.run([str(exe), "simulate", "--path", str(ssp), "--parameterSet", "case",
+    pset = ["--parameterSet", "case"] if ssp.suffix == ".ssp" else []
+    proc = subprocess.run([str(exe), "simulate", "--path", str(ssp), *pset,
                            "--stepSize", repr(_dt()), "--stopTime", repr(steps * _dt())],
                           capture_output=True, text=True, timeout=600, env=_env(), cwd=folder)
     rows = []
@@ -185,3 +187,25 @@ def test_the_ecos_command_runs_the_fmus_and_exits_cleanly(ecos_cli, ssp_file, ec
             assert shown == [f"{v:f}" for v in ecc[:21, j]], (k, j)
     print(f"\necos command: {runs - len(failures)} of {runs} runs exited cleanly")
     assert not failures, failures
+
+
+def test_the_ecos_command_runs_the_transmission_fmu_as_gsb_run(ecos_cli, transmission_fmu,
+                                                               tmp_path):
+    """ecos's command (a C++ process, Python only inside the FMU) runs the transmission FMU
+    at the case's step: each of 3 runs exits with 0, and the film forces and the mesh force
+    of its CSV (6 decimals: 1e-6 N on forces of 100 to 3000 N) are gsb run's, rounded."""
+    from fmu_src.case import load_case
+    from tests.probes.transmission import OUTPUTS
+    from tests.system.test_transmission_fmu import gsb_run_rows
+
+    steps = 32
+    ref = gsb_run_rows(load_case(CASE), steps)
+    forces = [k for k, n in enumerate(OUTPUTS) if n.startswith("F_") or n == "mesh_force"]
+    for k in range(3):
+        proc, rows = _cli_run(ecos_cli, transmission_fmu, tmp_path / f"r{k}", steps)
+        assert proc.returncode == 0, proc.stderr[-2000:]
+        header = rows[0]
+        got = np.array([[float(r[header.index(f"instance::{OUTPUTS[i]}[REAL]")])
+                         for i in forces] for r in rows[2:]])
+        assert got.shape == (steps, len(forces))
+        assert np.abs(got - ref[:, forces]).max() <= 0.5e-6 * (1 + 1e-9), k
