@@ -7,7 +7,12 @@ from __future__ import annotations
 
 from bearing_fmu import MODELS
 from fmu_src.contract import bearing_fmu_name
-from fmu_src.contract import bearing_variables, connections, gear_variables
+from fmu_src.contract import (
+    bearing_variables,
+    connections,
+    gear_variables,
+    transmission_variables,
+)
 
 __all__ = ["document", "markdown_table"]
 
@@ -168,14 +173,58 @@ Behaviour:
 
 """
 
+_TRANSMISSION = """
+## Transmission FMU (`gsb export-fmu CASE`)
+
+The whole system in one FMU, for tools that do not iterate FMUs (libcosim, OMSimulator, ecos
+and most fixed-step masters): the gear-shaft structure, the four bearings of the model
+`bearings.model` names (any registered model: {models}) and this package's iterative master
+inside `fmi2DoStep` (`orchestrator/coupling/transmission.py`). `gsb export-fmu CASE --dest
+DIR` writes `DIR/<case>.fmu`, carrying the case (`resources/case.toml`) and the code it runs,
+master included. It gives `gsb run`'s numbers at the same step in any FMI host, bit for bit at
+the case's step.
+
+- Parameters: every case field but `case.description` and `simulation.mesh_periods` (the
+  host's stop time decides the run's length), named as the gear-shaft FMU names them; a list
+  field one parameter per entry (`bearings.clearance[1]` ... `[4]`). A new value rebuilds the
+  system.
+- Input `torque` [N.m]: the input torque on the pinion shaft, held over each communication
+  step; until a host sets it, the parameter `operation.torque` acts. The mesh's contact
+  compliance stays linearised at `operation.torque`.
+- Initialisation mode: the outputs are the static solution X0 of the current parameters and
+  torque (velocities zero), solved when first read or at fmi2ExitInitializationMode, which
+  then builds the modal damping as a run does.
+- `fmi2DoStep(t, h)`: `n = ceil(h / (dt (1 + 1e-4)))` equal coupled steps of `h / n`, dt the
+  case's step (`DefaultExperiment` carries it, and the case's run length as its stop time): a
+  step within 1e-4 of dt (libcosim's whole nanoseconds) is taken as it comes, a longer one cut
+  into steps no longer than dt. `t` must be the FMU's time (to 1e-9). A step that fails (a
+  journal leaving its clearance, the coupled iteration not converging) returns fmi2Discard,
+  the reason in the log; the outputs then read fmi2Error and no further step is taken until a
+  state is set.
+- States: fmi2GetFMUstate / fmi2SetFMUstate / fmi2SerializeFMUstate hold the master's
+  checkpoint (structure, bearing warm starts, laws), the parameters, the torque and the time; a
+  serialised state set into another instance solves that instance's X0 first (as a resumed
+  run does), then continues bit for bit.
+- Outputs: `iterations` counts the master's coupled iterations in the last communication
+  step, `steps` the internal steps so far.
+
+Its variables for the shipped paper case (parameters with the case's values as start):
+
+"""
+
 
 def document() -> str:
     """The text of docs/fmu-variables.md."""
     fmus = ", ".join(bearing_fmu_name(m) for m in MODELS)
     wiring = "\n".join(f"| `{a}` | `{o}` | `{b}` | `{i}` |" for a, o, b, i in connections()
                        if "bearing1" in (a, b))
+    from fmu_src.case import load_case
+
+    transmission = transmission_variables(load_case("baguet2010_spur"))
     return (_HEADER.format(fmus=fmus, wiring=wiring) + markdown_table(bearing_variables()) + "\n"
-            + _GEAR + markdown_table(gear_variables()) + "\n")
+            + _GEAR + markdown_table(gear_variables()) + "\n"
+            + _TRANSMISSION.format(models=", ".join(MODELS))
+            + markdown_table(transmission) + "\n")
 
 
 if __name__ == "__main__":
