@@ -43,8 +43,8 @@ from fmu_src.case import FIELDS, bound_violation, load_case, model_option_fields
 from fmu_src.description import BEARING_FRAMES
 from fmu_src.units import symbol
 
-__all__ = ["BEARINGS", "GEAR_DEFAULT_CASE", "FmiVar", "ValueRefused", "bearing_fmu_name",
-           "bearing_option_keys", "bearing_variables", "case_parameters", "connections",
+__all__ = ["BEARINGS", "BEARING_RESOURCE", "GEAR_DEFAULT_CASE", "FmiVar", "ValueRefused",
+           "bearing_fmu_name",           "bearing_option_keys", "bearing_variables", "case_parameters", "connections",
            "gear_case_fields", "gear_parameters",
            "gear_variables", "journal_output_names", "law_input_names", "pack_laws",
            "parameter_field", "transmission_fields", "transmission_variables", "unpack_journal",
@@ -405,21 +405,30 @@ def _shipped_gear_variables() -> tuple[FmiVar, ...]:
 # --- transmission FMU ----------------------------------------------------------------------
 
 
+#: the name of a bearing FMU of the user's own in a transmission FMU's resources
+BEARING_RESOURCE = "bearing.fmu"
+
+
 def transmission_fields():
     """The case fields the transmission FMU exposes as parameters: all of them but the case's
     description and the run length (the host's stop time decides it)."""
     return tuple(f for f in FIELDS if f.key not in ("case.description", "simulation.mesh_periods"))
 
 
-def transmission_variables(case) -> tuple[FmiVar, ...]:
+def transmission_variables(case, bearing_fmu: str = "") -> tuple[FmiVar, ...]:
     """The variables of the transmission FMU of ``case`` (the gear-shaft structure, the four
     bearings and the iterative master in one FMU): every case field of
     :func:`transmission_fields` as a parameter starting at the case's value (the naming of
-    :func:`gear_parameters`), the input ``torque``, the journal states, the film forces, the
-    mesh force and the transmission error."""
+    :func:`gear_parameters`), the parameter ``bearing_fmu`` (starting at ``bearing_fmu``), the
+    input ``torque``, the journal states, the film forces, the mesh force and the transmission
+    error."""
     params = [_field_variable(n, f, v) for n, f, v in case_parameters(case, transmission_fields())]
     return (
         *params,
+        FmiVar("bearing_fmu", _P, "String", "", bearing_fmu,
+               "a bearing FMU of your own for the four bearings (any FMU with the contract of "
+               "docs/fmu-variables.md, 'A bearing FMU of your own'; a path relative to the "
+               "FMU's resources folder, or absolute); empty: the model bearings.model names"),
         FmiVar("torque", _I, "Real", "torque", float(case["operation.torque"]),
                "input torque T on the pinion shaft, held over a communication step; until a "
                "host sets it, the parameter operation.torque acts"),

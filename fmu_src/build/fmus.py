@@ -317,27 +317,31 @@ def transmission_fmu_name(case) -> str:
     return name if name[0].isalpha() else f"T_{name}"
 
 
-def build_transmission_fmu(case, dest: Path | str) -> Path:
+def build_transmission_fmu(case, dest: Path | str, bearing_fmu: Path | str | None = None) -> Path:
     """Write ``dest/<case>.fmu``, the transmission FMU of ``case``
     (:class:`orchestrator.coupling.transmission.TransmissionSlave`: the structure, the four
     bearings and the iterative master in one FMU, the case in its resources); return its
-    path."""
+    path. ``bearing_fmu``: a bearing FMU of the user's own, carried in the resources
+    (:data:`fmu_src.contract.BEARING_RESOURCE`) and used for the four bearings."""
     from fmu_src.build.native import export_library
-    from fmu_src.contract import transmission_variables
+    from fmu_src.contract import BEARING_RESOURCE, transmission_variables
 
     dest = Path(dest)
     dest.mkdir(parents=True, exist_ok=True)
     name = transmission_fmu_name(case)
+    carried = {} if bearing_fmu is None else {BEARING_RESOURCE: Path(bearing_fmu)}
     spec = FmuSpec(slave_script(name, f"the transmission of case {case['case.name']}",
                                 "orchestrator.coupling.transmission", "TransmissionSlave"),
-                   functools.partial(transmission_variables, case), feedthrough=False,
-                   extra=TRANSMISSION_CODE)
-    return _build(_pythonfmu_builder(), export_library(), name, spec, dest, case)
+                   functools.partial(transmission_variables, case,
+                                     BEARING_RESOURCE if carried else ""),
+                   feedthrough=False, extra=TRANSMISSION_CODE)
+    return _build(_pythonfmu_builder(), export_library(), name, spec, dest, case, carried)
 
 
-def _build(FmuBuilder, native, name: str, spec: FmuSpec, dest: Path, case=None) -> Path:
+def _build(FmuBuilder, native, name: str, spec: FmuSpec, dest: Path, case=None,
+           carried: dict | None = None) -> Path:
     """Build one FMU into ``dest/<name>.fmu`` (atomic), carrying ``case`` in its resources
-    (``case.toml``) when given."""
+    (``case.toml``) when given, and the files ``carried`` ({name in resources: path})."""
     from fmu_src.slaves.gear_shaft import CASE_RESOURCE
 
     with tempfile.TemporaryDirectory(prefix="gsb_fmu_") as tmp:
@@ -352,6 +356,8 @@ def _build(FmuBuilder, native, name: str, spec: FmuSpec, dest: Path, case=None) 
         _stage_code(project, spec.extra)
         if case is not None:
             (project / CASE_RESOURCE).write_text(case.to_toml())
+        for rel, path in (carried or {}).items():
+            shutil.copyfile(path, project / rel)
         files = list(project.iterdir())
         fmu = FmuBuilder.build_FMU(src, dest=tmp / f"{name}.fmu", project_files=files,
                                    canGetAndSetFMUstate=True, canSerializeFMUstate=True,

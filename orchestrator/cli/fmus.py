@@ -3,7 +3,10 @@ as an SSP archive, or the whole transmission as one FMU."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 from bearing_fmu import MODELS
+from fmu_src.case import CaseError
 from orchestrator.cli.options import add_case_argument, case_from_args
 
 __all__ = ["add_parser"]
@@ -40,6 +43,8 @@ def add_parser(sub) -> None:
     add_case_argument(p)
     p.add_argument("--bearing", choices=tuple(MODELS), help="bearing model (overrides the "
                                                             "case)")
+    p.add_argument("--bearing-fmu", default=None, metavar="FMU",
+                   help="a bearing FMU of your own for the four bearings, carried inside")
     p.add_argument("--dest", default=".", help="output folder (default: the current folder)")
     p.set_defaults(func=export_fmu)
 
@@ -73,7 +78,9 @@ def export_fmu(args) -> int:
     from fmu_src.description import time_step
 
     case = case_from_args(args)
-    path = build_transmission_fmu(case, args.dest)
+    if args.bearing_fmu is not None and not Path(args.bearing_fmu).is_file():
+        raise CaseError(f"--bearing-fmu {args.bearing_fmu}: no such file")
+    path = build_transmission_fmu(case, args.dest, args.bearing_fmu)
     print(f"{path} (step {time_step(case)!r} s or a multiple of it; e.g. fmpy simulate {path} "
           f"--step-size {time_step(case)!r})")
     return 0

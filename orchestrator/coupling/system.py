@@ -27,15 +27,25 @@ def build_master(case: Case, in_process: bool = False, fmu_dir: Path | str | Non
     FMUs the bearing FMU of the case's ``bearings.model`` and the gear-shaft FMU are taken from
     ``fmu_dir`` (default: the per-user cache; built there if missing), or ``fmus`` names the
     files: ``{"gear": path, "bearings": [4 paths], "bearing_parameters": [4 dicts]
-    (optional)}`` (an SSP's, or a bearing FMU of the user's own). Release the slaves with
+    (optional)}`` (an SSP's, or a bearing FMU of the user's own). In-process, ``fmus`` with
+    ``"bearings"`` only couples the in-process structure with those bearing FMUs (the
+    transmission FMU with a bearing FMU of the user's own). Release the slaves with
     :meth:`orchestrator.coupling.master.Master.close`.
     """
     tol = case["simulation.tolerance"]
     max_it = case["simulation.max_iterations"]
     if in_process:
         structure = InProcessStructure(description.structure(case))
-        bearings = ModelBearings(description.bearing_models(case), description.BEARING_FRAMES,
-                                 description.bearing_speeds(case))
+        if fmus is not None:
+            from orchestrator.coupling import fmi
+
+            bearings = fmi.FmuBearings(fmus["bearings"], fmus.get("bearing_parameters")
+                                       or description.bearing_parameters(case),
+                                       description.bearing_speeds(case))
+        else:
+            bearings = ModelBearings(description.bearing_models(case),
+                                     description.BEARING_FRAMES,
+                                     description.bearing_speeds(case))
     elif fmus is not None:
         from orchestrator.coupling import fmi
 

@@ -7,8 +7,9 @@ that a tool that does not iterate FMUs (libcosim, OMSimulator, ecos) gets ``gsb 
 Written by ``gsb export-fmu`` (:func:`fmu_src.build.fmus.build_transmission_fmu`), which puts
 the case into its resources (``case.toml``).
 
-* Parameters: every case field but the run length (:func:`fmu_src.contract.transmission_fields`);
-  a change rebuilds the system.
+* Parameters: every case field but the run length (:func:`fmu_src.contract.transmission_fields`)
+  and ``bearing_fmu``, a bearing FMU of the user's own (run through fmpy, in the host's
+  Python) instead of ``bearings.model``; a change rebuilds the system.
 * Input ``torque`` [N m]: the input torque, held over a communication step
   (:meth:`gear_fmu.structure.Structure.set_torque`); until set, the case's ``operation.torque``.
 * Initialisation: the outputs are the static solution X0 (Sec. 2.2.3), solved when first read
@@ -36,6 +37,7 @@ import numpy as np
 from pythonfmu.default_experiment import DefaultExperiment
 
 from fmu_src.contract import (
+    BEARING_RESOURCE,
     BEARINGS,
     FORCE_NAMES,
     journal_output_names,
@@ -84,6 +86,7 @@ class TransmissionSlave(ContractSlave):
         self.default_experiment = DefaultExperiment(start_time=0.0, stop_time=stop,
                                                     step_size=step)
         self._overrides: dict = {}  # case field -> value set through a parameter
+        self._bearing_fmu = ""  # the parameter bearing_fmu
         self._torque: float | None = None  # the input, once a host has set it
         self._start_time = 0.0
         self._master = None
@@ -93,7 +96,9 @@ class TransmissionSlave(ContractSlave):
         self._iterations = 0
         self._steps = 0
         self._error: str | None = None  # a failure that forbids stepping
-        self._register_all(transmission_variables(self._base))
+        carried = self.resources is not None and (Path(self.resources) / BEARING_RESOURCE).is_file()
+        self._register_all(transmission_variables(self._base,
+                                                  BEARING_RESOURCE if carried else ""))
 
     def _base_case(self):
         from fmu_src.case import load_case
@@ -107,7 +112,11 @@ class TransmissionSlave(ContractSlave):
     def _register_all(self, variables) -> None:
         out_index = {name: i for i, name in enumerate(_OUTPUTS)}
         for v in variables:
-            if v.causality == "parameter":
+            if v.name == "bearing_fmu":
+                self._bearing_fmu = v.start
+                self.register_contract_variable(v, lambda: self._bearing_fmu,
+                                                self._set_bearing_fmu)
+            elif v.causality == "parameter":
                 self.register_contract_variable(v, self._param_getter(v.name),
                                                 self._param_setter(v.name))
             elif v.name == "torque":
@@ -139,6 +148,24 @@ class TransmissionSlave(ContractSlave):
                 self._overrides[key] = new
                 self._drop_master()
         return set_
+
+    def _set_bearing_fmu(self, value) -> None:
+        if value != self._bearing_fmu:
+            self._bearing_fmu = value
+            self._drop_master()
+
+    def _bearing_fmu_path(self) -> str | None:
+        """The bearing FMU of the user's own (``bearing_fmu``: relative to the resources),
+        or None for the case's model."""
+        if not self._bearing_fmu:
+            return None
+        path = Path(self._bearing_fmu)
+        if not path.is_absolute() and self.resources is not None:
+            path = Path(self.resources) / path
+        if not path.is_file():
+            raise FileNotFoundError(f"bearing_fmu = {self._bearing_fmu!r}: no such file "
+                                    f"({path})")
+        return str(path)
 
     def _get_torque(self) -> float:
         return self.case()["operation.torque"] if self._torque is None else self._torque
@@ -172,7 +199,7 @@ class TransmissionSlave(ContractSlave):
         return self._base.with_overrides(self._overrides) if self._overrides else self._base
 
     def _key(self):
-        return repr(sorted(self._overrides.items())), self._get_torque()
+        return (repr(sorted(self._overrides.items())), self._bearing_fmu), self._get_torque()
 
     def _drop_master(self) -> None:
         if self._master is not None:
@@ -187,7 +214,9 @@ class TransmissionSlave(ContractSlave):
         """Build the master for the current parameters and torque and solve X0."""
         self._drop_master()
         case = self.case()
-        master = build_master(case, in_process=True)
+        fmu = self._bearing_fmu_path()
+        master = build_master(case, in_process=True,
+                              fmus=None if fmu is None else {"bearings": [fmu] * 4})
         master.structure.physics.t = self._start_time
         master.structure.physics.set_torque(self._get_torque())
         report = master.solve_static()
@@ -255,7 +284,8 @@ class TransmissionSlave(ContractSlave):
     # --- FMU state ----------------------------------------------------------------------------
     def _get_fmu_state(self):
         master = self._master
-        return {"overrides": dict(self._overrides), "torque": self._torque,
+        return {"overrides": dict(self._overrides), "bearing_fmu": self._bearing_fmu,
+                "torque": self._torque,
                 "start_time": self._start_time, "stepping": self._stepping,
                 "static_key": self._static_key,
                 "checkpoint": None if master is None else master.checkpoint(),
@@ -268,6 +298,9 @@ class TransmissionSlave(ContractSlave):
                 if state["overrides"]:
                     self._base.with_overrides(state["overrides"])  # a case error before a change
                 self._overrides = dict(state["overrides"])
+                self._drop_master()
+            if state["bearing_fmu"] != self._bearing_fmu:
+                self._bearing_fmu = state["bearing_fmu"]
                 self._drop_master()
             self._start_time = state["start_time"]
             blob = state["checkpoint"]
@@ -302,6 +335,7 @@ class TransmissionSlave(ContractSlave):
         out = {f"overrides/{key}": np.asarray(value)
                for key, value in state["overrides"].items()}
         out |= {"start_time": np.float64(state["start_time"]),
+                "bearing_fmu": np.str_(state["bearing_fmu"]),
                 "stepping": np.bool_(state["stepping"]),
                 "iterations": np.int64(state["iterations"]), "steps": np.int64(state["steps"])}
         if state["torque"] is not None:
@@ -321,11 +355,13 @@ class TransmissionSlave(ContractSlave):
         ov = arrays.sub("overrides")
         overrides = {key: ov.value(key) for key in ov.names()}
         has = arrays.has
-        return {"overrides": overrides,
+        bearing_fmu = arrays.text("bearing_fmu")
+        return {"overrides": overrides, "bearing_fmu": bearing_fmu,
                 "torque": arrays.float("torque") if has("torque") else None,
                 "start_time": arrays.float("start_time"),
                 "stepping": arrays.bool("stepping"),
-                "static_key": ((repr(sorted(overrides.items())), arrays.float("static_torque"))
+                "static_key": (((repr(sorted(overrides.items())), bearing_fmu),
+                                arrays.float("static_torque"))
                                if has("static_torque") else None),
                 "checkpoint": (arrays.array("checkpoint", "uint8").tobytes()
                                if has("checkpoint") else None),

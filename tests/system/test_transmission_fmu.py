@@ -184,3 +184,26 @@ def test_a_step_no_bearing_can_carry(transmission_fmu):
     assert "status 2 (discard)" in got["doStep"]
     assert "status 3 (error)" in got["getReal"]
     assert "status 2 (discard)" in got["doStep again"]
+
+
+def test_a_bearing_fmu_of_your_own_carried_inside(fmu_dir, tmp_path):
+    """``gsb export-fmu --bearing-fmu BearingLumped.fmu`` carries that FMU and runs the four
+    bearings through it (fmpy inside the FMU): the bits of gsb run with the lumped model, which
+    the bearing FMU computes as the in-process model does."""
+    import subprocess
+    import sys
+
+    proc = subprocess.run([sys.executable, "-m", "orchestrator.cli", "export-fmu", CASE,
+                           "--bearing-fmu", str(fmu_dir / "BearingLumped.fmu"),
+                           "--dest", str(tmp_path)], capture_output=True, text=True,
+                          timeout=600, cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    fmu = tmp_path / f"{CASE}.fmu"
+    missing = subprocess.run([sys.executable, "-m", "orchestrator.cli", "export-fmu", CASE,
+                              "--bearing-fmu", str(tmp_path / "nowhere.fmu")],
+                             capture_output=True, text=True, timeout=600, cwd=tmp_path)
+    assert missing.returncode == 2 and "nowhere.fmu: no such file" in missing.stderr
+    case = _case(**{"bearings.model": "lumped"})
+    got = run_isolated(module="tests.probes.transmission",
+                       args=["run", {"fmu": str(fmu), "runs": [{"h": _dt(case), "n": 8}]}])
+    assert np.array_equal(np.array(got[0]["rows"][1:]), gsb_run_rows(case, 8))
