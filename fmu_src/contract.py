@@ -44,8 +44,8 @@ from fmu_src.description import BEARING_FRAMES
 from fmu_src.units import symbol
 
 __all__ = ["BEARINGS", "BEARING_RESOURCE", "GEAR_DEFAULT_CASE", "FmiVar", "ValueRefused",
-           "bearing_fmu_name",           "bearing_option_keys", "bearing_variables", "case_parameters", "connections",
-           "gear_case_fields", "gear_parameters",
+           "bearing_fmu_name", "bearing_option_keys", "bearing_variables", "case_parameters",
+           "connections", "gear_case_fields", "gear_parameters",
            "gear_variables", "journal_output_names", "law_input_names", "pack_laws",
            "parameter_field", "transmission_fields", "transmission_variables", "unpack_journal",
            "unpack_law_arrays"]
