@@ -88,6 +88,17 @@ def test_the_fmu_declares_the_case():
     assert [n for n in OUTPUTS if by_name[n].causality != "output"] == []
 
 
+def test_fmpy_validates_it_and_it_carries_the_case_step(transmission_fmu):
+    from fmpy import read_model_description
+    from fmpy.validation import validate_fmu
+
+    assert validate_fmu(str(transmission_fmu)) == []
+    md = read_model_description(str(transmission_fmu))
+    case = _case()
+    assert float(md.defaultExperiment.stepSize) == _dt(case)
+    assert md.coSimulation.canGetAndSetFMUstate and md.coSimulation.canSerializeFMUstate
+
+
 def test_every_bearing_model_gives_gsb_runs_numbers(transmission_fmu):
     """In a fresh interpreter, one instance per registered model (``bearings.model`` set as a
     parameter) stepping at the case's step: the same bits as ``gsb run`` of that model."""
