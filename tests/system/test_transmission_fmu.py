@@ -48,9 +48,12 @@ def gsb_run_rows(case, steps: int) -> np.ndarray:
                       r["mesh_force"][:, None], r["transmission_error"][:, None]])
 
 
-def master_rows(case, h: float, steps: int) -> np.ndarray:
+def master_rows(case, h, steps: int) -> np.ndarray:
     """The same rows from the master of ``gsb run`` stepping at ``h`` (not the case's step),
-    X0 first."""
+    X0 first; ``h`` one step [s] for all, or a sequence of ``steps`` steps (a host's clock
+    that rounds its own time, as libcosim's, gives steps differing in their last bits)."""
+    hs = [float(h)] * steps if np.ndim(h) == 0 else [float(x) for x in h]
+    assert len(hs) == steps, (len(hs), steps)
     from orchestrator.coupling.system import build_master
 
     master = build_master(case, in_process=True)
@@ -60,7 +63,7 @@ def master_rows(case, h: float, steps: int) -> np.ndarray:
     rows = []
     for k in range(steps + 1):
         if k:
-            report = master.step(s.physics.t, h)
+            report = master.step(s.physics.t, hs[k - 1])
         rows.append([*report.states.ravel(), *report.bearing_force.ravel(), s.mesh_force(),
                      s.transmission_error()])
     return np.array(rows)
