@@ -17,8 +17,11 @@ modelDescription.xml.
   output dependencies (all inputs for the algebraic bearing FMUs; none for the gear-shaft FMU,
   whose outputs are states that change at doStep) and the InitialUnknowns.
 
-An FMU is written to a temporary file and moved into place (atomic): two builds into one folder
-at once leave complete files. Built FMUs go to a git-ignored folder.
+An FMU is written to a temporary file beside its destination and moved into place (atomic): two
+builds into one folder at once leave complete files. That file is created as any file is (mode
+0666 less the umask: 0644 usually), so that others can read the FMU, not with the 0600 of
+``tempfile.mkstemp``; the files inside it are 0644 too (:func:`readable_entry`). Built FMUs go
+to a git-ignored folder.
 """
 
 from __future__ import annotations
@@ -27,8 +30,11 @@ import functools
 import hashlib
 import math
 import os
+import secrets
 import shutil
+import stat
 import tempfile
+import time
 import zipfile
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -210,6 +216,25 @@ def _complete_model_description(xml_bytes: bytes, variables, feedthrough: bool =
     return parseString(ET.tostring(root, encoding="UTF-8")).toprettyxml(encoding="UTF-8")
 
 
+def readable_entry(entry: str | zipfile.ZipInfo) -> zipfile.ZipInfo:
+    """The archive entry named ``entry`` (a new one, compressed, dated now), or ``entry``
+    itself, as a regular file anyone may read once unpacked (mode 0644, or more: an executable
+    keeps its execute bits). ``ZipFile.writestr`` with a name alone makes it 0600: a tool that
+    unpacks with the archive's modes (unzip, a C/C++ host) would then leave it unreadable to
+    other users."""
+    if isinstance(entry, str):
+        entry = zipfile.ZipInfo(entry, time.localtime()[:6])
+        entry.compress_type = zipfile.ZIP_DEFLATED
+        entry.create_system = 3  # Unix: the mode below is read
+        mode = 0
+    elif entry.is_dir():
+        return entry
+    else:
+        mode = stat.S_IMODE(entry.external_attr >> 16)
+    entry.external_attr = ((stat.S_IFREG | mode | 0o644) << 16) | (entry.external_attr & 0xFFFF)
+    return entry
+
+
 def _finish(fmu: Path, out: Path, spec: FmuSpec | None, native) -> None:
     """Copy ``fmu`` to ``out`` with the completed modelDescription.xml (``spec`` given) and,
     if given (:class:`fmu_src.build.native.NativeLibraries`), the patched library in place of
@@ -226,13 +251,33 @@ def _finish(fmu: Path, out: Path, spec: FmuSpec | None, native) -> None:
                   and item.filename.endswith(".so")):
                 if native.loader is not None:
                     data = native.loader.read_bytes()
-                    zout.writestr(item.filename.rsplit("/", 1)[0] + "/" + native.library.name,
+                    zout.writestr(readable_entry(item.filename.rsplit("/", 1)[0] + "/"
+                                                 + native.library.name),
                                   native.library.read_bytes())
                 else:
                     data = native.library.read_bytes()
-            zout.writestr(item, data)
+            zout.writestr(readable_entry(item), data)
         if native is not None and native.loader is not None:
-            zout.writestr("resources/gsb_python.txt", python_host_config())
+            zout.writestr(readable_entry("resources/gsb_python.txt"), python_host_config())
+
+
+def _write_in_place(out: Path, write: Callable[[Path], None]) -> Path:
+    """``write(part)`` into a new file beside ``out``, then the file moved onto ``out`` in one
+    step (module docstring); the partial file is removed if ``write`` fails."""
+    while True:
+        part = out.parent / f".{out.stem}-{secrets.token_hex(6)}.part"
+        try:
+            open(part, "xb").close()  # created as any file is: 0666 less the umask
+            break
+        except FileExistsError:  # pragma: no cover - another writer drew the same name
+            continue
+    try:
+        write(part)
+        os.replace(part, out)
+    except BaseException:
+        part.unlink(missing_ok=True)
+        raise
+    return out
 
 
 def patch_fmu(fmu: Path | str, out: Path | str) -> Path:
@@ -241,16 +286,8 @@ def patch_fmu(fmu: Path | str, out: Path | str) -> Path:
     getters, no exit-time abort, the loader for C/C++ hosts); returns ``out``."""
     from fmu_src.build.native import export_library
 
-    out = Path(out)
-    fd, part = tempfile.mkstemp(prefix=f".{out.stem}-", suffix=".part", dir=out.parent)
-    os.close(fd)
-    try:
-        _finish(Path(fmu), Path(part), None, export_library())
-        os.replace(part, out)
-    except BaseException:
-        Path(part).unlink(missing_ok=True)
-        raise
-    return out
+    native = export_library()
+    return _write_in_place(Path(out), lambda part: _finish(Path(fmu), part, None, native))
 
 
 def _pythonfmu_builder():
@@ -310,13 +347,8 @@ def build_fmus(dest: Path | str, names=None, case=None) -> list[Path]:
                                        canGetAndSetFMUstate=True, canSerializeFMUstate=True,
                                        needsExecutionTool=True)
             # finished beside the destination, then moved into place in one step
-            fd, part = tempfile.mkstemp(prefix=f".{name}-", suffix=".part", dir=dest)
-            os.close(fd)
-            try:
-                _finish(Path(fmu), Path(part), spec, native)
-                os.replace(part, dest / f"{name}.fmu")
-            except BaseException:
-                Path(part).unlink(missing_ok=True)
-                raise
+            _write_in_place(dest / f"{name}.fmu",
+                            lambda part, fmu=fmu, spec=spec: _finish(Path(fmu), part, spec,
+                                                                     native))
         built.append(dest / f"{name}.fmu")
     return built

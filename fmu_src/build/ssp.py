@@ -145,7 +145,7 @@ def write_ssp(case: Case, dest: Path | str, laws=None) -> Path:
     ``bearings.model``) and write ``dest/<case name>.ssp``; returns its path.
     ``laws``: the bearing laws at the static solution (:func:`ssd_text`)."""
     from fmu_src.contract import bearing_fmu_name
-    from fmu_src.build.fmus import build_fmus
+    from fmu_src.build.fmus import build_fmus, readable_entry
 
     dest = Path(dest)
     dest.mkdir(parents=True, exist_ok=True)
@@ -155,10 +155,11 @@ def write_ssp(case: Case, dest: Path | str, laws=None) -> Path:
         fmus = build_fmus(tmp, ["GearShaft", bearing], case=case)
         part = Path(tmp) / "system.ssp"
         with zipfile.ZipFile(part, "w", zipfile.ZIP_DEFLATED) as z:
-            z.writestr("SystemStructure.ssd", ssd_text(case, "resources/GearShaft.fmu",
-                                                       f"resources/{bearing}.fmu", laws))
+            z.writestr(readable_entry("SystemStructure.ssd"),
+                       ssd_text(case, "resources/GearShaft.fmu", f"resources/{bearing}.fmu",
+                                laws))
             for path in fmus:
-                z.write(path, f"resources/{path.name}")
+                z.write(path, f"resources/{path.name}")  # their mode: 0644 (build_fmus)
         shutil.move(part, out)
     return out
 

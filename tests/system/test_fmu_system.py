@@ -11,6 +11,7 @@ import os
 import random
 import shutil
 import signal
+import stat
 import subprocess
 import sys
 import sysconfig
@@ -105,6 +106,37 @@ def test_the_ssp_archive_holds_the_system(ssp_file):
     starts = [[float(values[(f"bearing{j}", n)]) for n in ("s", "t")] for j in range(1, 5)]
     assert starts == x0[:, :2].tolist()
     assert float(values[("gear_shaft", "s_eval_3")]) == x0[2, 0]
+
+
+def _created_mode() -> int:
+    """The mode a file created now gets (0666 less the umask)."""
+    mask = os.umask(0)
+    os.umask(mask)
+    return 0o666 & ~mask
+
+
+def test_fmus_ssp_and_patched_fmus_are_readable_as_files_written_normally(
+        fmu_dir, ssp_file, spring_fmu, tmp_path):
+    """Built FMUs, the SSP archive and a patched FMU have the mode of a normally written file
+    (readable by others under the usual umask: 0644), not the 0600 of a temporary file; so
+    have the files inside them once unpacked with their modes (unzip, a C/C++ host): the FMUs
+    in the SSP, every file in an FMU (its modelDescription.xml and libraries too)."""
+    from fmu_src.build.fmus import build_fmus
+
+    mode = _created_mode()
+    built = build_fmus(tmp_path / "built", ["BearingLumped"])
+    for path in [*built, *fmu_dir.glob("*.fmu"), ssp_file, spring_fmu]:
+        assert stat.S_IMODE(path.stat().st_mode) == mode, (path, oct(path.stat().st_mode))
+    for archive in (ssp_file, built[0], spring_fmu):
+        with zipfile.ZipFile(archive) as z:
+            modes = {i.filename: i.external_attr >> 16 for i in z.infolist() if not i.is_dir()}
+        unreadable = {n: oct(m) for n, m in modes.items()
+                      if not stat.S_ISREG(m) or m & 0o444 != 0o444}
+        assert not unreadable, (archive.name, unreadable)
+    with zipfile.ZipFile(ssp_file) as z:
+        inner = [stat.S_IMODE(i.external_attr >> 16) for i in z.infolist()
+                 if i.filename.endswith(".fmu")]
+    assert inner == [mode, mode]  # as the FMU files were written
 
 
 def test_gsb_run_of_the_ssp_equals_gsb_run_of_the_case(fmu_dir, ssp_file, tmp_path):
