@@ -167,6 +167,25 @@ def carried_hash(fmu: Path | str) -> str | None:
         return None
 
 
+def _declare_bounds(sv, typed, v, real: bool) -> None:
+    """``min``/``max`` of variable ``v`` (:class:`fmu_src.contract.FmiVar`) on its type element
+    as :meth:`~fmu_src.contract.FmiVar.check` enforces them: the smallest value accepted, the
+    largest. A strict minimum (``> 0``, which FMI cannot declare) is the next double above the
+    limit (the next integer for an Integer), and the description says ``(> 0)``."""
+    if v.minimum is not None:
+        if real:
+            low = float(v.minimum)
+            typed.set("min", repr(math.nextafter(low, math.inf) if v.exclusive_minimum
+                                  else low))
+        else:
+            typed.set("min", str(math.floor(v.minimum) + 1 if v.exclusive_minimum
+                                 else math.ceil(v.minimum)))
+        if v.exclusive_minimum:
+            sv.set("description", f"{sv.get('description', '')} (> {v.minimum:g})".lstrip())
+    if v.maximum is not None:
+        typed.set("max", repr(float(v.maximum)) if real else str(math.floor(v.maximum)))
+
+
 def _complete_model_description(xml_bytes: bytes, variables, feedthrough: bool = True) -> bytes:
     root = ET.fromstring(xml_bytes)
     by_name = {v.name: v for v in variables}
@@ -191,12 +210,7 @@ def _complete_model_description(xml_bytes: bytes, variables, feedthrough: bool =
         typed = real if real is not None else sv.find("Integer")
         v = by_name.get(name)
         if typed is not None and v is not None:  # declared bounds (FmiVar.check enforces them)
-            if v.minimum is not None:
-                typed.set("min", repr(float(v.minimum)) if real is not None
-                          else str(math.ceil(v.minimum)))
-            if v.maximum is not None:
-                typed.set("max", repr(float(v.maximum)) if real is not None
-                          else str(int(v.maximum)))
+            _declare_bounds(sv, typed, v, real is not None)
         if sv.get("causality") == "input":
             inputs.append(i)
         if sv.get("causality") in ("output", "calculatedParameter"):

@@ -75,9 +75,12 @@ centre to the gear centre, z along the shafts, t = z x s), SI units. Build the F
   far that state lags is the master's coupling error (next section).
 - Values are checked when set: a value out of its bounds (column "allowed"), a non-finite
   number or a choice not listed is refused by fmi2SetReal/SetInteger with fmi2Error, the value
-  and the limit in the log, and the variable keeps its previous value. An output that cannot be
-  computed (a journal outside the clearance, a static solution that does not converge) makes
-  the read return fmi2Error, the reason in the log (the values read are NaN).
+  and the limit in the log, and the variable keeps its previous value. modelDescription.xml
+  declares the bounds as enforced: a strict one ("> 0", which FMI cannot write) as `min` =
+  the smallest double above it (5e-324), its description ending in "(> 0)".
+- An output that cannot be computed (a journal outside the clearance, a static solution that
+  does not converge) makes the read return fmi2Error, the reason in the log (the values read
+  are NaN).
 - Every FMU's state (fmi2GetFMUstate, fmi2SerializeFMUstate) holds everything its next outputs
   depend on, the hybrid solver's warm start included: a restored state reproduces the outputs
   bit for bit.

@@ -16,6 +16,7 @@ The FMUs load in the test's process (tests.helpers.run_here), but for the restar
 process.
 """
 
+import math
 import zipfile
 from xml.etree import ElementTree as ET
 
@@ -61,8 +62,9 @@ def test_bounds_are_declared_in_the_model_description(fmu_dir):
     with zipfile.ZipFile(fmu_dir / "BearingHybrid.fmu") as z:
         root = ET.fromstring(z.read("modelDescription.xml"))
     typed = {sv.get("name"): next(iter(sv)) for sv in root.iter("ScalarVariable")}
-    assert typed["C"].get("min") == "0.0" and typed["mu"].get("min") == "0.0"
-    assert typed["nodes"].get("min") == "8" and typed["omega"].get("min") == "0.0"
+    # > 0: the smallest positive double, the least value accepted (FMI has no strict bound)
+    assert typed["C"].get("min") == "5e-324" and typed["mu"].get("min") == "5e-324"
+    assert typed["nodes"].get("min") == "8" and typed["omega"].get("min") == "5e-324"
     assert typed["s"].get("min") is None  # an input any real value may take
     with zipfile.ZipFile(fmu_dir / "GearShaft.fmu") as z:
         root = ET.fromstring(z.read("modelDescription.xml"))
@@ -116,3 +118,25 @@ def test_bytes_that_are_not_the_fmus_own_state_are_refused_with_fmi2error(fmu_di
     assert all(v[2] == "fmi2DeSerializeFMUstate" for k, v in refused.items() if k != "shape")
     assert not marker.exists()
     assert out["again"]
+
+
+@pytest.mark.parametrize("fmu", ["GearShaft", *BEARING_FMUS])
+def test_declared_bounds_are_the_enforced_ones(fmu_dir, fmu):
+    """Every parameter and input with a min or max in modelDescription.xml: the bound itself
+    is accepted (fmi2OK) and the nearest value beyond it refused (fmi2Error). A strict bound
+    (> 0) is declared as the smallest double above it, and its description says so."""
+    from fmu_src.contract import gear_variables
+
+    out = run_here(module=PROBES, args=["declared_bounds", {"fmu": fmu_dir / f"{fmu}.fmu"}])
+    variables = bearing_variables() if fmu != "GearShaft" else gear_variables()
+    exclusive = {v.name: v.minimum for v in variables if v.exclusive_minimum}
+    bounded = {v.name for v in variables if v.causality in ("parameter", "input")
+               and (v.minimum is not None or v.maximum is not None)}
+    assert set(out) == bounded and set(exclusive) <= bounded
+    for name, r in out.items():
+        for value, at_bound, status in r["tries"]:
+            assert status == (0 if at_bound else 3), (name, value, r)
+        if name in exclusive:
+            limit = exclusive[name]
+            assert float(r["min"]) == math.nextafter(limit, math.inf), (name, r)
+            assert r["description"].endswith(f"(> {limit:g})"), (name, r["description"])

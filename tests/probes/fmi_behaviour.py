@@ -231,8 +231,45 @@ def refuse_foreign_states(fmu: str, gear: bool, marker: str) -> dict:
     return r
 
 
+def declared_bounds(fmu: str) -> dict:
+    """Every parameter and input with a min or max in modelDescription.xml set (in
+    initialisation mode) to that bound and to the nearest value beyond it (the next double;
+    the next integer): per variable and value, the setter's status."""
+    import ctypes
+
+    from orchestrator.coupling.fmi import FmuInstance
+
+    s = FmuInstance(fmu, "x")
+    f = s.fmu
+    f.setupExperiment(startTime=0.0)
+    f.enterInitializationMode()
+    r = {}
+    for v in s.md.modelVariables:
+        if v.causality not in ("parameter", "input") or v.type not in ("Real", "Integer"):
+            continue
+        real = v.type == "Real"
+        kind = float if real else int
+        setter = f.dll.fmi2SetReal if real else f.dll.fmi2SetInteger
+        ctype = ctypes.c_double if real else ctypes.c_int
+        tries = []
+        for bound, away in ((v.min, -math.inf), (v.max, math.inf)):
+            if bound is None:
+                continue
+            at = kind(bound)
+            beyond = math.nextafter(at, away) if real else at + (1 if away > 0 else -1)
+            for value in (at, beyond):
+                status = setter(f.component, (ctypes.c_uint * 1)(v.valueReference), 1,
+                                (ctype * 1)(value))
+                tries.append([value, value == at, status])
+        if tries:
+            r[v.name] = {"description": v.description, "tries": tries,
+                         "min": v.min, "max": v.max}
+    s.close()
+    return r
+
+
 PROBES = probes_of(refuse_bad_values, read_outside_the_clearance, state_round_trip, checkpoint,
-                   refuse_foreign_states)
+                   refuse_foreign_states, declared_bounds)
 
 
 def main(argv: list[str] | None = None) -> None:
