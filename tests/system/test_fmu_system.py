@@ -108,6 +108,42 @@ def test_the_ssp_archive_holds_the_system(ssp_file):
     assert float(values[("gear_shaft", "s_eval_3")]) == x0[2, 0]
 
 
+def test_the_ssp_carries_the_cases_step_where_tools_look_for_it(ssp_file):
+    """The case's time step, to the last bit, wherever a master looks for a fixed step: OSP's
+    annotation of the default experiment (ecos) and OMSimulator's annotation of the system
+    (its fixed-step master ``oms-ma``, the first ``org.openmodelica`` annotation, which
+    OMSimulator needs to import the SSP at all: it decides the system's type from it)."""
+    from xml.etree import ElementTree as ET
+
+    from fmu_src import description
+    from fmu_src.build.ssp import NS
+    from fmu_src.case import load_case
+
+    dt = description.time_step(load_case("baguet2010_spur"))
+    with zipfile.ZipFile(ssp_file) as z:
+        text = z.read("SystemStructure.ssd").decode()
+    root = ET.fromstring(text)
+    ns = NS | {"oms": "https://raw.githubusercontent.com/OpenModelica/OMSimulator/master/"
+                      "schema/oms.xsd"}
+    osp = root.findall("ssd:DefaultExperiment/ssd:Annotations/ssc:Annotation"
+                       "[@type='com.opensimulationplatform']/osp:Algorithm/"
+                       "osp:FixedStepAlgorithm", ns)
+    assert [float(a.get("baseStepSize")) for a in osp] == [dt]
+    system = root.find("ssd:System", ns)
+    annotations = system.find("ssd:Annotations", ns)
+    assert list(system)[-1] is annotations  # the SSD schema's order: annotations last
+    first = annotations.find("ssc:Annotation", ns)  # OMSimulator reads the first one
+    assert first.get("type") == "org.openmodelica"
+    masters = first.findall("oms:Annotations/oms:SimulationInformation/oms:FixedStepMaster",
+                            ns)
+    assert [(m.get("description"), float(m.get("stepSize"))) for m in masters] == [
+        ("oms-ma", dt)]
+    # OMSimulator (pugixml) matches qualified names as written: the prefixes must be these
+    for tag in ("<oms:Annotations>", "<oms:SimulationInformation>", "<oms:FixedStepMaster ",
+                "<osp:FixedStepAlgorithm ", "<ssc:Annotation "):
+        assert tag in text, tag
+
+
 def _created_mode() -> int:
     """The mode a file created now gets (0666 less the umask)."""
     mask = os.umask(0)
