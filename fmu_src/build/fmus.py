@@ -74,6 +74,7 @@ from pathlib import Path
 if "fmu_src" not in sys.modules:  # a host without this package loaded: the FMU's own code
     import fmu_bootstrap
 
+    fmu_bootstrap.require("{fmu}")  # else: what to install, and where, in the host's log
     fmu_bootstrap.stage_code(Path(__file__).resolve().parent)
 
 from fmu_src.slaves.support import pin_namespace  # noqa: E402

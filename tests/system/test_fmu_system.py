@@ -175,6 +175,22 @@ def test_fmus_ssp_and_patched_fmus_are_readable_as_files_written_normally(
     assert inner == [mode, mode]  # as the FMU files were written
 
 
+@pytest.mark.parametrize("fmu, refused", [("BearingHybrid", "numba"), ("GearShaft", "scipy"),
+                                          ("BearingLumped", "numpy")])
+def test_an_fmu_in_a_python_without_a_package_it_needs_says_what_to_install(fmu_dir, fmu,
+                                                                            refused):
+    """fmi2Instantiate in a Python that cannot import numpy, scipy or numba: NULL, and the
+    host's logger gets what to install and into which Python (a C host's user sees no
+    Python traceback on stderr)."""
+    out = run_isolated(module="tests.probes.missing_requirement",
+                       args=["instantiate", {"fmu": fmu_dir / f"{fmu}.fmu", "blocked": refused}])
+    assert out["null"] and not out["imported"]
+    text = "\n".join(m for _, m in out["messages"])
+    assert f"{fmu}.fmu" in text and "needs numpy, scipy and numba" in text, text
+    assert f"lacks {refused}" in text, text
+    assert f"{out['executable']} -m pip install {refused}" in text, text
+
+
 def test_gsb_run_of_the_ssp_equals_gsb_run_of_the_case(fmu_dir, ssp_file, tmp_path):
     """The archive's FMUs and values, run by the iterative master, give the case's run through
     the built FMUs bit for bit (the same code on the same numbers)."""
