@@ -45,8 +45,8 @@ autodoc_default_options = {
 # private modules (``bearing_fmu.fd._grid``, ...) that the reference leaves out.
 nitpicky = True
 nitpick_ignore_regex = [
-    (r"py:.*", r"(numpy|np|xarray|enum|pathlib|abc|collections|ctypes|typing|pythonfmu|fmpy|scipy"
-               r"|matplotlib|h5py|dask|argparse)\..*"),
+    (r"py:.*", r"(numpy|np|xarray|enum|pathlib|abc|collections|ctypes|typing|zipfile|pythonfmu|fmpy"
+               r"|scipy|matplotlib|h5py|dask|argparse)\..*"),
     (r"py:mod", r"(bearing_fmu|gear_fmu|fmu_src|orchestrator)(\.\w+)*\._\w+"),
 ]
 # an annotation inherited from pythonfmu's slave base class, unqualified under Sphinx 7

@@ -17,8 +17,11 @@ modelDescription.xml.
   output dependencies (all inputs for the algebraic bearing FMUs; none for the gear-shaft FMU,
   whose outputs are states that change at doStep) and the InitialUnknowns.
 
-An FMU is written to a temporary file and moved into place (atomic): two builds into one folder
-at once leave complete files. Built FMUs go to a git-ignored folder.
+An FMU is written to a temporary file beside its destination and moved into place (atomic): two
+builds into one folder at once leave complete files. That file is created as any file is (mode
+0666 less the umask: 0644 usually), so that others can read the FMU, not with the 0600 of
+``tempfile.mkstemp``; the files inside it are 0644 too (:func:`readable_entry`). Built FMUs go
+to a git-ignored folder.
 """
 
 from __future__ import annotations
@@ -27,8 +30,11 @@ import functools
 import hashlib
 import math
 import os
+import secrets
 import shutil
+import stat
 import tempfile
+import time
 import zipfile
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -67,8 +73,14 @@ import sys
 from pathlib import Path
 
 if "fmu_src" not in sys.modules:  # a host without this package loaded: the FMU's own code
-    import fmu_bootstrap
+    import importlib.util
 
+    # this FMU's own bootstrap, whatever another FMU's copy imported as fmu_bootstrap holds
+    _spec = importlib.util.spec_from_file_location(
+        "fmu_bootstrap_{fmu}", Path(__file__).resolve().parent / "fmu_bootstrap.py")
+    fmu_bootstrap = importlib.util.module_from_spec(_spec)
+    _spec.loader.exec_module(fmu_bootstrap)
+    fmu_bootstrap.require("{fmu}")  # else: what to install, and where, in the host's log
     fmu_bootstrap.stage_code(Path(__file__).resolve().parent)
 
 from fmu_src.slaves.support import pin_namespace  # noqa: E402
@@ -173,6 +185,25 @@ def carried_hash(fmu: Path | str) -> str | None:
         return None
 
 
+def _declare_bounds(sv, typed, v, real: bool) -> None:
+    """``min``/``max`` of variable ``v`` (:class:`fmu_src.contract.FmiVar`) on its type element
+    as :meth:`~fmu_src.contract.FmiVar.check` enforces them: the smallest value accepted, the
+    largest. A strict minimum (``> 0``, which FMI cannot declare) is the next double above the
+    limit (the next integer for an Integer), and the description says ``(> 0)``."""
+    if v.minimum is not None:
+        if real:
+            low = float(v.minimum)
+            typed.set("min", repr(math.nextafter(low, math.inf) if v.exclusive_minimum
+                                  else low))
+        else:
+            typed.set("min", str(math.floor(v.minimum) + 1 if v.exclusive_minimum
+                                 else math.ceil(v.minimum)))
+        if v.exclusive_minimum:
+            sv.set("description", f"{sv.get('description', '')} (> {v.minimum:g})".lstrip())
+    if v.maximum is not None:
+        typed.set("max", repr(float(v.maximum)) if real else str(math.floor(v.maximum)))
+
+
 def _complete_model_description(xml_bytes: bytes, variables, feedthrough: bool = True) -> bytes:
     root = ET.fromstring(xml_bytes)
     by_name = {v.name: v for v in variables}
@@ -197,12 +228,7 @@ def _complete_model_description(xml_bytes: bytes, variables, feedthrough: bool =
         typed = real if real is not None else sv.find("Integer")
         v = by_name.get(name)
         if typed is not None and v is not None:  # declared bounds (FmiVar.check enforces them)
-            if v.minimum is not None:
-                typed.set("min", repr(float(v.minimum)) if real is not None
-                          else str(math.ceil(v.minimum)))
-            if v.maximum is not None:
-                typed.set("max", repr(float(v.maximum)) if real is not None
-                          else str(int(v.maximum)))
+            _declare_bounds(sv, typed, v, real is not None)
         if sv.get("causality") == "input":
             inputs.append(i)
         if sv.get("causality") in ("output", "calculatedParameter"):
@@ -222,6 +248,25 @@ def _complete_model_description(xml_bytes: bytes, variables, feedthrough: bool =
     return parseString(ET.tostring(root, encoding="UTF-8")).toprettyxml(encoding="UTF-8")
 
 
+def readable_entry(entry: str | zipfile.ZipInfo) -> zipfile.ZipInfo:
+    """The archive entry named ``entry`` (a new one, compressed, dated now), or ``entry``
+    itself, as a regular file anyone may read once unpacked (mode 0644, or more: an executable
+    keeps its execute bits). ``ZipFile.writestr`` with a name alone makes it 0600: a tool that
+    unpacks with the archive's modes (unzip, a C/C++ host) would then leave it unreadable to
+    other users."""
+    if isinstance(entry, str):
+        entry = zipfile.ZipInfo(entry, time.localtime()[:6])
+        entry.compress_type = zipfile.ZIP_DEFLATED
+        entry.create_system = 3  # Unix: the mode below is read
+        mode = 0
+    elif entry.is_dir():
+        return entry
+    else:
+        mode = stat.S_IMODE(entry.external_attr >> 16)
+    entry.external_attr = ((stat.S_IFREG | mode | 0o644) << 16) | (entry.external_attr & 0xFFFF)
+    return entry
+
+
 def _finish(fmu: Path, out: Path, spec: FmuSpec | None, native) -> None:
     """Copy ``fmu`` to ``out`` with the completed modelDescription.xml (``spec`` given) and,
     if given (:class:`fmu_src.build.native.NativeLibraries`), the patched library in place of
@@ -238,13 +283,33 @@ def _finish(fmu: Path, out: Path, spec: FmuSpec | None, native) -> None:
                   and item.filename.endswith(".so")):
                 if native.loader is not None:
                     data = native.loader.read_bytes()
-                    zout.writestr(item.filename.rsplit("/", 1)[0] + "/" + native.library.name,
+                    zout.writestr(readable_entry(item.filename.rsplit("/", 1)[0] + "/"
+                                                 + native.library.name),
                                   native.library.read_bytes())
                 else:
                     data = native.library.read_bytes()
-            zout.writestr(item, data)
+            zout.writestr(readable_entry(item), data)
         if native is not None and native.loader is not None:
-            zout.writestr("resources/gsb_python.txt", python_host_config())
+            zout.writestr(readable_entry("resources/gsb_python.txt"), python_host_config())
+
+
+def _write_in_place(out: Path, write: Callable[[Path], None]) -> Path:
+    """``write(part)`` into a new file beside ``out``, then the file moved onto ``out`` in one
+    step (module docstring); the partial file is removed if ``write`` fails."""
+    while True:
+        part = out.parent / f".{out.stem}-{secrets.token_hex(6)}.part"
+        try:
+            open(part, "xb").close()  # created as any file is: 0666 less the umask
+            break
+        except FileExistsError:  # pragma: no cover - another writer drew the same name
+            continue
+    try:
+        write(part)
+        os.replace(part, out)
+    except BaseException:
+        part.unlink(missing_ok=True)
+        raise
+    return out
 
 
 def patch_fmu(fmu: Path | str, out: Path | str) -> Path:
@@ -253,16 +318,8 @@ def patch_fmu(fmu: Path | str, out: Path | str) -> Path:
     getters, no exit-time abort, the loader for C/C++ hosts); returns ``out``."""
     from fmu_src.build.native import export_library
 
-    out = Path(out)
-    fd, part = tempfile.mkstemp(prefix=f".{out.stem}-", suffix=".part", dir=out.parent)
-    os.close(fd)
-    try:
-        _finish(Path(fmu), Path(part), None, export_library())
-        os.replace(part, out)
-    except BaseException:
-        Path(part).unlink(missing_ok=True)
-        raise
-    return out
+    native = export_library()
+    return _write_in_place(Path(out), lambda part: _finish(Path(fmu), part, None, native))
 
 
 def _pythonfmu_builder():
@@ -363,12 +420,6 @@ def _build(FmuBuilder, native, name: str, spec: FmuSpec, dest: Path, case=None,
                                    canGetAndSetFMUstate=True, canSerializeFMUstate=True,
                                    needsExecutionTool=True)
         # finished beside the destination, then moved into place in one step
-        fd, part = tempfile.mkstemp(prefix=f".{name}-", suffix=".part", dir=dest)
-        os.close(fd)
-        try:
-            _finish(Path(fmu), Path(part), spec, native)
-            os.replace(part, dest / f"{name}.fmu")
-        except BaseException:
-            Path(part).unlink(missing_ok=True)
-            raise
+        _write_in_place(dest / f"{name}.fmu",
+                        lambda part: _finish(Path(fmu), part, spec, native))
     return dest / f"{name}.fmu"

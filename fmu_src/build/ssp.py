@@ -4,10 +4,11 @@
 ``gear_shaft`` and ``bearing1`` ... ``bearing4``, the connections of
 :func:`fmu_src.contract.connections`, each component's parameter values in one inline parameter
 set named ``case``, with start values of the connected inputs at the static solution when
-given, a default experiment with the case's time step) and ``resources/`` with the
-gear-shaft FMU carrying the case and the bearing FMU of the case's model (the four bearing
-components share the file). Any SSP tool runs it without this package; ecos needs
-``--parameterSet case`` to apply the values (it applies bindings only by name).
+given, a default experiment with the case's time step as the fixed step of OSP's master (its
+annotation of the default experiment) and of OMSimulator's (its annotation of the system)) and
+``resources/`` with the gear-shaft FMU carrying the case and the bearing FMU of the case's
+model (the four bearing components share the file). Any SSP tool runs it without this package;
+ecos needs ``--parameterSet case`` to apply the values (it applies bindings only by name).
 
 :func:`read_ssp` reads such an archive back (``gsb run X.ssp``): the case the gear-shaft FMU
 carries with the SSD's values applied, and the FMU files and parameter values of the bearings,
@@ -45,8 +46,9 @@ NS = {
     "ssc": "http://ssp-standard.org/SSP1/SystemStructureCommon",
     "ssv": "http://ssp-standard.org/SSP1/SystemStructureParameterValues",
     "osp": "http://opensimulationplatform.com/SSP/OSPAnnotations",
+    "oms": "https://raw.githubusercontent.com/OpenModelica/OMSimulator/master/schema/oms.xsd",
 }
-for _prefix, _uri in NS.items():  # ecos reads the prefixes literally ("ssd:Component")
+for _prefix, _uri in NS.items():  # ecos and OMSimulator read the prefixes literally
     ET.register_namespace(_prefix, _uri)
 
 #: component names in the SSD, and the name of the parameter set
@@ -102,6 +104,20 @@ def _start_values(case: Case, laws) -> tuple[dict, list[dict]]:
     return gear, bearings
 
 
+def _omsimulator_master(system, dt: float, tolerance: float) -> None:
+    """OMSimulator's annotation of the system (last child, as the SSD schema orders it): its
+    fixed-step master ``oms-ma`` at the case's step. OMSimulator takes the system's type from
+    this annotation (the first ``ssc:Annotation`` of the system's ``ssd:Annotations``) and
+    refuses to import a system without it; ``relativeTolerance`` is the case's coupling
+    tolerance (OMSimulator's algebraic loops; the system has none)."""
+    ann = ET.SubElement(ET.SubElement(system, _q("ssd", "Annotations")),
+                        _q("ssc", "Annotation"), type="org.openmodelica")
+    info = ET.SubElement(ET.SubElement(ann, _q("oms", "Annotations")),
+                         _q("oms", "SimulationInformation"))
+    ET.SubElement(info, _q("oms", "FixedStepMaster"), description="oms-ma", stepSize=repr(dt),
+                  relativeTolerance=repr(float(tolerance)))
+
+
 def ssd_text(case: Case, gear_source: str, bearing_source: str, laws=None) -> bytes:
     """``SystemStructure.ssd`` of a case, the FMUs at the given paths inside the archive;
     ``laws`` (:class:`bearing_fmu.affine.AffineLaws` linearised at the static solution X0,
@@ -130,6 +146,7 @@ def ssd_text(case: Case, gear_source: str, bearing_source: str, laws=None) -> by
         ET.SubElement(links, _q("ssd", "Connection"), startElement=a, startConnector=a_var,
                       endElement=b, endConnector=b_var)
     dt = description.time_step(case)
+    _omsimulator_master(system, dt, case["simulation.tolerance"])
     stop = dt * case["simulation.steps_per_mesh_period"] * case["simulation.mesh_periods"]
     exp = ET.SubElement(root, _q("ssd", "DefaultExperiment"), startTime="0.0",
                         stopTime=repr(stop))
@@ -145,7 +162,7 @@ def write_ssp(case: Case, dest: Path | str, laws=None) -> Path:
     ``bearings.model``) and write ``dest/<case name>.ssp``; returns its path.
     ``laws``: the bearing laws at the static solution (:func:`ssd_text`)."""
     from fmu_src.contract import bearing_fmu_name
-    from fmu_src.build.fmus import build_fmus
+    from fmu_src.build.fmus import build_fmus, readable_entry
 
     dest = Path(dest)
     dest.mkdir(parents=True, exist_ok=True)
@@ -155,10 +172,11 @@ def write_ssp(case: Case, dest: Path | str, laws=None) -> Path:
         fmus = build_fmus(tmp, ["GearShaft", bearing], case=case)
         part = Path(tmp) / "system.ssp"
         with zipfile.ZipFile(part, "w", zipfile.ZIP_DEFLATED) as z:
-            z.writestr("SystemStructure.ssd", ssd_text(case, "resources/GearShaft.fmu",
-                                                       f"resources/{bearing}.fmu", laws))
+            z.writestr(readable_entry("SystemStructure.ssd"),
+                       ssd_text(case, "resources/GearShaft.fmu", f"resources/{bearing}.fmu",
+                                laws))
             for path in fmus:
-                z.write(path, f"resources/{path.name}")
+                z.write(path, f"resources/{path.name}")  # their mode: 0644 (build_fmus)
         shutil.move(part, out)
     return out
 

@@ -80,9 +80,14 @@ centre to the gear centre, z along the shafts, t = z x s), SI units. Build the F
   far that state lags is the master's coupling error (next section).
 - Values are checked when set: a value out of its bounds (column "allowed"), a non-finite
   number or a choice not listed is refused by fmi2SetReal/SetInteger with fmi2Error, the value
-  and the limit in the log, and the variable keeps its previous value. An output that cannot be
-  computed (a journal outside the clearance, a static solution that does not converge) makes
-  the read return fmi2Error, the reason in the log (the values read are NaN).
+  and the limit in the log, and the variable keeps its previous value. modelDescription.xml
+  declares the bounds as enforced: a strict one ("> 0", which FMI cannot write) as `min` =
+  the smallest double above it (5e-324), its description ending in "(> 0)".
+- An output that cannot be computed (a journal outside the clearance, a law that is not
+  finite, a static solution or a step that does not converge) makes the read return
+  fmi2Error, the reason in the log (the values read are NaN); a bearing FMU's fmi2DoStep at
+  such inputs returns fmi2Discard, the reason in the log, so that a host that steps, then
+  exchanges, learns it at the step.
 - Every FMU's state (fmi2GetFMUstate, fmi2SerializeFMUstate) holds everything its next outputs
   depend on, the hybrid solver's warm start included: a restored state reproduces the outputs
   bit for bit.
@@ -162,8 +167,10 @@ Behaviour:
   current Kb (`Structure.set_damping_reference`).
 - `fmi2DoStep(t, dt)`: one Newmark step from t (the FMU's time) to t + dt with the current
   laws. The outputs do not depend directly on the inputs in step mode (no feedthrough): they
-  change at doStep. A step that does not converge returns fmi2Discard (reason in the log);
-  `fmi2SetFMUstate` returns to a saved state.
+  change at doStep. A step that cannot be computed (a Newton iteration that does not
+  converge, a step of more than 100 mesh periods) returns fmi2Discard (reason in the log);
+  the outputs then read fmi2Error and further steps are refused until `fmi2SetFMUstate`
+  returns to a saved state.
 - `fmi2GetFMUstate` / `fmi2SetFMUstate` / `fmi2SerializeFMUstate` save and restore the
   structural state (t, X, Xdot, Xddot, contact set, mesh outputs), the inputs, the parameters
   and the outputs exactly. Serialised states are numeric arrays in an npz archive with a

@@ -9,6 +9,11 @@ the code, whatever copy of the code compiled them (:mod:`bearing_fmu.numba_cache
 compile once per machine and code version, not at every instantiation from a freshly
 extracted FMU. A host that has already imported the package's modules keeps them (one copy of
 a module per process).
+
+:func:`require` first checks that the Python the FMU runs in has the packages that code needs
+(:data:`REQUIREMENTS`): without them the instantiation fails with what to install and into
+which Python, a message pythonfmu's library gives the host's logger (the user of a C/C++ host
+sees no Python traceback).
 """
 
 from __future__ import annotations
@@ -20,11 +25,37 @@ import sys
 import tempfile
 from pathlib import Path
 
-__all__ = ["cache_dir", "locked", "stage_code"]
+__all__ = ["REQUIREMENTS", "cache_dir", "locked", "require", "stage_code"]
 
 #: folder of the FMU's resources holding its code, and the file with the code's hash
 CODE_DIR = "gsb_code"
 HASH_FILE = "HASH"
+#: the packages the FMU's code imports besides the standard library and pythonfmu (which the
+#: FMU carries)
+REQUIREMENTS = ("numpy", "scipy", "numba")
+
+
+def require(fmu: str) -> None:
+    """Import every package of :data:`REQUIREMENTS`; ImportError naming the FMU, the packages
+    missing (or failing to import), this Python's executable and the command that installs
+    them, if any does not import."""
+    import importlib
+
+    missing: dict[str, str] = {}  # package -> why it does not import
+    for name in REQUIREMENTS:
+        try:
+            importlib.import_module(name)
+        except ImportError as exc:  # numba without numpy fails on numpy: name that one
+            culprit = (exc.name or "").split(".")[0]
+            missing.setdefault(culprit if culprit in REQUIREMENTS else name, str(exc))
+    if missing:
+        exe = sys.executable or "python"
+        names = " ".join(missing)
+        why = "; ".join(f"{name}: {reason}" for name, reason in missing.items())
+        raise ImportError(f"{fmu}.fmu runs Python code that needs {', '.join(REQUIREMENTS[:-1])} "
+                          f"and {REQUIREMENTS[-1]}, and the Python running it ({exe}, Python "
+                          f"{sys.version.split()[0]}) lacks {names.replace(' ', ', ')} ({why}). "
+                          f"Install into that Python: {exe} -m pip install {names}")
 
 
 def cache_dir() -> Path:

@@ -20,7 +20,10 @@ maps the FMI calls onto the structure through the life cycle the in-process tran
 A refused value (out of its bounds, non-finite) is reported by the set call (fmi2Error); a
 failed solution or a case whose fields do not fit together by the read of the outputs
 (fmi2Error) or the doStep (fmi2Discard), the reason in the log: a Python exception escaping a
-pythonfmu callback would be fatal for the instance and its host.
+pythonfmu callback would be fatal for the instance and its host. A step that cannot be computed
+(a Newton iteration that does not converge, a step longer than :data:`MAX_STEP_MESH_PERIODS`
+mesh periods) leaves the structure at no computed state: its outputs then read fmi2Error and
+further steps are refused until ``fmi2SetFMUstate`` restores a saved state.
 """
 
 from __future__ import annotations
@@ -60,6 +63,10 @@ _NAN_OUTPUTS = [math.nan] * len(_OUTPUTS)
 _FLAGS = ("dirty", "failed")
 #: the kind tag of this slave's serialised states (fmu_src.state_codec)
 STATE_KIND = "gsb.gear_shaft_fmu_state"
+#: the longest step doStep takes, in mesh periods: a longer one resolves nothing of the mesh
+#: dynamics, and with contact location (``simulation.locate_contact``) it is cut at every
+#: contact event it spans (a step of 1e6 s would be cut ~1e10 times and never end)
+MAX_STEP_MESH_PERIODS = 100
 
 
 class GearShaftSlave(ContractSlave):
@@ -251,10 +258,15 @@ class GearShaftSlave(ContractSlave):
             if st.mesh_state is None:
                 raise RuntimeError("the structure has no solution yet (no static solution)")
             ms = st.mesh_state
-            self._outputs = [*st.journal_states().ravel().tolist(),
-                             *self._speeds,
-                             float(ms.total_load), float(ms.transmission_error),
-                             *st.gear_displacements()[:, :2].ravel().tolist()]  # u, v of each
+            outputs = [*st.journal_states().ravel().tolist(),
+                       *self._speeds,
+                       float(ms.total_load), float(ms.transmission_error),
+                       *st.gear_displacements()[:, :2].ravel().tolist()]  # u, v of each
+            if not math.isfinite(sum(outputs)):  # finite terms may overflow the sum
+                bad = [n for n, x in zip(_OUTPUTS, outputs, strict=True) if not math.isfinite(x)]
+                if bad:
+                    raise FloatingPointError(f"outputs not finite: {', '.join(bad)}")
+            self._outputs = outputs
             self._failed = False
         except Exception as exc:  # anything raised here would be fatal for the host
             what = "static solution" if not self._cycle.stepping else "outputs"
@@ -291,19 +303,32 @@ class GearShaftSlave(ContractSlave):
         self._dirty = True
 
     def do_step(self, current_time, step_size):
-        """One Newmark step with the current laws; False (FMI discard) with a logged reason."""
+        """One Newmark step with the current laws; False (FMI discard) with a logged reason,
+        after which the outputs read fmi2Error and steps are refused (module docstring)."""
         st = self._cycle.built
         try:
             if self._error is not None:
-                raise RuntimeError(f"not stepping after an earlier failure ({self._error})")
+                raise RuntimeError(f"not stepping after an earlier failure ({self._error}); "
+                                   "restore a saved state (fmi2SetFMUstate) to step again")
             if st is None or not self._cycle.stepping:
                 raise RuntimeError("doStep before exitInitializationMode")
+            periods = step_size / st.mesh_period
+            if periods > MAX_STEP_MESH_PERIODS:
+                raise ValueError(f"dt = {step_size:.6g} s spans {periods:.3g} mesh periods: a "
+                                 f"step may span at most {MAX_STEP_MESH_PERIODS} (mesh period "
+                                 f"{st.mesh_period:.6g} s)")
             info = self._cycle.step(current_time, step_size, *unpack_law_arrays(self._laws))
         except Exception as exc:  # anything raised here would be fatal for the host
             step = "?" if st is None else st.n_steps + 1
-            self.output_failed(f"doStep {step} from t = {current_time:.9g} s, dt = "
-                               f"{step_size:.6g} s failed", exc)
+            failed = self.output_failed(f"doStep {step} from t = {current_time:.9g} s, dt = "
+                                        f"{step_size:.6g} s failed", exc)
             self._read_status = 0  # a step reports discard, not the next read
+            if st is not None and self._cycle.stepping:  # the structure is at no computed state
+                if self._error is None:
+                    self._error = failed
+                self._outputs = list(_NAN_OUTPUTS)
+                self._failed = True
+                self._dirty = False
             return False
         self._iterations = info.iterations
         self._dirty = True

@@ -3,8 +3,9 @@
 * a bad value is refused by the call that receives it (fmi2Error, the value and the limit in
   the log, the variable unchanged);
 * an output that cannot be computed (a journal outside the clearance) makes the read return
-  fmi2Error, never fmi2OK with NaN;
-* bounds are declared in modelDescription.xml;
+  fmi2Error, never fmi2OK with NaN; a step that cannot be computed returns fmi2Discard from
+  fmi2DoStep, the reason in the log;
+* bounds are declared in modelDescription.xml as they are enforced;
 * fmi2GetFMUstate/SetFMUstate and Serialize/DeSerialize restore every FMU bit for bit, the
   bearing models' warm starts included, and a system checkpointed to bytes restarts in a new
   process exactly where it stopped;
@@ -16,6 +17,7 @@ The FMUs load in the test's process (tests.helpers.run_here), but for the restar
 process.
 """
 
+import math
 import zipfile
 from xml.etree import ElementTree as ET
 
@@ -28,6 +30,9 @@ from tests.helpers import run_here, run_isolated
 BEARING_FMUS = [bearing_fmu_name(m) for m in MODELS]
 #: models whose film has a clearance (the lumped spring has none: any state is valid)
 FILM_MODELS = [m for m in MODELS if m != "lumped"]
+#: models that are a film model after the initialisation too (the linear model's frozen law is
+#: affine, defined at any state, in process as in the FMU)
+STEPPING_FILM_MODELS = [m for m in FILM_MODELS if m != "linear"]
 PROBES = "tests.probes.fmi_behaviour"
 
 
@@ -61,8 +66,9 @@ def test_bounds_are_declared_in_the_model_description(fmu_dir):
     with zipfile.ZipFile(fmu_dir / "BearingHybrid.fmu") as z:
         root = ET.fromstring(z.read("modelDescription.xml"))
     typed = {sv.get("name"): next(iter(sv)) for sv in root.iter("ScalarVariable")}
-    assert typed["C"].get("min") == "0.0" and typed["mu"].get("min") == "0.0"
-    assert typed["nodes"].get("min") == "8" and typed["omega"].get("min") == "0.0"
+    # > 0: the smallest positive double, the least value accepted (FMI has no strict bound)
+    assert typed["C"].get("min") == "5e-324" and typed["mu"].get("min") == "5e-324"
+    assert typed["nodes"].get("min") == "8" and typed["omega"].get("min") == "5e-324"
     assert typed["s"].get("min") is None  # an input any real value may take
     with zipfile.ZipFile(fmu_dir / "GearShaft.fmu") as z:
         root = ET.fromstring(z.read("modelDescription.xml"))
@@ -116,3 +122,66 @@ def test_bytes_that_are_not_the_fmus_own_state_are_refused_with_fmi2error(fmu_di
     assert all(v[2] == "fmi2DeSerializeFMUstate" for k, v in refused.items() if k != "shape")
     assert not marker.exists()
     assert out["again"]
+
+
+@pytest.mark.parametrize("model", list(MODELS))
+def test_a_bearing_step_that_cannot_be_computed_is_not_ok(fmu_dir, model):
+    """A fixed-step host (OMSimulator, ecos) sets the inputs, calls fmi2DoStep and reads the
+    outputs: at inputs where the law cannot be computed (the journal outside the clearance; a
+    state at which the law overflows) the doStep returns fmi2Discard with the reason in the log
+    (the host learns it there, not from NaN outputs) and the read returns fmi2Error. Valid
+    inputs step again."""
+    out = run_here(module=PROBES, args=["bearing_step_that_cannot_be_computed", {
+        "fmu": fmu_file(fmu_dir, model), "film": model in STEPPING_FILM_MODELS}])
+    assert ("outside" in out) == (model in STEPPING_FILM_MODELS)
+    for key in ("good", "again"):
+        (status, log), (read, values) = out[key]
+        assert status == 0 and read == 0 and math.isfinite(sum(values)), (key, out[key])
+    reasons = {"overflow": "not finite", "outside": "eccentricity ratio 1.2"}
+    for key in [k for k in reasons if k in out]:
+        (status, log), (read, _), (read_one, _) = out[key]
+        assert status == 2, (key, out[key])  # fmi2Discard
+        assert any(m.startswith("[error]") and reasons[key] in m and "doStep" in m
+                   for m in log), (key, log)
+        assert read == 3 and read_one == 3, (key, out[key])  # fmi2Error
+
+
+def test_a_gear_step_that_cannot_be_computed_is_not_ok(fmu_dir):
+    """Laws that make the Newton iteration diverge, and a step of 1e6 s (answered at once,
+    not after hours of contact events): fmi2Discard with the reason in the log, then the
+    outputs read fmi2Error (the structure is not at a computed state) and further steps are
+    refused until a saved state is restored; from it the step works."""
+    out = run_here(module=PROBES, args=["gear_step_that_cannot_be_computed",
+                                        {"fmu": fmu_dir / "GearShaft.fmu"}])
+    for key in ("good", "again"):
+        (status, _), (read, values) = out[key]
+        assert status == 0 and read == 0 and math.isfinite(sum(values)), (key, out[key])
+    (status, log), (read, values), (retry, retry_log) = out["diverging"]
+    assert status == 2 and read == 3 and all(math.isnan(x) for x in values), out["diverging"]
+    assert any("NewmarkConvergenceError" in m for m in log), log
+    assert retry == 2 and any("earlier failure" in m for m in retry_log), retry_log
+    (status, log), (read, _) = out["huge_dt"]
+    assert status == 2 and read == 3, out["huge_dt"]
+    assert any("dt = 1e+06 s" in m and "mesh periods" in m for m in log), log
+
+
+@pytest.mark.parametrize("fmu", ["GearShaft", *BEARING_FMUS])
+def test_declared_bounds_are_the_enforced_ones(fmu_dir, fmu):
+    """Every parameter and input with a min or max in modelDescription.xml: the bound itself
+    is accepted (fmi2OK) and the nearest value beyond it refused (fmi2Error). A strict bound
+    (> 0) is declared as the smallest double above it, and its description says so."""
+    from fmu_src.contract import gear_variables
+
+    out = run_here(module=PROBES, args=["declared_bounds", {"fmu": fmu_dir / f"{fmu}.fmu"}])
+    variables = bearing_variables() if fmu != "GearShaft" else gear_variables()
+    exclusive = {v.name: v.minimum for v in variables if v.exclusive_minimum}
+    bounded = {v.name for v in variables if v.causality in ("parameter", "input")
+               and (v.minimum is not None or v.maximum is not None)}
+    assert set(out) == bounded and set(exclusive) <= bounded
+    for name, r in out.items():
+        for value, at_bound, status in r["tries"]:
+            assert status == (0 if at_bound else 3), (name, value, r)
+        if name in exclusive:
+            limit = exclusive[name]
+            assert float(r["min"]) == math.nextafter(limit, math.inf), (name, r)
+            assert r["description"].endswith(f"(> {limit:g})"), (name, r["description"])

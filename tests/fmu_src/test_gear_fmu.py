@@ -43,7 +43,8 @@ def test_gear_fmu_passes_fmpy_validation_with_units_and_descriptions(gear_fmu):
     # the carried case's fields are parameters, with the bounds the case schema declares
     teeth = variables["gear_pair.teeth[1]"]
     assert teeth.type == "Integer" and teeth.start == "26" and teeth.min == "5"
-    assert variables["gear_pair.module"].min == "0.0" and variables["gear_pair.module"].unit == "m"
+    module = variables["gear_pair.module"]  # > 0: the least value accepted is the next double
+    assert module.min == "5e-324" and module.unit == "m" and module.description.endswith("(> 0)")
     assert variables["rotation_sign_3"].causality == "calculatedParameter"
     assert variables["K_st_3"].unit == "N/m" and variables["C_tt_4"].unit == "N.s/m"
     assert variables["s_dot_2"].unit == "m/s" and variables["mesh_force"].unit == "N"

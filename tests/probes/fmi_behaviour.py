@@ -231,8 +231,122 @@ def refuse_foreign_states(fmu: str, gear: bool, marker: str) -> dict:
     return r
 
 
+def _raw(s):
+    """fmi2DoStep and fmi2GetReal of an FmuInstance as an FMI host calls them: the status
+    whatever it is (fmpy raises on a non-OK status), the values read even then."""
+    import ctypes
+
+    f = s.fmu
+    dll, c = f.dll, f.component
+
+    def do_step(t, dt):
+        since = len(s.messages)
+        return [dll.fmi2DoStep(c, t, dt, 0), s.messages[since:]]
+
+    def get_real(names):
+        n = len(names)
+        values = (ctypes.c_double * n)()
+        status = dll.fmi2GetReal(c, (ctypes.c_uint * n)(*[s.vr[k] for k in names]), n, values)
+        return [status, list(values)]
+    return do_step, get_real
+
+
+def bearing_step_that_cannot_be_computed(fmu: str, film: bool) -> dict:
+    """A bearing FMU stepped as a fixed-step host steps it (inputs set, fmi2DoStep, outputs
+    read) after inputs at which its law cannot be computed: the journal at 1.2 C (a film
+    model) and at 1e305 m (every model: the law overflows). Per case the doStep's status and
+    log, the read's status and values; then a valid state again."""
+    from orchestrator.coupling.fmi import FmuInstance
+
+    s = FmuInstance(fmu, "b")
+    f, vr = s.fmu, s.vr
+    do_step, get_real = _raw(s)
+    outputs = ["F_s", "F_t", "K_ss", "K_st", "K_ts", "K_tt", "C_ss", "C_st", "C_ts", "C_tt"]
+    f.setupExperiment(startTime=0.0)
+    f.enterInitializationMode()
+    c = f.getReal([vr["C"]])[0]
+    f.setReal([vr["s"], vr["t"]], [0.3 * c, -0.2 * c])
+    f.exitInitializationMode()
+    r = {"good": [do_step(0.0, 1e-3), get_real(outputs)]}
+    bad = {"overflow": [1e305, 0.0]} | ({"outside": [1.2 * c, 0.0]} if film else {})
+    for k, (name, state) in enumerate(bad.items()):
+        f.setReal([vr["s"], vr["t"]], state)
+        r[name] = [do_step((k + 1) * 1e-3, 1e-3), get_real(outputs), get_real(["F_s"])]
+    f.setReal([vr["s"], vr["t"]], [0.3 * c, -0.2 * c])
+    r["again"] = [do_step(3e-3, 1e-3), get_real(outputs)]
+    s.close()
+    return r
+
+
+def gear_step_that_cannot_be_computed(fmu: str) -> dict:
+    """The gear-shaft FMU after one good step: a step with laws whose Newton iteration diverges
+    (F_s_1 = 1e300 N) and a step of 1e6 s (more mesh periods than a step may span), each from
+    the saved state after the good step. Per case the doStep's status and log and the read of
+    the journal states (status and values); then a good step from the saved state."""
+    from fmu_src.contract import journal_output_names
+    from orchestrator.coupling.fmi import FmuInstance
+
+    s = FmuInstance(fmu, "g")
+    f, vr = s.fmu, s.vr
+    do_step, get_real = _raw(s)
+    journal = journal_output_names()
+    f.setupExperiment(startTime=0.0)
+    f.enterInitializationMode()
+    f.exitInitializationMode()
+    dt = 1e-5
+    r = {"good": [do_step(0.0, dt), get_real(journal)]}
+    saved = f.getFMUstate()
+    f.setReal([vr["F_s_1"]], [1e300])
+    r["diverging"] = [do_step(dt, dt), get_real(journal), do_step(dt, dt)]
+    f.setFMUstate(saved)
+    r["huge_dt"] = [do_step(dt, 1e6), get_real(journal)]
+    f.setFMUstate(saved)
+    r["again"] = [do_step(dt, dt), get_real(journal)]
+    f.freeFMUstate(saved)
+    s.close()
+    return r
+
+
+def declared_bounds(fmu: str) -> dict:
+    """Every parameter and input with a min or max in modelDescription.xml set (in
+    initialisation mode) to that bound and to the nearest value beyond it (the next double;
+    the next integer): per variable and value, the setter's status."""
+    import ctypes
+
+    from orchestrator.coupling.fmi import FmuInstance
+
+    s = FmuInstance(fmu, "x")
+    f = s.fmu
+    f.setupExperiment(startTime=0.0)
+    f.enterInitializationMode()
+    r = {}
+    for v in s.md.modelVariables:
+        if v.causality not in ("parameter", "input") or v.type not in ("Real", "Integer"):
+            continue
+        real = v.type == "Real"
+        kind = float if real else int
+        setter = f.dll.fmi2SetReal if real else f.dll.fmi2SetInteger
+        ctype = ctypes.c_double if real else ctypes.c_int
+        tries = []
+        for bound, away in ((v.min, -math.inf), (v.max, math.inf)):
+            if bound is None:
+                continue
+            at = kind(bound)
+            beyond = math.nextafter(at, away) if real else at + (1 if away > 0 else -1)
+            for value in (at, beyond):
+                status = setter(f.component, (ctypes.c_uint * 1)(v.valueReference), 1,
+                                (ctype * 1)(value))
+                tries.append([value, value == at, status])
+        if tries:
+            r[v.name] = {"description": v.description, "tries": tries,
+                         "min": v.min, "max": v.max}
+    s.close()
+    return r
+
+
 PROBES = probes_of(refuse_bad_values, read_outside_the_clearance, state_round_trip, checkpoint,
-                   refuse_foreign_states)
+                   refuse_foreign_states, bearing_step_that_cannot_be_computed,
+                   gear_step_that_cannot_be_computed, declared_bounds)
 
 
 def main(argv: list[str] | None = None) -> None:

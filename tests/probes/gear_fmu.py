@@ -157,7 +157,9 @@ def comparison(fmu: str, case: str) -> dict:
 
 def failures(fmu: str) -> dict:
     """A static solution that does not converge, a Newton that diverges, a step at the wrong
-    time: the messages; then the state saved before them restored, and a step."""
+    time (from the state saved before: a failed step leaves the structure at no computed state,
+    and the FMU refuses to step on from it): the messages; then the saved state restored, and a
+    step."""
     from bearing_fmu.affine import AffineLaws
     from orchestrator.coupling.fmi import FmuError, FmuStructure
 
@@ -184,6 +186,7 @@ def failures(fmu: str) -> dict:
     except FmuError as exc:
         msgs["newton"] = str(exc)
     # wrong time
+    structure.set_state(saved)
     structure.set_bearing_laws(law_a)
     try:
         structure.do_step(5 * dt, dt)

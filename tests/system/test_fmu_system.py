@@ -11,6 +11,7 @@ import os
 import random
 import shutil
 import signal
+import stat
 import subprocess
 import sys
 import sysconfig
@@ -105,6 +106,89 @@ def test_the_ssp_archive_holds_the_system(ssp_file):
     starts = [[float(values[(f"bearing{j}", n)]) for n in ("s", "t")] for j in range(1, 5)]
     assert starts == x0[:, :2].tolist()
     assert float(values[("gear_shaft", "s_eval_3")]) == x0[2, 0]
+
+
+def test_the_ssp_carries_the_cases_step_where_tools_look_for_it(ssp_file):
+    """The case's time step, to the last bit, wherever a master looks for a fixed step: OSP's
+    annotation of the default experiment (ecos) and OMSimulator's annotation of the system
+    (its fixed-step master ``oms-ma``, the first ``org.openmodelica`` annotation, which
+    OMSimulator needs to import the SSP at all: it decides the system's type from it)."""
+    from xml.etree import ElementTree as ET
+
+    from fmu_src import description
+    from fmu_src.build.ssp import NS
+    from fmu_src.case import load_case
+
+    dt = description.time_step(load_case("baguet2010_spur"))
+    with zipfile.ZipFile(ssp_file) as z:
+        text = z.read("SystemStructure.ssd").decode()
+    root = ET.fromstring(text)
+    ns = NS | {"oms": "https://raw.githubusercontent.com/OpenModelica/OMSimulator/master/"
+                      "schema/oms.xsd"}
+    osp = root.findall("ssd:DefaultExperiment/ssd:Annotations/ssc:Annotation"
+                       "[@type='com.opensimulationplatform']/osp:Algorithm/"
+                       "osp:FixedStepAlgorithm", ns)
+    assert [float(a.get("baseStepSize")) for a in osp] == [dt]
+    system = root.find("ssd:System", ns)
+    annotations = system.find("ssd:Annotations", ns)
+    assert list(system)[-1] is annotations  # the SSD schema's order: annotations last
+    first = annotations.find("ssc:Annotation", ns)  # OMSimulator reads the first one
+    assert first.get("type") == "org.openmodelica"
+    masters = first.findall("oms:Annotations/oms:SimulationInformation/oms:FixedStepMaster",
+                            ns)
+    assert [(m.get("description"), float(m.get("stepSize"))) for m in masters] == [
+        ("oms-ma", dt)]
+    # OMSimulator (pugixml) matches qualified names as written: the prefixes must be these
+    for tag in ("<oms:Annotations>", "<oms:SimulationInformation>", "<oms:FixedStepMaster ",
+                "<osp:FixedStepAlgorithm ", "<ssc:Annotation "):
+        assert tag in text, tag
+
+
+def _created_mode() -> int:
+    """The mode a file created now gets (0666 less the umask)."""
+    mask = os.umask(0)
+    os.umask(mask)
+    return 0o666 & ~mask
+
+
+def test_fmus_ssp_and_patched_fmus_are_readable_as_files_written_normally(
+        fmu_dir, ssp_file, spring_fmu, tmp_path):
+    """Built FMUs, the SSP archive and a patched FMU have the mode of a normally written file
+    (readable by others under the usual umask: 0644), not the 0600 of a temporary file; so
+    have the files inside them once unpacked with their modes (unzip, a C/C++ host): the FMUs
+    in the SSP, every file in an FMU (its modelDescription.xml and libraries too)."""
+    from fmu_src.build.fmus import build_fmus
+
+    mode = _created_mode()
+    built = build_fmus(tmp_path / "built", ["BearingLumped"])
+    for path in [*built, *fmu_dir.glob("*.fmu"), ssp_file, spring_fmu]:
+        assert stat.S_IMODE(path.stat().st_mode) == mode, (path, oct(path.stat().st_mode))
+    for archive in (ssp_file, built[0], spring_fmu):
+        with zipfile.ZipFile(archive) as z:
+            modes = {i.filename: i.external_attr >> 16 for i in z.infolist() if not i.is_dir()}
+        unreadable = {n: oct(m) for n, m in modes.items()
+                      if not stat.S_ISREG(m) or m & 0o444 != 0o444}
+        assert not unreadable, (archive.name, unreadable)
+    with zipfile.ZipFile(ssp_file) as z:
+        inner = [stat.S_IMODE(i.external_attr >> 16) for i in z.infolist()
+                 if i.filename.endswith(".fmu")]
+    assert inner == [mode, mode]  # as the FMU files were written
+
+
+@pytest.mark.parametrize("fmu, refused", [("BearingHybrid", "numba"), ("GearShaft", "scipy"),
+                                          ("BearingLumped", "numpy")])
+def test_an_fmu_in_a_python_without_a_package_it_needs_says_what_to_install(fmu_dir, fmu,
+                                                                            refused):
+    """fmi2Instantiate in a Python that cannot import numpy, scipy or numba: NULL, and the
+    host's logger gets what to install and into which Python (a C host's user sees no
+    Python traceback on stderr)."""
+    out = run_isolated(module="tests.probes.missing_requirement",
+                       args=["instantiate", {"fmu": fmu_dir / f"{fmu}.fmu", "blocked": refused}])
+    assert out["null"] and not out["imported"]
+    text = "\n".join(m for _, m in out["messages"])
+    assert f"{fmu}.fmu" in text and "needs numpy, scipy and numba" in text, text
+    assert f"lacks {refused}" in text, text
+    assert f"{out['executable']} -m pip install {refused}" in text, text
 
 
 def test_gsb_run_of_the_ssp_equals_gsb_run_of_the_case(fmu_dir, ssp_file, tmp_path):
