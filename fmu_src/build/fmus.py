@@ -146,8 +146,8 @@ def _code_files(extra=()):
 
 
 def code_hash(extra=()) -> str:
-    """Content hash of everything the FMUs are built from: the code they carry (``extra``:
-    :func:`_code_files`), the builder and the native layer's sources (pythonfmu's copy, the
+    """Content hash of everything the FMUs are built from: the code they carry (with the
+    ``extra`` paths, as :data:`TRANSMISSION_CODE`), the builder and the native layer's sources (pythonfmu's copy, the
     patches, the loader; 20 hex digits)."""
     from fmu_src.build.native import native_sources
 
