@@ -24,8 +24,11 @@ Time integration refinements (switched on by the case file, :mod:`fmu_src.descri
   ``EVENT_SIDE`` base pitch earlier), then the acceleration is reset to the one after it,
   ``Xdd+ = Xdd- + M^-1 (F_mesh+ - F_mesh-)`` at the same X and Xd. Each sub-step then
   integrates a smooth problem and the scheme keeps its order 2. The bearing laws of the step
-  serve every sub-step (they are affine in X and Xd). Contact changes that are not kinematic
-  (a tooth pair separating under dynamic load) are not located.
+  serve every sub-step (they are affine in X and Xd). No sub-step is shorter than
+  ``EVENT_SNAP`` dt: an event that close to the step's end is taken at the end, and events
+  that close to each other as one (a step slightly off the mesh period's divisor brings the
+  events back towards the step's end a little every step). Contact changes that are not
+  kinematic (a tooth pair separating under dynamic load) are not located.
 
 Solution method: the constant part of the tangent is condensed onto the 20 gear and bearing DOFs
 once per dt (:mod:`gear_fmu.step.condensation`); each step costs one matrix-vector product for the
@@ -70,6 +73,12 @@ INITIAL_APPROACH_ROTATION = 1e-3
 #: contact location: the side of an event the mesh is evaluated on, in base pitches (above the
 #: mesh kernel's snap of 1e-9 pitch, :mod:`gear_fmu.mesh.element`)
 EVENT_SIDE = 1e-8
+#: contact location: no sub-step is shorter than this fraction of dt. Newmark's acceleration
+#: update ``4 (x1 - x0 - h v0) / h^2 - a0`` amplifies the round-off of the solved x1 by 4 / h^2:
+#: a sub-step of 1e-7 dt turns 1e-20 m of round-off into accelerations of order 1e2 m/s^2
+#: at the paper's step, and runs at a step a few 1e-8 off the mesh period's divisor went
+#: wrong or failed. At 1e-3 dt it is below 1e-4 m/s^2; an event moved by at most 1e-3 dt.
+EVENT_SNAP = 1e-3
 #: sub-step fractions of dt are rounded to multiples of 2**-30, so that the condensations of
 #: the recurring sub-steps are computed once (:meth:`Structure._dynamic`)
 _FRACTION = 2.0**30
@@ -416,16 +425,17 @@ class Structure:
         a0 = self.pinion_angle(self.t)
         a1 = self.pinion_angle(self.t + dt)
         tol = 1e-9 * self.mesh.pair.base_pitch / self.mesh.pair.base_radius[0]
-        events = self._events_in(a0 - tol, a1 + tol)
+        snap = max(tol, EVENT_SNAP * (a1 - a0))  # module docstring
+        events = self._events_in(a0 - tol, a1 + snap)
         if not events:
             return None
         cuts = []
         for e in events:
-            if e - a0 <= tol:
-                continue  # on the step's start: the previous step ended on it
-            frac = 1.0 if a1 - e <= tol else round((e - a0) / (a1 - a0) * _FRACTION) / _FRACTION
-            if 0.0 < frac and (not cuts or frac > cuts[-1]):
-                cuts.append(frac)
+            if e - a0 <= snap:
+                continue  # at the step's start: the previous step ended on it
+            frac = 1.0 if a1 - e <= snap else round((e - a0) / (a1 - a0) * _FRACTION) / _FRACTION
+            if 0.0 < frac and (not cuts or frac - cuts[-1] > EVENT_SNAP):
+                cuts.append(frac)  # else one event for two that close
         if not cuts:
             return None
         ends = cuts + ([] if cuts[-1] == 1.0 else [1.0])
