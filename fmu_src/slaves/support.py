@@ -34,8 +34,9 @@ __all__ = [
 
 FMI_OK, FMI_WARNING, FMI_DISCARD, FMI_ERROR = 0, 1, 2, 3
 
+
 def pin_namespace(namespace: dict) -> None:
-    """Hold one more reference to a slave script's module namespace, held by nothing.
+    """Add one reference to a slave script's module namespace, owned by no object.
 
     pythonfmu 0.7.0's library runs the slave script again at every instantiation, in the
     module's namespace, then drops one reference to that namespace (a borrowed reference
