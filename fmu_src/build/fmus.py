@@ -90,7 +90,7 @@ from {module} import {base}  # noqa: E402
 class {fmu}({base}):
 {body}
 
-pin_namespace(globals())  # pythonfmu 0.7.0's library (the stock fallback) needs it
+pin_namespace(globals())  # pythonfmu 0.7.0's library (the stock fallback) needs it, at each run
 '''
 
 

@@ -25,6 +25,13 @@ part comes from and how to update it) holds:
   - bytes fmi2DeSerializeFMUstate's slave refuses (not a state it wrote: the slaves read only
     :mod:`fmu_src.state_codec` states) make the call return fmi2Error, the instance kept, and
     ``_set_fmu_state`` may return a status as a setter does;
+  - fmi2FreeInstance frees the instance: the library keeps no Python object from one
+    instantiation to the next, and calls the slave's ``_fmi_release()`` before it drops it, so
+    that the slave breaks its reference cycles and is freed at once
+    (:meth:`fmu_src.slaves.support.ContractSlave._fmi_release`);
+  - no call enters Python once the interpreter is finalised (a Python host whose C exit
+    handlers or C++ static destructors end the instances, as OMSimulator's Python API does):
+    fmi2Terminate returns fmi2OK and fmi2FreeInstance frees the C++ side only;
 
 * ``loader/``: this project's loader (Linux), the FMU's binary: it has no Python dependency,
   so a C/C++ host can load it; it loads libpython when the host has none (the paths of

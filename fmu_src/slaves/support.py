@@ -34,19 +34,24 @@ __all__ = [
 
 FMI_OK, FMI_WARNING, FMI_DISCARD, FMI_ERROR = 0, 1, 2, 3
 
-_PINNED: list = []
 
+def pin_namespace(namespace: dict) -> None:
+    """Add one reference to a slave script's module namespace, owned by no object.
 
-def pin_namespace(namespace: dict, count: int = 10_000) -> None:
-    """Hold ``count`` extra references to a slave script's module namespace.
-
-    pythonfmu 0.7.0's library drops one reference to the slave module's ``__dict__`` each time
-    an instance is created (a borrowed reference released; the patched library keeps it): the
+    pythonfmu 0.7.0's library runs the slave script again at every instantiation, in the
+    module's namespace, then drops one reference to that namespace (a borrowed reference
+    released; the patched library keeps it): without a reference to make up for it, the
     second instantiation of the same FMU in one process frees the namespace, then fails with
-    "module has no attribute" or corrupts the heap. Every slave script calls this once at
-    import; 10,000 instances per process are then safe.
+    "module has no attribute" or corrupts the heap. Every slave script calls this at its end,
+    so that each run of it adds the reference that run's instantiation drops.
+
+    The reference is a count, not an object kept in a list: an instantiation then costs no
+    memory here, whichever library runs the script (with the patched one the namespace, which
+    lives as long as its module in ``sys.modules`` anyway, is only never freed).
     """
-    _PINNED.extend([namespace] * count)
+    import ctypes
+
+    ctypes.pythonapi.Py_IncRef(ctypes.py_object(namespace))
 
 
 _EXIT_FIXED: set = set()
@@ -111,6 +116,19 @@ class ContractSlave(Fmi2Slave):
         self._read_status = FMI_OK
         self._by_kind = {}  # {variable type: {value reference: variable}}, see _accessors
         release_python_state_at_exit(self.resources, type(self).__name__)
+
+    def _fmi_release(self) -> None:
+        """Break the reference cycles the slave is in; the patched library
+        (:mod:`fmu_src.build.native`) calls this just before it drops the slave
+        (fmi2FreeInstance, fmi2Reset).
+
+        The getters and setters of the variables, and the bound methods handed to helpers,
+        refer back to the slave: dropped as it is, the slave and all it holds (the gear-shaft
+        FMU's matrices, some MiB) would wait for Python's next full garbage collection, often
+        hundreds of instances later. Emptying its attributes breaks every cycle through it, so
+        it is freed at once. The slave is never called again.
+        """
+        self.__dict__.clear()
 
     # --- registration -------------------------------------------------------------------------
     def register_contract_variable(self, v, getter, setter=None) -> None:
