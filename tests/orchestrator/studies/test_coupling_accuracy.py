@@ -120,3 +120,23 @@ def test_the_command_prints_the_table():
                           "no_such_case"], capture_output=True, text=True, timeout=600,
                          cwd=ROOT)
     assert bad.returncode == 2 and "no_such_case" in bad.stderr
+
+
+def test_the_documented_table_is_the_studys_output_at_its_defaults():
+    """docs/fmu-variables.md (generated from fmu_src.build.variables_doc.ACCURACY) shows the
+    table with the study's current columns, printed by the command at its default arguments
+    (the numbers themselves are the command's: re-run it when the physics changes)."""
+    from fmu_src.build.variables_doc import ACCURACY
+    from orchestrator.studies.coupling_accuracy import DETUNE, LEVELS, command_line
+
+    fake = {"case": CASE, "periods": 1, "dt": 1.0, "steps_per_mesh_period": 32,
+            "detune": DETUNE, "orbit_ptp": [1.0, 1.0],
+            "rows": [{"k": k, "dt": 2.0**-k, "steps": 1, "same": {0: 1.0, 1: 1.0},
+                      "detuned": {0: 1.0, 1: 1.0}, "case_step": {0: 1.0, 1: 1.0},
+                      "iterative": 1.0} for k in range(LEVELS)]}
+    header = next(line for line in table(fake).splitlines() if line.startswith("| step"))
+    page = (ROOT / "docs" / "fmu-variables.md").read_text()
+    for text in (page, ACCURACY):
+        assert header in text
+        assert f"Printed by `{command_line()}`." in text
+        assert text.count("\n| dt") == LEVELS
