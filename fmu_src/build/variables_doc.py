@@ -14,7 +14,7 @@ from fmu_src.contract import (
     transmission_variables,
 )
 
-__all__ = ["document", "markdown_table"]
+__all__ = ["ACCURACY", "document", "markdown_table"]
 
 
 def _start(v) -> str:
@@ -48,6 +48,24 @@ def markdown_table(variables=None) -> str:
                      f"| {_bounds(v)} | {v.description} |")
     return "\n".join(lines)
 
+
+#: the output of ``python -m orchestrator.studies.coupling_accuracy`` (its command line is the
+#: table's last line; ``tests/orchestrator/studies/test_coupling_accuracy.py`` checks that it has
+#: the study's columns and default arguments): pasted when the physics or the study changes
+ACCURACY = """\
+Case `baguet2010_spur`, 32 mesh periods from the static start, dt = T_mesh / 32 = 2.32366e-05 s; bearing 1's orbit (iterative master at dt): peak-to-peak 2.00e-05 m along s, 8.72e-06 m along t. E [%] = bearing 1's largest journal position difference (s or t, at the instants n dt) / the reference orbit's larger peak-to-peak; columns "lag 0", "lag 1": against the iterative master at the same step.
+
+| step [s] | steps / mesh period | lag 0 | lag 1 | lag 0, step x (1 - 1e-06) | lag 1, step x (1 - 1e-06) | lag 0 vs iterative at dt | lag 1 vs iterative at dt | iterative vs iterative at dt |
+| --- | --- | --- | --- | --- | --- | --- | --- | --- |
+| dt = 2.324e-05 | 32 | 7.21 | 24.42 | 7.21 | 13.88 | 7.21 | 24.42 | 0.00 |
+| dt/2 = 1.162e-05 | 64 | 1.37 | 5.51 | 1.36 | 5.50 | 5.14 | 9.20 | 3.81 |
+| dt/4 = 5.809e-06 | 128 | 0.35 | 1.41 | 0.35 | 1.40 | 4.74 | 5.77 | 4.40 |
+| dt/8 = 2.905e-06 | 256 | 0.09 | 0.36 | 0.09 | 0.36 | 4.65 | 4.91 | 4.56 |
+
+Observed order p of the coupling error E ~ dt^p (same step, last halving): lag 0 1.99, lag 1 1.96.
+
+Printed by `python -m orchestrator.studies.coupling_accuracy baguet2010_spur --periods 32 --levels 4 --detune 1e-06`.
+"""
 
 _HEADER = """# FMU variables
 
@@ -99,22 +117,67 @@ centre to the gear centre, z along the shafts, t = z x s), SI units. Build the F
   journal states, and the step is redone from a saved FMU state (fmi2GetFMUstate /
   fmi2SetFMUstate) until film force and law agree to the case's tolerance: Newton-Raphson on
   the bearing nonlinearity, equal to a monolithic solution to that tolerance.
-- Non-iterative, Jacobi type (ecos, and most fixed-step masters): every FMU steps with the
-  inputs of the last exchange, then outputs are exchanged. The bearing outputs exchanged after
-  step n were evaluated at the journal states of step n - 1, so the gear-shaft FMU steps from
-  X_n with laws linearised at X_n-1. `tests/system/test_ecos.py` reproduces ecos's trajectories
-  to 1e-12 with an emulation of exactly this scheme. At the paper's time step (mesh period / 32)
-  the coupling error is large: over 1024 steps of the paper's spur case, ecos's journal
-  positions differ from the iterative solution by up to 5.2 % of the largest displacement,
-  26 % of the orbit's peak-to-peak amplitude (2.0e-5 m); the difference grows over the first
-  8 mesh periods and then stays there (23 % at step 1024). Use a master with rollback, or
-  much smaller communication steps, when the orbit matters.
+- Non-iterative (hosts without rollback, running the SSP archive of `gsb export-ssp`): each
+  step the gear-shaft FMU steps once with the laws it was given, and nothing compares them
+  with the bearings at the new journal states. Two schemes, by when the bearing outputs reach
+  the gear-shaft FMU:
+  - lag 0, Gauss-Seidel (OMSimulator, which orders the FMUs by their declared dependencies):
+    the bearings are evaluated at the journal states X_n of the step just taken, so the
+    gear-shaft FMU steps from X_n with the laws linearised at X_n (the iterative master's
+    first pass, accepted as it is);
+  - lag 1, Jacobi (ecos, libcosim, and most fixed-step masters): every FMU steps with the
+    inputs of the last exchange, then outputs are exchanged. The bearing outputs exchanged
+    after step n were evaluated at the journal states of step n - 1, so the gear-shaft FMU
+    steps from X_n with laws linearised at X_n-1. `tests/system/test_ecos.py` reproduces
+    ecos's trajectories to 1e-12 with an emulation of exactly this scheme
+    (`orchestrator.studies.coupling_accuracy.non_iterative`, which also runs lag 0).
+
+  A lag-L law is the bearing's first-order expansion about X_n-L used at X_n+1: its force
+  error is (1/2) F'' (X_n+1 - X_n-L)^2, second order in the step, and four times larger for
+  lag 1 than for lag 0. Affine bearings (`linear`, `lumped`) make both schemes exact.
 - Initialisation: in initialisation mode the gear-shaft FMU's outputs are the static solution
   for its current law inputs, so a master's initialisation loop is a Newton iteration on X0;
   from the law inputs' start values (journals at the centre) it overshoots the clearance. The
   SSP archive of `gsb export-ssp` therefore carries the static solution X0 that `gsb`'s master
   found as start values of the connected inputs: a non-iterative master starts in equilibrium
   (ecos reproduces X0 to 6e-15).
+
+### Accuracy of a non-iterative master against the step
+
+How far a non-iterative master's journal orbit is from `gsb run`'s (iterative, converged to
+the case's tolerance every step), for the paper's spur case with hybrid bearings, computed
+with the in-process physics emulating the two schemes exactly as the hosts run the FMUs:
+
+{accuracy}
+
+Reading it:
+
+- Columns "lag 0", "lag 1": the coupling error alone, against `gsb run` at the same step
+  (`--set simulation.steps_per_mesh_period=N` with N the second column). From T_mesh / 64 on
+  it falls as dt^2, lag 1's four times lag 0's.
+- At the paper's step T_mesh / 32 lag 1's error depends on the last digits of the step: a
+  contact line entering or leaving the path of contact at the start of each mesh period falls
+  exactly on a step's end (lag 1: 24.4 %), and a step shorter by 1e-6 of itself moves it just inside the
+  next step (columns "step x (1 - 1e-06)"; lag 1: 13.9 %). From T_mesh / 64 on the two agree.
+- The last three columns compare with `gsb run` of the shipped case (T_mesh / 32), what a
+  tool user is likely to hold as the reference: the iterative master itself moves by about
+  4.5 % of the orbit between T_mesh / 32 and T_mesh / 256 (the time discretisation: `gsb run`
+  warns that the 4366 Hz mesh mode gets 9.9 steps per period at T_mesh / 32), so compare with
+  `gsb run` at the step the tool used.
+
+Which step to give a tool: for a coupling error below about 2 % of the orbit, T_mesh / 64
+(dt/2) with lag 0 (OMSimulator), T_mesh / 128 (dt/4) with lag 1 (ecos, libcosim); below
+0.5 %: T_mesh / 128 and T_mesh / 256. Export the archive with that step
+(`gsb export-ssp CASE --set simulation.steps_per_mesh_period=N`: its step size, printed with
+the command, is T_mesh / N to the last digit) and give the host exactly that number. A step
+that differs from T_mesh / N by less than about 1e-7 of it, without being equal, makes the
+structure cut sub-steps shorter than 1e-6 of a step at those contact events and spoils every
+master's result (measured at T_mesh / 32 over 64 mesh periods: typed to 8 significant digits,
+2.3236632e-05 s, the orbit moves by about its own peak-to-peak, iterative master included; to
+10 digits the run fails, a journal leaving its clearance). For results that do not depend on
+the host's coupling, use the transmission FMU (`gsb export-fmu CASE --dest DIR`): one FMU
+with the iterative master inside, which gives `gsb run`'s result at the step the tool takes
+in any tool (the coupling exact; the step's time discretisation remains, last column).
 
 ## A bearing FMU of your own
 
@@ -228,7 +291,8 @@ def document() -> str:
     from fmu_src.case import load_case
 
     transmission = transmission_variables(load_case("baguet2010_spur"))
-    return (_HEADER.format(fmus=fmus, wiring=wiring) + markdown_table(bearing_variables()) + "\n"
+    return (_HEADER.format(fmus=fmus, wiring=wiring, accuracy=ACCURACY.rstrip("\n"))
+            + markdown_table(bearing_variables()) + "\n"
             + _GEAR + markdown_table(gear_variables()) + "\n"
             + _TRANSMISSION.format(models=", ".join(MODELS))
             + markdown_table(transmission) + "\n")

@@ -3,11 +3,13 @@
 ecos is non-iterative and of Jacobi type: each step, every FMU steps with the inputs of the
 last exchange, then all outputs are exchanged. The bearing FMUs' outputs exchanged after step
 n were evaluated at the journal states of step n - 1, so the gear FMU steps from X_n with the
-bearing laws linearised at X_{n-1} (it knows where: the ``*_eval`` inputs). :func:`jacobi`
-emulates that scheme with the in-process physics, independently of ecos and of this package's
-master: ecos gives its trajectories to round-off, i.e. it runs the FMUs as
-docs/fmu-variables.md describes. The difference to ``gsb run`` (iterative, converged to the
-case's tolerance every step) is the non-iterative coupling error at the paper's step; printed.
+bearing laws linearised at X_{n-1} (it knows where: the ``*_eval`` inputs).
+:func:`orchestrator.studies.coupling_accuracy.non_iterative` emulates that scheme with the
+in-process physics, independently of ecos and of this package's master (the coupling-accuracy
+study runs it, and its lag-0 variant, at several steps): ecos gives its trajectories to
+round-off, i.e. it runs the FMUs as docs/fmu-variables.md describes. The difference to
+``gsb run`` (iterative, converged to the case's tolerance every step) is the non-iterative
+coupling error at the paper's step; printed.
 
 Two hosts: ecospy's library in a Python process (values read at full precision), and the
 ``ecos`` command (a C++ process without Python: the FMUs' loader loads libpython), whose exit
@@ -85,37 +87,16 @@ def ecos_python(ssp_file):
     return np.array(out["x"]).reshape(-1, 4, 4), np.array(out["e"])
 
 
-def jacobi(steps: int, lag: int = 1) -> np.ndarray:
-    """(steps + 1, 4, 4) journal states of a non-iterative master with the in-process physics:
-    X0 from the static solution, then each step with the laws linearised ``lag`` steps
-    back (ecos: 1). Independent of ecos and of orchestrator.coupling.master's stepping."""
-    from bearing_fmu.affine import AffineLaws
-    from fmu_src.case import load_case
-    from orchestrator.coupling.system import build_master
-
-    master = build_master(load_case(CASE), in_process=True)
-    master.solve_static()
-    master.exit_initialization()
-    structure, bearings = master.structure, master.bearings
-    dt = _dt()
-    laws = [master.laws]
-    states = [structure.journal_states().copy()]
-    for k in range(steps):
-        structure.set_bearing_laws(laws[max(len(laws) - 1 - lag, 0)])
-        structure.do_step(k * dt, dt)
-        x = structure.journal_states().copy()
-        laws.append(AffineLaws.linearise(x, *bearings.evaluate(x)))
-        states.append(x)
-    return np.array(states)
-
-
 def test_ecos_runs_the_ssp_as_a_jacobi_master_would(ecos_python):
     """ecos's trajectories equal the emulated Jacobi scheme's to round-off over 64 steps, not
     to the bit: the hybrid film solver starts from its last solution, and ecos calls the
     bearing FMUs in its own sequence (measured 6.9e-13 relative to the largest position,
     9.0e-11 velocities; asserted with a margin of 3 on the larger)."""
+    from fmu_src.case import load_case
+    from orchestrator.studies.coupling_accuracy import non_iterative
+
     x, _ = ecos_python
-    ref = jacobi(STEPS)
+    ref = non_iterative(load_case(CASE), STEPS, lag=1)
     scale = np.abs(ref[:, :, :2]).max()
     position = float(np.abs(x[:, :, :2] - ref[:, :, :2]).max() / scale)
     velocity = float(np.abs(x[:, :, 2:] - ref[:, :, 2:]).max() / np.abs(ref[:, :, 2:]).max())
