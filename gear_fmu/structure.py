@@ -401,16 +401,20 @@ class Structure:
             info = StepInfo(t1, 0, 0.0)
             t_start = self.t
             side = EVENT_SIDE * self.mesh.pair.base_pitch / self.mesh.pair.base_radius[0]
-            for h, frac, at_event in pieces:
+            for h, frac, events in pieces:
                 te = t1 if frac == 1.0 else t_start + frac * dt
                 angle = self.pinion_angle(te)
-                sub = self._advance(h, te, angle - side if at_event else angle, f0, kb, cb,
-                                    what)
+                before, after = angle, angle
+                if events is not None:  # the sides of the events, wherever they were snapped
+                    first, last = events
+                    before = angle - side if angle <= first + side else first - side
+                    after = angle + side if angle >= last - side else last + side
+                sub = self._advance(h, te, before, f0, kb, cb, what)
                 info.iterations += sub.iterations
                 info.residual = max(info.residual, sub.residual)
                 info.residuals += sub.residuals
-                if at_event:  # Xdd after the event (module docstring)
-                    after = self.mesh.evaluate(angle + side, self.x[:N_GEAR])
+                if events is not None:  # Xdd after the event (module docstring)
+                    after = self.mesh.evaluate(after, self.x[:N_GEAR])
                     jump = after.force - self.mesh_state.force
                     self.a = self.a + self._gear_compliance() @ jump
                     self.active = after.active
@@ -420,8 +424,11 @@ class Structure:
         return info
 
     def _sub_steps(self, dt: float) -> list:
-        """``[(h, end fraction of dt, ends on an event)]`` of a step with contact events
-        (None without): the step cut at the event angles, fractions rounded to ``2**-30``."""
+        """``[(h, end fraction of dt, (first, last) event angle it ends on, or None)]`` of a
+        step with contact events (None without): the step cut at the event angles, fractions
+        rounded to ``2**-30``, none shorter than ``EVENT_SNAP`` dt (events that close to the
+        step's ends or to each other taken together; the mesh is then evaluated on the outer
+        sides of the events, not of the cut)."""
         a0 = self.pinion_angle(self.t)
         a1 = self.pinion_angle(self.t + dt)
         tol = 1e-9 * self.mesh.pair.base_pitch / self.mesh.pair.base_radius[0]
@@ -429,19 +436,22 @@ class Structure:
         events = self._events_in(a0 - tol, a1 + snap)
         if not events:
             return None
-        cuts = []
+        cuts = []  # [end fraction, first event, last event]
         for e in events:
             if e - a0 <= snap:
                 continue  # at the step's start: the previous step ended on it
             frac = 1.0 if a1 - e <= snap else round((e - a0) / (a1 - a0) * _FRACTION) / _FRACTION
-            if 0.0 < frac and (not cuts or frac - cuts[-1] > EVENT_SNAP):
-                cuts.append(frac)  # else one event for two that close
+            if cuts and frac - cuts[-1][0] <= EVENT_SNAP:  # one cut for events that close
+                cuts[-1][0] = max(cuts[-1][0], frac)
+                cuts[-1][2] = e
+            elif 0.0 < frac:
+                cuts.append([frac, e, e])
         if not cuts:
             return None
-        ends = cuts + ([] if cuts[-1] == 1.0 else [1.0])
+        ends = cuts + ([] if cuts[-1][0] == 1.0 else [[1.0, None, None]])
         out, prev = [], 0.0
-        for frac in ends:
-            out.append(((frac - prev) * dt, frac, frac in cuts))
+        for frac, first, last in ends:
+            out.append(((frac - prev) * dt, frac, None if first is None else (first, last)))
             prev = frac
         return out
 

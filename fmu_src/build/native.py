@@ -28,7 +28,7 @@ part comes from and how to update it) holds:
   - fmi2FreeInstance frees the instance: the library keeps no Python object from one
     instantiation to the next, and calls the slave's ``_fmi_release()`` before it drops it, so
     that the slave breaks its reference cycles and is freed at once
-    (:meth:`fmu_src.slaves.support.ContractSlave._fmi_release`);
+    (``ContractSlave._fmi_release`` in :mod:`fmu_src.slaves.support`);
   - no call enters Python once the interpreter is finalised (a Python host whose C exit
     handlers or C++ static destructors end the instances, as OMSimulator's Python API does):
     fmi2Terminate returns fmi2OK and fmi2FreeInstance frees the C++ side only;
