@@ -57,3 +57,15 @@ def test_freed_instances_leave_nothing_behind(fmu_dir, fmu):
     assert out["growth_per_cycle"] < BOUND, (
         f"resident memory grew by {out['growth_per_cycle']:.0f} B per cycle over {cycles} "
         f"cycles of {fmu}, above the bound of {BOUND} B")
+
+
+@pytest.mark.slow
+def test_freed_transmission_instances_leave_nothing_behind(transmission_fmu):
+    """The transmission FMU (the master, the structure and four bearings per instance; each
+    cycle solves X0): the same bounds."""
+    out = run_isolated(module=PROBES, args=["cycles", {
+        "fmu": transmission_fmu, "warm_up": 60, "cycles": 60, "held": 3}])
+    print(f"\ntransmission: {out['growth_per_cycle'] / 1024:.2f} KiB per instantiate/free "
+          f"cycle, {out['alive']} of 3 freed slaves still alive")
+    assert out["alive"] == 0
+    assert out["growth_per_cycle"] < BOUND
