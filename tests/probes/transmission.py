@@ -127,7 +127,17 @@ def impossible_step(fmu: str, h: float, torque: float) -> dict:
     return out
 
 
-PROBES = probes_of(run, state_round_trip, impossible_step)
+def simulate(fmu: str, dt: float, steps: int) -> list:
+    """fmpy's one call, ``simulate_fmu``, recording the outputs every ``dt`` [s]: its rows
+    after the start."""
+    from fmpy import simulate_fmu
+
+    res = simulate_fmu(fmu, step_size=dt, stop_time=steps * dt, output=OUTPUTS,
+                       output_interval=dt)
+    return [[float(res[n][k]) for n in OUTPUTS] for k in range(1, len(res))]
+
+
+PROBES = probes_of(run, state_round_trip, impossible_step, simulate)
 
 
 def main(argv: list[str] | None = None) -> None:

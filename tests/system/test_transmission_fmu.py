@@ -128,15 +128,13 @@ def test_helical_gives_gsb_runs_numbers(helical_transmission_fmu):
 
 def test_fmpys_simulate_fmu_within_1e_9(transmission_fmu):
     """fmpy's one call, whose communication steps differ from the case's step in their last
-    bits (it steps to ``k * output_interval``): within 1e-9 of gsb run, relative to each
-    output's largest magnitude (measured 3.4e-11, on the film forces)."""
-    from fmpy import simulate_fmu
-
+    bits (it steps to ``k * output_interval``), in a fresh interpreter: within 1e-9 of gsb
+    run, relative to each output's largest magnitude, the issue's requirement (measured
+    4.7e-10, on a journal velocity: the steps' last bits, amplified over 32 steps)."""
     case = _case()
     dt = _dt(case)
-    res = simulate_fmu(str(transmission_fmu), step_size=dt, stop_time=STEPS * dt,
-                       output=OUTPUTS, output_interval=dt)
-    rows = np.stack([res[n] for n in OUTPUTS], axis=1)[1:]
+    rows = np.array(run_isolated(module="tests.probes.transmission", args=[
+        "simulate", {"fmu": str(transmission_fmu), "dt": dt, "steps": STEPS}]))
     diff = _relative(rows, gsb_run_rows(case, STEPS))
     print(f"\nfmpy simulate_fmu vs gsb run: {diff:.1e}")
     assert len(rows) == STEPS and diff < 1e-9
