@@ -41,12 +41,11 @@ from fmu_src.contract import (
     gear_variables,
     journal_output_names,
     law_input_names,
-    parameter_field,
     support_load_names,
     unpack_law_arrays,
 )
 from fmu_src.lifecycle import Phase, StructureCycle
-from fmu_src.slaves.support import FMI_ERROR, ContractSlave
+from fmu_src.slaves.support import FMI_ERROR, ContractSlave, case_parameter
 from fmu_src.state_codec import StateArrays, StateFormatError, nest
 from fmu_src.states import structure_state_arrays, structure_state_from_arrays
 
@@ -116,8 +115,8 @@ class GearShaftSlave(ContractSlave):
                                                                           "frame_angle_"))}
         for v in variables:
             if v.causality == "parameter":
-                self.register_contract_variable(v, self._param_getter(v.name),
-                                                self._param_setter(v.name))
+                self.register_contract_variable(
+                    v, *case_parameter(self, v.name, self._reset_structure))
             elif v.name in index:
                 i = index[v.name]
                 self.register_contract_variable(v, self._law_getter(i), self._law_setter(i))
@@ -161,29 +160,6 @@ class GearShaftSlave(ContractSlave):
                 self._read_status = 3
             return self._with_status(self._outputs[:16])
         return super().get_real(vrs)
-
-    def _param_getter(self, name):
-        key, i = parameter_field(name)
-
-        def get():
-            value = self._overrides.get(key, self._base[key])
-            return value if i is None else value[i]
-        return get
-
-    def _param_setter(self, name):
-        key, i = parameter_field(name)
-
-        def set_(value):
-            current = self._overrides.get(key, self._base[key])
-            if i is None:
-                new = value
-            else:
-                new = list(current)
-                new[i] = value
-            if new != current:
-                self._overrides[key] = new
-                self._reset_structure()
-        return set_
 
     def _reset_structure(self) -> None:
         self._cycle.reset()

@@ -21,12 +21,13 @@ from __future__ import annotations
 from pythonfmu import Boolean, Fmi2Causality, Fmi2Slave, Fmi2Variability, Integer, Real, String
 from pythonfmu.enums import Fmi2Status
 
-from fmu_src.contract import ValueRefused
+from fmu_src.contract import ValueRefused, parameter_field
 from fmu_src.state_codec import StateArrays, decode, encode
 
 __all__ = [
     "FMI_ERROR",
     "ContractSlave",
+    "case_parameter",
     "describe_exception",
     "pin_namespace",
     "release_python_state_at_exit",
@@ -265,3 +266,23 @@ class ContractSlave(Fmi2Slave):
         out = cls._state_from_arrays(arrays)
         arrays.check_all_read()
         return out
+
+
+def case_parameter(slave, name: str, changed):
+    """``(getter, setter)`` of the FMU parameter ``name``, a case field or one entry of a list
+    field (:func:`fmu_src.contract.parameter_field`), for a slave that holds its carried case in
+    ``_base`` and the values set in ``_overrides`` ({case field: value}); ``changed()`` runs
+    when a set changes a value (the slave rebuilds what depends on the case)."""
+    key, i = parameter_field(name)
+
+    def get():
+        value = slave._overrides.get(key, slave._base[key])
+        return value if i is None else value[i]
+
+    def set_(value):
+        current = slave._overrides.get(key, slave._base[key])
+        new = value if i is None else [*current[:i], value, *current[i + 1:]]
+        if new != current:
+            slave._overrides[key] = new
+            changed()
+    return get, set_

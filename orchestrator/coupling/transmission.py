@@ -41,10 +41,9 @@ from fmu_src.contract import (
     BEARINGS,
     FORCE_NAMES,
     journal_output_names,
-    parameter_field,
     transmission_variables,
 )
-from fmu_src.slaves.support import FMI_ERROR, ContractSlave
+from fmu_src.slaves.support import FMI_ERROR, ContractSlave, case_parameter
 from fmu_src.state_codec import StateArrays
 from orchestrator.coupling.system import build_master
 
@@ -117,8 +116,8 @@ class TransmissionSlave(ContractSlave):
                 self.register_contract_variable(v, lambda: self._bearing_fmu,
                                                 self._set_bearing_fmu)
             elif v.causality == "parameter":
-                self.register_contract_variable(v, self._param_getter(v.name),
-                                                self._param_setter(v.name))
+                self.register_contract_variable(
+                    v, *case_parameter(self, v.name, self._drop_master))
             elif v.name == "torque":
                 self.register_contract_variable(v, self._get_torque, self._set_torque)
             elif v.name in out_index:
@@ -141,25 +140,6 @@ class TransmissionSlave(ContractSlave):
             except KeyError:
                 pass  # not only outputs
         return super().get_real(vrs)
-
-    def _param_getter(self, name):
-        key, i = parameter_field(name)
-
-        def get():
-            value = self._overrides.get(key, self._base[key])
-            return value if i is None else value[i]
-        return get
-
-    def _param_setter(self, name):
-        key, i = parameter_field(name)
-
-        def set_(value):
-            current = self._overrides.get(key, self._base[key])
-            new = value if i is None else [*current[:i], value, *current[i + 1:]]
-            if new != current:
-                self._overrides[key] = new
-                self._drop_master()
-        return set_
 
     def _set_bearing_fmu(self, value) -> None:
         if value != self._bearing_fmu:
