@@ -549,7 +549,9 @@ def read_case_text(path: str | Path) -> str:
     except OSError as exc:
         raise CaseError(f"{path}: cannot read the case file ({exc.strerror or exc})") from None
     for signature, what in _SIGNATURES.items():
-        if raw.startswith(signature):
+        # HDF5 may put its signature after a user block of 512, 1024, ... bytes
+        offsets = (0, 512, 1024, 2048, 4096) if signature.startswith(b"\x89HDF") else (0,)
+        if any(raw.startswith(signature, at) for at in offsets):
             raise CaseError(f"{path}: not a case file: {what.format(path=path)}; a case file "
                             f"is TOML text") from None
     try:
