@@ -13,8 +13,10 @@ The paper's cases ship with the package (``models``) and load by name
 
 from __future__ import annotations
 
+import difflib
 import json
 import math
+import re
 import tomllib
 from dataclasses import dataclass, fields
 from pathlib import Path
@@ -27,8 +29,9 @@ from gear_fmu.drivetrain import OUTPUT_ENDS, Drivetrain
 from gear_fmu.mesh.geometry import GearGeometryError, GearPair, zero_backlash_centre_distance
 from gear_fmu.modal.damping import BASES, DAMPING_KINDS, DampingModel
 
-__all__ = ["BEARING_MODELS", "FIELDS", "Case", "CaseError", "Field", "damping", "drivetrain",
-           "gear_pair", "load_case", "model_option_fields", "schema_markdown", "shipped_cases"]
+__all__ = ["BEARING_MODELS", "FIELDS", "Case", "CaseError", "Field", "check_override", "damping",
+           "drivetrain", "gear_pair", "load_case", "model_option_fields", "parse_toml",
+           "read_case_text", "schema_markdown", "shipped_cases"]
 
 BEARING_MODELS = tuple(_BEARING_TABLE)
 
@@ -226,10 +229,8 @@ class Case:
         """A copy with some fields replaced (values as in a case file), checked again."""
         raw = dict(self.values)
         for key, value in overrides.items():
-            if key not in _BY_KEY:
-                raise CaseError(f"unknown field {key!r}")
-            raw[key] = _convert(_BY_KEY[key], value)
-        _check_consistency(raw, self.source)
+            raw[key] = check_override(key, value)
+        _check_consistency(raw, _overridden(self.source, overrides))
         return Case(raw, self.source)
 
     @property
@@ -323,19 +324,58 @@ def _convert(field: Field, value):
     return [_scalar(field, v, f"{field.key}[{i}]") for i, v in enumerate(value)]
 
 
+def _unknown_key(key: str) -> str | None:
+    """Why ``key`` is not a case field (with the closest field when one is close, as a typo's
+    correction), or None for a field."""
+    if key in _BY_KEY:
+        return None
+    parts = key.split(".")
+    if len(parts) != 2 or not all(parts):
+        same_name = [f.key for f in FIELDS if f.key.split(".")[1] == key]
+        return (f"{key!r} is not section.key (e.g. operation.speed)"
+                + (f"; did you mean {' or '.join(same_name)}?" if same_name else ""))
+    section = parts[0]
+    close = difflib.get_close_matches(key, _BY_KEY, n=1, cutoff=0.75)
+    hint = f"; did you mean {close[0]}?" if close else ""
+    if section not in _SECTIONS:
+        return (f"unknown section [{section}] in {key}{hint} (sections: "
+                f"{', '.join(sorted(_SECTIONS))})")
+    known = [f.key.split(".")[1] for f in FIELDS if f.key.startswith(section + ".")]
+    return f"unknown field {key}{hint} ([{section}] takes {', '.join(known)})"
+
+
+def check_override(key: str, value):
+    """One override (``"section.key"``, a value as in a case file) on its own: the value in SI
+    units, or :class:`CaseError` naming the key (a typo gets the closest field) and the value,
+    never a case file (the override is not in one)."""
+    why = _unknown_key(str(key))
+    if why:
+        raise CaseError(why)
+    return _convert(_BY_KEY[key], value)
+
+
+def _overridden(source: str, overrides: dict) -> str:
+    """The source of a case in messages once ``overrides`` replaced some of its fields: a
+    value the file does not hold is not blamed on the file alone."""
+    if not overrides:
+        return source
+    return f"{source} with {', '.join(map(str, overrides))} overridden"
+
+
 def parse_case(data: dict, source: str = "<case>") -> Case:
     """Check a parsed TOML document against :data:`FIELDS`."""
     for section, content in data.items():
         if section not in _SECTIONS:
-            raise CaseError(f"{source}: unknown section [{section}]; known: "
-                            f"{', '.join(sorted(_SECTIONS))}")
+            close = difflib.get_close_matches(section, _SECTIONS, n=1, cutoff=0.75)
+            raise CaseError(f"{source}: unknown section [{section}]"
+                            + (f"; did you mean [{close[0]}]?" if close else "")
+                            + f" (sections: {', '.join(sorted(_SECTIONS))})")
         if not isinstance(content, dict):
             raise CaseError(f"{source}: [{section}] must be a table")
         for key in content:
-            if f"{section}.{key}" not in _BY_KEY:
-                known = [f.key.split(".")[1] for f in FIELDS if f.key.startswith(section + ".")]
-                raise CaseError(f"{source}: unknown field {section}.{key}; [{section}] takes "
-                                f"{', '.join(known)}")
+            why = _unknown_key(f"{section}.{key}")
+            if why:
+                raise CaseError(f"{source}: {why}")
     values = {}
     for field in FIELDS:
         section, key = field.key.split(".")
@@ -464,6 +504,8 @@ def resolve_case(path_or_name: str | Path) -> Path:
     path = Path(path_or_name)
     if path.is_file():
         return path
+    if path.is_dir():
+        raise CaseError(f"{path}: a folder, not a case file")
     shipped = shipped_cases()
     stem = path.name[:-5] if path.name.endswith(".toml") else path.name
     if str(path_or_name) in (stem, f"{stem}.toml") and stem in shipped:
@@ -474,21 +516,69 @@ def resolve_case(path_or_name: str | Path) -> Path:
 
 def load_case(path: str | Path, overrides: dict | None = None) -> Case:
     """Read and check a case file (a path, or the name of a shipped case); ``overrides``
-    (``{"section.key": value}``, values as in a case file) replace fields before the checks."""
+    (``{"section.key": value}``, values as in a case file) replace fields before the checks.
+    An override that is wrong on its own is named as such, not as the file's
+    (:func:`check_override`)."""
     path = resolve_case(path)
+    overrides = overrides or {}
+    for key, value in overrides.items():
+        check_override(key, value)
+    data = parse_toml(read_case_text(path), str(path))
+    case = parse_case(_apply_overrides(data, overrides), _overridden(str(path), overrides))
+    return Case(case.values, str(path))
+
+
+#: leading bytes of the binary files a case argument is mistaken for -> what the file is
+_SIGNATURES = {
+    b"\x89HDF\r\n\x1a\n": "an HDF5 file (a results file of gsb run or gsb sweep? `gsb run "
+                           "--resume {path}` continues a run, `gsb plot {path}` draws it)",
+    b"PK\x03\x04": "a ZIP archive (an FMU or SSP archive? gsb run takes an SSP archive by its "
+                   ".ssp name)",
+    b"\x89PNG\r\n\x1a\n": "a PNG image",
+    b"%PDF": "a PDF document",
+    b"\x1f\x8b": "a gzip archive",
+}
+
+
+def read_case_text(path: str | Path) -> str:
+    """The text of a case file, or :class:`CaseError` naming the file and why it is not one
+    (unreadable, a known binary format, not UTF-8 text)."""
+    path = Path(path)
     try:
-        data = tomllib.loads(path.read_text())
+        raw = path.read_bytes()
+    except OSError as exc:
+        raise CaseError(f"{path}: cannot read the case file ({exc.strerror or exc})") from None
+    for signature, what in _SIGNATURES.items():
+        # HDF5 may put its signature after a user block of 512, 1024, ... bytes
+        offsets = (0, 512, 1024, 2048, 4096) if signature.startswith(b"\x89HDF") else (0,)
+        if any(raw.startswith(signature, at) for at in offsets):
+            raise CaseError(f"{path}: not a case file: {what.format(path=path)}; a case file "
+                            f"is TOML text") from None
+    try:
+        return raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise CaseError(f"{path}: not a case file: not UTF-8 text (byte {raw[exc.start]:#04x} "
+                        f"at offset {exc.start}); a case file is TOML text") from None
+
+
+_TOML_WHERE = re.compile(r"^(?P<msg>.*) \(at line (?P<line>\d+), column (?P<col>\d+)\)$",
+                         re.DOTALL)
+
+
+def parse_toml(text: str, source: str) -> dict:
+    """A case's TOML text as a dict, or :class:`CaseError` naming ``source`` and the line and
+    column of a syntax error."""
+    try:
+        return tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise CaseError(f"{path}: not valid TOML: {exc}") from None
-    return parse_case(_apply_overrides(data, overrides or {}), str(path))
+        m = _TOML_WHERE.match(str(exc))
+        where = f"{source}, line {m['line']}, column {m['col']}" if m else source
+        raise CaseError(f"{where}: not valid TOML: {m['msg'] if m else exc}") from None
 
 
 def _apply_overrides(data: dict, overrides: dict) -> dict:
     for key, value in overrides.items():
-        parts = str(key).split(".")
-        if len(parts) != 2 or not all(parts):
-            raise CaseError(f"override {key!r}: expected section.key (e.g. operation.speed)")
-        section, name = parts
+        section, name = str(key).split(".")
         table = data.setdefault(section, {})
         if not isinstance(table, dict):
             raise CaseError(f"override {key!r}: [{section}] is not a table")

@@ -28,7 +28,7 @@ import math
 import re
 from dataclasses import dataclass, field
 
-__all__ = ["DIMENSIONS", "Dimension", "UnitError", "parse_quantity", "symbol"]
+__all__ = ["DIMENSIONS", "Dimension", "UnitError", "describe", "parse_quantity", "symbol"]
 
 
 class UnitError(ValueError):
@@ -92,6 +92,17 @@ def symbol(dimension: str) -> str:
     return DIMENSIONS[dimension].symbol
 
 
+def describe(dimension: str) -> str:
+    """A dimension as a noun phrase with its article, for messages: ``"angular_speed"`` ->
+    ``"an angular speed"``, ``"dimensionless"`` -> ``"a dimensionless number"``.
+
+    >>> describe("angular_speed"), describe("length"), describe("inertia")
+    ('an angular speed', 'a length', 'an inertia')
+    """
+    words = "dimensionless number" if dimension == "dimensionless" else dimension.replace("_", " ")
+    return f"{'an' if words[0] in 'aeiou' else 'a'} {words}"
+
+
 def parse_quantity(value, dimension: str, field: str) -> float:
     """A case-file value as a float in SI units.
 
@@ -105,8 +116,10 @@ def parse_quantity(value, dimension: str, field: str) -> float:
         Dotted name of the field, for error messages.
     """
     si = symbol(dimension)
+    expected = describe(dimension)
     if isinstance(value, bool):
-        raise UnitError(f"{field}: expected a {dimension} value, got {value!r}")
+        raise UnitError(f"{field}: expected {expected} (a number in {si} or 'number unit'), "
+                        f"got {value!r}")
     if isinstance(value, (int, float)):
         out = float(value)
     elif isinstance(value, str):
@@ -116,16 +129,16 @@ def parse_quantity(value, dimension: str, field: str) -> float:
         number, unit = m.groups()
         unit = unit or si
         if unit not in _SPELLINGS:
-            raise UnitError(f"{field}: unknown unit {unit!r} in {value!r}; a {dimension} takes "
-                            f"one of {', '.join(DIMENSIONS[dimension].aliases)}")
+            raise UnitError(f"{field}: unknown unit {unit!r} in {value!r}; {expected} takes one "
+                            f"of the units {', '.join(DIMENSIONS[dimension].aliases)}")
         factor, dim = _SPELLINGS[unit]
         if dim != dimension:
-            raise UnitError(f"{field}: {value!r} is a {dim}, expected a {dimension} "
+            raise UnitError(f"{field}: {value!r} is {describe(dim)}, expected {expected} "
                             f"(e.g. '{number} {si}')")
         out = float(number) * factor
     else:
-        raise UnitError(f"{field}: expected a {dimension} value, got {type(value).__name__} "
-                        f"{value!r}")
+        raise UnitError(f"{field}: expected {expected} (a number in {si} or 'number unit'), "
+                        f"got {type(value).__name__} {value!r}")
     if not math.isfinite(out):
         raise UnitError(f"{field}: {value!r} is not finite")
     return out

@@ -36,12 +36,10 @@ def stored_case(attrs: dict, source: str | None = None) -> Case:
     """The case a results file was run with (root attribute ``case_toml``, the effective case
     after the overrides, bit for bit); ``source`` names it in error messages (default: the
     case file it was read from)."""
-    import tomllib
+    from fmu_src.case import parse_case, parse_toml
 
-    from fmu_src.case import parse_case
-
-    where = attrs.get("case_file", "results") if source is None else source
-    return parse_case(tomllib.loads(str(attrs["case_toml"])), f"{where} (stored case)")
+    where = f"{attrs.get('case_file', 'results') if source is None else source} (stored case)"
+    return parse_case(parse_toml(str(attrs["case_toml"]), where), where)
 
 
 def _static_load(results: dict) -> float:

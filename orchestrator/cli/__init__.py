@@ -9,6 +9,7 @@ import sys
 from bearing_fmu.base import BearingError
 from fmu_src.case import CaseError
 from gear_fmu.mesh.geometry import GearGeometryError
+from orchestrator.cli.options import UsageError
 from orchestrator.run.progress import RunInterrupted
 from orchestrator.run.spec import RunError
 
@@ -33,7 +34,7 @@ def main(argv: list[str] | None = None) -> int:
     except RunInterrupted as exc:
         print(f"gsb {args.command}: {exc}", file=sys.stderr)
         return exc.exit_code
-    except (BearingError, CaseError, GearGeometryError, RunError) as exc:
+    except (BearingError, CaseError, GearGeometryError, RunError, UsageError) as exc:
         print(f"gsb {args.command}: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:

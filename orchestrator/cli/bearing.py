@@ -13,11 +13,14 @@ from __future__ import annotations
 import argparse
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 
 from bearing_fmu import MODELS, BearingData, is_film_model, model_class
 from bearing_fmu.static import static_equilibrium
+from fmu_src.case import bound_violation
+from orchestrator.cli.options import UsageError
 
 #: the models the calculator offers: those that solve the Reynolds equation
 FILM_MODELS = tuple(m for m in MODELS if is_film_model(m))
@@ -25,9 +28,15 @@ FILM_MODELS = tuple(m for m in MODELS if is_film_model(m))
 
 def build_model(name: str, bearing: BearingData, nodes: int | None, pinned_start: bool):
     """A film model from the registry with the CLI's options (passed straight through:
-    a model that does not take one says so)."""
+    a model that does not take one says so; ``--nodes`` checked against the model's bounds)."""
     options = {}
-    if nodes:
+    if nodes is not None:
+        for opt in model_class(name).options:
+            violated = opt.key == "nodes" and bound_violation(nodes, opt.minimum, opt.maximum,
+                                                              opt.exclusive_minimum)
+            if violated:
+                raise UsageError(f"--nodes {nodes}: the {name} model needs {violated[0]} "
+                                 f"{violated[1]}")
         options["nodes"] = nodes
     if pinned_start:
         options["pinned_start"] = True
@@ -146,23 +155,51 @@ def add_parser(sub) -> None:
     p.set_defaults(func=run)
 
 
-def run(args) -> int:
-    dimensional = [args.diameter, args.length, args.clearance, args.viscosity, args.speed,
-                   args.load]
-    if any(v is not None for v in dimensional):
-        names = ["--diameter", "--length", "--clearance", "--viscosity", "--speed", "--load"]
-        missing = [n for n, v in zip(names, dimensional, strict=True) if v is None]
+def _check_inputs(args) -> bool:
+    """The options of one of the two forms, each finite and in its range; True for the
+    dimensional form. :class:`UsageError` naming the option and its value otherwise."""
+    dimensional = {"--diameter": args.diameter, "--length": args.length,
+                   "--clearance": args.clearance, "--viscosity": args.viscosity,
+                   "--speed": args.speed, "--load": args.load}
+    dimensionless = {"--l-over-d": args.l_over_d, "--eccentricity": args.eccentricity}
+    given = {o for o, v in (dimensional | dimensionless).items() if v is not None}
+    if given & set(dimensional):
+        if given & set(dimensionless):
+            extra = sorted(given & set(dimensionless))
+            raise UsageError(f"{' and '.join(extra)} {'belongs' if len(extra) == 1 else 'belong'}"
+                             f" to the dimensionless form; the dimensional form "
+                             f"({', '.join(dimensional)}) finds the eccentricity from the load: "
+                             f"give one form")
+        missing = [o for o in dimensional if o not in given]
         if missing:
-            raise SystemExit(f"dimensional form needs {' '.join(missing)}")
+            raise UsageError(f"the dimensional form needs {', '.join(missing)} as well")
+        for option, value in dimensional.items():
+            if not math.isfinite(value) or (option != "--load" and value <= 0.0):
+                raise UsageError(f"{option} {value:g}: must be "
+                                 + ("finite" if option == "--load" else "finite and > 0"))
+        return True
+    if len(given) < 2:
+        raise UsageError("give --l-over-d and --eccentricity (the dimensionless form), or "
+                         f"{', '.join(dimensional)} (the dimensional form)")
+    if not (math.isfinite(args.l_over_d) and args.l_over_d > 0.0):
+        raise UsageError(f"--l-over-d {args.l_over_d:g}: must be finite and > 0")
+    if not 0.0 <= args.eccentricity < 1.0:
+        raise UsageError(f"--eccentricity {args.eccentricity:g}: must be in [0, 1) (the "
+                         f"eccentricity ratio e/C; 1 is contact)")
+    return False
+
+
+def run(args) -> int:
+    dimensional = _check_inputs(args)
+    if args.pressure_png and not Path(args.pressure_png).parent.is_dir():
+        raise UsageError(f"--pressure-png {args.pressure_png}: no folder "
+                         f"{Path(args.pressure_png).parent}")
+    if dimensional:
         bearing = BearingData(args.diameter, args.length, args.clearance, args.viscosity)
         model = build_model(args.model, bearing, args.nodes, args.pinned_start)
         rep = dimensional_report(model, args.speed, (0.0, -args.load))
         xb, yb = rep["x0_m"] / args.clearance, rep["y0_m"] / args.clearance
     else:
-        if args.l_over_d is None or args.eccentricity is None:
-            raise SystemExit("give --l-over-d and --eccentricity (or the dimensional form)")
-        if not 0.0 <= args.eccentricity < 1.0:
-            raise SystemExit(f"--eccentricity {args.eccentricity} must be in [0, 1)")
         # the dimensionless problem depends on L/D only
         bearing = BearingData(diameter=1.0, length=args.l_over_d, clearance=1e-3, viscosity=1.0)
         model = build_model(args.model, bearing, args.nodes, args.pinned_start)
@@ -173,7 +210,11 @@ def run(args) -> int:
     else:
         _print_report(rep)
     if args.pressure_png:
-        write_pressure_png(model, xb, yb, args.pressure_png)
+        try:
+            write_pressure_png(model, xb, yb, args.pressure_png)
+        except OSError as exc:
+            raise UsageError(f"--pressure-png {args.pressure_png}: cannot write "
+                             f"({exc.strerror or exc})") from None
         if not args.json:
             print(f"pressure field written to {args.pressure_png}")
     return 0

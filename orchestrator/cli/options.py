@@ -4,22 +4,36 @@ give (the command line's settings become case fields: the case is their one carr
 from __future__ import annotations
 
 import argparse
+import json
 
-__all__ = ["add_case_argument", "add_override_options", "case_from_args", "overrides_from_args",
-           "parse_override"]
+__all__ = ["UsageError", "add_case_argument", "add_override_options", "case_from_args",
+           "overrides_from_args", "parse_override", "set_overrides"]
 
 
-def parse_override(text: str):
+class UsageError(ValueError):
+    """A command line that cannot be carried out as given; the message names the option and
+    its value (``gsb <command>: error: ...``, exit 2)."""
+
+
+class Override(tuple):
+    """A ``--set`` option: the pair (key, value), and the text as typed (``.text``) for the
+    messages about it."""
+
+    def __new__(cls, key: str, value, text: str):
+        self = super().__new__(cls, (key, value))
+        self.text = text
+        return self
+
+
+def parse_override(text: str) -> Override:
     """``section.key=value`` -> (key, value): JSON lists, numbers, else the text ("4 mm")."""
-    import json
-
     if "=" not in text:
         raise argparse.ArgumentTypeError(f"--set {text!r}: expected section.key=value")
     key, value = (part.strip() for part in text.split("=", 1))
     try:
-        return key, json.loads(value)
+        return Override(key, json.loads(value), text)
     except ValueError:
-        return key, value
+        return Override(key, value, text)
 
 
 def add_case_argument(p, case_help: str = "case file (TOML) or the name of a shipped case, e.g. "
@@ -40,18 +54,40 @@ def add_override_options(p) -> None:
                    metavar="SECTION.KEY=VALUE", help="override any case field (repeatable)")
 
 
+def set_overrides(pairs) -> dict:
+    """The ``--set`` options' (key, value) pairs as case fields, each checked on its own: an
+    error names the option as typed (a typo of a key gets the closest field), not the case
+    file it would have replaced a field of."""
+    from fmu_src.case import CaseError, check_override
+
+    for pair in pairs:
+        try:
+            check_override(*pair)
+        except CaseError as exc:
+            typed = getattr(pair, "text", None) or f"{pair[0]}={json.dumps(pair[1])}"
+            raise CaseError(f"--set {typed}: {exc}") from None
+    return dict(pairs)
+
+
 def overrides_from_args(args) -> dict:
-    """The command line's settings as case fields: the case is their one carrier."""
+    """The command line's settings as case fields: the case is their one carrier. Each is
+    checked on its own first, the message naming its option (``--speed '3000 rpmx'``)."""
+    from fmu_src.case import CaseError, check_override
     from orchestrator.run.spec import check_periods
 
-    overrides = dict(args.overrides)
+    overrides = set_overrides(args.overrides)
     periods = getattr(args, "periods", None)
-    for key, value in (("operation.speed", args.speed), ("operation.torque", args.torque),
-                       ("operation.unbalance", args.unbalance),
-                       ("bearings.model", getattr(args, "bearing", None)),
-                       ("simulation.mesh_periods",
-                        None if periods is None else check_periods(periods))):
+    for option, key, value in (("--speed", "operation.speed", args.speed),
+                               ("--torque", "operation.torque", args.torque),
+                               ("--unbalance", "operation.unbalance", args.unbalance),
+                               ("--bearing", "bearings.model", getattr(args, "bearing", None)),
+                               ("--periods", "simulation.mesh_periods",
+                                None if periods is None else check_periods(periods))):
         if value is not None:
+            try:
+                check_override(key, value)
+            except CaseError as exc:
+                raise CaseError(f"{option} {value!r}: {exc}") from None
             overrides[key] = value
     return overrides
 

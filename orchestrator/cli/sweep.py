@@ -194,10 +194,11 @@ def sweep_hash(case, vary: list, bearings: list, periods: int, steady: int) -> s
 def _plan(args):
     """The checked inputs: (case, vary [(key, values)], bearings, points, periods, steady)."""
     from fmu_src.case import load_case
+    from orchestrator.cli.options import set_overrides
     from orchestrator.run.spec import check_periods
     from orchestrator.sweeps.runner import SweepPoint, check_point
 
-    case = load_case(args.case, dict(args.overrides))
+    case = load_case(args.case, set_overrides(args.overrides))
     vary = []
     for text in args.vary:
         key, values = parse_vary(text)

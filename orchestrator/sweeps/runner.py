@@ -29,14 +29,13 @@ import signal
 import sys
 import threading
 import time
-import tomllib
 import traceback
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from fmu_src.case import Case, CaseError, load_case, parse_case
+from fmu_src.case import Case, CaseError, load_case, parse_case, parse_toml
 from orchestrator.run.progress import RunInterrupted, deferred_signals
 from orchestrator.run.spec import RunError
 from orchestrator.sweeps import file as sweep_file
@@ -91,10 +90,7 @@ def as_case(case) -> Case:
     if isinstance(case, Case):
         return case
     if isinstance(case, str) and "\n" in case:
-        try:
-            return parse_case(tomllib.loads(case), "<sweep case>")
-        except tomllib.TOMLDecodeError as exc:
-            raise CaseError(f"sweep case: not valid TOML: {exc}") from None
+        return parse_case(parse_toml(case, "sweep case"), "<sweep case>")
     return load_case(case)
 
 
