@@ -130,6 +130,14 @@ def _locator_class():
     return CodeVersionLocator
 
 
+def cold() -> bool:
+    """Whether no kernel of this code version is in the cache yet (the first run compiles
+    them: :func:`install`)."""
+    root = str(Path(__file__).resolve().parents[1])
+    folder = cache_base() / (PREFIX + code_hash(root))
+    return not any(folder.rglob("*.nbi"))
+
+
 def install() -> None:
     """Put the code-version locator first in numba's list (once per process)."""
     classes = _impl_class()._locator_classes

@@ -65,6 +65,7 @@ import hashlib
 import os
 import platform
 import shutil
+import logging
 import subprocess
 import sys
 import sysconfig
@@ -313,6 +314,9 @@ def export_library(quiet: bool = True, retry: bool = False) -> NativeLibraries |
             reason = marker.read_text().strip()
         else:
             try:
+                logging.getLogger("gsb.startup").info(
+                    "building the FMUs' native layer with CMake in %s (once per machine and "
+                    "Python version) ...", folder)
                 built = build_library(folder, quiet)
                 marker.unlink(missing_ok=True)  # a retry that succeeded
                 return built

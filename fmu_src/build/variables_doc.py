@@ -164,7 +164,7 @@ Reading it:
 - The last three columns compare with `gsb run` of the shipped case (T_mesh / 32), what a
   tool user is likely to hold as the reference: the iterative master itself moves by about
   4.5 % of the orbit between T_mesh / 32 and T_mesh / 256 (the time discretisation: `gsb run`
-  warns that the 4366 Hz mesh mode gets 9.9 steps per period at T_mesh / 32), so compare with
+  notes that the 4366 Hz mesh mode gets 9.9 steps per period at T_mesh / 32), so compare with
   `gsb run` at the step the tool used.
 
 Which step to give a tool: for a coupling error below about 2 % of the orbit, T_mesh / 64

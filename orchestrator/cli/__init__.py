@@ -27,8 +27,26 @@ def make_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _show_startup(show: bool) -> None:
+    """Print what a first run does once (the FMU build, the native layer, numba's compilation:
+    the ``gsb.startup`` log of the library, silent by default) on stderr, unless ``--quiet``."""
+    import logging
+
+    log = logging.getLogger("gsb.startup")
+    for handler in [h for h in log.handlers if getattr(h, "gsb_cli", False)]:
+        log.removeHandler(handler)
+    if show:
+        handler = logging.StreamHandler(sys.stderr)
+        handler.setFormatter(logging.Formatter("gsb: %(message)s"))
+        handler.gsb_cli = True
+        log.addHandler(handler)
+        log.setLevel(logging.INFO)
+        log.propagate = False
+
+
 def main(argv: list[str] | None = None) -> int:
     args = make_parser().parse_args(argv)
+    _show_startup(not getattr(args, "quiet", False))
     try:
         return args.func(args)
     except RunInterrupted as exc:

@@ -47,7 +47,8 @@ def add_parser(sub) -> None:
                    help="a bearing FMU of your own for all four bearings (inputs s, t, s_dot, "
                         "t_dot; outputs F_s, F_t; docs/fmu-variables.md)")
     p.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
-    p.add_argument("--quiet", action="store_true", help="no progress display")
+    p.add_argument("--quiet", action="store_true",
+                   help="no progress display, no start-up messages (first-run builds)")
     p.set_defaults(func=run)
 
     p = sub.add_parser("cases", help="list the cases shipped with the package",
@@ -180,9 +181,11 @@ def _figures(summary, args) -> list[Path]:
 
 
 def _print_summary(summary, figures: list[Path]) -> None:
-    """What ``gsb run`` prints of a finished (or resumed) run: its figures, the report and the
-    files it wrote."""
+    """What ``gsb run`` prints of a finished (or resumed) run: its figures, the report, the
+    checks' notes (a deliberate time step and what it costs) and the files it wrote."""
     print(summary.describe())
+    for text in summary.notes:
+        print(f"note: {text}")
     print(summary.report_text())
     print(f"results: {summary.results}")
     for path in figures:

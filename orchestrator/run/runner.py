@@ -42,6 +42,7 @@ of the results file once the transient stops (complete, failed or interrupted; a
 from __future__ import annotations
 
 import contextlib
+import logging
 import math
 import signal
 import sys
@@ -57,7 +58,7 @@ from orchestrator.coupling.master import StepReport, decode_checkpoint
 from orchestrator.coupling.system import build_master
 from orchestrator.run import files as run_files
 from orchestrator.run.channels import CHANNELS, COORDS, dims
-from orchestrator.run.checks import overload_message, time_step_warnings, unbalance_warnings
+from orchestrator.run.checks import overload_message, time_step_findings, unbalance_warnings
 from orchestrator.run.progress import Progress, RunInterrupted, deferred_signals
 from orchestrator.run.result import MemoryRecorder, Result
 from orchestrator.run.results import (
@@ -88,6 +89,7 @@ class RunSummary:
     static_positions: np.ndarray  # (4, 2) m
     report: dict | None = None  # orchestrator.analysis.metrics.run_report, None below 2 steps
     warnings: list = field(default_factory=list)  # sentences of the checks before the transient
+    notes: list = field(default_factory=list)  # what the checks state once (a deliberate step)
     relaxed_steps: int = 0  # steps whose coupled iteration was relaxed (coupling.master)
 
     @property
@@ -131,7 +133,7 @@ class RunSummary:
 @dataclass
 class Static:
     """What the static step leaves: the master's report, X0 (4, 2) [m], the static mesh force
-    [N] and transmission error [m], the checks' warnings and the wall time [s]."""
+    [N] and transmission error [m], the checks' warnings and notes and the wall time [s]."""
 
     report: StepReport
     x0: np.ndarray
@@ -139,6 +141,7 @@ class Static:
     transmission_error: float
     warnings: list
     seconds: float
+    notes: list = field(default_factory=list)
 
 
 class Stop(Exception):
@@ -203,8 +206,15 @@ class Runner:
 
     def start(self) -> None:
         """The master and its two slaves (:func:`~orchestrator.coupling.system.build_master`)."""
+        from bearing_fmu import numba_cache
+
         s = self.spec
+        cold = numba_cache.cold()
         self.master = build_master(s.case, s.in_process, s.fmu_dir, s.fmus)
+        if cold:  # the kernels compile on their first call: the static solution's
+            logging.getLogger("gsb.startup").info(
+                "compiling the numba kernels into %s (once per code version on this "
+                "machine) ...", numba_cache.cache_base())
         self.stop_if_asked("before the static solution")
 
     def static(self) -> Static:
@@ -231,13 +241,14 @@ class Runner:
         # solve its static problem again for outputs read after the final laws were set
         mesh_force, te = structure.mesh_force(), structure.transmission_error()
         try:
-            warnings = time_step_warnings(case, master.laws, self.spec.dt, structure.physics)
+            warnings, notes = time_step_findings(case, master.laws, self.spec.dt,
+                                                 structure.physics)
         except (ValueError, np.linalg.LinAlgError) as exc:  # a check, not the run
-            warnings = [f"the time-step check could not run: {exc}"]
+            warnings, notes = [f"the time-step check could not run: {exc}"], []
         warnings = unbalance_warnings(case) + warnings
         for text in warnings if self.echo else ():
             print(f"warning: {text}", file=sys.stderr, flush=True)
-        return Static(static, x0, mesh_force, te, warnings, time.perf_counter() - t0)
+        return Static(static, x0, mesh_force, te, warnings, time.perf_counter() - t0, notes)
 
     def transient(self, recorder, first: int = 0, bar: Progress | None = None) -> dict:
         """Steps ``first`` .. ``n_steps`` - 1, each row appended to ``recorder``; returns the
@@ -282,7 +293,8 @@ class Runner:
     def summary(self, static: Static, done: dict, path: Path | None, steps: int) -> RunSummary:
         return RunSummary(path, steps, done["wall_time"], static.seconds, done["iterations"],
                           done["bearing_evaluations"], static.report.iterations, static.x0,
-                          warnings=static.warnings, relaxed_steps=done["relaxed_steps"])
+                          warnings=static.warnings, notes=static.notes,
+                          relaxed_steps=done["relaxed_steps"])
 
 
 def _static_attributes(static: Static) -> dict:
@@ -290,7 +302,7 @@ def _static_attributes(static: Static) -> dict:
             "static_iterations": static.report.iterations,
             "static_mesh_force": static.mesh_force,
             "static_transmission_error": static.transmission_error,
-            "warnings": "\n".join(static.warnings)}
+            "warnings": "\n".join(static.warnings), "notes": "\n".join(static.notes)}
 
 
 def simulate_case(spec: RunSpec, progress: bool = False, echo_warnings: bool = True) -> Result:

@@ -10,6 +10,7 @@ four bearing FMUs of a case behind the master's interfaces.
 
 from __future__ import annotations
 
+import logging
 from pathlib import Path
 
 from fmu_src import description
@@ -61,6 +62,9 @@ def ensure_fmus(names, fmu_dir=None) -> dict[str, Path]:
     with locked(fmu_dir):
         stale = [n for n, p in paths.items() if _stale(n, p, current)]  # another run built?
         if stale:
+            logging.getLogger("gsb.startup").info(
+                "building the FMUs %s in %s (once per code version) ...", ", ".join(stale),
+                fmu_dir)
             build_fmus(fmu_dir, stale)
     return paths
 

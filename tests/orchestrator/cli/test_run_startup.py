@@ -1,0 +1,92 @@
+"""What ``gsb run`` says before and around its run: the time step's cost (a warning when it
+is material, a note once when the shipped case keeps the paper's step on purpose) and the
+one-off start-up work of a first run (FMU build, native layer, numba compilation)."""
+
+import os
+import subprocess
+import sys
+
+import pytest
+
+from tests.helpers import ROOT
+
+GSB = [sys.executable, "-m", "orchestrator.cli"]
+
+
+def gsb(*args, env=None, cwd):
+    env = dict(os.environ if env is None else env)
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (str(ROOT), env.get("PYTHONPATH", "")) if p)
+    return subprocess.run([*GSB, *map(str, args)], capture_output=True, text=True, cwd=cwd,
+                          env=env, timeout=600)
+
+
+def test_shipped_case_states_its_step_once_and_does_not_warn(tmp_path):
+    """The paper's step (T/32) gives the 4366 Hz mesh mode 9.9 steps per period, 3.3 % period
+    error (tan(omega_h dt / 2) = omega dt / 2): stated once in the summary, no warning."""
+    proc = gsb("run", "baguet2010_spur", "--periods", 1, "--in-process", "--no-figures",
+               "--quiet", "--out", tmp_path, cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert "warning" not in proc.stderr
+    notes = [line for line in proc.stdout.splitlines() if line.startswith("note: time step")]
+    assert len(notes) == 1, proc.stdout
+    assert "32 steps per mesh period, the paper's" in notes[0]
+    assert "4366 Hz" in notes[0] and "9.9 time steps per period" in notes[0]
+    assert "lengthens its period by 3.3 %" in notes[0]
+    assert "simulation.steps_per_mesh_period >= 59" in notes[0]
+
+
+def test_a_coarser_step_warns_with_the_period_error(tmp_path):
+    """T/16: the 4366 Hz mode gets 4.9 steps per period, 12.3 % period error; the 2159 Hz one
+    10.0 steps, 3.2 %: both warn (stderr), with the step that brings them under 1 %."""
+    proc = gsb("run", "baguet2010_spur", "--periods", 1, "--in-process", "--no-figures",
+               "--quiet", "--out", tmp_path, "--set", "simulation.steps_per_mesh_period=16",
+               cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    warnings = [line for line in proc.stderr.splitlines() if line.startswith("warning: ")]
+    assert len(warnings) == 2, proc.stderr
+    assert "4366 Hz" in warnings[1] and "lengthens its period by 12.3 %" in warnings[1]
+    assert "steps_per_mesh_period >= 59 (now 16)" in warnings[1]
+    assert "2159 Hz" in warnings[0] and "lengthens its period by 3.2 %" in warnings[0]
+    assert "note: time step" not in proc.stdout
+
+
+@pytest.mark.parametrize("show", [True, False])
+def test_the_cli_shows_an_fmu_build_unless_quiet(show, tmp_path, monkeypatch, capsys):
+    """The library logs the build on ``gsb.startup``; the CLI prints it on stderr, ``--quiet``
+    (show False) not (the build itself stubbed: what is printed is the point)."""
+    import fmu_src.build.fmus
+    from orchestrator.cli import _show_startup
+    from orchestrator.coupling.fmi.cache import ensure_fmus
+
+    built = []
+    monkeypatch.setattr(fmu_src.build.fmus, "build_fmus", lambda dest, names: built.append(names))
+    _show_startup(show)
+    try:
+        ensure_fmus(["GearShaft"], tmp_path)
+    finally:
+        _show_startup(False)
+    err = capsys.readouterr().err
+    assert built == [["GearShaft"]]
+    if show:
+        assert err == (f"gsb: building the FMUs GearShaft in {tmp_path} (once per code "
+                       "version) ...\n")
+    else:
+        assert err == ""
+
+
+@pytest.mark.slow
+def test_a_first_run_says_what_it_builds_and_compiles(tmp_path):
+    """An empty cache (FMUs, native layer, numba kernels): a run through FMUs prints one line
+    per one-off step, in order, on stderr; the run itself succeeds."""
+    env = dict(os.environ, GSB_CACHE_DIR=str(tmp_path / "cache"),
+               NUMBA_CACHE_DIR=str(tmp_path / "cache" / "numba"))
+    proc = gsb("run", "baguet2010_spur", "--periods", 1, "--no-figures", "--out", tmp_path,
+               env=env, cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    lines = [line for line in proc.stderr.splitlines() if line.startswith("gsb: ")]
+    assert [line.split(" (once per")[1] for line in lines] == [
+        " code version) ...", " machine and Python version) ...",
+        " code version on this machine) ..."], proc.stderr
+    assert lines[0].startswith("gsb: building the FMUs GearShaft, BearingHybrid in ")
+    assert lines[1].startswith("gsb: building the FMUs' native layer with CMake in ")
+    assert lines[2].startswith("gsb: compiling the numba kernels into ")
