@@ -495,7 +495,7 @@ def _run_to_file(spec: RunSpec, attrs: dict, where, first: int = 0, blob=None,
             into = give_up(stopped_by=stop.stopped_by, interrupted=stop.signame)
             with contextlib.suppress(Exception):
                 _store_report(into)
-            raise stop.message(f"{writer.rows} steps kept in {into}") from None
+            raise stop.message(f"{_rows_in(into)} steps kept in {into}") from None
         except StepFailed as failed:
             into = give_up(checkpoint=False, stopped_by=failed.stopped_by)
             with contextlib.suppress(Exception):
@@ -513,6 +513,18 @@ def _run_to_file(spec: RunSpec, attrs: dict, where, first: int = 0, blob=None,
     summary = runner.summary(static, done, path, spec.n_steps - first)
     summary.report = _store_report(path)
     return summary
+
+
+def _rows_in(path: Path) -> int | str:
+    """The rows a closed results file holds, read from the file (the count a user's reader
+    sees, whatever was buffered or flushed when the run stopped); "?" if it cannot be read."""
+    from orchestrator.run.results import open_results
+
+    try:
+        with open_results(path) as f:
+            return int(f["time"].shape[0])
+    except (OSError, KeyError):
+        return "?"
 
 
 def _report_attributes(report: dict) -> dict:

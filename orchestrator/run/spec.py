@@ -15,6 +15,7 @@ import numpy as np
 
 from fmu_src import description
 from fmu_src.case import Case
+from fmu_src.contract import bearing_fmu_name
 from fmu_src.units import symbol
 
 __all__ = ["ATTRIBUTE_UNITS", "RunError", "RunSpec", "check_periods", "with_units"]
@@ -65,9 +66,18 @@ class RunSpec:
 
     @property
     def label(self) -> str:
-        """The bearing model's name, or the stem of a bearing FMU of the user's own."""
-        return (self.case["bearings.model"] if self.fmus is None
-                else Path(self.fmus["bearings"][0]).stem)
+        """The bearing model's name (``hybrid``), also when the bearing FMUs are this
+        package's own of that model (an SSP archive of ``gsb export-ssp``: ``BearingHybrid``
+        is named ``hybrid`` as in a direct run); for a bearing FMU of the user's own, ``fmu-``
+        and its file's stem, so that the results file says whose bearing law it holds."""
+        if self.fmus is None:
+            return self.case["bearings.model"]
+        stems = {Path(p).stem for p in self.fmus["bearings"]}
+        model = self.case["bearings.model"]
+        if stems == {bearing_fmu_name(model)}:
+            return model
+        stem = Path(self.fmus["bearings"][0]).stem
+        return "fmu-" + "".join(c if c.isalnum() or c in "-." else "-" for c in stem)
 
     def attributes(self) -> dict:
         """The settings stored as root attributes of the results file (numbers in SI units;
