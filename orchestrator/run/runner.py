@@ -71,7 +71,8 @@ from orchestrator.run.results import (
 )
 from orchestrator.run.spec import RunError, RunSpec, check_periods, with_units
 
-__all__ = ["RunSummary", "Runner", "resume_run", "run_case", "simulate_case"]
+__all__ = ["RunSummary", "Runner", "resume_run", "run_case", "simulate_case",
+           "stored_summary"]
 
 
 @dataclass
@@ -89,6 +90,7 @@ class RunSummary:
     report: dict | None = None  # orchestrator.analysis.metrics.run_report, None below 2 steps
     warnings: list = field(default_factory=list)  # sentences of the checks before the transient
     relaxed_steps: int = 0  # steps whose coupled iteration was relaxed (coupling.master)
+    stored: bool = False  # read from the complete results file of the same inputs, not computed
 
     @property
     def iterations_per_step(self) -> float:
@@ -99,6 +101,11 @@ class RunSummary:
         return self.steps / self.wall_time if self.wall_time > 0 else math.inf
 
     def describe(self) -> str:
+        if self.stored:
+            return (f"{self.steps} steps read from the stored results of the same inputs "
+                    f"(computed in {self.wall_time:.1f} s, {self.iterations_per_step:.2f} "
+                    f"coupled iterations per step); nothing computed: --overwrite computes "
+                    f"them again")
         return (f"{self.steps} steps in {self.wall_time:.1f} s ({self.steps_per_second:.0f} "
                 f"steps/s), {self.iterations_per_step:.2f} coupled iterations per step, "
                 f"{4 * self.bearing_evaluations} bearing evaluations; static solution in "
@@ -342,9 +349,11 @@ def run_case(case: Case, in_process: bool = False, out_dir: Path | str = "result
     after this many time steps (a quick look; default: all the periods'). ``echo_warnings``:
     print the checks' warnings on stderr (they are also in the summary and the results file).
     The results file is named after the effective parameters
-    (:func:`orchestrator.run.files.results_name`); an existing one stops the run before it
-    starts unless ``overwrite`` (:func:`orchestrator.run.files.target`: a complete file is
-    replaced only by a complete run).
+    (:func:`orchestrator.run.files.results_name`). An existing complete one of the same inputs
+    answers instead of a run (:func:`stored_summary`, ``summary.stored``; ``overwrite``
+    computes it again and replaces it once complete), an incomplete one stops the run before
+    it starts unless ``overwrite``, one of other inputs always does
+    (:func:`orchestrator.run.files.target`).
 
     ``fmus``: run these FMU files instead of the built ones
     (:func:`~orchestrator.coupling.system.build_master`); the results are then named after the
@@ -357,12 +366,32 @@ def run_case(case: Case, in_process: bool = False, out_dir: Path | str = "result
     spec = RunSpec.of(case, in_process, fmus, fmu_dir, steps)
     name = run_files.results_name(spec.case, spec.label, in_process, steps,
                                   None if fmus is None else fmus["bearings"][0])
+    attributes = spec.attributes()
     try:
-        where = run_files.target(out_dir, name, overwrite)
+        where = run_files.target(out_dir, name, overwrite, attributes)
     except run_files.TargetError as exc:
         raise RunError(str(exc)) from None
-    return _run_to_file(spec, spec.attributes(), where, progress=progress,
+    if where.stored:
+        return stored_summary(where.final)
+    return _run_to_file(spec, attributes, where, progress=progress,
                         flush_seconds=flush_seconds, echo=echo_warnings)
+
+
+def stored_summary(path: Path) -> RunSummary:
+    """The summary of a complete results file, read from it (nothing computed): its steps,
+    wall time, coupled iterations, static solution and report
+    (:func:`orchestrator.analysis.metrics.run_report` of its channels)."""
+    from orchestrator.analysis.metrics import run_report
+
+    results = read_results(path)
+    a = results["attrs"]
+    steps = len(results["time"])
+    warnings = [w for w in str(a.get("warnings", "")).split("\n") if w]
+    return RunSummary(Path(path), steps, float(a.get("wall_time", 0.0)), 0.0,
+                      int(np.sum(results["iterations"])), 0,
+                      int(a.get("static_iterations", 0)), np.asarray(a["static_journal"]),
+                      report=run_report(results) if steps >= 2 else None,
+                      warnings=warnings, stored=True)
 
 
 def resume_run(path: Path | str, periods: int | None = None, fmu_dir: Path | str | None = None,

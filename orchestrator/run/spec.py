@@ -8,6 +8,7 @@ second carrier. :func:`orchestrator.coupling.system.build_master` builds its mas
 
 from __future__ import annotations
 
+import hashlib
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -89,6 +90,8 @@ class RunSpec:
             "mode": "in-process" if self.in_process else "fmu",
             "bearing_fmu": ("" if self.fmus is None
                             else str(Path(self.fmus["bearings"][0]).resolve())),
+            "bearing_fmu_sha256": ("" if self.fmus is None else hashlib.sha256(
+                Path(self.fmus["bearings"][0]).read_bytes()).hexdigest()),
             "dt": self.dt, "steps_per_mesh_period": case["simulation.steps_per_mesh_period"],
             "mesh_periods": case["simulation.mesh_periods"], "steps_total": self.n_steps,
             "speed": case["operation.speed"], "speeds": description.bearing_speeds(case),
