@@ -182,11 +182,43 @@ class StepFailed(Exception):
         """How the run ended, as its results record it."""
         return f"{type(self.cause).__name__}: {self}"
 
-    def error(self, spec: RunSpec, kept: str) -> RunError:
-        """The exception the run raises; ``kept``: where its steps are."""
+    def error(self, spec: RunSpec, kept: str, rows: int | str | None = None) -> RunError:
+        """The exception the run raises: the step, its time [s], what failed in units and
+        what to do (:func:`failure_text`); ``kept``: where its ``rows`` steps are."""
+        rows = self.index if rows is None else rows
         return RunError(f"step {self.index + 1} of {spec.n_steps} (t = "
-                        f"{self.t + spec.dt:.6e} s) failed: {self}; the {self.index} steps "
-                        f"computed are in {kept}")
+                        f"{self.t + spec.dt:.6g} s) failed: {failure_text(spec.case, self.cause)}"
+                        f"; the {rows} steps computed are in {kept}")
+
+
+def failure_text(case: Case, cause: BaseException) -> str:
+    """What failed in a step, for the user: for a bearing that carries where it failed
+    (``bearing``, 1-based, and ``state``, the global s, t [m] and their rates [m/s], as the
+    in-process bearing set and the FMU transport attach them), the bearing, its journal's
+    position in um and eccentricity ratio against the clearance, and what to change; else the
+    cause's own message."""
+    bearing, state = getattr(cause, "bearing", None), getattr(cause, "state", None)
+    if bearing is None or state is None or len(state) != 4:
+        return str(cause)
+    s, t, sd, td = (float(v) for v in state)
+    clearance = float(case["bearings.clearance"][bearing - 1])
+    eps = math.hypot(s, t) / clearance
+    where = (f"s = {s * 1e6:.1f} um, t = {t * 1e6:.1f} um (radial clearance "
+             f"{clearance * 1e6:.1f} um)")
+    if eps >= 1.0:
+        if unbalance_warnings(case):
+            todo = ("the unbalance force exceeds the bearings' load capacity (the warning "
+                    "above): lower operation.unbalance (--unbalance) or operation.speed "
+                    "(--speed)")
+        else:
+            todo = ("lower the load (--torque, --unbalance) or the speed (--speed), or give "
+                    "the film more capacity (bearings.viscosity, bearings.length, a smaller "
+                    "bearings.clearance)")
+        return (f"bearing {bearing}'s journal reached the bearing wall: eccentricity ratio "
+                f"{eps:.4g} (must stay below 1) at {where}; {todo}")
+    reason = str(getattr(cause, "reason", "")) or str(cause)
+    return (f"bearing {bearing} failed at {where}, eccentricity ratio {eps:.4g}, velocity "
+            f"s_dot = {sd:.4g} m/s, t_dot = {td:.4g} m/s: {reason}")
 
 
 class Runner:
@@ -529,7 +561,7 @@ def _run_to_file(spec: RunSpec, attrs: dict, where, first: int = 0, blob=None,
             into = give_up(checkpoint=False, stopped_by=failed.stopped_by)
             with contextlib.suppress(Exception):
                 _store_report(into)
-            raise failed.error(spec, into) from failed.cause
+            raise failed.error(spec, into, _rows_in(into)) from failed.cause
         except RunError:
             raise
         except BaseException as exc:  # a bug or a second Ctrl-C: keep the steps all the same
