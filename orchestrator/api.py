@@ -60,7 +60,8 @@ def simulate(case, periods: int | None = None, bearing: str | None = None, *,
         Stop after this many time steps.
     results_dir : path, optional
         Also write the results file there, as ``gsb run --out`` does (named after the
-        parameters, never overwritten; HDF5 that xarray opens with ``engine="h5netcdf"``).
+        parameters, never overwritten; HDF5 that xarray opens with ``engine="h5netcdf"``);
+        the same call again reads that file instead of computing it.
     fmu_dir : path, optional
         Folder of the built FMUs (default: the per-user cache, built there if missing).
     progress : bool

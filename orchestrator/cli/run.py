@@ -19,6 +19,8 @@ def add_parser(sub) -> None:
                                    "writes <out>/<case>_<model>_<hash>.h5 (the hash of the "
                                    "effective parameters: runs with other overrides keep their "
                                    "own files) and PNG figures in the folder beside it. The "
+                                   "same run again answers from its complete file at once "
+                                   "(--overwrite computes it again). The "
                                    "file is readable while the run writes it (HDF5 SWMR) and "
                                    "flushed every second. Ctrl-C or SIGTERM stops the run after "
                                    "the current step (exit 130 / 143), the steps computed kept; "
@@ -36,8 +38,9 @@ def add_parser(sub) -> None:
                    help="run the Python slaves directly, without the FMI layer")
     p.add_argument("--out", default="results", help="output folder (default results/)")
     p.add_argument("--overwrite", action="store_true",
-                   help="replace an existing results file of the same parameters (a complete "
-                        "one only once the new run is complete)")
+                   help="compute the run again and replace its existing results file (a "
+                        "complete one only once the new run is complete); without it a "
+                        "complete file of the same inputs is read, not computed")
     p.add_argument("--resume", metavar="FILE", default=None,
                    help="continue the run of this results file from its last checkpoint (its "
                         "stored case, transport and model; --periods extends it)")
@@ -175,8 +178,13 @@ def _figures(summary, args) -> list[Path]:
     (:func:`orchestrator.figures.run.run_figures`); none with ``--no-figures``."""
     if args.no_figures:
         return []
-    from orchestrator.figures.run import run_figures
+    from orchestrator.figures.run import RUN_FIGURES, run_figures
 
+    if summary.stored:  # drawn from the same file before, unless they are missing
+        drawn = [summary.results.with_suffix("") / name for name in RUN_FIGURES]
+        if all(p.is_file() and p.stat().st_mtime >= summary.results.stat().st_mtime
+               for p in drawn):
+            return drawn
     return run_figures(summary.results)
 
 

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from bearing_fmu.affine import AffineLaws
-from bearing_fmu.base import BearingModel
+from bearing_fmu.base import BearingError, BearingModel
 from bearing_fmu.frames import LocalFrame
 from fmu_src.lifecycle import StructureCycle
 from fmu_src.state_codec import StateArrays, nest
@@ -134,7 +134,11 @@ class ModelBearings(BearingSet):
         self._states = states.copy()
         out = np.empty((nb, 5, 2))
         for b in range(nb):
-            self.models[b].evaluate_global(self._q[b], states[b], self.omegas[b], out[b])
+            try:
+                self.models[b].evaluate_global(self._q[b], states[b], self.omegas[b], out[b])
+            except BearingError as exc:  # which bearing, at which state [m, m/s]: the run's
+                exc.bearing, exc.state, exc.reason = b + 1, states[b].copy(), str(exc)
+                raise
         self.evaluations += nb
         return out[:, 0], out[:, 1:3], out[:, 3:5]
 

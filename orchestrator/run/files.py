@@ -3,8 +3,12 @@
 A run's file is ``<out>/<case>_<model>[_inprocess]_<hash>.h5``, the hash (8 hex digits of a
 SHA-256) taken over the effective case (every field after the overrides, ``--periods``
 included), the transport and, for a bearing FMU of the user's own, the FMU file's bytes. Two
-runs with different overrides therefore write two files; the same run twice finds its file
-and stops with a message (``--overwrite`` replaces it, ``--resume`` continues it).
+runs with different overrides therefore write two files. The same run twice finds its file:
+complete, the run answers from it (:attr:`Target.stored`; nothing is computed, ``--overwrite``
+computes it again); incomplete, it stops with a message (``--resume`` continues it,
+``--overwrite`` replaces it). The name alone is never trusted: a file whose stored inputs (the
+case, the transport, the bearing model or FMU, the number of steps) differ from the run's is
+neither reused nor replaced, ``--overwrite`` or not (:func:`input_difference`).
 
 With ``--overwrite`` over a complete file the new run writes ``<name>.partial.h5`` and
 replaces the old file only once it is complete: a run that fails or is interrupted leaves the
@@ -19,7 +23,8 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
-__all__ = ["Target", "TargetError", "describe_file", "results_name", "target"]
+__all__ = ["Target", "TargetError", "describe_file", "input_difference", "results_name",
+           "target"]
 
 
 class TargetError(RuntimeError):
@@ -55,12 +60,47 @@ def describe_file(path: Path) -> str:
     return f"incomplete, {n} steps" + (f", stopped by {why}" if why else "")
 
 
+#: the root attributes that, with the case, say what a results file was computed from
+INPUTS = ("mode", "bearing_model", "bearing_fmu_sha256", "steps_total")
+
+
+def _case_body(toml: str) -> str:
+    """A stored case file without its header comment (which names where it was read from)."""
+    lines = str(toml).split("\n")
+    while lines and lines[0].startswith("#"):
+        lines.pop(0)
+    return "\n".join(lines)
+
+
+def input_difference(path: Path, expected: dict) -> str | None:
+    """None if the results file ``path`` was computed from the inputs of ``expected`` (the
+    root attributes of the run about to start: :meth:`orchestrator.run.spec.RunSpec.attributes`),
+    else what differs, in a few words."""
+    from orchestrator.run.results import read_attributes
+
+    try:
+        stored = read_attributes(path)
+    except OSError as exc:
+        return f"its attributes cannot be read ({exc})"
+    if "case_toml" not in stored:
+        return "it stores no case (a file of another version or program)"
+    if _case_body(stored["case_toml"]) != _case_body(expected["case_toml"]):
+        return "another case (some field of the stored case differs)"
+    for key in INPUTS:
+        a, b = stored.get(key, ""), expected.get(key, "")
+        if str(a) != str(b):
+            return f"{key} {a!r}, this run's {b!r}"
+    return None
+
+
 @dataclass
 class Target:
-    """Where a run writes (``write``) and the file it becomes when complete (``final``)."""
+    """Where a run writes (``write``) and the file it becomes when complete (``final``);
+    ``stored``: ``final`` is complete and holds this very run, read instead of computed."""
 
     write: Path
     final: Path
+    stored: bool = False
 
     def finish(self, complete: bool) -> Path:
         """Move the written file into place: always when complete; when not, only if no
@@ -82,9 +122,12 @@ def _is_complete(path: Path) -> bool:
         return False
 
 
-def target(out_dir: Path | str, name: str, overwrite: bool) -> Target:
+def target(out_dir: Path | str, name: str, overwrite: bool, expected: dict | None = None
+           ) -> Target:
     """Decide where a run named ``name`` writes in ``out_dir`` (module docstring); checks
-    that the folder can be created and written before anything is computed."""
+    that the folder can be created and written before anything is computed. ``expected``:
+    the root attributes of the run (:func:`input_difference`); without them an existing
+    complete file is never reused."""
     out_dir = Path(out_dir)
     try:
         out_dir.mkdir(parents=True, exist_ok=True)
@@ -105,7 +148,15 @@ def target(out_dir: Path | str, name: str, overwrite: bool) -> Target:
         raise TargetError(f"{final} is being written by another run (process {pid}); wait for "
                           "it, stop it, or use another --out")
     state = describe_file(final)
+    readable = state.startswith(("complete", "incomplete"))
+    differ = input_difference(final, expected) if readable and expected is not None else None
+    if differ is not None:
+        raise TargetError(f"{final} exists ({state}) but holds a run of other inputs "
+                          f"({differ}): it is neither reused nor replaced; move it away or "
+                          "use another --out")
     complete = state.startswith("complete")
+    if complete and not overwrite and expected is not None:
+        return Target(final, final, stored=True)
     if not overwrite:
         hint = "" if complete else f", --resume {final} to continue it"
         raise TargetError(f"{final} exists ({state}): this run would overwrite it; "

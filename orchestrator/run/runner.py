@@ -72,7 +72,8 @@ from orchestrator.run.results import (
 )
 from orchestrator.run.spec import RunError, RunSpec, check_periods, with_units
 
-__all__ = ["RunSummary", "Runner", "resume_run", "run_case", "simulate_case"]
+__all__ = ["RunSummary", "Runner", "resume_run", "run_case", "simulate_case",
+           "stored_summary"]
 
 
 @dataclass
@@ -91,6 +92,7 @@ class RunSummary:
     warnings: list = field(default_factory=list)  # sentences of the checks before the transient
     notes: list = field(default_factory=list)  # what the checks state once (a deliberate step)
     relaxed_steps: int = 0  # steps whose coupled iteration was relaxed (coupling.master)
+    stored: bool = False  # read from the complete results file of the same inputs, not computed
 
     @property
     def iterations_per_step(self) -> float:
@@ -101,6 +103,11 @@ class RunSummary:
         return self.steps / self.wall_time if self.wall_time > 0 else math.inf
 
     def describe(self) -> str:
+        if self.stored:
+            return (f"{self.steps} steps read from the stored results of the same inputs "
+                    f"(computed in {self.wall_time:.1f} s, {self.iterations_per_step:.2f} "
+                    f"coupled iterations per step); nothing computed: --overwrite computes "
+                    f"them again")
         return (f"{self.steps} steps in {self.wall_time:.1f} s ({self.steps_per_second:.0f} "
                 f"steps/s), {self.iterations_per_step:.2f} coupled iterations per step, "
                 f"{4 * self.bearing_evaluations} bearing evaluations; static solution in "
@@ -178,11 +185,43 @@ class StepFailed(Exception):
         """How the run ended, as its results record it."""
         return f"{type(self.cause).__name__}: {self}"
 
-    def error(self, spec: RunSpec, kept: str) -> RunError:
-        """The exception the run raises; ``kept``: where its steps are."""
+    def error(self, spec: RunSpec, kept: str, rows: int | str | None = None) -> RunError:
+        """The exception the run raises: the step, its time [s], what failed in units and
+        what to do (:func:`failure_text`); ``kept``: where its ``rows`` steps are."""
+        rows = self.index if rows is None else rows
         return RunError(f"step {self.index + 1} of {spec.n_steps} (t = "
-                        f"{self.t + spec.dt:.6e} s) failed: {self}; the {self.index} steps "
-                        f"computed are in {kept}")
+                        f"{self.t + spec.dt:.6g} s) failed: {failure_text(spec.case, self.cause)}"
+                        f"; the {rows} steps computed are in {kept}")
+
+
+def failure_text(case: Case, cause: BaseException) -> str:
+    """What failed in a step, for the user: for a bearing that carries where it failed
+    (``bearing``, 1-based, and ``state``, the global s, t [m] and their rates [m/s], as the
+    in-process bearing set and the FMU transport attach them), the bearing, its journal's
+    position in um and eccentricity ratio against the clearance, and what to change; else the
+    cause's own message."""
+    bearing, state = getattr(cause, "bearing", None), getattr(cause, "state", None)
+    if bearing is None or state is None or len(state) != 4:
+        return str(cause)
+    s, t, sd, td = (float(v) for v in state)
+    clearance = float(case["bearings.clearance"][bearing - 1])
+    eps = math.hypot(s, t) / clearance
+    where = (f"s = {s * 1e6:.1f} um, t = {t * 1e6:.1f} um (radial clearance "
+             f"{clearance * 1e6:.1f} um)")
+    if eps >= 1.0:
+        if unbalance_warnings(case):
+            todo = ("the unbalance force exceeds the bearings' load capacity (the warning "
+                    "above): lower operation.unbalance (--unbalance) or operation.speed "
+                    "(--speed)")
+        else:
+            todo = ("lower the load (--torque, --unbalance) or the speed (--speed), or give "
+                    "the film more capacity (bearings.viscosity, bearings.length, a smaller "
+                    "bearings.clearance)")
+        return (f"bearing {bearing}'s journal reached the bearing wall: eccentricity ratio "
+                f"{eps:.4g} (must stay below 1) at {where}; {todo}")
+    reason = str(getattr(cause, "reason", "")) or str(cause)
+    return (f"bearing {bearing} failed at {where}, eccentricity ratio {eps:.4g}, velocity "
+            f"s_dot = {sd:.4g} m/s, t_dot = {td:.4g} m/s: {reason}")
 
 
 class Runner:
@@ -354,9 +393,11 @@ def run_case(case: Case, in_process: bool = False, out_dir: Path | str = "result
     after this many time steps (a quick look; default: all the periods'). ``echo_warnings``:
     print the checks' warnings on stderr (they are also in the summary and the results file).
     The results file is named after the effective parameters
-    (:func:`orchestrator.run.files.results_name`); an existing one stops the run before it
-    starts unless ``overwrite`` (:func:`orchestrator.run.files.target`: a complete file is
-    replaced only by a complete run).
+    (:func:`orchestrator.run.files.results_name`). An existing complete one of the same inputs
+    answers instead of a run (:func:`stored_summary`, ``summary.stored``; ``overwrite``
+    computes it again and replaces it once complete), an incomplete one stops the run before
+    it starts unless ``overwrite``, one of other inputs always does
+    (:func:`orchestrator.run.files.target`).
 
     ``fmus``: run these FMU files instead of the built ones
     (:func:`~orchestrator.coupling.system.build_master`); the results are then named after the
@@ -369,12 +410,32 @@ def run_case(case: Case, in_process: bool = False, out_dir: Path | str = "result
     spec = RunSpec.of(case, in_process, fmus, fmu_dir, steps)
     name = run_files.results_name(spec.case, spec.label, in_process, steps,
                                   None if fmus is None else fmus["bearings"][0])
+    attributes = spec.attributes()
     try:
-        where = run_files.target(out_dir, name, overwrite)
+        where = run_files.target(out_dir, name, overwrite, attributes)
     except run_files.TargetError as exc:
         raise RunError(str(exc)) from None
-    return _run_to_file(spec, spec.attributes(), where, progress=progress,
+    if where.stored:
+        return stored_summary(where.final)
+    return _run_to_file(spec, attributes, where, progress=progress,
                         flush_seconds=flush_seconds, echo=echo_warnings)
+
+
+def stored_summary(path: Path) -> RunSummary:
+    """The summary of a complete results file, read from it (nothing computed): its steps,
+    wall time, coupled iterations, static solution and report
+    (:func:`orchestrator.analysis.metrics.run_report` of its channels)."""
+    from orchestrator.analysis.metrics import run_report
+
+    results = read_results(path)
+    a = results["attrs"]
+    steps = len(results["time"])
+    warnings = [w for w in str(a.get("warnings", "")).split("\n") if w]
+    return RunSummary(Path(path), steps, float(a.get("wall_time", 0.0)), 0.0,
+                      int(np.sum(results["iterations"])), 0,
+                      int(a.get("static_iterations", 0)), np.asarray(a["static_journal"]),
+                      report=run_report(results) if steps >= 2 else None,
+                      warnings=warnings, stored=True)
 
 
 def resume_run(path: Path | str, periods: int | None = None, fmu_dir: Path | str | None = None,
@@ -507,12 +568,12 @@ def _run_to_file(spec: RunSpec, attrs: dict, where, first: int = 0, blob=None,
             into = give_up(stopped_by=stop.stopped_by, interrupted=stop.signame)
             with contextlib.suppress(Exception):
                 _store_report(into)
-            raise stop.message(f"{writer.rows} steps kept in {into}") from None
+            raise stop.message(f"{_rows_in(into)} steps kept in {into}") from None
         except StepFailed as failed:
             into = give_up(checkpoint=False, stopped_by=failed.stopped_by)
             with contextlib.suppress(Exception):
                 _store_report(into)
-            raise failed.error(spec, into) from failed.cause
+            raise failed.error(spec, into, _rows_in(into)) from failed.cause
         except RunError:
             raise
         except BaseException as exc:  # a bug or a second Ctrl-C: keep the steps all the same
@@ -525,6 +586,18 @@ def _run_to_file(spec: RunSpec, attrs: dict, where, first: int = 0, blob=None,
     summary = runner.summary(static, done, path, spec.n_steps - first)
     summary.report = _store_report(path)
     return summary
+
+
+def _rows_in(path: Path) -> int | str:
+    """The rows a closed results file holds, read from the file (the count a user's reader
+    sees, whatever was buffered or flushed when the run stopped); "?" if it cannot be read."""
+    from orchestrator.run.results import open_results
+
+    try:
+        with open_results(path) as f:
+            return int(f["time"].shape[0])
+    except (OSError, KeyError):
+        return "?"
 
 
 def _report_attributes(report: dict) -> dict:

@@ -8,6 +8,7 @@ second carrier. :func:`orchestrator.coupling.system.build_master` builds its mas
 
 from __future__ import annotations
 
+import hashlib
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -15,6 +16,7 @@ import numpy as np
 
 from fmu_src import description
 from fmu_src.case import Case
+from fmu_src.contract import bearing_fmu_name
 from fmu_src.units import symbol
 
 __all__ = ["ATTRIBUTE_UNITS", "RunError", "RunSpec", "check_periods", "with_units"]
@@ -65,9 +67,18 @@ class RunSpec:
 
     @property
     def label(self) -> str:
-        """The bearing model's name, or the stem of a bearing FMU of the user's own."""
-        return (self.case["bearings.model"] if self.fmus is None
-                else Path(self.fmus["bearings"][0]).stem)
+        """The bearing model's name (``hybrid``), also when the bearing FMUs are this
+        package's own of that model (an SSP archive of ``gsb export-ssp``: ``BearingHybrid``
+        is named ``hybrid`` as in a direct run); for a bearing FMU of the user's own, ``fmu-``
+        and its file's stem, so that the results file says whose bearing law it holds."""
+        if self.fmus is None:
+            return self.case["bearings.model"]
+        stems = {Path(p).stem for p in self.fmus["bearings"]}
+        model = self.case["bearings.model"]
+        if stems == {bearing_fmu_name(model)}:
+            return model
+        stem = Path(self.fmus["bearings"][0]).stem
+        return "fmu-" + "".join(c if c.isalnum() or c in "-." else "-" for c in stem)
 
     def attributes(self) -> dict:
         """The settings stored as root attributes of the results file (numbers in SI units;
@@ -79,6 +90,8 @@ class RunSpec:
             "mode": "in-process" if self.in_process else "fmu",
             "bearing_fmu": ("" if self.fmus is None
                             else str(Path(self.fmus["bearings"][0]).resolve())),
+            "bearing_fmu_sha256": ("" if self.fmus is None else hashlib.sha256(
+                Path(self.fmus["bearings"][0]).read_bytes()).hexdigest()),
             "dt": self.dt, "steps_per_mesh_period": case["simulation.steps_per_mesh_period"],
             "mesh_periods": case["simulation.mesh_periods"], "steps_total": self.n_steps,
             "speed": case["operation.speed"], "speeds": description.bearing_speeds(case),

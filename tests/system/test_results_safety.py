@@ -49,15 +49,15 @@ def test_runs_with_other_overrides_keep_their_own_files(tmp_path, capsys):
                                    for f in files)
     speeds = sorted(float(read_results(f)["attrs"]["speed"]) for f in files)
     assert speeds == [325.0, 400.0]
-    # the same run again (the command line in this process): refused before anything is
-    # computed, the file untouched
+    # the same run again (the command line in this process): answered from its file,
+    # nothing computed, both files untouched
     from orchestrator.cli import main
 
     before = files[0].stat().st_mtime_ns, files[1].stat().st_mtime_ns
     capsys.readouterr()
-    assert main(["run", "baguet2010_spur", "--periods", "1", *QUICK, "--out", str(out)]) == 2
-    err = capsys.readouterr().err
-    assert "exists (complete, 32 steps)" in err and "--overwrite" in err
+    assert main(["run", "baguet2010_spur", "--periods", "1", *QUICK, "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "32 steps read from the stored results" in printed and "--overwrite" in printed
     assert (files[0].stat().st_mtime_ns, files[1].stat().st_mtime_ns) == before
 
 
@@ -150,6 +150,8 @@ def test_signals_and_a_kill_keep_the_steps_and_the_run_resumes_exactly(transport
         else:
             assert proc.returncode == 128 + int(sig), proc.stderr[-2000:]
             assert "Traceback" not in proc.stderr and f"interrupted by {sig.name}" in proc.stderr
+            # the count it announces is the rows the file holds
+            assert f"; {kept} steps kept in {path}" in proc.stderr, (kept, proc.stderr[-500:])
             assert r["attrs"]["interrupted"] == sig.name and sig.name in r["attrs"]["stopped_by"]
         np.testing.assert_array_equal(r["journal_position"], reference["journal_position"][:kept])
         if transport == "fmu" and sig == signal.SIGINT:

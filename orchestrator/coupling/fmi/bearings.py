@@ -117,9 +117,8 @@ class FmuBearings(BearingSet):
 
     def _call(self, b: int, s: FmuInstance, status: int, what: str, states) -> None:
         if status > 1:  # discard, error, fatal
-            raise FmuError(f"bearing {b + 1} ({s.path.name}) failed at state "
-                           f"{np.asarray(states).tolist()}: {what} returned "
-                           f"{status_name(status)}; FMU log: {s.log_tail()}")
+            raise _failed(b, s, states, f"{what} returned {status_name(status)}; FMU log: "
+                                        f"{s.log_tail()}")
 
     def _exchange(self, b: int, s: FmuInstance, n: int) -> None:
         """Set the journal state of bearing b from its row of the state buffer, read its first
@@ -132,8 +131,7 @@ class FmuBearings(BearingSet):
         self._call(b, s, get_real(c, self._out_vr[b], n, self._law_at[b]), "fmi2GetReal",
                    state)
         if not all_finite(self._laws[10 * b:10 * b + n]):
-            raise FmuError(f"bearing {b + 1} ({s.path.name}) failed at state "
-                           f"{state.tolist()}: non-finite outputs; FMU log: {s.log_tail()}")
+            raise _failed(b, s, state, f"non-finite outputs; FMU log: {s.log_tail()}")
 
     def _force(self, b: int, s: FmuInstance, state, n: int) -> np.ndarray:
         """Set the journal state of bearing b, read its first ``n`` outputs."""
@@ -210,3 +208,14 @@ class FmuBearings(BearingSet):
         for s in self.slaves:
             s.close()
         self.slaves = []
+
+
+def _failed(b: int, s: FmuInstance, state, reason: str) -> FmuError:
+    """The error of bearing ``b`` (0-based) failing at its global journal state (s, t, s_dot,
+    t_dot) [m, m/s], carried as ``bearing`` (1-based), ``state`` and ``reason`` for a run's
+    message in units (:class:`orchestrator.run.runner.StepFailed`)."""
+    state = np.array(state, dtype=float)
+    exc = FmuError(f"bearing {b + 1} ({s.path.name}) failed at state {state.tolist()}: "
+                   f"{reason}")
+    exc.bearing, exc.state, exc.reason = b + 1, state, reason
+    return exc
