@@ -7,6 +7,7 @@ z = 26 / 157, clearances 150 / 150 / 110 / 110 um), orbits as ellipses around th
 point, bearing-force norms with known lines at 1x, gear 1x and 26x.
 """
 
+import itertools
 import math
 import subprocess
 import sys
@@ -208,7 +209,7 @@ def test_mesh_figure_of_a_long_run_bins_by_pinion_revolution(tmp_path):
                  if t.get_text() and t.get_visible()]
         boxes = [b for b in boxes if fig.axes[0].bbox.x0 - 1 <= b.x0 <= fig.axes[0].bbox.x1]
         assert len(boxes) >= 3
-        assert all(a.x1 + 5 < b.x0 for a, b in zip(boxes, boxes[1:], strict=False))
+        assert all(a.x1 + 5 < b.x0 for a, b in itertools.pairwise(boxes))
     finally:
         for fig in figures.values():
             plt.close(fig)
