@@ -62,13 +62,18 @@ def add_parser(sub) -> None:
 
     p = sub.add_parser("export", help="write a results file's channels as CSV",
                        description="One row per time step, one column per channel component, "
-                                   "named `channel[i][j] [unit]` (e.g. journal_position[0][1] "
-                                   "[m]: bearing 1, t), 17 significant digits.")
+                                   "named by its dimensions and unit, bearings 1-4 and axes s, t "
+                                   "as in the prints and figures (e.g. "
+                                   "`journal_position[bearing=1][axis=t] [m]`, "
+                                   "`gear_nodes[node=gear][direction=u] [m]`, `mesh_force [N]`), "
+                                   "17 significant digits. An existing CSV is kept unless "
+                                   "--overwrite.")
     p.add_argument("file", help="results file (.h5) of gsb run")
     p.add_argument("--csv", metavar="OUT", nargs="?", const="", default="",
                    help="CSV file to write (default: the results file with .csv)")
     p.add_argument("--channel", dest="channels", action="append", default=[],
                    help="export only this channel (repeatable; default all)")
+    p.add_argument("--overwrite", action="store_true", help="replace an existing CSV file")
     p.set_defaults(func=export)
 
 
@@ -104,7 +109,10 @@ def export(args) -> int:
     if out.resolve() == path.resolve():
         raise CaseError(f"--csv {out}: would overwrite the results file")
     try:
-        written = export_csv(path, out, args.channels or None)
+        written = export_csv(path, out, args.channels or None, overwrite=args.overwrite)
+    except FileExistsError:
+        raise CaseError(f"--csv {out}: exists; --overwrite replaces it (or give another "
+                        "--csv file)") from None
     except ValueError as exc:
         raise CaseError(f"--channel: {exc}") from None
     except OSError as exc:

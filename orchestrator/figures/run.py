@@ -18,7 +18,10 @@
     (those of the report of ``gsb run``) drawn and listed;
 ``mesh.png``
     transmission error and dynamic mesh force over the last pinion revolution and over the
-    whole run (min/max envelope per bin).
+    whole run (max / min / mean per pinion revolution: :func:`envelope`). The TE is drawn about
+    its mean over the last gear revolution, the mean stated: it holds the static deflection
+    under the torque, the shafts' torsional wind-up included, which the dynamic reading of TE
+    (peak-to-peak, orders) leaves out.
 
 Channels read (:data:`orchestrator.run.channels.CHANNELS`): ``time`` [s],
 ``journal_position`` (4, 2)
@@ -34,6 +37,7 @@ import math
 from pathlib import Path
 
 import numpy as np
+from matplotlib.ticker import FormatStrFormatter, MaxNLocator
 
 from orchestrator.analysis.spectrum import (
     PAD,
@@ -49,13 +53,14 @@ from orchestrator.figures.base import (
     SHAFTS,
     UM,
     RunData,
+    num_attr,
     order_label,
     pyplot,
     titled_figure,
 )
 from orchestrator.run.results import read_results
 
-__all__ = ["RUN_FIGURES", "make_run_figures", "run_figures", "run_spectrum"]
+__all__ = ["RUN_FIGURES", "envelope", "make_run_figures", "run_figures", "run_spectrum"]
 
 #: the PNGs :func:`run_figures` writes (and removes first when stale)
 RUN_FIGURES = ("orbits.png", "bearing_forces.png", "spectra.png", "mesh.png")
@@ -187,6 +192,9 @@ def _angle_axis(ax, run: RunData, t_start: float):
     top = ax.secondary_xaxis("top", functions=(lambda a: (t_start + a / deg_per_s) * 1e3,
                                                lambda ms: (ms * 1e-3 - t_start) * deg_per_s))
     top.set_xlabel("time [ms]")
+    # at most 5 labels: run times of four or five digits stay apart over a panel's width
+    top.xaxis.set_major_locator(MaxNLocator(nbins=4, steps=[1, 2, 5, 10]))
+    top.xaxis.set_major_formatter(FormatStrFormatter("%g"))
     return top
 
 
@@ -314,35 +322,65 @@ def _spectra(plt, run: RunData):
     return fig
 
 
-def _envelope(ax, x, y, colour, period: int, bins: int = 600):
-    """``y(x)`` as a thin line, or, over more than ``2 bins`` points, as its max and min and
-    mean per bin of a whole number of ``period`` samples (mesh periods: no beating with the
-    mesh frequency), the last bins ending at the last sample."""
-    n = x.size
-    if n <= 2 * bins:
-        ax.plot(x, y, color=colour, lw=0.7)
-        return
-    period = max(1, int(period))
-    width = period * math.ceil(n / (period * bins))
-    starts = np.arange(n - width, -1, -width)[::-1]  # whole bins ending at the last sample
-    if starts[0] >= width // 2:
+#: the whole-run panels of ``mesh.png`` bin by pinion revolution from this many revolutions on
+#: (fewer: by mesh period)
+MIN_REVOLUTIONS = 10
+
+
+def envelope(time, y, span: float) -> dict:
+    """Max, min and mean of ``y`` per bin of ``span`` seconds of run time, the last bin ending
+    at the last sample (a partial first bin kept if at least half a span, else merged into
+    the next): ``centre`` [s], ``hi``, ``lo``, ``mean`` per bin.
+
+    A bin of one pinion revolution holds every mesh period and every order of the pinion
+    whole, so its max and min do not beat with them (bins of a few mesh periods alias against
+    the revolution: a moire on a long run)."""
+    time, y = np.asarray(time, dtype=float), np.asarray(y, dtype=float)
+    n_bins = max(1, math.floor((time[-1] - time[0]) / span + 1e-9))
+    # a bin holds the samples after its left edge; half a step off the samples: a whole
+    # number of steps per span gives that number per bin, whatever the rounding of the times
+    half_step = 0.5 * float(np.median(np.diff(time))) if time.size > 1 else 0.0
+    edges = time[-1] - span * np.arange(n_bins, 0, -1) + half_step
+    starts = np.searchsorted(time, edges, side="right")
+    if starts[0] >= 1 and time[starts[0] - 1] - time[0] >= 0.5 * span:
         starts = np.r_[0, starts]  # the partial first bin kept
     else:
         starts[0] = 0  # merged into the first whole bin
-    ends = np.r_[starts[1:], n]
-    lo = np.minimum.reduceat(y, starts)
-    hi = np.maximum.reduceat(y, starts)
-    mean = np.add.reduceat(y, starts) / (ends - starts)
-    xc = x[(starts + ends - 1) // 2]
-    span = (x[-1] - x[0]) * width / (n - 1)
-    ax.plot(xc, hi, color=colour, lw=0.9,
-            label=f"max / min per bin of {width // period} mesh period(s), {span:.3g}")
-    ax.plot(xc, lo, color=colour, lw=0.9)
-    ax.plot(xc, mean, color="0.3", lw=0.6, label="mean per bin")
+    starts = np.unique(starts)
+    ends = np.r_[starts[1:], time.size]
+    return {"centre": 0.5 * (time[starts] + time[ends - 1]),
+            "hi": np.maximum.reduceat(y, starts), "lo": np.minimum.reduceat(y, starts),
+            "mean": np.add.reduceat(y, starts) / (ends - starts)}
+
+
+def _whole_run(ax, run: RunData, y, colour) -> str:
+    """``y`` over the whole run as its envelope per pinion revolution (per mesh period on a
+    run of fewer than :data:`MIN_REVOLUTIONS` revolutions; the line itself under 1200
+    samples); returns the legend label of the envelope ("" for the line)."""
+    if y.size <= 1200:
+        ax.plot(run.time * 1e3, y, color=colour, lw=0.7)
+        return ""
+    revolutions = (run.time[-1] - run.time[0]) / run.pinion_rev
+    teeth = run.teeth[0] if run.teeth else 1
+    if revolutions >= MIN_REVOLUTIONS:
+        span, what = run.pinion_rev, "pinion revolution"
+    else:
+        span, what = run.pinion_rev / teeth, "mesh period"
+    env = envelope(run.time, y, span)
+    x = env["centre"] * 1e3
+    label = f"max / min per {what} ({span * 1e3:.3g} ms"
+    if run.gear_rev is not None and what == "pinion revolution":
+        label += f"; a gear revolution: {run.gear_rev * 1e3:.3g} ms"
+    label += ")"
+    ax.fill_between(x, env["lo"], env["hi"], color=colour, alpha=0.25, lw=0)
+    ax.plot(x, env["hi"], color=colour, lw=1.0, label=label)
+    ax.plot(x, env["lo"], color=colour, lw=1.0)
+    ax.plot(x, env["mean"], color="0.3", lw=0.7, label=f"mean per {what}")
+    return label
 
 
 def _mesh(plt, run: RunData):
-    fig = titled_figure(plt, run, "transmission error and mesh force")
+    fig = titled_figure(plt, run, "dynamic transmission error and mesh force")
     axes = fig.subplots(2, 2, sharex="col", width_ratios=[1, 1.25])
     win, kind = run.short_window()
     t = run.time[win]
@@ -351,25 +389,42 @@ def _mesh(plt, run: RunData):
     w0 = run.static_mesh
     dyn = run.mesh - (w0 if w0 is not None else 0.0)
     dyn_label = "W - W0 [N]" if w0 is not None else "mesh force W [N]"
-    teeth = run.teeth[0] if run.teeth else 1
-    period = round(1.0 / (teeth * run.pinion_hz * run.dt))  # steps per mesh period
     te = run.te
+    caption = None
     if te is not None:
-        axes[0, 0].plot(angle, te[win] * UM, color="C4", lw=1.0)
+        # the dynamic part about the steady mean: the mean holds the static deflection under
+        # the torque, most of it the shafts' torsional wind-up, which the NVH reading of TE
+        # (its peak-to-peak, its orders) leaves out
+        steady, steady_kind, _ = run.long_window()
+        mean = float(te[steady].mean())
+        te_dyn = (te - mean) * UM
+        axes[0, 0].plot(angle, te_dyn[win], color="C4", lw=1.0)
+        axes[0, 0].axhline(0.0, color="k", ls=":", lw=0.9)
         if run.static_te is not None:
-            axes[0, 0].axhline(run.static_te * UM, color="k", ls=":", lw=0.9,
-                               label="static TE")
+            axes[0, 0].axhline((run.static_te - mean) * UM, color="0.4", ls="--", lw=0.9,
+                               label=f"static TE at X0 ({run.static_te * UM:.4g} um)")
             axes[0, 0].legend(loc="best", fontsize=9)
-        axes[0, 0].set_ylabel("transmission error [um]")
-        _envelope(axes[0, 1], run.time * 1e3, te * UM, "C4", period)
+        for ax in axes[0]:
+            ax.set_ylabel("TE - mean [um]")
+        _whole_run(axes[0, 1], run, te_dyn, "C4")
+        axes[0, 1].axhline(0.0, color="k", ls=":", lw=0.9)
+        axes[0, 0].set_title(f"{kind}: TE peak-to-peak {np.ptp(te_dyn[win]):.3g} um",
+                             fontsize=11)
+        torque = num_attr(run.attrs, "torque")
+        under = "" if torque is None else f" under {torque:.4g} N m"
+        caption = (f"TE = r_b1 \u03b81 + r_b2 \u03b82 at the gears, drawn about its mean "
+                   f"{mean * UM:.1f} um over the {steady_kind}.\nThat mean is the static "
+                   f"deflection{under}, the shafts' torsional wind-up included; the part about "
+                   f"it is the dynamic TE.")
     else:
         for ax in axes[0]:
             ax.text(0.5, 0.5, "no transmission_error channel", ha="center",
                     transform=ax.transAxes)
+        axes[0, 0].set_title(kind, fontsize=11)
     axes[1, 0].plot(angle, dyn[win], color="C5", lw=1.0)
     axes[1, 0].axhline(0.0, color="k", ls=":", lw=0.9)
     axes[1, 0].set_ylabel(dyn_label)
-    _envelope(axes[1, 1], run.time * 1e3, dyn, "C5", period)
+    _whole_run(axes[1, 1], run, dyn, "C5")
     axes[1, 1].axhline(0.0, color="k", ls=":", lw=0.9)
     if w0:
         for ax in axes[1]:
@@ -381,7 +436,6 @@ def _mesh(plt, run: RunData):
     if angle[-1] > 300:
         axes[1, 0].set_xticks(np.arange(0, 361, 60))
     _angle_axis(axes[0, 0], run, t_start)
-    axes[0, 0].set_title(kind, fontsize=11)
     axes[0, 1].set_title("whole run", fontsize=11)
     axes[1, 1].set_xlabel("time [ms]")
     for ax in axes[:, 1]:
@@ -390,14 +444,12 @@ def _mesh(plt, run: RunData):
                        label="left panels' window")
         ax.set_xlim(0.0, run.time[-1] * 1e3)
     handles, labels = axes[1, 1].get_legend_handles_labels()
-    if len(handles) > 1:
-        labels = [lab + " ms" if lab.startswith("max") else lab for lab in labels]
-        fig.legend(handles, labels, loc="outside lower right", ncol=3, fontsize=9,
-                   frameon=False)
+    if len(handles) > 1 or caption:
+        fig.legend(handles, labels, loc="outside lower center", ncol=3, fontsize=9,
+                   frameon=False, title=caption, title_fontsize=9.5)
     for ax in axes.flat:
         ax.grid(True, lw=0.4, alpha=0.5)
         ax.ticklabel_format(axis="y", useOffset=False)
-    axes[0, 1].set_ylabel("transmission error [um]")
     axes[1, 1].set_ylabel(dyn_label)
     return fig
 

@@ -42,10 +42,11 @@ from pathlib import Path
 import numpy as np
 
 from fmu_src.state_codec import FORMAT_VERSION, StateFormatError
+from orchestrator.run.channels import COORDS, dims
 
 __all__ = ["ResultsWriter", "add_attributes", "attribute_value", "clear_write_flags",
-           "export_csv", "live_writer", "open_results", "read_attributes", "read_checkpoint",
-           "read_results"]
+           "csv_column_labels", "export_csv", "live_writer", "open_results", "read_attributes",
+           "read_checkpoint", "read_results"]
 
 #: rows buffered at most between two writes (the time bound usually flushes first)
 CAPACITY = 4096
@@ -402,10 +403,31 @@ def read_checkpoint(path) -> tuple[int, bytes] | None:
         return rows, f[f"resume/slot{slot}"][:nbytes].tobytes()
 
 
-def export_csv(path, csv_path, channels=None) -> Path:
-    """Write the chosen channels (default: all) as CSV: one row per time step, columns named
-    ``channel[i][j] [unit]`` (e.g. ``journal_position[0][1] [m]``: bearing 1, t; no comma
-    inside a name, so any CSV reader splits them right)."""
+def csv_column_labels(name: str, shape: tuple) -> list[str]:
+    """The CSV labels of a channel's components in C order: ``name[dimension=label]...``
+    with the dimensions and labels of :mod:`orchestrator.run.channels` (bearings 1-4 as in
+    the prints and figures, axes s and t), e.g. ``journal_position[bearing=1][axis=t]``; a
+    channel not described there numbers its components from 1 (``name[1][2]``). No comma
+    inside a label, so any CSV reader splits the header right."""
+    try:
+        names = dims(name)[1:]
+    except KeyError:
+        names = ()
+    if len(names) != len(shape) or any(len(COORDS[d]) != n for d, n in zip(names, shape,
+                                                                            strict=True)):
+        return [name + "".join(f"[{i + 1}]" for i in idx) for idx in np.ndindex(*shape)]
+    return [name + "".join(f"[{d}={COORDS[d][i]}]" for d, i in zip(names, idx, strict=True))
+            for idx in np.ndindex(*shape)]
+
+
+def export_csv(path, csv_path, channels=None, overwrite: bool = False) -> Path:
+    """Write the chosen channels (default: all) as CSV: one row per time step, a column per
+    component labelled by :func:`csv_column_labels` and its unit (e.g.
+    ``journal_position[bearing=1][axis=t] [m]``), 17 significant digits. Raises
+    FileExistsError if ``csv_path`` exists unless ``overwrite``."""
+    csv_path = Path(csv_path)
+    if csv_path.exists() and not overwrite:
+        raise FileExistsError(f"{csv_path} exists")
     data = read_results(path)
     chosen = channels or [n for n in data if n not in ("units", "attrs")]
     unknown = [n for n in chosen if n not in data or n in ("units", "attrs")]
@@ -420,11 +442,9 @@ def export_csv(path, csv_path, channels=None) -> Path:
         arr = np.asarray(data[name])
         shape = arr.shape[1:]
         flat = arr.reshape(n_rows, -1)
-        for j, idx in enumerate(np.ndindex(*shape) if shape else [()]):
-            label = name + "".join(f"[{i}]" for i in idx)
+        for j, label in enumerate(csv_column_labels(name, shape)):
             heads.append(f"{label} [{data['units'][name]}]")
             cols.append(flat[:, j])
-    csv_path = Path(csv_path)
     np.savetxt(csv_path, np.column_stack(cols), delimiter=",", header=",".join(heads),
                comments="", fmt="%.17g")
     return csv_path

@@ -359,3 +359,44 @@ def test_gsb_modal_campbell_at_three_speeds(tmp_path, capsys):
         assert 100.0 <= c["speed_rad_s"] <= 900.0
     # the mesh modes near 2.2 and 4.4 kHz meet the orders k >= 2 inside 100-900 rad/s
     assert any(c["order"] >= 2 for c in chart["crossings"])
+
+
+def test_campbell_builds_the_tooth_table_once_with_the_same_numbers(monkeypatch):
+    """Two speeds build the case's mesh twice but compute its tooth stiffness table once (it
+    depends on the geometry and the torque, not on the speed); the second speed's numbers,
+    made with the shared table, equal bit for bit those made with a table computed afresh."""
+    from gear_fmu.mesh import tooth_stiffness
+    from orchestrator.analysis import campbell
+
+    case = load_case(SPUR)
+    computed = []
+    compute = tooth_stiffness._compute_table
+
+    def counting(*args):
+        computed.append(args[1:])
+        return compute(*args)
+
+    monkeypatch.setattr(tooth_stiffness, "_compute_table", counting)
+    monkeypatch.setattr(tooth_stiffness, "_TABLES", {})
+    shared = campbell.campbell_data(case, [150.0, 700.0])
+    assert len(computed) == 1 and len(shared["modes"]) == 2
+    tooth_stiffness._TABLES.clear()
+    fresh = campbell.campbell_data(case, [700.0])
+    assert len(computed) == 2
+    for key in ("frequency_hz", "damping_ratio", "mesh_energy_fraction", "shapes"):
+        assert np.array_equal(shared["modes"][1][key], fresh["modes"][0][key]), key
+    # the speed mattered: the bearings' film moved the modes between the two speeds
+    assert not np.array_equal(shared["modes"][0]["frequency_hz"], fresh["modes"][0]["frequency_hz"])
+
+
+def test_tooth_table_copies_cannot_alter_the_shared_table():
+    """The table is handed out as copies: writing into one leaves the next call's numbers."""
+    from gear_fmu.mesh.tooth_stiffness import mesh_stiffness_table
+
+    pair = description.gear_pair(load_case(SPUR))
+    xi, k = mesh_stiffness_table(pair, 1e5, 9)
+    expected = k.copy()
+    k[:] = 0.0
+    xi[:] = 0.0
+    xi2, k2 = mesh_stiffness_table(pair, 1e5, 9)
+    assert np.array_equal(k2, expected) and xi2[0] < xi2[-1]

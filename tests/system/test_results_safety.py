@@ -202,7 +202,8 @@ def test_resume_extends_a_run(tmp_path, capsys):
     lines = (tmp_path / "short.csv").read_text().splitlines()
     head = lines[0].split(",")
     assert len(lines) == 1 + 160 and head[0] == "time [s]"
-    assert "journal_position[0][1] [m]" in head and "bearing_force[3][0] [N]" in head
+    assert ("journal_position[bearing=1][axis=t] [m]" in head
+            and "bearing_force[bearing=4][axis=s] [N]" in head)
     col = head.index("mesh_force [N]")
     assert [float(line.split(",")[col]) for line in lines[1:]] == r["mesh_force"].tolist()
 

@@ -2,10 +2,14 @@
 
 import json
 import math
+import subprocess
+import sys
 
+import numpy as np
 import pytest
 
 from orchestrator.cli import main
+from tests.helpers import probe_env
 
 
 def test_bearing_dimensionless_json(capsys):
@@ -42,3 +46,45 @@ def test_bearing_errors_are_clear(capsys):
                  "--clearance", "150e-6", "--viscosity", "0.0288", "--speed", "325",
                  "--load", "1e9"]) == 2
     assert "cannot carry" in capsys.readouterr().err
+
+
+def _gsb(*args, cwd):
+    return subprocess.run([sys.executable, "-m", "orchestrator.cli", *map(str, args)],
+                          capture_output=True, text=True, timeout=300, cwd=cwd,
+                          env=probe_env())
+
+
+def test_gsb_export_names_columns_as_printed_and_keeps_an_existing_csv(tmp_path):
+    """``gsb export --csv``: columns named by bearing 1-4 and axis s / t (as the prints and
+    figures), each holding that component; a second export refuses to replace the CSV (exit
+    2, one line naming it and --overwrite) and leaves it as it was; --overwrite replaces it."""
+    from orchestrator.run.channels import CHANNELS
+    from orchestrator.run.results import ResultsWriter
+
+    path = tmp_path / "run.h5"
+    names = ("journal_position", "bearing_force", "gear_nodes", "mesh_force")
+    rng = np.random.default_rng(3)
+    rows = {n: rng.normal(size=(5, *CHANNELS[n][0])) for n in names}
+    with ResultsWriter(path, {n: CHANNELS[n] for n in names}, attrs={"kind": "run"}) as w:
+        for k in range(5):
+            w.append(time=1e-4 * (k + 1), **{n: rows[n][k] for n in names})
+    csv = tmp_path / "run.csv"
+    done = _gsb("export", path, "--csv", csv, cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    lines = csv.read_text().splitlines()
+    head = lines[0].split(",")
+    first = head.index("journal_position[bearing=1][axis=s] [m]")
+    assert head[0] == "time [s]" and head[first + 1] == "journal_position[bearing=1][axis=t] [m]"
+    values = np.array([[float(x) for x in line.split(",")] for line in lines[1:]])
+    column = head.index("bearing_force[bearing=4][axis=t] [N]")
+    assert values[:, column].tolist() == rows["bearing_force"][:, 3, 1].tolist()
+    column = head.index("gear_nodes[node=gear][direction=u] [m]")
+    assert values[:, column].tolist() == rows["gear_nodes"][:, 1, 0].tolist()
+    assert "mesh_force [N]" in head and not any("[0]" in h or "=0]" in h for h in head)
+    csv.write_text("kept\n")
+    again = _gsb("export", path, "--csv", csv, cwd=tmp_path)
+    assert again.returncode == 2 and csv.read_text() == "kept\n"
+    assert again.stderr.startswith(f"gsb export: error: --csv {csv}: exists")
+    assert "--overwrite" in again.stderr and again.stderr.count("\n") == 1
+    forced = _gsb("export", path, "--csv", csv, "--overwrite", cwd=tmp_path)
+    assert forced.returncode == 0 and csv.read_text().splitlines()[0] == lines[0]

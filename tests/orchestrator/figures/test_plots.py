@@ -7,7 +7,10 @@ z = 26 / 157, clearances 150 / 150 / 110 / 110 um), orbits as ellipses around th
 point, bearing-force norms with known lines at 1x, gear 1x and 26x.
 """
 
+import itertools
 import math
+import subprocess
+import sys
 
 import h5py
 import numpy as np
@@ -17,6 +20,7 @@ from orchestrator.cli import main
 from orchestrator.figures.base import pyplot, run_title
 from orchestrator.figures.run import RUN_FIGURES, make_run_figures
 from orchestrator.run.results import ResultsWriter, read_results
+from tests.helpers import probe_env
 
 SPEED, TEETH, TORQUE = 325.0, (26, 157), 220.0
 F1 = SPEED / (2 * math.pi)  # pinion rotation [Hz]
@@ -158,3 +162,54 @@ def test_gsb_plot_bad_file(tmp_path, capsys, content):
     err = capsys.readouterr().err
     assert err.startswith("gsb plot: error: ") and str(path) in err
     assert err.count("\n") == 1 and "Traceback" not in err
+
+
+def _whole_run_lines(fig, ylabel_start: str) -> dict:
+    """The lines of the whole-run panel whose y label starts so, by legend label."""
+    ax = next(a for a in fig.axes if a.get_title() == "whole run"
+              or (a.get_ylabel().startswith(ylabel_start) and a.get_xlabel() == "time [ms]"))
+    assert ax.get_ylabel().startswith(ylabel_start)
+    return {line.get_label(): line for line in ax.get_lines()}
+
+
+def test_mesh_figure_of_a_long_run_bins_by_pinion_revolution(tmp_path):
+    """A 2048-mesh-period run (65536 steps, 78.8 pinion revolutions): ``gsb plot`` draws it
+    (exit 0), the whole-run TE envelope has a point per pinion revolution and is flat for a
+    TE made of pinion orders (bins of 4 mesh periods alias against the 26-period revolution:
+    their max swings with the 1x), the TE is drawn about its mean with the mean and the
+    shafts' wind-up stated, and the top time labels do not run into each other."""
+    path = _write(tmp_path / "long.h5", 65536, True)
+    done = subprocess.run([sys.executable, "-m", "orchestrator.cli", "plot", str(path)],
+                          capture_output=True, text=True, timeout=300, env=probe_env())
+    assert done.returncode == 0, done.stderr
+    assert (tmp_path / "long" / "mesh.png").stat().st_size > 20_000
+    plt = pyplot()
+    results = read_results(path)
+    te = results["transmission_error"]
+    mean = te[-GEAR_REV_STEPS:].mean()  # the last gear revolution
+    figures = make_run_figures(results)
+    try:
+        fig = figures["mesh.png"]
+        lines = _whole_run_lines(fig, "TE - mean")
+        label = next(k for k in lines if k.startswith("max / min per pinion revolution"))
+        hi = lines[label].get_ydata()
+        centres = lines[label].get_xdata()
+        assert len(hi) == 79  # 78 whole revolutions ending at the last step, 0.77 kept
+        np.testing.assert_allclose(np.diff(centres[1:]), 1e3 / F1, rtol=1e-9)
+        # synthetic TE: 5 um at 1x + 1 um at 26x, whose max over a revolution is fixed
+        assert np.ptp(hi[1:]) < 1e-6
+        assert hi[-1] == pytest.approx((te[-32 * TEETH[0]:].max() - mean) * 1e6, rel=1e-12)
+        caption = fig.legends[0].get_title().get_text()
+        assert "wind-up" in caption and "mean 140.3 um" in caption
+        te_left = fig.axes[0].get_lines()[0].get_ydata()
+        assert abs(te_left.mean()) < 0.05 and np.ptp(te_left) > 10.0  # about the mean, um
+        fig.canvas.draw()
+        top = next(a for a in fig.axes[0].child_axes if a.get_xlabel() == "time [ms]")
+        boxes = [t.get_window_extent() for t in top.get_xticklabels()
+                 if t.get_text() and t.get_visible()]
+        boxes = [b for b in boxes if fig.axes[0].bbox.x0 - 1 <= b.x0 <= fig.axes[0].bbox.x1]
+        assert len(boxes) >= 3
+        assert all(a.x1 + 5 < b.x0 for a, b in itertools.pairwise(boxes))
+    finally:
+        for fig in figures.values():
+            plt.close(fig)

@@ -22,7 +22,8 @@ def test_units_and_attributes_are_stored(tmp_path):
     assert r["attrs"]["clearance"].dtype == np.float64  # numeric, not JSON text
     csv = export_csv(path, tmp_path / "r.csv")
     head, first = csv.read_text().splitlines()[:2]
-    assert head.startswith("time [s],F[0][0] [N],F[0][1] [N],F[1][0] [N]")
+    # a channel the results channels do not describe: components numbered from 1
+    assert head.startswith("time [s],F[1][1] [N],F[1][2] [N],F[2][1] [N]")
     assert [float(x) for x in first.split(",")] == [0.0] * 9
 
 
