@@ -58,9 +58,9 @@ def instantiate(fmu: str, blocked: str) -> dict:
     free_type = ctypes.CFUNCTYPE(None, ctypes.c_void_p)
 
     class Callbacks(ctypes.Structure):
-        _fields_ = [("logger", logger_type), ("allocateMemory", calloc_type),
+        _fields_ = (("logger", logger_type), ("allocateMemory", calloc_type),
                     ("freeMemory", free_type), ("stepFinished", ctypes.c_void_p),
-                    ("componentEnvironment", ctypes.c_void_p)]
+                    ("componentEnvironment", ctypes.c_void_p))
 
     keep = (logger_type(logger), calloc_type(lambda n, size: libc.calloc(n, size)),
             free_type(lambda p: libc.free(p)))
