@@ -31,7 +31,7 @@ from gear_fmu.modal.damping import BASES, DAMPING_KINDS, DampingModel
 
 __all__ = ["BEARING_MODELS", "FIELDS", "Case", "CaseError", "Field", "check_override", "damping",
            "drivetrain", "gear_pair", "load_case", "model_option_fields", "parse_toml",
-           "read_case_text", "schema_markdown", "shipped_cases"]
+           "read_case_text", "schema_markdown", "shipped_case", "shipped_cases"]
 
 BEARING_MODELS = tuple(_BEARING_TABLE)
 
@@ -499,17 +499,26 @@ def shipped_cases() -> dict[str, Path]:
     return {p.stem: p for p in sorted(folder.glob("*.toml"))}
 
 
+def shipped_case(name: str) -> Case:
+    """The shipped case ``name`` (``"baguet2010_spur"``), read from the package whatever the
+    working directory holds: what code that an FMU host or a worker runs loads by name."""
+    shipped = shipped_cases()
+    if name not in shipped:
+        raise CaseError(f"no shipped case {name!r}; shipped cases: {', '.join(shipped)}")
+    return load_case(shipped[name])
+
+
 def resolve_case(path_or_name: str | Path) -> Path:
     """A case file by path, or by the name of a shipped case (``"baguet2010_spur"``)."""
     path = Path(path_or_name)
     if path.is_file():
         return path
-    if path.is_dir():
-        raise CaseError(f"{path}: a folder, not a case file")
     shipped = shipped_cases()
     stem = path.name[:-5] if path.name.endswith(".toml") else path.name
     if str(path_or_name) in (stem, f"{stem}.toml") and stem in shipped:
-        return shipped[stem]
+        return shipped[stem]  # a folder of that name (a run's results, say) is not the case
+    if path.is_dir():
+        raise CaseError(f"{path}: a folder, not a case file")
     raise CaseError(f"case file not found: {path_or_name} (not a file; shipped cases: "
                     f"{', '.join(shipped)})")
 

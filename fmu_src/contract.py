@@ -39,7 +39,7 @@ from numba import njit
 
 from bearing_fmu import MODELS, model_class
 from bearing_fmu.affine import AffineLaws
-from fmu_src.case import FIELDS, bound_violation, load_case, model_option_fields
+from fmu_src.case import FIELDS, bound_violation, model_option_fields, shipped_case
 from fmu_src.description import BEARING_FRAMES
 from fmu_src.units import symbol
 
@@ -129,7 +129,7 @@ BEARING_OUTPUTS = (*FORCE_NAMES, *STIFFNESS_NAMES, *DAMPING_NAMES, *EVAL_NAMES)
 
 def _paper_bearing():
     """Start values of the bearing data: bearing 1 of the paper's spur case (Table 3)."""
-    case = load_case("baguet2010_spur")
+    case = shipped_case("baguet2010_spur")
     return {k: case[f"bearings.{k}"][0] for k in ("diameter", "length", "clearance",
                                                    "viscosity")}
 
@@ -399,7 +399,7 @@ def gear_variables(case=None) -> tuple[FmiVar, ...]:
 
 @functools.cache
 def _shipped_gear_variables() -> tuple[FmiVar, ...]:
-    return gear_variables(load_case(GEAR_DEFAULT_CASE.removesuffix(".toml")))
+    return gear_variables(shipped_case(GEAR_DEFAULT_CASE.removesuffix(".toml")))
 
 
 # --- transmission FMU ----------------------------------------------------------------------

@@ -344,7 +344,7 @@ def build_fmus(dest: Path | str, names=None, case=None) -> list[Path]:
     ``case`` (a :class:`fmu_src.case.Case`): the case the gear-shaft FMU carries (its
     parameters' start values; default: the shipped paper case)."""
     from fmu_src.build.native import export_library
-    from fmu_src.case import load_case
+    from fmu_src.case import shipped_case
     from fmu_src.contract import GEAR_DEFAULT_CASE
 
     dest = Path(dest)
@@ -354,7 +354,7 @@ def build_fmus(dest: Path | str, names=None, case=None) -> list[Path]:
         raise ValueError(f"unknown FMU {unknown[0]!r}; available: {', '.join(FMUS)}")
     FmuBuilder = _pythonfmu_builder()
     native = export_library()
-    case = load_case(GEAR_DEFAULT_CASE.removesuffix(".toml")) if case is None else case
+    case = shipped_case(GEAR_DEFAULT_CASE.removesuffix(".toml")) if case is None else case
     built = []
     for name in names or FMUS:
         spec = FMUS[name]

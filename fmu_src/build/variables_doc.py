@@ -285,9 +285,9 @@ def document() -> str:
     fmus = ", ".join(bearing_fmu_name(m) for m in MODELS)
     wiring = "\n".join(f"| `{a}` | `{o}` | `{b}` | `{i}` |" for a, o, b, i in connections()
                        if "bearing1" in (a, b))
-    from fmu_src.case import load_case
+    from fmu_src.case import shipped_case
 
-    transmission = transmission_variables(load_case("baguet2010_spur"))
+    transmission = transmission_variables(shipped_case("baguet2010_spur"))
     return (_HEADER.format(fmus=fmus, wiring=wiring, accuracy=ACCURACY.rstrip("\n"))
             + markdown_table(bearing_variables()) + "\n"
             + _GEAR + markdown_table(gear_variables()) + "\n"

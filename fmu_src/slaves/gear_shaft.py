@@ -100,11 +100,11 @@ class GearShaftSlave(ContractSlave):
         self._register_all(variables)
 
     def _base_case(self):
-        from fmu_src.case import load_case
+        from fmu_src.case import load_case, shipped_case
 
         if self.resources is not None and (Path(self.resources) / CASE_RESOURCE).is_file():
             return load_case(Path(self.resources) / CASE_RESOURCE)
-        return load_case(GEAR_DEFAULT_CASE.removesuffix(".toml"))  # shipped with the package
+        return shipped_case(GEAR_DEFAULT_CASE.removesuffix(".toml"))
 
     # --- FMI plumbing ------------------------------------------------------------------------
     def _register_all(self, variables) -> None:

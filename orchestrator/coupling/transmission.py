@@ -100,12 +100,12 @@ class TransmissionSlave(ContractSlave):
                                                   BEARING_RESOURCE if carried else ""))
 
     def _base_case(self):
-        from fmu_src.case import load_case
+        from fmu_src.case import load_case, shipped_case
 
         path = None if self.resources is None else Path(self.resources) / CASE_RESOURCE
         if path is not None and path.is_file():
             return load_case(path)
-        return load_case("baguet2010_spur")  # shipped with the package
+        return shipped_case("baguet2010_spur")
 
     # --- FMI plumbing ------------------------------------------------------------------------
     def _register_all(self, variables) -> None:

@@ -4,7 +4,7 @@ A run's file is ``<out>/<case>_<model>[_inprocess]_<hash>.h5``, the hash (8 hex 
 SHA-256) taken over the effective case (every field after the overrides, ``--periods``
 included), the transport and, for a bearing FMU of the user's own, the FMU file's bytes. Two
 runs with different overrides therefore write two files. The same run twice finds its file:
-complete, the run answers from it (:attr:`Target.stored`; nothing is computed, ``--overwrite``
+complete, the run answers from it (``Target.stored``; nothing is computed, ``--overwrite``
 computes it again); incomplete, it stops with a message (``--resume`` continues it,
 ``--overwrite`` replaces it). The name alone is never trusted: a file whose stored inputs (the
 case, the transport, the bearing model or FMU, the number of steps) differ from the run's is

@@ -430,12 +430,13 @@ def stored_summary(path: Path) -> RunSummary:
     results = read_results(path)
     a = results["attrs"]
     steps = len(results["time"])
-    warnings = [w for w in str(a.get("warnings", "")).split("\n") if w]
+    warnings, notes = ([w for w in str(a.get(key, "")).split("\n") if w]
+                       for key in ("warnings", "notes"))
     return RunSummary(Path(path), steps, float(a.get("wall_time", 0.0)), 0.0,
                       int(np.sum(results["iterations"])), 0,
                       int(a.get("static_iterations", 0)), np.asarray(a["static_journal"]),
                       report=run_report(results) if steps >= 2 else None,
-                      warnings=warnings, stored=True)
+                      warnings=warnings, notes=notes, stored=True)
 
 
 def resume_run(path: Path | str, periods: int | None = None, fmu_dir: Path | str | None = None,

@@ -55,7 +55,7 @@ def test_a_force_only_bearing_fmu_matches_the_built_in_lumped_model(fmu_dir, spr
         "out_dir": tmp_path, "gear_fmu": fmu_dir / "GearShaft.fmu", "bearing_fmu": spring_fmu}])
     print(f"\nforce-only FMU vs lumped in process, 64 steps: positions {r['position']:.1e}, "
           f"velocities {r['velocity']:.1e}; iterations per step {r['its']}")
-    assert r["label"] == "SpringBearing"
+    assert r["label"] == "fmu-SpringBearing"  # a bearing FMU of your own, by its file
     assert r["its"] == [1.0, 1.0]  # an affine force: one pass, whatever the FD round-off
     # measured 5.0e-12 / 2.3e-11 (the finite-difference round-off in Kb, Cb); margin 3
     assert r["position"] < 1.5e-11 and r["velocity"] < 7e-11

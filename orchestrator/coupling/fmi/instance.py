@@ -79,7 +79,12 @@ class FmuInstance:
         cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(_calloc)
         cb.freeMemory = fmi2CallbackFreeMemoryTYPE(_free)
         self._callbacks = cb  # keep the ctypes callbacks alive
-        self.fmu.instantiate(loggingOn=True, callbacks=cb)
+        try:
+            self.fmu.instantiate(loggingOn=True, callbacks=cb)
+        except Exception as exc:  # fmpy says only "Failed to instantiate model": add why
+            log = "; ".join(self.messages[-5:]) or "the FMU logged nothing"
+            raise FmuError(f"{path.name} ({instance_name}): fmi2Instantiate failed: {log}") \
+                from exc
 
     def set(self, values: dict, who: str | None = None) -> None:
         """Set parameters or inputs by name (one call per type); FmuError with the FMU's log
