@@ -64,7 +64,9 @@ def test_affine_bearings_make_both_lags_the_iterative_master(model):
     scale = np.abs(ref).max(axis=(0, 1))
     for lag in (0, 1):
         x = non_iterative(case, 64, lag)
-        assert (np.abs(x - ref).max(axis=(0, 1)) <= 1e-13 * scale).all(), (model, lag)
+        # round-off: 0 with the newest dependency versions, 4.8e-11 of the velocities' largest
+        # with the oldest allowed (numpy 1.26, scipy 1.11, numba 0.59)
+        assert (np.abs(x - ref).max(axis=(0, 1)) <= 2e-10 * scale).all(), (model, lag)
     hybrid = load_case(CASE)
     assert orbit_error(non_iterative(hybrid, 64, 0), iterative(hybrid, 64)) > 1e-2
 
