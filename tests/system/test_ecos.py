@@ -78,8 +78,11 @@ def ecos_python(ssp_file):
     initialisation and after each of STEPS steps, at full precision."""
     cmd = probe_command("tests.probes.ecos", "simulate",
                         {"ssp": ssp_file, "step_size": _dt(), "steps": STEPS})
+    # faulthandler: a crash of the host (an exit-time SIGSEGV was seen, intermittently, in
+    # full-suite runs) leaves its stacks in the message below
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=600,
-                          env=probe_env(_env()), cwd=ssp_file.parent)
+                          env=dict(probe_env(_env()), PYTHONFAULTHANDLER="1"),
+                          cwd=ssp_file.parent)
     if proc.returncode != 0 and "libtbb" in proc.stderr:
         pytest.skip(f"ecos cannot run here: {proc.stderr.strip()[-300:]}")
     assert proc.returncode == 0, proc.stderr[-3000:]
