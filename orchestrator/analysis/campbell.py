@@ -13,7 +13,8 @@ the structure builds the damping C the transient uses
   Kb and Cb full 2x2 (:func:`gear_fmu.modal.damped_modes.damped_modes`).
 
 :func:`campbell_data` repeats it over pinion speeds (the bearings' equilibrium, Kb and Cb
-depend on the speed); :func:`crossings` finds where a mode crosses the mesh-order lines
+depend on the speed) on one structure (:class:`Linearisation`: what does not depend on the
+speed is built once); :func:`crossings` finds where a mode crosses the mesh-order lines
 ``f = k z1 omega / (2 pi)`` and the 1x line ``f = omega / (2 pi)``, which
 :func:`orchestrator.figures.campbell.plot_campbell` draws. Modes are followed from one speed to
 the next by their shapes (largest modal assurance criterion ``|phi_a^H M phi_b|^2``,
@@ -29,6 +30,7 @@ import numpy as np
 import scipy.optimize
 
 from bearing_fmu.base import BearingError
+from fmu_src import description
 from fmu_src.case import Case
 from gear_fmu.modal.analyses import exact_mean_mesh_stiffness, line_of_action_stiffness, modes
 from gear_fmu.modal.damped_modes import MESH_MODE_FRACTION, DampedModes, damped_modes
@@ -36,7 +38,7 @@ from gear_fmu.modal.modes import Modes
 from orchestrator.coupling.master import CouplingError
 from orchestrator.coupling.system import build_master
 
-__all__ = ["Linearised", "campbell_data", "crossings", "linearise"]
+__all__ = ["Linearisation", "Linearised", "campbell_data", "crossings", "linearise"]
 
 #: mesh harmonics drawn and searched, k = 1 .. HARMONICS
 HARMONICS = 4
@@ -87,6 +89,114 @@ class Linearised:
     z1: int
 
 
+class Linearisation:
+    """A case linearised about X0 at any pinion speed (module docstring), what does not depend
+    on the speed built once.
+
+    Built once: the structure (shaft and gear matrices, mesh element and its tooth stiffness
+    table, the condensed static stiffness) and its loads on stiff supports, from which the
+    bearings' first guess of X0 starts (:meth:`orchestrator.coupling.master.Master.first_guess`).
+    A static solution overwrites the whole state of the structure and the damping is rebuilt
+    from the Kb of each X0, so the structure carries nothing from one speed to the next; its
+    own speed enters only the unbalance and the transient, which a linearisation does not use.
+
+    Per speed, with the case at that speed (:meth:`at`): new bearing models (the hybrid film's
+    warm start remembers the states it was evaluated at, so new models evaluate the same
+    sequence as a master built for that speed alone), X0, the damping C on the modes with
+    Kb(X0) (its modal reference depends on Kb), the exact mean mesh stiffness and the damped
+    modes. The mean mesh stiffness depends on Kb only through the contact set of the static
+    solution at each angle (the slice springs ``k(xi) dl V V^T`` are fixed by the angle), which
+    the bearings' compliance can change where the gap is small (tip relief, crowning, light
+    load): it is computed again at every speed.
+
+    Parameters
+    ----------
+    case : Case
+    bearing_stiffness : float, optional
+        Isotropic bearing stiffness [N/m] instead of the bearings' film at X0 (:func:`linearise`);
+        then nothing depends on the speed.
+    n_gauss : int
+        Gauss-Legendre points per event-free interval of the mean mesh stiffness.
+    """
+
+    def __init__(self, case: Case, bearing_stiffness: float | None = None, n_gauss: int = 8):
+        self.case = case
+        self.bearing_stiffness = None if bearing_stiffness is None else float(bearing_stiffness)
+        self.n_gauss = n_gauss
+        self.structure = description.structure(case)
+        self._support_loads = None  # (4, 2) [N], when the first X0 needs them
+
+    def at(self, speed: float | None = None, undamped: bool = True) -> Linearised:
+        """The case linearised about its X0 at a pinion speed [rad/s] (default the case's).
+
+        Raises the static solution's :class:`~bearing_fmu.base.BearingError` or
+        :class:`~orchestrator.coupling.master.CouplingError`.
+        """
+        case = self.case if speed is None else self.case.with_overrides(
+            {"operation.speed": float(speed)})
+        st = self.structure
+        if self.bearing_stiffness is None:
+            master = build_master(case, in_process=True, structure=st)
+            try:
+                if self._support_loads is None:
+                    self._support_loads = master.structure.support_loads()
+                master.solve_static(master.first_guess(self._support_loads))
+                master.exit_initialization()  # C as in the transient: built with the static Kb
+                kb = np.array(master.laws.kb, dtype=float)
+                cb = np.array(master.laws.cb, dtype=float)
+            finally:
+                master.close()
+            kb_ref = 0.5 * (kb + np.transpose(kb, (0, 2, 1)))
+            source = (f"{case['bearings.model']} film at the static solution X0 (damped modes: "
+                      "Kb and Cb full 2x2; undamped modes: symmetric part of Kb)")
+        else:
+            k = self.bearing_stiffness
+            kb = np.broadcast_to(k * np.eye(2), (4, 2, 2)).copy()
+            cb = np.zeros((4, 2, 2))
+            kb_ref = k
+            st.set_damping_reference(k)
+            source = f"isotropic {k:g} N/m, no bearing damping (Cb = 0)"
+        k_mesh = exact_mean_mesh_stiffness(st, kb_ref, self.n_gauss)
+        ref = st.reference_mesh_stiffness
+        found = modes(st, kb_ref, mesh_stiffness=k_mesh) if undamped else None
+        damped = damped_modes(st.system, st.damping_full, k_mesh, kb, cb)
+        return Linearised(
+            case, source, kb, cb, k_mesh, line_of_action_stiffness(st, k_mesh),
+            None if ref is None else line_of_action_stiffness(st, ref),
+            st.mesh.pair.contact_width, st.system.mass, found, damped,
+            int(st.system.teeth[0]))
+
+    def campbell(self, speeds, max_frequency: float = 6000.0) -> dict:
+        """:func:`campbell_data` on this linearisation."""
+        kept, per_speed, skipped = [], [], []
+        mass, z1 = None, None
+        fixed = None  # isotropic bearings: the modes of every speed
+        for w in np.asarray(speeds, dtype=float):
+            if fixed is None:
+                try:
+                    lin = self.at(float(w), undamped=False)
+                except (BearingError, CouplingError) as exc:
+                    skipped.append((float(w), str(exc)))
+                    continue
+                d = lin.damped
+                f = d.frequency_hz
+                sel = (~d.overdamped) & (f <= 1.5 * max_frequency)
+                modes_w = {"frequency_hz": f[sel], "damping_ratio": d.damping_ratio[sel],
+                           "mesh_energy_fraction": d.mesh_energy_fraction[sel],
+                           "shapes": d.shapes[:, sel]}
+                mass, z1 = lin.mass, lin.z1
+                if self.bearing_stiffness is not None:
+                    fixed = modes_w
+            else:
+                modes_w = {key: v.copy() for key, v in fixed.items()}
+            per_speed.append(modes_w)
+            kept.append(float(w))
+        data = {"speeds": np.array(kept), "modes": per_speed, "mass": mass, "z1": z1,
+                "skipped": skipped, "max_frequency": float(max_frequency)}
+        data["segments"] = _segments(data)
+        return data
+
+
 def linearise(case: Case, bearing_stiffness: float | None = None, n_gauss: int = 8,
               undamped: bool = True) -> Linearised:
     """Modes of a case linearised about X0 (module docstring).
@@ -102,40 +212,15 @@ def linearise(case: Case, bearing_stiffness: float | None = None, n_gauss: int =
     undamped : bool
         Also the undamped modes (``Linearised.modes``).
     """
-    master = build_master(case, in_process=True)
-    try:
-        st = master.structure.structure
-        if bearing_stiffness is None:
-            master.solve_static()
-            master.exit_initialization()  # C as in the transient: built with the static Kb
-            kb = np.array(master.laws.kb, dtype=float)
-            cb = np.array(master.laws.cb, dtype=float)
-            kb_ref = 0.5 * (kb + np.transpose(kb, (0, 2, 1)))
-            source = (f"{case['bearings.model']} film at the static solution X0 (damped modes: "
-                      "Kb and Cb full 2x2; undamped modes: symmetric part of Kb)")
-        else:
-            k = float(bearing_stiffness)
-            kb = np.broadcast_to(k * np.eye(2), (4, 2, 2)).copy()
-            cb = np.zeros((4, 2, 2))
-            kb_ref = k
-            st.set_damping_reference(k)
-            source = f"isotropic {k:g} N/m, no bearing damping (Cb = 0)"
-        k_mesh = exact_mean_mesh_stiffness(st, kb_ref, n_gauss)
-        ref = st.reference_mesh_stiffness
-        found = modes(st, kb_ref, mesh_stiffness=k_mesh) if undamped else None
-        damped = damped_modes(st.system, st.damping_full, k_mesh, kb, cb)
-        return Linearised(
-            case, source, kb, cb, k_mesh, line_of_action_stiffness(st, k_mesh),
-            None if ref is None else line_of_action_stiffness(st, ref),
-            st.mesh.pair.contact_width, st.system.mass, found, damped,
-            int(st.system.teeth[0]))
-    finally:
-        master.close()
+    return Linearisation(case, bearing_stiffness, n_gauss).at(undamped=undamped)
 
 
 def campbell_data(case: Case, speeds, bearing_stiffness: float | None = None,
                   n_gauss: int = 8, max_frequency: float = 6000.0) -> dict:
     """Damped modes at each pinion speed, each with its own static solution X0.
+
+    The structure is built once (:class:`Linearisation`); the bearings, X0, the damping and
+    the modes at every speed.
 
     Parameters
     ----------
@@ -144,7 +229,7 @@ def campbell_data(case: Case, speeds, bearing_stiffness: float | None = None,
         Pinion speeds [rad/s], > 0.
     bearing_stiffness : float, optional
         Isotropic bearings without damping (:func:`linearise`): the modes then do not depend on
-        the speed.
+        the speed (computed once).
     n_gauss : int
     max_frequency : float
         Modes above ``1.5 max_frequency`` [Hz] are not kept.
@@ -158,27 +243,7 @@ def campbell_data(case: Case, speeds, bearing_stiffness: float | None = None,
         static solution failed), ``segments`` (``(speed index a, mode at a, mode at a + 1)``:
         the same mode at neighbouring speeds).
     """
-    kept, per_speed, skipped = [], [], []
-    mass, z1 = None, None
-    for w in np.asarray(speeds, dtype=float):
-        try:
-            lin = linearise(case.with_overrides({"operation.speed": float(w)}),
-                            bearing_stiffness, n_gauss, undamped=False)
-        except (BearingError, CouplingError) as exc:
-            skipped.append((float(w), str(exc)))
-            continue
-        d = lin.damped
-        f = d.frequency_hz
-        sel = (~d.overdamped) & (f <= 1.5 * max_frequency)
-        per_speed.append({"frequency_hz": f[sel], "damping_ratio": d.damping_ratio[sel],
-                          "mesh_energy_fraction": d.mesh_energy_fraction[sel],
-                          "shapes": d.shapes[:, sel]})
-        kept.append(float(w))
-        mass, z1 = lin.mass, lin.z1
-    data = {"speeds": np.array(kept), "modes": per_speed, "mass": mass, "z1": z1,
-            "skipped": skipped, "max_frequency": float(max_frequency)}
-    data["segments"] = _segments(data)
-    return data
+    return Linearisation(case, bearing_stiffness, n_gauss).campbell(speeds, max_frequency)
 
 
 def _segments(data: dict) -> list[tuple[int, int, int]]:

@@ -91,8 +91,9 @@ def modal(args) -> int:
 
     low, high = _modal_checks(args)
     case = case_from_args(args)
+    system = campbell.Linearisation(case, args.bearing_stiffness)  # the Campbell's too
     try:
-        lin = campbell.linearise(case, args.bearing_stiffness)
+        lin = system.at()
     except CouplingError as exc:
         raise RunError(f"{case['case.name']}: {exc}") from None
     found, dm = lin.modes, lin.damped
@@ -104,7 +105,7 @@ def modal(args) -> int:
     if args.campbell is not None:
         path = Path(args.campbell or Path(args.out) / f"{case['case.name']}_campbell.png")
         speeds = np.linspace(low, high, args.campbell_speeds)
-        data = campbell.campbell_data(case, speeds, args.bearing_stiffness)
+        data = system.campbell(speeds)
         if not data["modes"]:
             raise CaseError(f"--campbell: no static solution over {low:g}-{high:g} rad/s: "
                             f"{data['skipped'][0][1]}")

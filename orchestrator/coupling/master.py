@@ -239,12 +239,22 @@ class Master:
         self.total_bearing_evaluations += 1
         return self.bearings.evaluate(states)
 
-    def solve_static(self, initial_states: np.ndarray | None = None) -> StepReport:
-        """X0: iterate structure static solves and bearing linearisations (Sec. 2.2.3)."""
-        if initial_states is None:
+    def first_guess(self, loads: np.ndarray | None = None) -> np.ndarray:
+        """(nb, 4) journal states of the first linearisation of X0 (module docstring): the
+        bearings' equilibrium (:meth:`BearingSet.static_position`) under ``loads`` (nb, 2) [N],
+        by default the structure's loads on stiff supports
+        (:meth:`StructureSlave.support_loads`), which do not depend on the bearings: a caller
+        solving one structure with several bearing sets computes them once."""
+        if loads is None:
             loads = self.structure.support_loads()
-            positions = self.bearings.static_position(loads)
-            initial_states = np.hstack([positions, np.zeros_like(positions)])
+        positions = self.bearings.static_position(loads)
+        return np.hstack([positions, np.zeros_like(positions)])
+
+    def solve_static(self, initial_states: np.ndarray | None = None) -> StepReport:
+        """X0: iterate structure static solves and bearing linearisations (Sec. 2.2.3), from
+        ``initial_states`` (default :meth:`first_guess`)."""
+        if initial_states is None:
+            initial_states = self.first_guess()
         states = np.array(initial_states, dtype=float)
         states[:, 2:] = 0.0
         force, kb, cb = self._evaluate(states)

@@ -13,6 +13,7 @@ from pathlib import Path
 
 from fmu_src import description
 from fmu_src.case import Case
+from gear_fmu.structure import Structure
 from orchestrator.coupling.inprocess import InProcessStructure, ModelBearings
 from orchestrator.coupling.master import Master
 
@@ -20,7 +21,7 @@ __all__ = ["build_master"]
 
 
 def build_master(case: Case, in_process: bool = False, fmu_dir: Path | str | None = None,
-                 fmus: dict | None = None) -> Master:
+                 fmus: dict | None = None, structure: Structure | None = None) -> Master:
     """The master of a case with its two slaves (``master.structure``, ``master.bearings``).
 
     In-process the physics objects of :mod:`fmu_src.description` are driven directly; through
@@ -31,11 +32,20 @@ def build_master(case: Case, in_process: bool = False, fmu_dir: Path | str | Non
     ``"bearings"`` only couples the in-process structure with those bearing FMUs (the
     transmission FMU with a bearing FMU of the user's own). Release the slaves with
     :meth:`orchestrator.coupling.master.Master.close`.
+
+    ``structure`` (in-process only): the :class:`gear_fmu.structure.Structure` to drive instead
+    of one built from the case, e.g. one structure linearised with the bearings of several
+    speeds (:class:`orchestrator.analysis.campbell.Linearisation`): the caller vouches that it
+    is the case's.
     """
     tol = case["simulation.tolerance"]
     max_it = case["simulation.max_iterations"]
+    if structure is not None and not in_process:
+        raise ValueError("build_master: a structure object can only be driven in-process "
+                         "(in_process=True)")
     if in_process:
-        structure = InProcessStructure(description.structure(case))
+        structure = InProcessStructure(description.structure(case) if structure is None
+                                       else structure)
         if fmus is not None:
             from orchestrator.coupling import fmi
 
