@@ -58,7 +58,6 @@ P. Velex, O. Duverger, J. Mech. Des. 126 (2004) 748-752.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 
 import numpy as np
@@ -198,25 +197,8 @@ class ToothPairCompliance:
         return 1.0 / sum(self.components(xi).values())
 
 
-#: tables already computed, by :func:`_table_key` (a Campbell diagram builds a case's mesh at
-#: each speed; the table depends on the geometry, material and reference load only)
-_TABLES: dict = {}
-#: tables kept at most (the oldest dropped first)
-_TABLES_KEPT = 16
-
-
-def _table_key(pair: GearPair, line_load: float, n: int) -> tuple:
-    """Exact identity of a table's inputs: every field of the pair by ``repr`` (round-trip exact
-    for floats, lists and tuples alike), the load and the sample count."""
-    return (repr([(f.name, getattr(pair, f.name)) for f in dataclasses.fields(pair)]),
-            repr(float(line_load)), int(n))
-
-
 def mesh_stiffness_table(pair: GearPair, line_load: float, n: int = 129):
     """Stiffness per unit length of contact line sampled over the path of contact.
-
-    The same inputs return a copy of the table computed first (the same numbers bit for bit,
-    without the 2 n tooth compliance integrals).
 
     Returns
     -------
@@ -225,17 +207,6 @@ def mesh_stiffness_table(pair: GearPair, line_load: float, n: int = 129):
     """
     if int(n) != n or n < 2:
         raise ValueError(f"n = {n!r}: need an integer >= 2")
-    key = _table_key(pair, line_load, n)
-    if key not in _TABLES:
-        if len(_TABLES) >= _TABLES_KEPT:
-            del _TABLES[next(iter(_TABLES))]
-        _TABLES[key] = _compute_table(pair, line_load, int(n))
-    xi, k = _TABLES[key]
-    return xi.copy(), k.copy()
-
-
-def _compute_table(pair: GearPair, line_load: float, n: int):
-    """:func:`mesh_stiffness_table` computed."""
     xi_a, xi_e = pair.path_of_contact
     xi = np.linspace(xi_a, xi_e, int(n))
     model = ToothPairCompliance(pair, line_load)
