@@ -105,9 +105,10 @@ class Linearisation:
     sequence as a master built for that speed alone), X0, the damping C on the modes with
     Kb(X0) (its modal reference depends on Kb), the exact mean mesh stiffness and the damped
     modes. The mean mesh stiffness depends on Kb only through the contact set of the static
-    solution at each angle (the slice springs ``k(xi) dl V V^T`` are fixed by the angle), which
-    the bearings' compliance can change where the gap is small (tip relief, crowning, light
-    load): it is computed again at every speed.
+    solution at each angle (the slice springs ``k(xi) dl V V^T`` are fixed by the angle); the
+    gear tilts under the bearings' compliance can open an edge of the face (the helical case's
+    mean moves with the speed, most at a light torque, the spur case's not at all), so it is
+    computed again at every speed.
 
     Parameters
     ----------
@@ -140,6 +141,9 @@ class Linearisation:
             try:
                 if self._support_loads is None:
                     self._support_loads = master.structure.support_loads()
+                # its own first guess, not the previous speed's X0: X0 converges to the
+                # coupling tolerance only, so another start moves it and the modes (by 1e-6
+                # relative on the spur case) and the diagram would depend on the speed order
                 master.solve_static(master.first_guess(self._support_loads))
                 master.exit_initialization()  # C as in the transient: built with the static Kb
                 kb = np.array(master.laws.kb, dtype=float)
