@@ -25,6 +25,7 @@ import asyncio
 import concurrent.futures
 import contextlib
 import math
+import os
 import signal
 import sys
 import threading
@@ -195,6 +196,22 @@ def _children_ignore_sigint():
         signal.signal(signal.SIGINT, previous)
 
 
+@contextlib.contextmanager
+def _environment_kept():
+    """This process's environment as it was: Dask's nanny sets ``OMP_NUM_THREADS``,
+    ``OPENBLAS_NUM_THREADS``, ``MKL_NUM_THREADS`` and ``MALLOC_TRIM_THRESHOLD_`` in the
+    environment of the process that starts a worker (``distributed.nanny.pre-spawn-environ``)
+    and leaves them there, so that every program this process starts afterwards would run its
+    BLAS on one thread."""
+    saved = dict(os.environ)
+    try:
+        yield
+    finally:
+        for name in set(os.environ) - set(saved):
+            del os.environ[name]
+        os.environ.update({k: v for k, v in saved.items() if os.environ.get(k) != v})
+
+
 def dask_client(scheduler, n_workers: int, timeout: float):
     """``(client, cluster)``: a client of the scheduler at ``scheduler`` (cluster None), or of
     a new LocalCluster of ``n_workers`` processes; ``timeout`` [s] to connect."""
@@ -204,7 +221,7 @@ def dask_client(scheduler, n_workers: int, timeout: float):
 
     if scheduler:
         return Client(scheduler, timeout=timeout), None
-    with _children_ignore_sigint():
+    with _children_ignore_sigint(), _environment_kept():
         cluster = LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
                                dashboard_address=":0", scheduler_kwargs={"dashboard": False},
                                silence_logs=logging.ERROR)

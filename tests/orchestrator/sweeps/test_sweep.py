@@ -1,6 +1,7 @@
 """Sweeps on Dask and the post-processing they rely on."""
 
 import math
+import os
 
 import numpy as np
 import pytest
@@ -37,7 +38,10 @@ def test_steady_window():
 @pytest.mark.parametrize("scheduler", ["none", None], ids=["serial", "local-cluster"])
 def test_sweep_gathers_points_and_reports_a_failed_one(scheduler, tmp_path):
     """Two speeds and a bad point; serial in this process or on a 2-worker LocalCluster. The
-    failed point is reported with its reason, the others are kept, in point order."""
+    failed point is reported with its reason, the others are kept, in point order; the
+    LocalCluster leaves this process's environment as it was (Dask's nanny sets the BLAS
+    thread counts of later child processes to 1 there)."""
+    environment = dict(os.environ)
     points = [SweepPoint({"operation.speed": 200.0}, "linear", "a"),
               SweepPoint({"operation.speed": -5.0}, "linear", "bad"),
               SweepPoint({"operation.speed": 400.0}, "linear", "b")]
@@ -45,6 +49,7 @@ def test_sweep_gathers_points_and_reports_a_failed_one(scheduler, tmp_path):
                     scheduler=scheduler, progress=False)
     assert [i for i, _ in res.failed] == [1]
     assert "operation.speed" in res.failed[0][1]
+    assert dict(os.environ) == environment
     data = read_sweep(res.path)
     assert [d["label"] for d in data] == ["a", "bad", "b"]
     assert [d["values"].tolist() for d in data] == [[200.0], [-5.0], [400.0]]
