@@ -48,6 +48,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 import scipy.linalg
 
+from bearing_fmu.blas_threads import one_blas_thread
 from gear_fmu.dofs import THETA
 from gear_fmu.loads import (
     StructureLoads,
@@ -134,6 +135,7 @@ class Structure:
 
     n_bearings = N_BEARING
 
+    @one_blas_thread
     def __init__(
         self,
         system: GearShaftSystem,
@@ -202,6 +204,7 @@ class Structure:
             self._c = None
 
     # ------------------------------------------------------------------ damping
+    @one_blas_thread
     def set_damping(self, damping_full: np.ndarray) -> None:
         """Use the damping matrix C (full numbering) [N s/m] from now on."""
         self._pending_reference = None
@@ -237,6 +240,7 @@ class Structure:
         self._require_damping()
         return self._reference_mesh_stiffness
 
+    @one_blas_thread
     def set_damping_reference(self, bearing_stiffness) -> None:
         """(Re)build the modal damping C on the modes of the reference configuration.
 
@@ -276,6 +280,7 @@ class Structure:
         # residual scale: the largest external load (torque, gravity, unbalance)
         self._f_scale = max(float(np.linalg.norm(f)), *self._unb)
 
+    @one_blas_thread
     def set_torque(self, torque: float) -> None:
         """Input torque T [N m] from the next static solution or step on.
 
@@ -325,6 +330,7 @@ class Structure:
     check_laws = staticmethod(check_laws)
 
     # ------------------------------------------------------------------ solves
+    @one_blas_thread
     def static(self, F0, Kb, Cb=None) -> StepInfo:
         """Static solution X0 at the current time with the given affine bearing laws.
 
@@ -346,6 +352,7 @@ class Structure:
             self._m_gear = scipy.linalg.cho_solve(cho, np.eye(self._m.shape[0])[:, :N_GEAR])
         return self._m_gear
 
+    @one_blas_thread
     def static_at(self, f0, kb, angle) -> StepInfo:
         """Static solution at a given rigid-body pinion angle [rad] (checked laws)."""
         cond = self._static
@@ -370,6 +377,7 @@ class Structure:
         self.mesh_state = ms
         return info
 
+    @one_blas_thread
     def step(self, dt: float, F0, Kb, Cb) -> StepInfo:
         """One Newmark step t -> t + dt with affine bearing laws F0 - Kb X - Cb Xdot.
 

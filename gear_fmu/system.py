@@ -51,6 +51,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from bearing_fmu.blas_threads import one_blas_thread
 from gear_fmu.dofs import DOF_PER_NODE, THETA, U, V, W, dof
 from gear_fmu.drivetrain import Drivetrain
 from gear_fmu.timoshenko import HollowSection, disc_matrices, timoshenko_element
@@ -238,6 +239,7 @@ class GearShaftSystem:
     def n_nodes(self) -> int:
         return sum(s.n_elements + 1 for s in self.shafts)
 
+    @one_blas_thread
     def build(self) -> None:
         """Assemble M and K_shaft of Eq. (9) (shaft elements, gear discs, thrust springs) and
         the DOF maps."""

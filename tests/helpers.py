@@ -49,7 +49,7 @@ def probe_command(module: str, *args, python_args=()) -> list[str]:
 
 def run_isolated(code: str | None = None, timeout: float = 600, numba_cache: Path | None = None,
                  python_args: tuple = (), *, module: str | None = None, script: Path | None = None,
-                 args=()) -> dict:
+                 args=(), env_vars: dict | None = None) -> dict:
     """Run a probe in a fresh interpreter started in an empty temporary folder; it prints one
     JSON object on its last line and exits normally. Returns that object.
 
@@ -59,7 +59,7 @@ def run_isolated(code: str | None = None, timeout: float = 600, numba_cache: Pat
     a line or two; longer code belongs in a probe module, where it is linted and readable).
     ``args`` as :func:`_argv`. ``numba_cache``: numba's cache folder for that interpreter
     (``NUMBA_CACHE_DIR``; an empty one compiles every kernel anew). ``python_args``: options of
-    the interpreter (``-S``)."""
+    the interpreter (``-S``). ``env_vars``: variables set in the probe's environment."""
     if module is not None:
         env, cmd = probe_env(), probe_command(module, *args, python_args=python_args)
     elif script is not None:
@@ -68,6 +68,7 @@ def run_isolated(code: str | None = None, timeout: float = 600, numba_cache: Pat
         env, cmd = dict(os.environ), [sys.executable, *python_args, "-c", textwrap.dedent(code)]
     if numba_cache is not None:
         env["NUMBA_CACHE_DIR"] = str(numba_cache)
+    env.update(env_vars or {})
     with tempfile.TemporaryDirectory(prefix="gsb_test_") as cwd:
         proc = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, cwd=cwd,
                               env=env)

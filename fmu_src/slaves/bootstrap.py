@@ -32,7 +32,7 @@ CODE_DIR = "gsb_code"
 HASH_FILE = "HASH"
 #: the packages the FMU's code imports besides the standard library and pythonfmu (which the
 #: FMU carries)
-REQUIREMENTS = ("numpy", "scipy", "numba")
+REQUIREMENTS = ("numpy", "scipy", "numba", "threadpoolctl")
 
 
 def require(fmu: str) -> None:

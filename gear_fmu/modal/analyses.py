@@ -23,6 +23,7 @@ import math
 
 import numpy as np
 
+from bearing_fmu.blas_threads import one_blas_thread
 from gear_fmu.modal.damped_modes import damped_modes
 from gear_fmu.modal.modes import natural_modes
 
@@ -42,6 +43,7 @@ def _springs(st, bearing_stiffness):
     return f0, kb
 
 
+@one_blas_thread
 def mean_mesh_stiffness(st, bearing_stiffness=1e8, n_angles: int = 16) -> np.ndarray:
     """Mesh stiffness (12, 12) averaged over one mesh period of static solutions.
 
@@ -62,6 +64,7 @@ def mean_mesh_stiffness(st, bearing_stiffness=1e8, n_angles: int = 16) -> np.nda
     return acc / n_angles
 
 
+@one_blas_thread
 def quasi_static(st, angles, bearing_stiffness=1e8) -> dict:
     """Static solutions under the constant loads at given pinion angles (no dynamics).
 
@@ -95,6 +98,7 @@ def quasi_static(st, angles, bearing_stiffness=1e8) -> dict:
     return {k: np.array(v) for k, v in out.items()}
 
 
+@one_blas_thread
 def exact_mean_mesh_stiffness(st, bearing_stiffness=1e8, n_gauss: int = 8) -> np.ndarray:
     """Mesh stiffness (12, 12) averaged over one mesh period, integrated between contact events.
 
@@ -165,6 +169,7 @@ def line_of_action_stiffness(st, mesh_stiffness) -> float:
     return float(k[5, 5] / lever**2)
 
 
+@one_blas_thread
 def modes(st, bearing_stiffness=1e8, n_gauss: int = 8, mesh_stiffness=None):
     """Natural modes with the mean mesh stiffness at the static load (for ``gsb modal``): the
     undamped modes of K0 of Eq. (20).
@@ -179,6 +184,7 @@ def modes(st, bearing_stiffness=1e8, n_gauss: int = 8, mesh_stiffness=None):
     return natural_modes(st.system, bearing_stiffness, mesh_stiffness)
 
 
+@one_blas_thread
 def damped(st, kb, cb, mesh_stiffness=None, n_gauss: int = 8):
     """Damped modes of the linearised system about X0, Eq. (20) with C0 = C + Cb(X0).
 
@@ -196,6 +202,7 @@ def damped(st, kb, cb, mesh_stiffness=None, n_gauss: int = 8):
     return damped_modes(st.system, st.damping_full, mesh_stiffness, kb, cb)
 
 
+@one_blas_thread
 def reference_damping(st, model, bearing_stiffness):
     """The damping matrix ``C`` (full numbering) of a damping model
     (:mod:`gear_fmu.modal.damping`) on the reference configuration: shafts, the mean mesh stiffness
@@ -219,6 +226,7 @@ def reference_damping(st, model, bearing_stiffness):
     return c, ref, k_mesh
 
 
+@one_blas_thread
 def support_loads(st) -> np.ndarray:
     """(4, 2) static loads of the structure on stiff bearings (1e12 N/m) [N], global frame."""
     saved = st.get_state()

@@ -37,6 +37,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 import scipy.linalg
 
+from bearing_fmu.blas_threads import one_blas_thread
 from gear_fmu.modal.modes import KINDS, bearing_block_matrix, classify, mesh_stiffness_matrix
 from gear_fmu.system import GearShaftSystem
 
@@ -107,6 +108,7 @@ def _square(a, n: int | None, name: str) -> np.ndarray:
     return a
 
 
+@one_blas_thread
 def damped_eigen(m, c, k, k_mesh=None, dof_kind=None, zero_tol: float = 1e-6) -> DampedModes:
     """Damped modes of ``M x'' + C x' + K x = 0`` on plain arrays (module docstring).
 
@@ -171,6 +173,7 @@ def damped_eigen(m, c, k, k_mesh=None, dof_kind=None, zero_tol: float = 1e-6) ->
                        [kinds[i] for i in order], real[order], int(zero.sum()))
 
 
+@one_blas_thread
 def damped_modes(system: GearShaftSystem, damping_full, mesh_stiffness12, kb, cb
                  ) -> DampedModes:
     """Damped modes of the gear-shaft system linearised about X0 (Eq. 20, module docstring).

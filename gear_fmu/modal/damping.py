@@ -42,6 +42,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bearing_fmu.blas_threads import one_blas_thread
 from gear_fmu.dofs import THETA
 from gear_fmu.modal.modes import Modes, mesh_stiffness_matrix, modal_damping_matrix, natural_modes
 
@@ -148,6 +149,7 @@ def mesh_damping_coefficient(model: DampingModel, k_mesh12, base_radii, polar_in
     return 2.0 * model.mesh_ratio * math.sqrt(k_m * m_e)
 
 
+@one_blas_thread
 def damping_matrix(system, model: DampingModel, k_mesh12, bearing_stiffness, base_radii
                    ) -> tuple[np.ndarray, Modes | None]:
     """``C = C_s + C_m + C_d`` [SI] (full numbering) and the modes C_s was built on (None for

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg
 
+from bearing_fmu.blas_threads import one_blas_thread
 from gear_fmu.system import GearShaftSystem
 
 __all__ = [
@@ -125,6 +126,7 @@ def classify(fractions: np.ndarray, dominant: float = 0.75) -> str:
     return f"{KINDS[order[0]]}-{KINDS[order[1]]}"
 
 
+@one_blas_thread
 def natural_modes(
     system: GearShaftSystem, bearing_stiffness, mesh_stiffness=None, stiffness_extra=None
 ) -> Modes:
@@ -169,6 +171,7 @@ def natural_modes(
     return Modes(omega, shapes, kin, mesh_frac, kinds)
 
 
+@one_blas_thread
 def modal_damping_matrix(system: GearShaftSystem, modes: Modes, zeta: float) -> np.ndarray:
     """Modal damping ``C = M Phi diag(2 zeta omega_i) Phi^T M`` (full numbering) [N s/m]: the C
     of Eq. (9).

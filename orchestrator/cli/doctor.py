@@ -16,11 +16,18 @@ import subprocess
 import sys
 from pathlib import Path
 
+from fmu_src.slaves.bootstrap import REQUIREMENTS
+
 __all__ = ["add_parser", "report"]
 
 #: what the FMUs and the runs import, in the order printed
-PACKAGES = ("numpy", "scipy", "numba", "llvmlite", "fmpy", "pythonfmu", "h5py", "matplotlib",
-            "dask", "pyamg")
+PACKAGES = ("numpy", "scipy", "numba", "llvmlite", "threadpoolctl", "fmpy", "pythonfmu", "h5py",
+            "matplotlib", "dask", "pyamg")
+
+
+def _needs() -> str:
+    """The FMUs' requirements as words: "numpy, scipy, numba and threadpoolctl"."""
+    return f"{', '.join(REQUIREMENTS[:-1])} and {REQUIREMENTS[-1]}"
 
 
 def add_parser(sub) -> None:
@@ -123,8 +130,9 @@ def _hosts(lines: list, problems: list) -> None:
 
     host = dict(line.split("=", 1) for line in python_host_config().splitlines()
                 if "=" in line and not line.startswith("#"))
+    needs = _needs()
     lines.append("FMU hosts    a Python host (fmpy) runs the FMUs in its own interpreter, which "
-                 "needs numpy, scipy and numba")
+                 f"needs {needs}")
     libpython = host.get("libpython", "")
     lines.append(f"  C/C++ host the loader starts {host.get('executable')} with libpython "
                  f"{libpython or 'NONE'} (GSB_PYTHON, GSB_LIBPYTHON override)")
@@ -133,14 +141,14 @@ def _hosts(lines: list, problems: list) -> None:
                         "cannot start it; use a Python built with --enable-shared (pyenv: "
                         "PYTHON_CONFIGURE_OPTS=--enable-shared) or set GSB_LIBPYTHON")
     check = subprocess.run([host.get("executable", sys.executable), "-c",
-                            "import numpy, scipy, numba"], capture_output=True, text=True,
+                            f"import {', '.join(REQUIREMENTS)}"], capture_output=True, text=True,
                            timeout=120)
     if check.returncode == 0:
-        lines.append("  it imports numpy, scipy and numba: ok")
+        lines.append(f"  it imports {needs}: ok")
     else:
         last = (check.stderr.strip().splitlines() or ["?"])[-1]
         problems.append(f"the FMU hosts' Python {host.get('executable')} cannot import the "
-                        f"FMUs' dependencies ({last}): install numpy, scipy and numba there")
+                        f"FMUs' dependencies ({last}): install {needs} there")
 
 
 def report() -> tuple[list[str], list[str]]:

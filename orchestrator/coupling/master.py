@@ -45,6 +45,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from bearing_fmu.affine import AffineLaws
+from bearing_fmu.blas_threads import one_blas_thread
 from bearing_fmu.static import newton_equilibrium
 from fmu_src.state_codec import StateArrays, decode, encode, nest
 from fmu_src.states import laws_arrays, laws_from_arrays
@@ -250,6 +251,7 @@ class Master:
         positions = self.bearings.static_position(loads)
         return np.hstack([positions, np.zeros_like(positions)])
 
+    @one_blas_thread
     def solve_static(self, initial_states: np.ndarray | None = None) -> StepReport:
         """X0: iterate structure static solves and bearing linearisations (Sec. 2.2.3), from
         ``initial_states`` (default :meth:`first_guess`)."""
@@ -276,6 +278,7 @@ class Master:
             f"relative bearing-force mismatch {mismatch:.3e} > tol {self.tol:.1e}"
         )
 
+    @one_blas_thread
     def exit_initialization(self) -> None:
         """End the static phase of both slaves (linear bearings freeze, the structure builds
         its modal damping with the bearings' static stiffness)."""
@@ -314,6 +317,7 @@ class Master:
         finally:
             self.structure.close()
 
+    @one_blas_thread
     def step(self, t: float, dt: float) -> StepReport:
         """One coupled Newmark step from t to t + dt."""
         if self.laws is None:

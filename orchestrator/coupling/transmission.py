@@ -36,6 +36,7 @@ from pathlib import Path
 import numpy as np
 from pythonfmu.default_experiment import DefaultExperiment
 
+from bearing_fmu.blas_threads import ONE_BLAS_THREAD
 from fmu_src.contract import (
     BEARING_RESOURCE,
     BEARINGS,
@@ -255,10 +256,11 @@ class TransmissionSlave(ContractSlave):
             h = step_size / n
             st.set_torque(self._get_torque())
             iterations = 0
-            for _ in range(n):
-                report = self._master.step(st.t, h)
-                iterations += report.iterations
-                self._steps += 1
+            with ONE_BLAS_THREAD:  # once for the n steps (module bearing_fmu.blas_threads)
+                for _ in range(n):
+                    report = self._master.step(st.t, h)
+                    iterations += report.iterations
+                    self._steps += 1
         except Exception as exc:  # anything raised here would be fatal for the host
             self._error = self.output_failed(
                 f"doStep from t = {current_time:.9g} s, h = {step_size:.6g} s failed", exc)

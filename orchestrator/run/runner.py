@@ -52,6 +52,7 @@ from pathlib import Path
 
 import numpy as np
 
+from bearing_fmu.blas_threads import one_blas_thread
 from fmu_src.case import Case
 from fmu_src.state_codec import StateFormatError
 from orchestrator.coupling.master import StepReport, decode_checkpoint
@@ -289,6 +290,7 @@ class Runner:
             print(f"warning: {text}", file=sys.stderr, flush=True)
         return Static(static, x0, mesh_force, te, warnings, time.perf_counter() - t0, notes)
 
+    @one_blas_thread
     def transient(self, recorder, first: int = 0, bar: Progress | None = None) -> dict:
         """Steps ``first`` .. ``n_steps`` - 1, each row appended to ``recorder``; returns the
         counts of the transient (``wall_time`` [s], ``iterations``, ``bearing_evaluations``,

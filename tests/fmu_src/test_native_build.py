@@ -93,7 +93,7 @@ def test_gsb_doctor_names_the_python_the_caches_and_the_native_layer(fmu_dir, tm
     out = proc.stdout
     assert sys.executable in out and "numba " in out and "pythonfmu 0.7.0" in out
     assert "native layer built:" in out and "libgsb-loader.so" in out
-    assert "imports numpy, scipy and numba: ok" in out
+    assert "imports numpy, scipy, numba and threadpoolctl: ok" in out
     if proc.returncode == 0:
         assert "nothing missing" in out
     else:

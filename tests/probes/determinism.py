@@ -44,7 +44,30 @@ def short_bearing_force(code: str) -> dict:
     return {"force": r.force.tolist(), "file": ShortBearing.__module__}
 
 
-PROBES = probes_of(runs, short_bearing_force)
+def linear_algebra() -> dict:
+    """What the structure's dense linear algebra feeds, as hashes: the helical case's first 16
+    steps in-process (static solution, damping, Newmark matrices, steps) and the damped modes
+    of the spur case about X0 (``gsb modal``), and the BLAS thread count of this process."""
+    import numpy as np
+    from threadpoolctl import threadpool_info
+
+    import orchestrator as gsb
+    from fmu_src.case import load_case
+    from orchestrator.analysis.campbell import linearise
+
+    r = gsb.simulate(load_case("baguet2010_helical"), in_process=True, steps=16, progress=False)
+    run = hashlib.sha256()
+    for name in sorted(r.channels):
+        run.update(name.encode() + np.ascontiguousarray(r.channels[name]).tobytes())
+    d = linearise(load_case("baguet2010_spur")).damped
+    modes = hashlib.sha256(np.ascontiguousarray(d.frequency_hz).tobytes()
+                           + np.ascontiguousarray(d.damping_ratio).tobytes())
+    return {"helical run": run.hexdigest(), "spur modes": modes.hexdigest(),
+            "blas threads": max(i["num_threads"] for i in threadpool_info()
+                                if i["user_api"] == "blas")}
+
+
+PROBES = probes_of(runs, short_bearing_force, linear_algebra)
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -186,7 +186,7 @@ def test_an_fmu_in_a_python_without_a_package_it_needs_says_what_to_install(fmu_
                        args=["instantiate", {"fmu": fmu_dir / f"{fmu}.fmu", "blocked": refused}])
     assert out["null"] and not out["imported"]
     text = "\n".join(m for _, m in out["messages"])
-    assert f"{fmu}.fmu" in text and "needs numpy, scipy and numba" in text, text
+    assert f"{fmu}.fmu" in text and "needs numpy, scipy, numba and threadpoolctl" in text, text
     assert f"lacks {refused}" in text, text
     assert f"{out['executable']} -m pip install {refused}" in text, text
 

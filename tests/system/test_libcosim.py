@@ -63,7 +63,7 @@ def paper_step(transmission_fmu):
 
 def test_libcosim_starts_at_x0_on_its_nanosecond_clock(paper_step):
     """The time-series observer's sample at the initialisation is the static solution X0 of
-    ``gsb run``'s master (``SAME_RUN``: bit for bit in most runs, across the two processes);
+    ``gsb run``'s master (``SAME_RUN``: bit for bit, across the two processes);
     libcosim's clock reads k * 23,236 ns after step k."""
     got = paper_step
     x0 = master_rows(_case(), [], 0)[0]
@@ -75,8 +75,8 @@ def test_libcosim_starts_at_x0_on_its_nanosecond_clock(paper_step):
 
 def test_each_step_is_gsb_runs_master_at_libcosims_steps(paper_step):
     """After each step, the last-value observer's 26 outputs are those of ``gsb run``'s master
-    stepping at libcosim's steps (:func:`libcosim_steps`; ``SAME_RUN``: bit for bit with the
-    newest dependency versions), one internal step each; the time-series observer recorded
+    stepping at libcosim's steps (:func:`libcosim_steps`; ``SAME_RUN``: bit for bit), one
+    internal step each; the time-series observer recorded
     the same. Against the master at the constant step 23236e-9 s the outputs differ by 4.1e-10
     relative to each output's largest magnitude (newest versions; 1.4e-9 with the oldest
     allowed; measured over these 32 steps, on a velocity; asserted below 1e-8): a step's last
