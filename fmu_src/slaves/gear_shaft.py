@@ -45,7 +45,13 @@ from fmu_src.contract import (
     unpack_law_arrays,
 )
 from fmu_src.lifecycle import Phase, StructureCycle
-from fmu_src.slaves.support import FMI_ERROR, ContractSlave, case_parameter
+from fmu_src.slaves.support import (
+    FMI_ERROR,
+    ContractSlave,
+    case_parameter,
+    overrides_from_arrays,
+    overrides_to_arrays,
+)
 from fmu_src.state_codec import StateArrays, StateFormatError, nest
 from fmu_src.states import structure_state_arrays, structure_state_from_arrays
 
@@ -366,14 +372,11 @@ class GearShaftSlave(ContractSlave):
     # ``phase`` (a :class:`fmu_src.lifecycle.Phase` name), the flags, ``error`` (text, absent
     # for none), ``damping_kb`` (4, 2, 2) and
     # ``structure/...`` (fmu_src.states) once built (``has_structure``)
-    @classmethod
-    def _state_kind(cls) -> str:
-        return STATE_KIND
+    STATE_KIND = STATE_KIND
 
     @classmethod
     def _state_to_arrays(cls, state) -> dict:
-        out = {f"overrides/{key}": np.asarray(value)
-               for key, value in state["overrides"].items()}
+        out = overrides_to_arrays(state["overrides"])
         out |= {"laws": np.array(state["laws"], dtype=np.float64),
                 "outputs": np.array(state["outputs"], dtype=np.float64),
                 "iterations": np.int64(state["iterations"]),
@@ -390,8 +393,7 @@ class GearShaftSlave(ContractSlave):
 
     @classmethod
     def _state_from_arrays(cls, arrays: StateArrays):
-        ov = arrays.sub("overrides")  # values the case checks when the state is set
-        state = {"overrides": {key: ov.value(key) for key in ov.names()},
+        state = {"overrides": overrides_from_arrays(arrays),
                  "laws": arrays.array("laws", "float64", (len(_LAWS),)).tolist(),
                  "outputs": arrays.array("outputs", "float64", (len(_OUTPUTS),)).tolist(),
                  "iterations": arrays.int("iterations"),

@@ -18,6 +18,7 @@
 
 from __future__ import annotations
 
+import numpy as np
 from pythonfmu import Boolean, Fmi2Causality, Fmi2Slave, Fmi2Variability, Integer, Real, String
 from pythonfmu.enums import Fmi2Status
 
@@ -240,10 +241,15 @@ class ContractSlave(Fmi2Slave):
     # running code. Bytes that are not such a state raise StateFormatError, which the patched
     # library (fmu_src.build.native) returns as fmi2Error with the message in the log, the
     # instance intact (pythonfmu's own library makes it fmi2Fatal).
+    #: the kind tag of this slave's serialised states
+    STATE_KIND: str = ""
+
     @classmethod
     def _state_kind(cls) -> str:
-        """The kind tag of this slave's serialised states."""
-        raise NotImplementedError
+        """The kind tag of this slave's serialised states (:attr:`STATE_KIND`)."""
+        if not cls.STATE_KIND:
+            raise NotImplementedError(f"{cls.__name__} declares no STATE_KIND")
+        return cls.STATE_KIND
 
     @classmethod
     def _state_to_arrays(cls, state) -> dict:
@@ -266,6 +272,19 @@ class ContractSlave(Fmi2Slave):
         out = cls._state_from_arrays(arrays)
         arrays.check_all_read()
         return out
+
+
+def overrides_to_arrays(overrides: dict) -> dict:
+    """The case fields a slave's parameters changed ({field: value}) as the arrays
+    ``overrides/<field>`` of a serialised state (:mod:`fmu_src.state_codec`)."""
+    return {f"overrides/{key}": np.asarray(value) for key, value in overrides.items()}
+
+
+def overrides_from_arrays(arrays: StateArrays) -> dict:
+    """The {field: value} of :func:`overrides_to_arrays`, unchecked: the case checks them when
+    the state is set."""
+    ov = arrays.sub("overrides")
+    return {key: ov.value(key) for key in ov.names()}
 
 
 def case_parameter(slave, name: str, changed):

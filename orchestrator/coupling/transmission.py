@@ -44,7 +44,14 @@ from fmu_src.contract import (
     journal_output_names,
     transmission_variables,
 )
-from fmu_src.slaves.support import FMI_ERROR, ContractSlave, case_parameter
+from fmu_src.description import mesh_period, time_step
+from fmu_src.slaves.support import (
+    FMI_ERROR,
+    ContractSlave,
+    case_parameter,
+    overrides_from_arrays,
+    overrides_to_arrays,
+)
 from fmu_src.state_codec import StateArrays
 from orchestrator.coupling.system import build_master
 
@@ -78,7 +85,6 @@ class TransmissionSlave(ContractSlave):
             "Gear-shaft-bearing transmission (Timoshenko shafts, distributed gear mesh, four "
             "journal bearings) with its iterative co-simulation master inside; global frame, "
             "SI units (Baguet & Jacquenot 2010).")
-        from fmu_src.description import mesh_period, time_step
 
         self._base = self._base_case()
         step = time_step(self._base)
@@ -233,7 +239,7 @@ class TransmissionSlave(ContractSlave):
         if self._error is None:
             try:
                 self._master.exit_initialization()
-                self._dt = _case_step(self.case())
+                self._dt = time_step(self.case())
             except Exception as exc:  # anything raised here would be fatal for the host
                 self._error = self.output_failed("initialisation failed", exc)
         self._stepping = True
@@ -308,7 +314,7 @@ class TransmissionSlave(ContractSlave):
                     self._solve_static()  # the static problem the state continues from
                 if state["stepping"] and not self._stepping:
                     self._master.exit_initialization()
-                    self._dt = _case_step(self.case())
+                    self._dt = time_step(self.case())
                 self._master.restore(blob)
                 self._torque = state["torque"]
             self._stepping = state["stepping"]
@@ -320,14 +326,11 @@ class TransmissionSlave(ContractSlave):
             return FMI_ERROR
         return None
 
-    @classmethod
-    def _state_kind(cls) -> str:
-        return STATE_KIND
+    STATE_KIND = STATE_KIND
 
     @classmethod
     def _state_to_arrays(cls, state) -> dict:
-        out = {f"overrides/{key}": np.asarray(value)
-               for key, value in state["overrides"].items()}
+        out = overrides_to_arrays(state["overrides"])
         out |= {"start_time": np.float64(state["start_time"]),
                 "bearing_fmu": np.str_(state["bearing_fmu"]),
                 "stepping": np.bool_(state["stepping"]),
@@ -346,8 +349,7 @@ class TransmissionSlave(ContractSlave):
 
     @classmethod
     def _state_from_arrays(cls, arrays: StateArrays):
-        ov = arrays.sub("overrides")
-        overrides = {key: ov.value(key) for key in ov.names()}
+        overrides = overrides_from_arrays(arrays)
         has = arrays.has
         bearing_fmu = arrays.text("bearing_fmu")
         return {"overrides": overrides, "bearing_fmu": bearing_fmu,
@@ -364,8 +366,3 @@ class TransmissionSlave(ContractSlave):
                 "iterations": arrays.int("iterations"), "steps": arrays.int("steps"),
                 "error": arrays.text("error") if has("error") else None}
 
-
-def _case_step(case) -> float:
-    from fmu_src.description import time_step
-
-    return time_step(case)
