@@ -29,6 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.optimize
 
+from bearing_fmu import numba_cache
 from bearing_fmu.base import BearingError
 from fmu_src import description
 from fmu_src.case import Case
@@ -36,7 +37,7 @@ from gear_fmu.modal.analyses import exact_mean_mesh_stiffness, line_of_action_st
 from gear_fmu.modal.damped_modes import MESH_MODE_FRACTION, DampedModes, damped_modes
 from gear_fmu.modal.modes import Modes
 from orchestrator.coupling.master import CouplingError
-from orchestrator.coupling.system import build_master
+from orchestrator.coupling.system import announce_compilation, build_master
 
 __all__ = ["Linearisation", "Linearised", "campbell_data", "crossings", "linearise"]
 
@@ -124,7 +125,9 @@ class Linearisation:
         self.case = case
         self.bearing_stiffness = None if bearing_stiffness is None else float(bearing_stiffness)
         self.n_gauss = n_gauss
+        cold = numba_cache.cold()
         self.structure = description.structure(case)
+        announce_compilation(cold)
         self._support_loads = None  # (4, 2) [N], when the first X0 needs them
 
     def at(self, speed: float | None = None, undamped: bool = True) -> Linearised:

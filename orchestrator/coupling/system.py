@@ -9,15 +9,17 @@ the studies all couple a case through it.
 
 from __future__ import annotations
 
+import logging
 from pathlib import Path
 
+from bearing_fmu import numba_cache
 from fmu_src import description
 from fmu_src.case import Case
 from gear_fmu.structure import Structure
 from orchestrator.coupling.inprocess import InProcessStructure, ModelBearings
 from orchestrator.coupling.master import Master
 
-__all__ = ["build_master"]
+__all__ = ["announce_compilation", "build_master"]
 
 
 def build_master(case: Case, in_process: bool = False, fmu_dir: Path | str | None = None,
@@ -40,6 +42,7 @@ def build_master(case: Case, in_process: bool = False, fmu_dir: Path | str | Non
     """
     tol = case["simulation.tolerance"]
     max_it = case["simulation.max_iterations"]
+    cold = numba_cache.cold()  # before the structure's construction compiles a kernel
     if structure is not None and not in_process:
         raise ValueError("build_master: a structure object can only be driven in-process "
                          "(in_process=True)")
@@ -65,4 +68,15 @@ def build_master(case: Case, in_process: bool = False, fmu_dir: Path | str | Non
         from orchestrator.coupling import fmi
 
         structure, bearings = fmi.system_from_case(case, fmu_dir=fmu_dir)
+    announce_compilation(cold)  # after the FMUs' build: the kernels compile on first calls
     return Master(structure, bearings, tol, max_it)
+
+
+def announce_compilation(cold: bool) -> None:
+    """Say on the ``gsb.startup`` log (printed by the command line) that numba compiles this
+    code version's kernels, if ``cold`` (:func:`bearing_fmu.numba_cache.cold`, asked before
+    the first kernel call): the first command on a machine is otherwise silent for 15-25 s."""
+    if cold:
+        logging.getLogger("gsb.startup").info(
+            "compiling the numba kernels into %s (once per code version on this machine) ...",
+            numba_cache.cache_base())

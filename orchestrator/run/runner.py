@@ -42,7 +42,6 @@ of the results file once the transient stops (complete, failed or interrupted; a
 from __future__ import annotations
 
 import contextlib
-import logging
 import math
 import signal
 import sys
@@ -246,15 +245,8 @@ class Runner:
 
     def start(self) -> None:
         """The master and its two slaves (:func:`~orchestrator.coupling.system.build_master`)."""
-        from bearing_fmu import numba_cache
-
         s = self.spec
-        cold = numba_cache.cold()
         self.master = build_master(s.case, s.in_process, s.fmu_dir, s.fmus)
-        if cold:  # the kernels compile on their first call: the static solution's
-            logging.getLogger("gsb.startup").info(
-                "compiling the numba kernels into %s (once per code version on this "
-                "machine) ...", numba_cache.cache_base())
         self.stop_if_asked("before the static solution")
 
     def static(self) -> Static:

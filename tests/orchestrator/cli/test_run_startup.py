@@ -90,3 +90,16 @@ def test_a_first_run_says_what_it_builds_and_compiles(tmp_path):
     assert lines[0].startswith("gsb: building the FMUs GearShaft, BearingHybrid in ")
     assert lines[1].startswith("gsb: building the FMUs' native layer with CMake in ")
     assert lines[2].startswith("gsb: compiling the numba kernels into ")
+
+
+
+@pytest.mark.slow
+def test_modal_says_once_that_it_compiles_on_an_empty_cache(tmp_path):
+    """An empty numba cache: ``gsb modal`` says on stderr, once, that it compiles the kernels
+    (the structure's construction compiles the first of them, before any master is built;
+    the command was otherwise silent for about 15 s), and gives its modes."""
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "numba"))
+    proc = gsb("modal", "baguet2010_spur", "--out", tmp_path, env=env, cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stderr.count("gsb: compiling the numba kernels into ") == 1, proc.stderr
+    assert "bending" in proc.stdout
