@@ -20,6 +20,7 @@ SMALLEST = {
     "sweep_efficiency.py": ["--periods", "1", "--speeds", "2"],
     "bearing_models.py": [],
     "transmission_fmu.py": ["--periods", "1", "--repeat", "1"],
+    "campbell.py": ["--repeat", "1", "--speeds", "3"],
 }
 
 
