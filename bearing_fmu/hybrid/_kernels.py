@@ -350,3 +350,19 @@ def hybrid_global(state, active, ws, iws, trig, coef, q, s, omega, clearance, fs
             loc[r + 2, c] = sc * res[r + 2, c]
     law_to_global(q, loc, out)
     return 0
+
+
+@njit(cache=True)
+def hybrid_set_global(states, active, ws, iws, trig, coef, q, s, omega, clearance, fs, res,
+                      out):
+    """:func:`hybrid_global` for a set of bearings in one call, in their order, with their
+    workspaces stacked along the first axis (:class:`bearing_fmu.hybrid.model.HybridSet`):
+    the same arithmetic as one call per bearing. Returns ``(-1, 0)``, or the index of the
+    first bearing whose status is not 0 and that status (the bearings after it are not
+    evaluated)."""
+    for b in range(states.shape[0]):
+        status = hybrid_global(states[b:b + 1], active[b], ws[b], iws[b], trig[b], coef, q[b],
+                               s[b], omega[b], clearance[b], fs[b], res[b], out[b])
+        if status != 0:
+            return b, status
+    return -1, 0

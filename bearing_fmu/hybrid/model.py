@@ -33,7 +33,7 @@ from bearing_fmu.hybrid import _kernels as _k
 from bearing_fmu.hybrid import _workspace as _ws
 from bearing_fmu.hybrid.axial import AXIAL_COEF, axial_shape
 
-__all__ = ["HybridBearing", "HybridConvergenceError"]
+__all__ = ["HybridBearing", "HybridConvergenceError", "HybridSet"]
 
 _STATUS = {
     1: "the active-set (LCP) iteration did not converge",
@@ -201,3 +201,63 @@ class HybridBearing(FilmBearingModel):
         xi = np.linspace(-lam, lam, int(n_xi))
         g = axial_shape(xi / lam, float(self._state[0]["t"]))
         return th, xi, np.outer(a, g)
+
+
+class HybridSet:
+    """Hybrid bearings of equal n evaluated in one compiled call
+    (``bearing_fmu.hybrid._kernels.hybrid_set_global``): the numbers of one
+    :meth:`HybridBearing.evaluate_global` per bearing, bit for bit, without the Python and the
+    dispatch of four calls.
+
+    The bearings' workspaces are moved into stacked arrays of which each bearing keeps a view,
+    so that its own methods (warm start, state, reset) act on the same memory.
+
+    Parameters
+    ----------
+    models : sequence of HybridBearing
+        Of one n (:meth:`fits`).
+    q : (nb, 2, 2) array
+        Global-to-local rotation of each bearing (:class:`bearing_fmu.frames.LocalFrame`).
+    omegas : (nb,) array
+        Shaft speed at each bearing [rad/s], > 0.
+    """
+
+    def __init__(self, models, q, omegas):
+        if not self.fits(models):
+            raise ValueError("HybridSet: the models must be hybrid bearings of one n")
+        self.models = list(models)
+        self._q = np.ascontiguousarray(q, dtype=float)
+        self._omega = np.array([check_omega(w) for w in omegas], dtype=float)
+        self._clearance = np.array([m.bearing.clearance for m in self.models])
+        self._fs = np.array([m.bearing.force_scale(w)
+                             for m, w in zip(self.models, self._omega, strict=True)])
+        self._states = np.concatenate([m._state for m in self.models])
+        self._active = np.stack([m._active for m in self.models])
+        self._ws = np.stack([m._ws for m in self.models])
+        self._iws = np.stack([m._iws for m in self.models])
+        self._trig = np.stack([m._trig for m in self.models])
+        self._res = np.stack([m._res for m in self.models])
+        for b, m in enumerate(self.models):
+            m._state, m._active, m._ws = self._states[b:b + 1], self._active[b], self._ws[b]
+            m._iws, m._trig, m._res = self._iws[b], self._trig[b], self._res[b]
+
+    @staticmethod
+    def fits(models) -> bool:
+        """Whether the models can share one call: all :class:`HybridBearing`, of one n."""
+        return (len(models) > 0 and all(type(m) is HybridBearing for m in models)
+                and len({m.n for m in models}) == 1)
+
+    def evaluate_global(self, states, out) -> None:
+        """Film force [N], Kb [N/m], Cb [N s/m] (global frame) of every bearing at its global
+        journal state ``states`` (nb, 4) [m, m/s] into ``out`` (nb, 5, 2) (rows as
+        :meth:`HybridBearing.evaluate_global`). A failing bearing raises that bearing's
+        error, with its index in ``bearing`` (0-based)."""
+        b, status = _k.hybrid_set_global(
+            self._states, self._active, self._ws, self._iws, self._trig, AXIAL_COEF, self._q,
+            states, self._omega, self._clearance, self._fs, self._res, out)
+        if b >= 0:
+            try:
+                self.models[b].raise_status(status, self._q[b], states[b], self._omega[b])
+            except BearingError as exc:
+                exc.bearing_index = int(b)
+                raise

@@ -14,6 +14,7 @@ import numpy as np
 from bearing_fmu.affine import AffineLaws
 from bearing_fmu.base import BearingError, BearingModel
 from bearing_fmu.frames import LocalFrame
+from bearing_fmu.hybrid.model import HybridSet
 from fmu_src.lifecycle import StructureCycle
 from fmu_src.state_codec import StateArrays, nest
 from fmu_src.states import (
@@ -127,18 +128,27 @@ class ModelBearings(BearingSet):
         self._q = np.array([f.q for f in self.frames])
         self._states = None  # global journal states of the last evaluation
         self.evaluations = 0
+        # hybrid bearings of one n: one compiled call for the set (the same numbers)
+        self._set = (HybridSet(self.models, self._q, self.omegas)
+                     if HybridSet.fits(self.models) else None)
 
     def evaluate(self, states):
         nb = len(self.models)
         states = np.asarray(states, dtype=float)
         self._states = states.copy()
         out = np.empty((nb, 5, 2))
-        for b in range(nb):
-            try:
-                self.models[b].evaluate_global(self._q[b], states[b], self.omegas[b], out[b])
-            except BearingError as exc:  # which bearing, at which state [m, m/s]: the run's
-                exc.bearing, exc.state, exc.reason = b + 1, states[b].copy(), str(exc)
-                raise
+        b = 0
+        try:
+            if self._set is not None:
+                self._set.evaluate_global(np.ascontiguousarray(states), out)
+            else:
+                for b in range(nb):
+                    self.models[b].evaluate_global(self._q[b], states[b], self.omegas[b],
+                                                   out[b])
+        except BearingError as exc:  # which bearing, at which state [m, m/s]: the run's
+            b = getattr(exc, "bearing_index", b)
+            exc.bearing, exc.state, exc.reason = b + 1, states[b].copy(), str(exc)
+            raise
         self.evaluations += nb
         return out[:, 0], out[:, 1:3], out[:, 3:5]
 

@@ -323,3 +323,48 @@ def test_bad_input():
     # too coarse a theta mesh for a very short bearing: clear error, not a wrong answer
     with pytest.raises(HybridConvergenceError, match="increase n"):
         HybridBearing(unit(0.01), n=192).dimensionless(0.3, 0.0)
+
+
+# --- a set of hybrid bearings in one call (bearing_fmu.hybrid.model.HybridSet) ---------------
+
+def test_a_set_in_one_call_gives_each_bearings_numbers_bit_for_bit():
+    """Four bearings of different data, frames and speeds along 40 states (warm starts carried
+    from call to call): the set's one compiled call gives, bit for bit, the forces, Kb, Cb
+    and warm starts of one ``evaluate_global`` per bearing on twin models; a state on the
+    clearance circle at the third bearing raises that bearing's error, with its index."""
+    from bearing_fmu.hybrid.model import HybridSet
+
+    data = [BearingData(0.07, 0.05, 150e-6, 0.0288), BearingData(0.07, 0.05, 150e-6, 0.0288),
+            BearingData(0.09, 0.06, 110e-6, 0.0288), BearingData(0.09, 0.06, 110e-6, 0.02)]
+    q = np.array([rotation(a).T for a in (0.3, -1.2, 2.0, 0.0)])
+    omegas = np.array([325.0, 325.0, 200.0, 200.0])
+    alone = [HybridBearing(d) for d in data]
+    grouped = HybridSet([HybridBearing(d) for d in data], q, omegas)
+    rng = np.random.default_rng(7)
+    clear = np.array([d.clearance for d in data])
+    for _ in range(40):
+        eps = rng.uniform(0.1, 0.85, 4)
+        phi = rng.uniform(0.0, 2.0 * math.pi, 4)
+        states = np.column_stack([clear * eps * np.cos(phi), clear * eps * np.sin(phi),
+                                  (clear * omegas)[:, None] * rng.uniform(-0.2, 0.2, (4, 2))])
+        expected = np.empty((4, 5, 2))
+        for b in range(4):
+            alone[b].evaluate_global(q[b], states[b], omegas[b], expected[b])
+        got = np.empty((4, 5, 2))
+        grouped.evaluate_global(states, got)
+        assert np.array_equal(got, expected)
+    for a, g in zip(alone, grouped.models, strict=True):
+        (ra, aa), (rg, ag) = a.get_state(), g.get_state()
+        assert ra.tobytes() == rg.tobytes() and np.array_equal(aa, ag)
+    states[2, :2] = [clear[2], 0.0]
+    with pytest.raises(EccentricityError) as caught:
+        grouped.evaluate_global(states, got)
+    assert caught.value.bearing_index == 2
+
+
+def test_a_set_takes_only_hybrid_bearings_of_one_n():
+    from bearing_fmu.hybrid.model import HybridSet
+
+    assert HybridSet.fits([HybridBearing(unit(0.5)), HybridBearing(unit(1.0))])
+    assert not HybridSet.fits([HybridBearing(unit(0.5)), HybridBearing(unit(0.5), n=96)])
+    assert not HybridSet.fits([])
