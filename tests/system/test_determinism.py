@@ -112,7 +112,7 @@ def test_a_change_in_a_callee_file_recompiles_its_callers(tmp_path):
 @pytest.mark.skipif((os.cpu_count() or 1) < 2,
                     reason="one core: OpenBLAS runs one thread whatever it is told")
 def test_same_bits_whatever_the_blas_thread_count(fmu_dir):
-    """OpenBLAS splits a product or factorisation of the structure's matrices (107 rows for
+    """OpenBLAS splits a product or factorisation of the structure's matrices (108 rows for
     the paper's case) among its threads, and the split changed the last bits: before the
     computations ran on one BLAS thread (:mod:`bearing_fmu.blas_threads`), the helical case's
     first 16 steps differed between ``OPENBLAS_NUM_THREADS=1`` and 2, and an FMU run in a
