@@ -251,7 +251,7 @@ class HybridSet:
         """Film force [N], Kb [N/m], Cb [N s/m] (global frame) of every bearing at its global
         journal state ``states`` (nb, 4) [m, m/s] into ``out`` (nb, 5, 2) (rows as
         :meth:`HybridBearing.evaluate_global`). A failing bearing raises that bearing's
-        error, with its index in ``bearing`` (0-based)."""
+        error, with its index in ``bearing_index`` (0-based)."""
         b, status = _k.hybrid_set_global(
             self._states, self._active, self._ws, self._iws, self._trig, AXIAL_COEF, self._q,
             states, self._omega, self._clearance, self._fs, self._res, out)

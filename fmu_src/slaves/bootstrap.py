@@ -25,7 +25,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-__all__ = ["REQUIREMENTS", "cache_dir", "locked", "require", "stage_code"]
+__all__ = ["REQUIREMENTS", "REQUIREMENTS_TEXT", "cache_dir", "locked", "require", "stage_code"]
 
 #: folder of the FMU's resources holding its code, and the file with the code's hash
 CODE_DIR = "gsb_code"
@@ -33,6 +33,8 @@ HASH_FILE = "HASH"
 #: the packages the FMU's code imports besides the standard library and pythonfmu (which the
 #: FMU carries)
 REQUIREMENTS = ("numpy", "scipy", "numba", "threadpoolctl")
+#: the same as words, for messages: "numpy, scipy, numba and threadpoolctl"
+REQUIREMENTS_TEXT = f"{', '.join(REQUIREMENTS[:-1])} and {REQUIREMENTS[-1]}"
 
 
 def require(fmu: str) -> None:
@@ -52,8 +54,8 @@ def require(fmu: str) -> None:
         exe = sys.executable or "python"
         names = " ".join(missing)
         why = "; ".join(f"{name}: {reason}" for name, reason in missing.items())
-        raise ImportError(f"{fmu}.fmu runs Python code that needs {', '.join(REQUIREMENTS[:-1])} "
-                          f"and {REQUIREMENTS[-1]}, and the Python running it ({exe}, Python "
+        raise ImportError(f"{fmu}.fmu runs Python code that needs {REQUIREMENTS_TEXT}, and "
+                          f"the Python running it ({exe}, Python "
                           f"{sys.version.split()[0]}) lacks {names.replace(' ', ', ')} ({why}). "
                           f"Install into that Python: {exe} -m pip install {names}")
 

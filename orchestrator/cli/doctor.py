@@ -16,18 +16,13 @@ import subprocess
 import sys
 from pathlib import Path
 
-from fmu_src.slaves.bootstrap import REQUIREMENTS
+from fmu_src.slaves.bootstrap import REQUIREMENTS, REQUIREMENTS_TEXT
 
 __all__ = ["add_parser", "report"]
 
 #: what the FMUs and the runs import, in the order printed
 PACKAGES = ("numpy", "scipy", "numba", "llvmlite", "threadpoolctl", "fmpy", "pythonfmu", "h5py",
             "matplotlib", "dask", "pyamg")
-
-
-def _needs() -> str:
-    """The FMUs' requirements as words: "numpy, scipy, numba and threadpoolctl"."""
-    return f"{', '.join(REQUIREMENTS[:-1])} and {REQUIREMENTS[-1]}"
 
 
 def add_parser(sub) -> None:
@@ -130,9 +125,8 @@ def _hosts(lines: list, problems: list) -> None:
 
     host = dict(line.split("=", 1) for line in python_host_config().splitlines()
                 if "=" in line and not line.startswith("#"))
-    needs = _needs()
     lines.append("FMU hosts    a Python host (fmpy) runs the FMUs in its own interpreter, which "
-                 f"needs {needs}")
+                 f"needs {REQUIREMENTS_TEXT}")
     libpython = host.get("libpython", "")
     lines.append(f"  C/C++ host the loader starts {host.get('executable')} with libpython "
                  f"{libpython or 'NONE'} (GSB_PYTHON, GSB_LIBPYTHON override)")
@@ -144,11 +138,11 @@ def _hosts(lines: list, problems: list) -> None:
                             f"import {', '.join(REQUIREMENTS)}"], capture_output=True, text=True,
                            timeout=120)
     if check.returncode == 0:
-        lines.append(f"  it imports {needs}: ok")
+        lines.append(f"  it imports {REQUIREMENTS_TEXT}: ok")
     else:
         last = (check.stderr.strip().splitlines() or ["?"])[-1]
         problems.append(f"the FMU hosts' Python {host.get('executable')} cannot import the "
-                        f"FMUs' dependencies ({last}): install {needs} there")
+                        f"FMUs' dependencies ({last}): install {REQUIREMENTS_TEXT} there")
 
 
 def report() -> tuple[list[str], list[str]]:
