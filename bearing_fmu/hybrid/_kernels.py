@@ -17,7 +17,7 @@ from numba import njit
 from bearing_fmu.frames import law_to_global, state_to_local
 from bearing_fmu.hybrid._jacobian import film_jacobian
 from bearing_fmu.hybrid._lcp import solve_lcp, substitute
-from bearing_fmu.hybrid._ritz import assemble, element_integrals, km_apply
+from bearing_fmu.hybrid._ritz import assemble, element_integrals, km_node
 from bearing_fmu.hybrid._workspace import (
     COS,
     CV,
@@ -29,9 +29,7 @@ from bearing_fmu.hybrid._workspace import (
     G1_TT,
     G2_T,
     G2_TT,
-    KA,
     KE,
-    MA,
     SCR,
     SIN,
     A,
@@ -45,6 +43,35 @@ CORRECTOR = 1000.0
 
 
 @njit(cache=True)
+def _stationarity(ws, active, g):
+    """a.K a, a.M a, a.F and c = (A_t a - b_t)_P into ws[CV] (section 5), in one sweep."""
+    n = active.shape[0]
+    a = ws[A]
+    fb = ws[FB]
+    cv = ws[CV]
+    ke = ws[KE]
+    m11 = ws[KE + 1]
+    m12 = ws[KE + 2]
+    m22 = ws[KE + 3]
+    g2t = g[G2_T]
+    g1t = g[G1_T]
+    g0t = g[G0_T]
+    qk = 0.0
+    qm = 0.0
+    af = 0.0
+    im = n - 1
+    for i in range(n):
+        ip = i + 1 if i < n - 1 else 0
+        kai, mai = km_node(ke, m11, m12, m22, a, im, i, ip)
+        qk += a[i] * kai
+        qm += a[i] * mai
+        af += a[i] * fb[i]
+        cv[i] = (g2t * kai + g1t * mai - g0t * fb[i]) if active[i] else 0.0
+        im = i
+    return qk, qm, af
+
+
+@njit(cache=True)
 def solve_t(ws, active, order, runs, g, coef, lam, t, tol, maxit, pinned):
     """LCP (section 4) and Newton on J*(t) (section 5) for the source in ws[FB].
 
@@ -53,11 +80,8 @@ def solve_t(ws, active, order, runs, g, coef, lam, t, tol, maxit, pinned):
     """
     n = active.shape[0]
     a = ws[A]
-    fb = ws[FB]
     cv = ws[CV]
     z = ws[Z]
-    ka = ws[KA]
-    ma = ws[MA]
     lcp_total = 0
     status = 2
     jss = 1.0
@@ -75,11 +99,7 @@ def solve_t(ws, active, order, runs, g, coef, lam, t, tol, maxit, pinned):
         if not ok:
             status = 1
             break
-        qk, qm = km_apply(ws, KE, a, ka, ma)
-        af = 0.0
-        for i in range(n):
-            af += a[i] * fb[i]
-            cv[i] = (g[G2_T] * ka[i] + g[G1_T] * ma[i] - g[G0_T] * fb[i]) if active[i] else 0.0
+        qk, qm, af = _stationarity(ws, active, g)
         js = 0.5 * (g[G2_T] * qk + g[G1_T] * qm) - g[G0_T] * af
         jss = 0.5 * (g[G2_TT] * qk + g[G1_TT] * qm) - g[G0_TT] * af
         substitute(ws, active, order, runs, nr, cv, z)

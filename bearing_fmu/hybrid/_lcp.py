@@ -18,11 +18,16 @@ EXTRAP_PASSES = 12
 
 
 @njit(cache=True)
-def factor(ws, active, order, runs):
-    """Thomas factors (inverse pivots) of A_PP over the runs of consecutive active nodes, the
-    ring walked from the node after an inactive one (so no run wraps: no cyclic coupling left).
-    Returns the number of runs; run r covers positions runs[r] <= k < runs[n + r] of
-    ``order``."""
+def factor_solve(ws, active, order, runs, rhs, out):
+    """Thomas factors (inverse pivots) of A_PP over the runs of consecutive active nodes, and
+    the solution of A_PP out_P = rhs_P (out = 0 off P), in one walk of the ring.
+
+    The ring is walked from the node after an inactive one, so no run wraps (no cyclic
+    coupling left). Each run is factorised and eliminated forwards in the same loop, the two
+    recurrences being independent chains the processor overlaps, then substituted backwards.
+    Returns the number of runs; run r covers positions ``runs[r] <= k < runs[n + r]`` of
+    ``order``, whose factors :func:`substitute` uses for further right-hand sides.
+    """
     n = active.shape[0]
     d = ws[D]
     lo = ws[LO]
@@ -42,28 +47,39 @@ def factor(ws, active, order, runs):
     nr = 0
     k = 0
     while k < n:
-        if not active[order[k]]:
+        i = order[k]
+        if not active[i]:
+            out[i] = 0.0
             k += 1
             continue
         start = k
-        i = order[k]
         piv[k] = 1.0 / d[i]
         cp[k] = lo[i] * piv[k]
+        prev = rhs[i] * piv[k]
+        out[i] = prev
         k += 1
         while k < n and active[order[k]]:
             i = order[k]
-            piv[k] = 1.0 / (d[i] - lo[order[k - 1]] * cp[k - 1])
+            lk = lo[order[k - 1]]
+            piv[k] = 1.0 / (d[i] - lk * cp[k - 1])
             cp[k] = lo[i] * piv[k]
+            prev = (rhs[i] - lk * prev) * piv[k]
+            out[i] = prev
             k += 1
         runs[nr] = start
         runs[n + nr] = k
         nr += 1
+        nxt = prev
+        for kb in range(k - 2, start - 1, -1):
+            i = order[kb]
+            nxt = out[i] - cp[kb] * nxt
+            out[i] = nxt
     return nr
 
 
 @njit(cache=True)
 def substitute(ws, active, order, runs, nr, rhs, out):
-    """Solve A_PP out_P = rhs_P with the factors of :func:`factor`; out = 0 off P."""
+    """Solve A_PP out_P = rhs_P with the factors of :func:`factor_solve`; out = 0 off P."""
     n = out.shape[0]
     lo = ws[LO]
     cp = ws[CP]
@@ -164,8 +180,7 @@ def solve_lcp(ws, active, order, runs, pinned, maxpass):
                 if b[i] < b[imin]:
                     imin = i
             active[imin] = False
-        nr = factor(ws, active, order, runs)
-        substitute(ws, active, order, runs, nr, b, a)
+        nr = factor_solve(ws, active, order, runs, b, a)
         extrap = it < EXTRAP_PASSES
         for i in range(n):
             new[i] = 1.0 if active[i] else 0.0

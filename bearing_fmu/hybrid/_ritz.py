@@ -104,25 +104,13 @@ def element_integrals(x, y, trig, ws, delta, jac):
         im = i
 
 
-@njit(cache=True)
-def km_apply(ws, r0, a, ka, ma):
-    """ka = K_r a, ma = M_r a for the element rows r0..r0+3; returns (a.K_r a, a.M_r a)."""
-    n = a.shape[0]
-    ke = ws[r0]
-    m11 = ws[r0 + 1]
-    m12 = ws[r0 + 2]
-    m22 = ws[r0 + 3]
-    qk = 0.0
-    qm = 0.0
-    im = n - 1
-    for i in range(n):
-        ip = i + 1 if i < n - 1 else 0
-        ka[i] = (ke[im] + ke[i]) * a[i] - ke[i] * a[ip] - ke[im] * a[im]
-        ma[i] = (m22[im] + m11[i]) * a[i] + m12[i] * a[ip] + m12[im] * a[im]
-        qk += a[i] * ka[i]
-        qm += a[i] * ma[i]
-        im = i
-    return qk, qm
+@njit(cache=True, inline="always")
+def km_node(ke, m11, m12, m22, a, im, i, ip):
+    """``((K a)_i, (M a)_i)`` for the element integrals ``ke, m11, m12, m22`` (one weight of
+    :func:`element_integrals`) at node i of the ring, ``im, ip`` its neighbours i - 1, i + 1:
+    the hat functions of element i - 1 and element i meet at node i."""
+    return ((ke[im] + ke[i]) * a[i] - ke[i] * a[ip] - ke[im] * a[im],
+            (m22[im] + m11[i]) * a[i] + m12[i] * a[ip] + m12[im] * a[im])
 
 
 @njit(cache=True)

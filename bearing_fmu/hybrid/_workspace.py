@@ -49,14 +49,13 @@ FB = 16  # F_i = int f l_i
 D, LO, B = 17, 18, 19  # A = G2 K + G1 M (diagonal, (i, i+1)), b = G0 F
 A = 20  # the nodal amplitudes a_i
 CV, Z = 21, 22  # c = (A_t a - b_t)_P, z = A_PP^-1 c
-KA, MA = 23, 24  # K_r a, M_r a
-CP, PIV = 25, 26  # Thomas factors
-COS, SIN = 27, 28  # cos, sin at the nodes (solution frame)
-NEW = 29  # next active set (0/1) during a PDAS pass
-RQ = 30  # rows 30-33: Jacobian right-hand sides r_q
-DA = 34  # rows 34-37: A_PP^-1 r_q
-SCR = 38  # rows 38-41: small scratch arrays (views, no allocation in the hot path)
-WS_ROWS = 42
+CP, PIV = 23, 24  # Thomas factors
+COS, SIN = 25, 26  # cos, sin at the nodes (solution frame)
+NEW = 27  # next active set (0/1) during a PDAS pass
+RQ = 28  # rows 28-31: Jacobian right-hand sides r_q
+DA = 32  # rows 32-35: A_PP^-1 r_q
+SCR = 36  # rows 36-39: small scratch arrays (views, no allocation in the hot path)
+WS_ROWS = 40
 
 # --- the axial-integral vector g ---------------------------------------------------------------
 G0, G1, G2 = 0, 1, 2  # G0 = lambda I0, G1 = I1 / lambda, G2 = lambda I2 (bearing_fmu.hybrid.axial)
