@@ -16,11 +16,12 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from gear_fmu.dofs import DOF_PER_NODE, U, V
 
 __all__ = ["StructureLoads", "constant_loads", "shaft_speeds", "unbalance_amplitudes",
-           "unbalance_force"]
+           "unbalance_force", "unbalance_into"]
 
 
 @dataclass(frozen=True)
@@ -75,10 +76,23 @@ def unbalance_force(amplitudes, speeds, t: float) -> np.ndarray:
 
     The pinion shaft turns about +z (``omega t``), the gear shaft about -z (``-omega_2 t``).
     """
-    a1, a2 = amplitudes
-    w1, w2 = speeds
-    return np.array([a1 * math.cos(w1 * t), a1 * math.sin(w1 * t),
-                     a2 * math.cos(w2 * t), -a2 * math.sin(w2 * t)])
+    out = np.empty(4)
+    unbalance_into(np.array([*amplitudes, *speeds], dtype=float), t, out)
+    return out
+
+
+@njit(cache=True)
+def unbalance_into(coef, t, out):
+    """:func:`unbalance_force` into ``out`` (4,), from ``coef`` = [M1 e1 omega^2, M2 e2
+    omega_2^2, omega, omega_2] (amplitudes [N], speeds [rad/s]): the compiled step's form."""
+    a1 = coef[0]
+    a2 = coef[1]
+    w1 = coef[2]
+    w2 = coef[3]
+    out[0] = a1 * math.cos(w1 * t)
+    out[1] = a1 * math.sin(w1 * t)
+    out[2] = a2 * math.cos(w2 * t)
+    out[3] = -a2 * math.sin(w2 * t)
 
 
 def constant_loads(system, loads: StructureLoads) -> np.ndarray:

@@ -277,6 +277,7 @@ class Structure:
         self._f_c = np.ascontiguousarray(f[:NC])
         self._omega = shaft_speeds(ld, sys_.teeth)
         self._unb = unbalance_amplitudes(sys_.shaft_masses, ld.unbalance, self._omega)
+        self._unb_coef = np.array([*self._unb, *self._omega], dtype=float)  # the compiled step's
         # residual scale: the largest external load (torque, gravity, unbalance)
         self._f_scale = max(float(np.linalg.norm(f)), *self._unb)
 
@@ -521,9 +522,9 @@ class Structure:
         x1, v1, a1 = np.empty(size), np.empty(size), np.empty(size)
         err = mesh.error_displacement(angle) if mesh.has_errors else _NO_ERROR
         used = _NO_SET if self.active is None else self.active
-        unb = unbalance_force(self._unb, self._omega, t1)  # Eq. (10)
         status, k, total, length = advance(
-            hh, g_const, cond.s0, cond.w, self.x, self.v, self.a, self._f_c, unb, f0, kb, cb, h,
+            hh, g_const, cond.s0, cond.w, self.x, self.v, self.a, self._f_c, self._unb_coef, t1,
+            f0, kb, cb, h,
             angle, err, mesh.has_errors, *self._mesh_arrays, used, self.active is not None,
             self._f_scale, self.tol, self.max_iter, force, stiff, active, inside, delta, load,
             xi, z, residuals, x1, v1, a1)

@@ -22,6 +22,7 @@ import math
 import numpy as np
 from numba import njit
 
+from gear_fmu.loads import unbalance_into
 from gear_fmu.mesh.element import _mesh_kernel
 from gear_fmu.step.assembly import prepare_step
 from gear_fmu.step.condensation import N_GEAR, NC
@@ -46,7 +47,7 @@ def sum_squares(f0):
 
 
 @njit(cache=True)
-def advance(hh, g_const, s0, w, x, v, a, f_c, unb, f0, kb, cb, h,  # step (Eq. 12-16)
+def advance(hh, g_const, s0, w, x, v, a, f_c, unb_coef, t1, f0, kb, cb, h,  # step (Eq. 12-16)
             angle, err, has_err, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1, pitch2,
             used0, has_used, f_scale, tol, max_iter,  # contact loop (Fig. 4)
             force, stiff, active, inside, delta, load, xis, zout, residuals,  # mesh state out
@@ -55,7 +56,9 @@ def advance(hh, g_const, s0, w, x, v, a, f_c, unb, f0, kb, cb, h,  # step (Eq. 1
     Eq. (12), (14), (16) assembled, Newton-Raphson with the contact loop, Eq. (13), (15).
 
     Inputs as :func:`gear_fmu.step.assembly.prepare_step` (``hh``, ``g_const``, ``s0``, ``w``
-    from the condensation at h) and :func:`gear_fmu.step.contact_loop.solve_condensed`
+    from the condensation at h; the unbalance of Eq. (10) at the step's end ``t1`` [s] from
+    ``unb_coef``, :func:`gear_fmu.loads.unbalance_into`) and
+    :func:`gear_fmu.step.contact_loop.solve_condensed`
     (``used0`` / ``has_used``: the contact set the first iterate is consistent with); ``err``
     the error displacement of the gear nodes added to the mesh's input (runout, mounting) when
     ``has_err``; ``f_scale`` the largest external load [N], raised to the norm of the bearing
@@ -65,6 +68,8 @@ def advance(hh, g_const, s0, w, x, v, a, f_c, unb, f0, kb, cb, h,  # step (Eq. 1
 
     Returns ``(status, passes, total mesh load [N], contact length [m])``.
     """
+    unb = np.empty(4)
+    unbalance_into(unb_coef, t1, unb)
     s_lin, z0, y = prepare_step(hh, g_const, x, v, a, f_c, unb, f0, kb, cb, s0, h, N_GEAR)
     f_scale = max(f_scale, math.sqrt(sum_squares(f0)))
     xc = x[:NC] + h * v[:NC]
