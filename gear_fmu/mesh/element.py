@@ -138,19 +138,59 @@ class MeshState:
 _SNAP = 1e-9
 
 
+@njit(cache=True, inline="always")
+def _structure_vector(xi, z, geo, nvec, v):
+    """V = [n; O1M x n; -n; -(O2M x n)] (12,) of the contact point at abscissa ``xi`` on the
+    line of action and axial position ``z`` [m]: the mesh's coupling of the gear-node DOFs."""
+    t1s, t1t = geo[5], geo[6]
+    us, ut = geo[7], geo[8]
+    a = geo[11]
+    zg1, zg2 = geo[12], geo[13]
+    ms_ = t1s + xi * us
+    mt_ = t1t + xi * ut
+    r1 = (ms_, mt_, z - zg1)
+    r2 = (ms_ - a, mt_, z - zg2)
+    for c in range(3):
+        v[c] = nvec[c]
+        v[6 + c] = -nvec[c]
+    v[3] = r1[1] * nvec[2] - r1[2] * nvec[1]
+    v[4] = r1[2] * nvec[0] - r1[0] * nvec[2]
+    v[5] = r1[0] * nvec[1] - r1[1] * nvec[0]
+    v[9] = -(r2[1] * nvec[2] - r2[2] * nvec[1])
+    v[10] = -(r2[2] * nvec[0] - r2[0] * nvec[2])
+    v[11] = -(r2[0] * nvec[1] - r2[1] * nvec[0])
+
+
+@njit(cache=True, inline="always")
+def _slice_stiffness(xi, xi_tab, k_tab, dl):
+    """Stiffness of a slice [N/m]: the table's stiffness per unit contact length at ``xi``
+    (linear interpolation) times the slice width ``dl``."""
+    n_tab = xi_tab.size
+    pos = (xi - xi_tab[0]) / (xi_tab[n_tab - 1] - xi_tab[0]) * (n_tab - 1)
+    i0 = int(pos)
+    if i0 >= n_tab - 1:
+        i0 = n_tab - 2
+    if i0 < 0:
+        i0 = 0
+    f = pos - i0
+    return ((1.0 - f) * k_tab[i0] + f * k_tab[i0 + 1]) * dl
+
+
 @njit(cache=True)
 def _mesh_kernel(angle, q, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1, pitch2,
-                 force, stiff, active, inside, delta, load, xis, zout):
-    """Slices of all contact lines at pinion angle ``angle`` (module docstring)."""
+                 force, stiff, active, inside, delta, load, xis, zout, same_angle):
+    """Slices of all contact lines at pinion angle ``angle`` (module docstring).
+
+    ``same_angle``: the arrays hold this kernel's evaluation at the same angle (a Newton pass
+    of one step). The tangent ``stiff`` depends on the angle and the contact set only (the
+    slices' positions and stiffnesses), so it is kept when the set is the same, and otherwise
+    assembled in a second sweep over the slices in contact, in the order of the first.
+    """
     xi_a, xi_e, pbt, tanb = geo[0], geo[1], geo[2], geo[3]
     rb1 = geo[4]
     ns = zs.size
-    n_tab = xi_tab.size
-    t1s, t1t = geo[5], geo[6]
     us, ut = geo[7], geo[8]
     ns_u, nz = geo[9], geo[10]  # n = ns_u * u + nz * e_z
-    a = geo[11]
-    zg1, zg2 = geo[12], geo[13]
     z1n, z2n = pitch1.size, pitch2.size
     ca1, ca2, l1, l2, pexp, crown, slope, width = (dev[0], dev[1], dev[2], dev[3], dev[4],
                                                    dev[5], dev[6], dev[7])
@@ -160,10 +200,9 @@ def _mesh_kernel(angle, q, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1, pit
     nvec[2] = nz
     for i in range(12):
         force[i] = 0.0
-        for j in range(12):
-            stiff[i, j] = 0.0
     total = 0.0
     length = 0.0
+    same_set = same_angle
     v = np.empty(12)
     for s in range(ns):
         z = zs[s]
@@ -172,6 +211,7 @@ def _mesh_kernel(angle, q, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1, pit
         fr = max(w - fl, 0.0)
         for j in range(n_lines):
             m = j * ns + s
+            was_active = active[m]
             xi = xi_a + pbt * (fr + j)
             xis[m] = xi
             zout[m] = z
@@ -180,58 +220,49 @@ def _mesh_kernel(angle, q, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1, pit
             active[m] = False
             load[m] = 0.0
             delta[m] = 0.0
-            if not ins:
-                continue
-            # stiffness per unit contact length: linear interpolation in the table
-            pos = (xi - xi_tab[0]) / (xi_tab[n_tab - 1] - xi_tab[0]) * (n_tab - 1)
-            i0 = int(pos)
-            if i0 >= n_tab - 1:
-                i0 = n_tab - 2
-            if i0 < 0:
-                i0 = 0
-            f = pos - i0
-            kdl = ((1.0 - f) * k_tab[i0] + f * k_tab[i0 + 1]) * dl
-            # contact point and structure vector V = [n; O1M x n; -n; -(O2M x n)]
-            ms_ = t1s + xi * us
-            mt_ = t1t + xi * ut
-            r1 = (ms_, mt_, z - zg1)
-            r2 = (ms_ - a, mt_, z - zg2)
-            for c in range(3):
-                v[c] = nvec[c]
-                v[6 + c] = -nvec[c]
-            v[3] = r1[1] * nvec[2] - r1[2] * nvec[1]
-            v[4] = r1[2] * nvec[0] - r1[0] * nvec[2]
-            v[5] = r1[0] * nvec[1] - r1[1] * nvec[0]
-            v[9] = -(r2[1] * nvec[2] - r2[2] * nvec[1])
-            v[10] = -(r2[2] * nvec[0] - r2[0] * nvec[2])
-            v[11] = -(r2[0] * nvec[1] - r2[1] * nvec[0])
-            # deviations (open the gap when > 0)
-            e = 0.0
-            if ca1 > 0.0 and xi > xi_e - l1:
-                e += ca1 * ((xi - (xi_e - l1)) / l1) ** pexp
-            if ca2 > 0.0 and xi < xi_a + l2:
-                e += ca2 * (((xi_a + l2) - xi) / l2) ** pexp
-            zr = 2.0 * z / width
-            e += crown * zr * zr + slope * z / width
-            pair = j - int(fl)
-            if z1n > 0:
-                e += pitch1[pair % z1n]
-            if z2n > 0:
-                e += pitch2[pair % z2n]
-            d = -e
-            for c in range(12):
-                d += v[c] * q[c]
-            delta[m] = d
-            if d > 0.0:
-                active[m] = True
-                fm = kdl * d
-                load[m] = fm
-                total += fm
-                length += dl
+            if ins:
+                kdl = _slice_stiffness(xi, xi_tab, k_tab, dl)
+                _structure_vector(xi, z, geo, nvec, v)
+                # deviations (open the gap when > 0)
+                e = 0.0
+                if ca1 > 0.0 and xi > xi_e - l1:
+                    e += ca1 * ((xi - (xi_e - l1)) / l1) ** pexp
+                if ca2 > 0.0 and xi < xi_a + l2:
+                    e += ca2 * (((xi_a + l2) - xi) / l2) ** pexp
+                zr = 2.0 * z / width
+                e += crown * zr * zr + slope * z / width
+                pair = j - int(fl)
+                if z1n > 0:
+                    e += pitch1[pair % z1n]
+                if z2n > 0:
+                    e += pitch2[pair % z2n]
+                d = -e
                 for c in range(12):
-                    force[c] -= v[c] * fm
-                    for c2 in range(12):
-                        stiff[c, c2] += kdl * v[c] * v[c2]
+                    d += v[c] * q[c]
+                delta[m] = d
+                if d > 0.0:
+                    active[m] = True
+                    fm = kdl * d
+                    load[m] = fm
+                    total += fm
+                    length += dl
+                    for c in range(12):
+                        force[c] -= v[c] * fm
+            if active[m] != was_active:
+                same_set = False
+    if not same_set:
+        for i in range(12):
+            for j in range(12):
+                stiff[i, j] = 0.0
+        for s in range(ns):
+            for j in range(n_lines):
+                m = j * ns + s
+                if active[m]:
+                    kdl = _slice_stiffness(xis[m], xi_tab, k_tab, dl)
+                    _structure_vector(xis[m], zout[m], geo, nvec, v)
+                    for c in range(12):
+                        for c2 in range(12):
+                            stiff[c, c2] += kdl * v[c] * v[c2]
     return total, length
 
 
@@ -407,7 +438,7 @@ class MeshElement:
         total, length = _mesh_kernel(
             float(pinion_angle), qe, self._geo, self.xi_table, self.k_table, self.z_slices,
             self.dl, self.n_lines, self._dev, self._pitch[0], self._pitch[1], force, stiff,
-            active, inside, delta, load, xi, z)
+            active, inside, delta, load, xi, z, False)
         rb1, rb2 = self.pair.base_radius
         te = rb1 * q[5] + rb2 * q[11]
         return MeshState(force, stiff, active, delta, load, inside, xi, z, total, te,

@@ -83,7 +83,7 @@ def advance(hh, g_const, s0, w, x, v, a, f_c, unb_coef, t1, f0, kb, cb, h,  # st
             q[i] = xc[i] + err[i] if has_err else xc[i]
         total, length = _mesh_kernel(angle, q, geo, xi_tab, k_tab, zs, dl, n_lines, dev,
                                      pitch1, pitch2, force, stiff, active, inside, delta, load,
-                                     xis, zout)
+                                     xis, zout, k > 0)
         ff = np.dot(force, force)
         scale = max(f_scale, math.sqrt(ff))
         scale = scale if scale > 0.0 else 1.0

@@ -219,7 +219,9 @@ def test_the_compiled_step_equals_the_python_loop_bit_for_bit():
     """The paper's spur case (distributed mesh element, contact located) over 96 steps with
     anisotropic, cross-coupled laws: the compiled step (:func:`gear_fmu.step.kernel.advance`)
     and the Python loop it mirrors (taken when the structure's timers are on) give the same
-    states, contact sets and residual histories to the last bit."""
+    states, contact sets, mesh forces and tangents and residual histories to the last bit (the
+    compiled step keeps the mesh tangent of its previous Newton pass when the contact set is
+    the same; the loop assembles it at every pass)."""
     case = load_case("baguet2010_spur")
     rng = np.random.default_rng(1)
     kb = np.broadcast_to(2e8 * np.eye(2), (4, 2, 2)) + 3e7 * rng.standard_normal((4, 2, 2))
@@ -231,18 +233,20 @@ def test_the_compiled_step_equals_the_python_loop_bit_for_bit():
         st = description.structure(case)
         st.static(f0, kb, cb)
         st.timing = timing
-        history, changes = [], 0
+        history, changes, tangents = [], 0, []
         for _ in range(96):
             before = st.active
             history.append(st.step(dt, f0, kb, cb).residuals)
             changes += not np.array_equal(st.active, before)
-        runs.append((st.x, st.v, st.a, st.active, st.mesh_state.force, history, changes))
+            tangents.append(st.mesh_state.stiffness.copy())
+        runs.append((st.x, st.v, st.a, st.active, st.mesh_state.force, np.array(tangents),
+                     history, changes))
     compiled, loop = runs
     assert timing["mesh"] > 0.0  # the second run took the Python loop (its timers ran)
-    assert compiled[6] >= 4  # the contact set changes (contact lines enter and leave)
-    for a, b in zip(compiled[:5], loop[:5], strict=True):
+    assert compiled[7] >= 4  # the contact set changes (contact lines enter and leave)
+    for a, b in zip(compiled[:6], loop[:6], strict=True):
         np.testing.assert_array_equal(a, b)
-    assert compiled[5:] == loop[5:]
+    assert compiled[6:] == loop[6:]
 
 
 @pytest.mark.parametrize("mesh", ["stand-in", "mesh element"])
