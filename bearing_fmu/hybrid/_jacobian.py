@@ -89,18 +89,18 @@ def film_jacobian(ws, active, order, runs, nr, g, jss, dsig, sc, ss, jx, jv, st)
     sq[2] = -2.0 * gd * cfa
     sq[3] = -2.0 * gd * sfa
     substitute4(ws, active, order, runs, nr, RQ, DA)  # A_PP^-1 r_q = -da0
-    cda = ws[SCR + 1, 0:4]  # c.da0 for the four q
+    cda = ws[SCR + 3, 4:8]  # c.da0 for the four q
     for q in range(4):
         cda[q] = 0.0
     for i in range(n):
         for q in range(4):
             cda[q] += cv[i] * ws[DA + q, i]
-    dts = ws[SCR + 1, 4:8]
+    dts = ws[SCR + 3, 8:12]
     for q in range(4):
         dts[q] = -(sq[q] - cda[q]) / jss  # dt_q = -(s_q + c.da0) / J*''
         st.dtdq[q] = dts[q]
-    s1 = ws[SCR + 3, 4:8]
-    s2 = ws[SCR + 3, 8:12]
+    s1 = ws[SCR + 1, 4:8]  # (row SCR + 1, columns 0-3: jx, jv of the caller)
+    s2 = ws[SCR + 1, 8:12]
     for q in range(4):
         s1[q] = 0.0
         s2[q] = 0.0

@@ -246,7 +246,7 @@ def hybrid_kernel(state, x0, y0, xd0, yd0, want_jac, active, ws, iws, trig, coef
     jx = ws[SCR:SCR + 2, 0:2]
     jv = ws[SCR:SCR + 2, 2:4]
     g = ws[SCR + 2, 0:9]
-    fr = ws[SCR + 2, 15:17]
+    fr = ws[SCR + 2, 9:11]
     for r in range(2):
         fr[r] = 0.0
         for c in range(2):

@@ -54,7 +54,9 @@ COS, SIN = 25, 26  # cos, sin at the nodes (solution frame)
 NEW = 27  # next active set (0/1) during a PDAS pass
 RQ = 28  # rows 28-31: Jacobian right-hand sides r_q
 DA = 32  # rows 32-35: A_PP^-1 r_q
-SCR = 36  # rows 36-39: small scratch arrays (views, no allocation in the hot path)
+SCR = 36  # rows 36-39: small scratch arrays (views, no allocation in the hot path), within
+#   the first 16 columns (the smallest n): rows 0-1 jx, jv (0-3) and the Jacobian's sums (4-11),
+#   row 2 the axial integrals g (0-8) and the force (9-10), row 3 s_q, c.da0, dt_q (0-11)
 WS_ROWS = 40
 
 # --- the axial-integral vector g ---------------------------------------------------------------
