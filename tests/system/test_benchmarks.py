@@ -21,6 +21,7 @@ SMALLEST = {
     "bearing_models.py": [],
     "transmission_fmu.py": ["--periods", "1", "--repeat", "1"],
     "campbell.py": ["--repeat", "1", "--speeds", "3"],
+    "kernel_parts.py": ["--steps", "2", "--calls", "10"],
 }
 
 
