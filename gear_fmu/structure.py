@@ -277,7 +277,8 @@ class Structure:
         self._f_c = np.ascontiguousarray(f[:NC])
         self._omega = shaft_speeds(ld, sys_.teeth)
         self._unb = unbalance_amplitudes(sys_.shaft_masses, ld.unbalance, self._omega)
-        self._unb_coef = np.array([*self._unb, *self._omega], dtype=float)  # the compiled step's
+        # [M1 e1 omega^2, M2 e2 omega_2^2, omega, omega_2]: Eq. (10) inside the compiled step
+        self._unb_coef = np.array([*self._unb, *self._omega], dtype=float)
         # residual scale: the largest external load (torque, gravity, unbalance)
         self._f_scale = max(float(np.linalg.norm(f)), *self._unb)
 
