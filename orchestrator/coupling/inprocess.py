@@ -134,13 +134,13 @@ class ModelBearings(BearingSet):
 
     def evaluate(self, states):
         nb = len(self.models)
-        states = np.asarray(states, dtype=float)
+        states = np.ascontiguousarray(states, dtype=float)  # as the set's compiled call takes it
         self._states = states.copy()
         out = np.empty((nb, 5, 2))
         b = 0
         try:
             if self._set is not None:
-                self._set.evaluate_global(np.ascontiguousarray(states), out)
+                self._set.evaluate_global(states, out)
             else:
                 for b in range(nb):
                     self.models[b].evaluate_global(self._q[b], states[b], self.omegas[b],
