@@ -20,7 +20,9 @@ results writer, and the rest (the loop, the progress test); and the ratio of the
 sum of the timed calls. The timers add about 0.5 us per call (measured by the ratio of the
 runs with and without them). A third run times the compiled kernels alone (:data:`KERNELS`:
 the structure's step, the hybrid bearing, the master's update) and prints the ratio of the
-total to their sum: what is left is Python and, through FMUs, the FMI layer.
+total to their sum: what is left is Python and, through FMUs, the FMI layer. In-process the
+master takes most steps as one compiled call (:mod:`orchestrator.coupling.fused`, timed as
+one line); the third run uses the master's Python loop, whose kernels can be timed apart.
 """
 
 from __future__ import annotations
@@ -54,6 +56,7 @@ TIMED = [
     ("laws in / journals out", FMU_STRUCTURE, "set_bearing_laws"),
     ("laws in / journals out", FMU_STRUCTURE, "journal_states"),
     ("master: linearise + mismatch", "bearing_fmu.affine.AffineLaws", "relinearise"),
+    ("compiled coupled step", "orchestrator.coupling.fused.FusedStep", "step"),
     ("outputs + results writer", "orchestrator.run.results.ResultsWriter", "append"),
     ("outputs + results writer", "orchestrator.coupling.master.StructureSlave", "step_outputs"),
     ("outputs + results writer", FMU_STRUCTURE, "step_outputs"),
@@ -85,8 +88,11 @@ def timed_calls(targets=TIMED, counts: dict | None = None):
             owner = importlib.import_module(path)
         except ModuleNotFoundError:  # "module.Class"
             module, cls_name = path.rsplit(".", 1)
-            owner = getattr(importlib.import_module(module), cls_name)
-        raw = owner.__dict__.get(name)
+            try:
+                owner = getattr(importlib.import_module(module), cls_name)
+            except ModuleNotFoundError:  # a module this commit does not have
+                owner = None
+        raw = owner.__dict__.get(name) if owner is not None else None
         if raw is None:  # a kernel this commit does not have (the benchmark runs on older ones)
             continue
         func = raw.__func__ if isinstance(raw, classmethod) else raw
@@ -109,6 +115,23 @@ def timed_calls(targets=TIMED, counts: dict | None = None):
             setattr(owner, name, raw)
 
 
+@contextlib.contextmanager
+def python_loop():
+    """The master's Python loop instead of its compiled step (:mod:`orchestrator.coupling.
+    fused`), whose kernels cannot be timed one by one."""
+    try:
+        from orchestrator.coupling.fused import FusedStep
+    except ModuleNotFoundError:  # a commit without it
+        yield
+        return
+    fits = FusedStep.__dict__["fits"]
+    FusedStep.fits = staticmethod(lambda *a: False)
+    try:
+        yield
+    finally:
+        FusedStep.fits = fits
+
+
 def breakdown(periods: int, in_process: bool) -> None:
     """Per coupled iteration: the timed calls (:data:`TIMED`) and the rest."""
     kw = dict(in_process=in_process, progress=False)
@@ -122,7 +145,7 @@ def breakdown(periods: int, in_process: bool) -> None:
             s = run_case(case.with_overrides({"simulation.mesh_periods": periods}),
                          out_dir=tmp + "/t", **kw)
         calls: dict[str, int] = {}
-        with timed_calls(KERNELS, calls) as kernels:
+        with timed_calls(KERNELS, calls) as kernels, python_loop():
             k = run_case(case.with_overrides({"simulation.mesh_periods": periods}),
                          out_dir=tmp + "/k", **kw)
     n = s.iterations

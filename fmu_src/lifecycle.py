@@ -112,9 +112,14 @@ class StructureCycle:
 
     def step(self, t: float, dt: float, f0, kb, cb):
         """One Newmark step from ``t`` [s] (the structure's time) to ``t + dt``; the report."""
+        return self.check_step(t, dt).step(dt, f0, kb, cb)
+
+    def check_step(self, t: float, dt: float):
+        """The structure, if a step from ``t`` [s] may start (stepping, at the structure's
+        time); the error otherwise."""
         if not self.stepping:
             raise RuntimeError("a step before the end of initialisation")
         st = self.structure
         if abs(t - st.t) > 1e-9 * max(dt, abs(t)):
             raise ValueError(f"a step from t = {t!r} s but the structure is at t = {st.t!r} s")
-        return st.step(dt, f0, kb, cb)
+        return st

@@ -398,10 +398,7 @@ class Structure:
             With the step number, the time and the residual.
         """
         f0, kb, cb = check_laws_fast(F0, Kb, Cb)
-        if self.active is None:
-            raise RuntimeError("call static() before the first step (initial state X0)")
-        if not (dt > 0.0 and math.isfinite(dt)):
-            raise ValueError(f"time step dt = {dt!r} s must be finite and > 0")
+        self._check_step(dt)
         t1 = self.t + dt
         what = f"Newmark step {self.n_steps + 1}"
         pieces = self._sub_steps(dt) if self.locate_contact else None
@@ -432,6 +429,12 @@ class Structure:
         self.t = t1
         self.n_steps += 1
         return info
+
+    def _check_step(self, dt: float) -> None:
+        if self.active is None:
+            raise RuntimeError("call static() before the first step (initial state X0)")
+        if not (dt > 0.0 and math.isfinite(dt)):
+            raise ValueError(f"time step dt = {dt!r} s must be finite and > 0")
 
     def _sub_steps(self, dt: float) -> list:
         """``[(h, end fraction of dt, (first, last) event angle it ends on, or None)]`` of a
@@ -512,23 +515,34 @@ class Structure:
     def _advance_compiled(self, h, t1, angle, f0, kb, cb, what) -> StepInfo:
         """:meth:`_advance` in one compiled call (:func:`gear_fmu.step.kernel.advance`, the
         same arithmetic as the Python loop)."""
+        head, tail, outputs = self._advance_inputs(h, t1, angle)
+        status, k, total, length = advance(*head, f0, kb, cb, *tail, *outputs)
+        return self._advance_result(status, k, total, length, outputs, t1, what)
+
+    def _advance_inputs(self, h, t1, angle):
+        """The arguments of :func:`gear_fmu.step.kernel.advance` for a step of length h to t1
+        (mesh at ``angle``): those before the bearing laws, those after them, and the output
+        buffers it writes (:meth:`_advance_result` reads them)."""
         cond, hh, g_const = self._dynamic(h)
         mesh = self.mesh
         n = mesh.n_lines * mesh.n_slices
         size = self.x.size
-        force, stiff = np.empty(12), np.empty((12, 12))
-        active, inside = np.empty(n, dtype=np.bool_), np.empty(n, dtype=np.bool_)
-        delta, load, xi, z = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-        residuals = np.empty(self.max_iter + 1)
-        x1, v1, a1 = np.empty(size), np.empty(size), np.empty(size)
+        outputs = (np.empty(12), np.empty((12, 12)), np.empty(n, dtype=np.bool_),
+                   np.empty(n, dtype=np.bool_), np.empty(n), np.empty(n), np.empty(n),
+                   np.empty(n), np.empty(self.max_iter + 1), np.empty(size), np.empty(size),
+                   np.empty(size))
         err = mesh.error_displacement(angle) if mesh.has_errors else _NO_ERROR
         used = _NO_SET if self.active is None else self.active
-        status, k, total, length = advance(
-            hh, g_const, cond.s0, cond.w, self.x, self.v, self.a, self._f_c, self._unb_coef, t1,
-            f0, kb, cb, h,
-            angle, err, mesh.has_errors, *self._mesh_arrays, used, self.active is not None,
-            self._f_scale, self.tol, self.max_iter, force, stiff, active, inside, delta, load,
-            xi, z, residuals, x1, v1, a1)
+        head = (hh, g_const, cond.s0, cond.w, self.x, self.v, self.a, self._f_c,
+                self._unb_coef, t1)
+        tail = (h, angle, err, mesh.has_errors, *self._mesh_arrays, used,
+                self.active is not None, self._f_scale, self.tol, self.max_iter)
+        return head, tail, outputs
+
+    def _advance_result(self, status, k, total, length, outputs, t1, what) -> StepInfo:
+        """Raise the error of a failed :func:`gear_fmu.step.kernel.advance`, or take its new
+        state and mesh evaluation from ``outputs`` (:meth:`_advance_inputs`)."""
+        force, stiff, active, inside, delta, load, xi, z, residuals, x1, v1, a1 = outputs
         history = residuals[:k + 1].tolist()
         if status == SINGULAR:
             raise NewmarkConvergenceError(
@@ -540,13 +554,39 @@ class Structure:
                 f"{what} at t = {t1:.9g} s did not converge: relative residual "
                 f"{history[-1]:.3e} (tol {self.tol:.1e}) after {self.max_iter} iterations; "
                 f"last residuals {', '.join(f'{v:.2e}' for v in history[-5:])}")
-        rb1, rb2 = mesh.pair.base_radius
+        rb1, rb2 = self.mesh.pair.base_radius
         te = rb1 * x1[5] + rb2 * x1[11]
         self.mesh_state = MeshState(force, stiff, active, delta, load, inside, xi, z, total, te,
                                     {"contact_length": length})
         self.x, self.v, self.a = x1, v1, a1
         self.active = active
         return StepInfo(t1, k, history[-1], history)
+
+    def compiled_step(self, dt: float):
+        """The inputs of a step of dt as one call of :func:`gear_fmu.step.kernel.advance` with
+        the bearing laws left to the caller (a compiled coupled step,
+        :mod:`orchestrator.coupling.fused`): ``(head, tail, outputs, t1)``, the arguments
+        before the laws, those after them, the output buffers and the step's end [s]; None
+        for a step that takes the Python path (contact events inside it, timing on). Finish
+        it with :meth:`end_compiled_step`."""
+        self._check_step(dt)
+        if self._mesh_arrays is None or self.timing is not None:
+            return None
+        if self.locate_contact and self._sub_steps(dt):
+            return None
+        t1 = self.t + dt
+        return (*self._advance_inputs(dt, t1, self.pinion_angle(t1)), t1)
+
+    def end_compiled_step(self, step, status, k, total, length) -> StepInfo:
+        """What :meth:`step` does after its one compiled call: the error of a failed call, or
+        the new state, time and step count; ``step`` from :meth:`compiled_step`, the other
+        arguments as :func:`gear_fmu.step.kernel.advance` returned them."""
+        _, _, outputs, t1 = step
+        info = self._advance_result(status, k, total, length, outputs, t1,
+                                    f"Newmark step {self.n_steps + 1}")
+        self.t = t1
+        self.n_steps += 1
+        return info
 
     # ------------------------------------------------------------------ state
     def get_state(self) -> StructureState:

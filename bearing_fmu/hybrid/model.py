@@ -252,12 +252,22 @@ class HybridSet:
         journal state ``states`` (nb, 4) [m, m/s] into ``out`` (nb, 5, 2) (rows as
         :meth:`HybridBearing.evaluate_global`). A failing bearing raises that bearing's
         error, with its index in ``bearing_index`` (0-based)."""
-        b, status = _k.hybrid_set_global(
-            self._states, self._active, self._ws, self._iws, self._trig, AXIAL_COEF, self._q,
-            states, self._omega, self._clearance, self._fs, self._res, out)
+        b, status = _k.hybrid_set_global(*self.kernel_arguments(states, out))
         if b >= 0:
-            try:
-                self.models[b].raise_status(status, self._q[b], states[b], self._omega[b])
-            except BearingError as exc:
-                exc.bearing_index = int(b)
-                raise
+            self.raise_status(b, status, states)
+
+    def kernel_arguments(self, states, out) -> tuple:
+        """The arguments of ``hybrid_set_global`` for the journal states ``states`` (nb, 4)
+        and the output ``out`` (nb, 5, 2): what a compiled caller passes on
+        (:mod:`orchestrator.coupling.fused`)."""
+        return (self._states, self._active, self._ws, self._iws, self._trig, AXIAL_COEF,
+                self._q, states, self._omega, self._clearance, self._fs, self._res, out)
+
+    def raise_status(self, b, status, states) -> None:
+        """Raise the error of bearing ``b`` (0-based) whose call returned ``status`` at the
+        global journal states ``states`` (nb, 4), with its index in ``bearing_index``."""
+        try:
+            self.models[b].raise_status(status, self._q[b], states[b], self._omega[b])
+        except BearingError as exc:
+            exc.bearing_index = int(b)
+            raise

@@ -145,12 +145,36 @@ class ModelBearings(BearingSet):
                 for b in range(nb):
                     self.models[b].evaluate_global(self._q[b], states[b], self.omegas[b],
                                                    out[b])
-        except BearingError as exc:  # which bearing, at which state [m, m/s]: the run's
-            b = getattr(exc, "bearing_index", b)
-            exc.bearing, exc.state, exc.reason = b + 1, states[b].copy(), str(exc)
+        except BearingError as exc:
+            self._annotate(exc, b, states)
             raise
         self.evaluations += nb
         return out[:, 0], out[:, 1:3], out[:, 3:5]
+
+    @staticmethod
+    def _annotate(exc, b, states) -> None:
+        """Which bearing failed, at which state [m, m/s]: what the run reports."""
+        b = getattr(exc, "bearing_index", b)
+        exc.bearing, exc.state, exc.reason = b + 1, states[b].copy(), str(exc)
+
+    @property
+    def hybrid_set(self) -> HybridSet | None:
+        """The compiled call of a set of hybrid bearings of one n, else None."""
+        return self._set
+
+    def record_states(self, states) -> None:
+        """The journal states (nb, 4) [m, m/s] a compiled caller evaluated the set at last."""
+        self._states = np.array(states, dtype=float)
+
+    def raise_set_failure(self, b, status, states) -> None:
+        """The error :meth:`evaluate` raises when the hybrid set's bearing ``b`` (0-based)
+        returned ``status`` at ``states`` (nb, 4) (a compiled caller's failure)."""
+        self.record_states(states)
+        try:
+            self._set.raise_status(b, status, states)
+        except BearingError as exc:
+            self._annotate(exc, b, states)
+            raise
 
     def checkpoint(self) -> dict:
         """Each model's state (:func:`fmu_src.states.bearing_state_arrays`) under its index."""

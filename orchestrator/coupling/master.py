@@ -235,6 +235,11 @@ class Master:
     total_iterations: int = 0
     total_bearing_evaluations: int = 0
     relaxed_steps: int = 0  # steps that needed the relaxation (module docstring)
+    #: the same step as one compiled call where the slaves allow it
+    #: (:class:`orchestrator.coupling.fused.FusedStep`, given by
+    #: :func:`orchestrator.coupling.system.build_master`): ``fused.step(master, t, dt)``
+    #: returns the step's report, or None for a step this loop takes
+    fused: object | None = field(default=None, repr=False)
 
     def _evaluate(self, states):
         self.total_bearing_evaluations += 1
@@ -322,6 +327,10 @@ class Master:
         """One coupled Newmark step from t to t + dt."""
         if self.laws is None:
             raise CouplingError("call solve_static() (or set laws) before the first step")
+        if self.fused is not None:
+            report = self.fused.step(self, t, dt)
+            if report is not None:
+                return report
         saved = self.structure.get_state()
         laws = self.laws
         mismatch = math.inf
@@ -343,11 +352,13 @@ class Master:
                 self.relaxed_steps += 1
             laws = laws.blend(new, RELAXATION) if relaxed else new
             self.structure.set_state(saved)
-        raise CouplingError(
-            f"step at t = {t:.6e} s (dt = {dt:.3e} s) did not converge in "
-            f"{self.max_iterations} iterations: relative bearing-force mismatch "
-            f"{mismatch:.3e} > tol {self.tol:.1e}"
-        )
+        raise CouplingError(not_converged(t, dt, self.max_iterations, mismatch, self.tol))
+
+
+def not_converged(t, dt, max_iterations, mismatch, tol) -> str:
+    """The message of a step from t [s] that did not converge."""
+    return (f"step at t = {t:.6e} s (dt = {dt:.3e} s) did not converge in {max_iterations} "
+            f"iterations: relative bearing-force mismatch {mismatch:.3e} > tol {tol:.1e}")
 
 
 def decode_checkpoint(data, what: str = "the checkpoint") -> StateArrays:

@@ -16,6 +16,7 @@ from bearing_fmu import numba_cache
 from fmu_src import description
 from fmu_src.case import Case
 from gear_fmu.structure import Structure
+from orchestrator.coupling.fused import FusedStep
 from orchestrator.coupling.inprocess import InProcessStructure, ModelBearings
 from orchestrator.coupling.master import Master
 
@@ -69,7 +70,8 @@ def build_master(case: Case, in_process: bool = False, fmu_dir: Path | str | Non
 
         structure, bearings = fmi.system_from_case(case, fmu_dir=fmu_dir)
     announce_compilation(cold)  # after the FMUs' build: the kernels compile on first calls
-    return Master(structure, bearings, tol, max_it)
+    fused = FusedStep(structure, bearings) if FusedStep.fits(structure, bearings) else None
+    return Master(structure, bearings, tol, max_it, fused=fused)
 
 
 def announce_compilation(cold: bool) -> None:

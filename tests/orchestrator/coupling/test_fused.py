@@ -1,0 +1,138 @@
+"""The master's step as one compiled call (:mod:`orchestrator.coupling.fused`) against the
+Python loop it replaces (:meth:`Master.step` without ``fused``): the same bits, counters and
+errors, step for step, spur and helical, through the relaxation and the steps with contact
+events that it leaves to the Python loop. The physics of the step is asserted elsewhere (the
+monolithic Newton, the golden run, the order); through FMUs the Python loop runs, and the
+FMU suites compare it with in-process runs bit for bit."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from bearing_fmu.affine import AffineLaws
+from bearing_fmu.base import BearingError
+from fmu_src.case import load_case
+from fmu_src.description import time_step
+from gear_fmu.step.newmark import NewmarkConvergenceError
+from orchestrator.coupling import fused as fused_module
+from orchestrator.coupling.master import CouplingError
+from orchestrator.coupling.system import build_master
+
+
+def _pair(case):
+    """Two masters of ``case`` after the static solution: the compiled step and the Python
+    loop."""
+    out = []
+    for compiled in (True, False):
+        m = build_master(case, in_process=True)
+        assert m.fused is not None
+        if not compiled:
+            m.fused = None
+        m.solve_static()
+        m.exit_initialization()
+        out.append(m)
+    return out
+
+
+def _counters(m):
+    return (m.total_iterations, m.total_bearing_evaluations, m.relaxed_steps,
+            m.bearings.evaluations, m.structure.physics.n_steps, m.structure.physics.t)
+
+
+def _same_state(a, b):
+    sa, sb = a.structure.physics, b.structure.physics
+    for name in ("x", "v", "a", "active"):
+        np.testing.assert_array_equal(getattr(sa, name), getattr(sb, name), err_msg=name)
+    assert sa.mesh_force() == sb.mesh_force()
+    assert sa.transmission_error() == sb.transmission_error()
+    for name in ("f0", "kb", "cb", "states", "force_at"):
+        np.testing.assert_array_equal(getattr(a.laws, name), getattr(b.laws, name), name)
+
+
+def _run_both(case, steps, monkeypatch):
+    compiled, python = _pair(case)
+    taken = []
+    step = fused_module.FusedStep.step
+    monkeypatch.setattr(fused_module.FusedStep, "step",
+                        lambda self, *a: taken.append(step(self, *a)) or taken[-1])
+    dt = time_step(case)
+    for i in range(steps):
+        rc, rp = compiled.step(i * dt, dt), python.step(i * dt, dt)
+        assert (rc.iterations, rc.mismatch) == (rp.iterations, rp.mismatch), f"step {i + 1}"
+        np.testing.assert_array_equal(rc.bearing_force, rp.bearing_force)
+        np.testing.assert_array_equal(rc.states, rp.states)
+    _same_state(compiled, python)
+    assert _counters(compiled) == _counters(python)
+    return compiled, sum(r is not None for r in taken)
+
+
+@pytest.mark.parametrize("name, steps", [("baguet2010_spur", 64), ("baguet2010_helical", 24)])
+def test_the_compiled_step_gives_the_bits_of_the_python_loop(name, steps, monkeypatch):
+    _, n_compiled = _run_both(load_case(name), steps, monkeypatch)
+    # steps with contact events take the Python loop: both kinds ran
+    assert 0 < n_compiled < steps
+
+
+def test_the_relaxed_step_at_300_rad_s_gives_the_same_bits(monkeypatch):
+    """Step 408 at 300 rad/s puts Newton into a two-cycle and is relaxed (test_master)."""
+    case = load_case("baguet2010_spur").with_overrides({"operation.speed": 300.0})
+    compiled, _ = _run_both(case, 13 * 32, monkeypatch)
+    assert compiled.relaxed_steps >= 1
+
+
+def _fail_both(case, change, monkeypatch):
+    """The exception of one step of each master after ``change(master)``, and the counters;
+    the compiled master's step must not have left it to the Python loop."""
+    step = fused_module.FusedStep.step
+    left = []
+
+    def spy(self, *a):
+        left.append(self)  # the compiled loop raises or returns a report, never None
+        report = step(self, *a)
+        left.pop()
+        return report
+
+    monkeypatch.setattr(fused_module.FusedStep, "step", spy)
+    out = []
+    for m in _pair(case):
+        change(m)
+        dt = time_step(case)
+        with pytest.raises(Exception) as info:
+            m.step(0.0, dt)
+        # where a failed step leaves the structure is not compared: the Python loop leaves
+        # it at the last iterate (or before it), the compiled one before the step, and a run
+        # stops there without a checkpoint (orchestrator.run.runner)
+        out.append((type(info.value), str(info.value), _counters(m)[:4]))
+    assert len(left) == 1  # the compiled master's step raised inside the compiled path
+    return out
+
+
+def test_a_step_that_does_not_converge_fails_alike(monkeypatch):
+    def never(m):
+        m.tol, m.max_iterations = 0.0, 4
+
+    compiled, python = _fail_both(load_case("baguet2010_spur"), never, monkeypatch)
+    assert compiled == python
+    assert compiled[0] is CouplingError and "did not converge in 4 iterations" in compiled[1]
+
+
+def test_a_failing_bearing_fails_alike(monkeypatch):
+    """Laws that throw the journals out of their clearance: the first bearing's state check."""
+    def push(m):
+        laws = m.laws
+        m.laws = AffineLaws(laws.f0 + 1e7, laws.kb, laws.cb)
+
+    compiled, python = _fail_both(load_case("baguet2010_spur"), push, monkeypatch)
+    assert compiled == python
+    assert issubclass(compiled[0], BearingError)
+
+
+def test_a_failing_structure_step_fails_alike(monkeypatch):
+    """A structure allowed no Newton pass: its own non-convergence error."""
+    def no_pass(m):
+        m.structure.physics.max_iter = 0
+
+    compiled, python = _fail_both(load_case("baguet2010_spur"), no_pass, monkeypatch)
+    assert compiled == python
+    assert compiled[0] is NewmarkConvergenceError and "did not converge" in compiled[1]
