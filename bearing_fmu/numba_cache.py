@@ -16,7 +16,9 @@ covers every module of those packages (:func:`code_hash`). Any change of the cod
 empty folder (the eight most recent are kept), and every copy of one version shares it: the
 installed package and the code an FMU carries (staged by :mod:`fmu_src.slaves.bootstrap`) load
 each other's kernels, so an FMU in another tool's process starts without compiling what
-``gsb run`` compiled. Everything else numba caches is left alone.
+``gsb run`` compiled. A kernel of ``orchestrator`` (:data:`CALLERS`: the master's compiled
+step calls the structure's and the bearings' kernels) is cached in the same folder with its own
+file's content in its stamp. Everything else numba caches is left alone.
 """
 
 from __future__ import annotations
@@ -30,6 +32,11 @@ from pathlib import Path
 
 #: the packages whose kernels share one code version
 PACKAGES = ("bearing_fmu", "gear_fmu", "fmu_src")
+#: packages whose kernels call those of :data:`PACKAGES` but that an FMU does not all carry
+#: (the master's compiled step, :mod:`orchestrator.coupling.fused`): cached in the folder of
+#: the code version they call, with their own file's content in the source stamp (numba then
+#: compiles them again when that file changes; the code hash covers their callees)
+CALLERS = ("orchestrator",)
 #: folders of those packages that an FMU does not carry (fmu_src's build tools): left out of
 #: the hash, so that the installed package and an FMU's copy of the code agree on it
 SKIP = frozenset(("__pycache__", "build"))
@@ -62,10 +69,11 @@ def cache_base() -> Path:
 
 
 def _root_of(py_file: str) -> str | None:
-    """The folder holding the package of ``py_file`` if it is one of :data:`PACKAGES`."""
+    """The folder holding the package of ``py_file`` if it is one of :data:`PACKAGES` or
+    :data:`CALLERS`."""
     path = Path(py_file).resolve()
     for parent in path.parents:
-        if parent.name in PACKAGES and (parent / "__init__.py").is_file():
+        if parent.name in PACKAGES + CALLERS and (parent / "__init__.py").is_file():
             return str(parent.parent)
     return None
 
@@ -97,6 +105,9 @@ def _locator_class():
             rel = Path(py_file).resolve().relative_to(root)
             self._version = PREFIX + code_hash(root)
             self._stamp = (self._version, rel.as_posix())
+            if rel.parts[0] in CALLERS:
+                own = hashlib.sha256(Path(py_file).read_bytes()).hexdigest()[:16]
+                self._stamp = (*self._stamp, own)
             self._path = str(cache_base() / self._version / rel.parent)
 
         def ensure_cache_path(self):

@@ -106,9 +106,10 @@ def coupled_step(hh, g_const, s0, w, x, v, a, f_c, unb_coef, t1,  # structure be
 
 
 class FusedStep:
-    """:meth:`~orchestrator.coupling.master.Master.step` as one :func:`coupled_step` for an in-process structure
-    (:class:`orchestrator.coupling.inprocess.InProcessStructure`) and in-process hybrid
-    bearings of one n (:class:`orchestrator.coupling.inprocess.ModelBearings` with a
+    """:meth:`~orchestrator.coupling.master.Master.step` as one :func:`coupled_step` for an
+    in-process structure (:class:`orchestrator.coupling.inprocess.InProcessStructure`) and
+    in-process hybrid bearings of one n
+    (:class:`orchestrator.coupling.inprocess.ModelBearings` with a
     :attr:`~orchestrator.coupling.inprocess.ModelBearings.hybrid_set`);
     :func:`orchestrator.coupling.system.build_master` gives it to the master when both are."""
 

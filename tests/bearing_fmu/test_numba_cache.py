@@ -1,0 +1,49 @@
+"""Where numba caches this project's kernels (:mod:`bearing_fmu.numba_cache`): the end-to-end
+checks (a changed callee recompiles its callers; cold = warm) are in
+tests/system/test_determinism.py; here the locator of a kernel outside the hashed packages."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+from bearing_fmu import numba_cache
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _locator(root: Path):
+    """The locator numba would use for the master's compiled step in the code under root."""
+    path = root / "orchestrator" / "coupling" / "fused.py"
+    namespace: dict = {}
+    code = compile("def coupled_step():\n    pass\n", str(path), "exec")
+    exec(code, namespace)
+    return numba_cache._locator_class().from_function(namespace["coupled_step"], str(path))
+
+
+def test_a_kernel_calling_the_packages_is_cached_with_their_version_and_its_own_content(
+        tmp_path, monkeypatch):
+    """The master's compiled step (orchestrator) calls the structure's and the bearings'
+    kernels: cached in the folder of their code version (a change of a callee: a new folder),
+    with its own file's content in the stamp (a change of the file: another stamp, so numba
+    compiles it again). Under numba's own locator it was cached beside its source and checked
+    against that file only, so a changed callee left it stale."""
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "numba"))
+    from numba.core import config
+
+    monkeypatch.setattr(config, "CACHE_DIR", str(tmp_path / "numba"))
+    root = tmp_path / "code"
+    for pkg in (*numba_cache.PACKAGES, "orchestrator"):
+        shutil.copytree(ROOT / pkg, root / pkg,
+                        ignore=shutil.ignore_patterns("__pycache__", "native", "build"))
+    first = _locator(root)
+    assert first is not None
+    version = numba_cache.PREFIX + numba_cache.code_hash(str(root))
+    folder = tmp_path / "numba" / version / "orchestrator" / "coupling"
+    assert Path(first.get_cache_path()) == folder
+    fused = root / "orchestrator" / "coupling" / "fused.py"
+    fused.write_text(fused.read_text() + "\n# changed\n")
+    second = _locator(root)
+    assert second.get_cache_path() == first.get_cache_path()
+    assert second.get_source_stamp() != first.get_source_stamp()
+    assert second.get_source_stamp()[:2] == first.get_source_stamp()[:2]
