@@ -162,3 +162,15 @@ def affine_global(q, s, f0, kb, cb, out):
             loc[1 + r, c] = kb[r, c]
             loc[3 + r, c] = cb[r, c]
     law_to_global(q, loc, out)
+
+
+@njit(cache=True)
+def affine_set_global(q, f0, kb, cb, s, out):
+    """:func:`affine_global` for a set of laws in one call, in their order: ``q`` (nb, 2, 2),
+    ``f0`` (nb, 2), ``kb``, ``cb`` (nb, 2, 2) stacked, the global states ``s`` (nb, 4), the
+    results into ``out`` (nb, 5, 2); the same arithmetic as one call per law. Returns
+    ``(-1, 0)`` as ``bearing_fmu.hybrid._kernels.hybrid_set_global`` does when every bearing
+    gave its law (an affine law always does)."""
+    for b in range(s.shape[0]):
+        affine_global(q[b], s[b], f0[b], kb[b], cb[b], out[b])
+    return -1, 0

@@ -81,7 +81,8 @@ class LinearBearing(BearingModel):
         r = model.evaluate(x0, y0, 0.0, 0.0, omega)
         return cls(model.bearing, (x0, y0), r.force, r.stiffness, r.damping, omega)
 
-    def _check_speed(self, omega) -> float:
+    def check_speed(self, omega) -> float:
+        """``omega`` [rad/s] if the coefficients hold at it, else the error naming both."""
         omega = check_omega(omega)
         if not abs(omega - self.omega) <= 1e-12 * abs(self.omega):
             raise ValueError(
@@ -91,7 +92,7 @@ class LinearBearing(BearingModel):
         return omega
 
     def evaluate(self, x, y, xdot, ydot, omega) -> BearingResult:
-        self._check_speed(omega)
+        self.check_speed(omega)
         force = self.law.force(np.array([x, y, xdot, ydot], dtype=float))
         return BearingResult(force=force, stiffness=self.law.kb.copy(),
                              damping=self.law.cb.copy())
@@ -99,7 +100,7 @@ class LinearBearing(BearingModel):
     def evaluate_global(self, q, state, omega, out) -> None:
         """The law of Eq. (17) in the frame of ``q`` in one compiled call (the arithmetic
         of :meth:`evaluate` and the base class's frame conversions)."""
-        self._check_speed(omega)
+        self.check_speed(omega)
         law = self.law
         affine_global(q, state, law.f0, law.kb, law.cb, out)
 

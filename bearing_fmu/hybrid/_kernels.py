@@ -373,12 +373,13 @@ def hybrid_global(state, active, ws, iws, trig, coef, q, s, omega, clearance, fs
 
 
 @njit(cache=True)
-def hybrid_set_global(states, active, ws, iws, trig, coef, q, s, omega, clearance, fs, res,
+def hybrid_set_global(states, active, ws, iws, trig, coef, q, omega, clearance, fs, res, s,
                       out):
     """:func:`hybrid_global` for a set of bearings in one call, in their order, with their
     workspaces stacked along the first axis (:class:`bearing_fmu.hybrid.model.HybridSet`):
-    the same arithmetic as one call per bearing. Returns ``(-1, 0)``, or the index of the
-    first bearing whose status is not 0 and that status (the bearings after it are not
+    the same arithmetic as one call per bearing; the set's arrays first, then the journal
+    states ``s`` (nb, 4) and the output ``out`` (nb, 5, 2). Returns ``(-1, 0)``, or the index
+    of the first bearing whose status is not 0 and that status (the bearings after it are not
     evaluated)."""
     for b in range(states.shape[0]):
         status = hybrid_global(states[b:b + 1], active[b], ws[b], iws[b], trig[b], coef, q[b],

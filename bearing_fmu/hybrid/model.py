@@ -252,16 +252,15 @@ class HybridSet:
         journal state ``states`` (nb, 4) [m, m/s] into ``out`` (nb, 5, 2) (rows as
         :meth:`HybridBearing.evaluate_global`). A failing bearing raises that bearing's
         error, with its index in ``bearing_index`` (0-based)."""
-        b, status = _k.hybrid_set_global(*self.kernel_arguments(states, out))
+        b, status = _k.hybrid_set_global(*self.kernel_arguments(), states, out)
         if b >= 0:
             self.raise_status(b, status, states)
 
-    def kernel_arguments(self, states, out) -> tuple:
-        """The arguments of ``hybrid_set_global`` for the journal states ``states`` (nb, 4)
-        and the output ``out`` (nb, 5, 2): what a compiled caller passes on
-        (:mod:`orchestrator.coupling.fused`)."""
+    def kernel_arguments(self) -> tuple:
+        """The arguments of ``hybrid_set_global`` before the journal states and the output:
+        what a compiled caller passes on (:mod:`orchestrator.coupling.fused`)."""
         return (self._states, self._active, self._ws, self._iws, self._trig, AXIAL_COEF,
-                self._q, states, self._omega, self._clearance, self._fs, self._res, out)
+                self._q, self._omega, self._clearance, self._fs, self._res)
 
     def raise_status(self, b, status, states) -> None:
         """Raise the error of bearing ``b`` (0-based) whose call returned ``status`` at the

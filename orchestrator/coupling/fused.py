@@ -1,5 +1,5 @@
 """The master's coupled step in one compiled call, for the in-process structure and a set of
-hybrid bearings.
+hybrid bearings (Table 4 case 2) or of linear ones (case 0).
 
 :meth:`orchestrator.coupling.master.Master.step` iterates in Python: per iteration a
 structure step, the bearings at the new journal states, the test and the new laws
@@ -7,10 +7,11 @@ structure step, the bearings at the new journal states, the test and the new law
 these is already one compiled kernel, and the Python between them (objects, checks, copies,
 dispatch) cost about a third of an iteration of the paper's case. :func:`coupled_step` runs
 the same iteration with the same kernels (:func:`gear_fmu.step.kernel.advance`,
-``bearing_fmu.hybrid._kernels.hybrid_set_global``, ``bearing_fmu.affine._relinearise``) in the
-same order on the same numbers, so a step gives the bits of the Python loop, and of the same
-step through FMUs (the tests compare them). The structure's state is not saved and restored:
-every iteration starts from the same (X, Xdot, Xddot) and writes the new state into buffers.
+``bearing_fmu.hybrid._kernels.hybrid_set_global`` or ``bearing_fmu.affine.affine_set_global``,
+``bearing_fmu.affine._relinearise``) in the same order on the same numbers, so a step gives
+the bits of the Python loop, and of the same step through FMUs (the tests compare them). The
+structure's state is not saved and restored: every iteration starts from the same
+(X, Xdot, Xddot) and writes the new state into buffers.
 
 What the compiled loop does not take (a step with contact events, whose sub-steps and
 acceleration jumps are Python, or timing on) goes through the Python loop:
@@ -22,9 +23,11 @@ from __future__ import annotations
 
 import numpy as np
 from numba import njit
+from numba.extending import overload
 
-from bearing_fmu.affine import AffineLaws, _relinearise
+from bearing_fmu.affine import AffineLaws, _relinearise, affine_set_global
 from bearing_fmu.hybrid._kernels import hybrid_set_global
+from bearing_fmu.linear import LinearBearing, LinearisedBearing
 from gear_fmu.step.condensation import N_GEAR
 from gear_fmu.step.kernel import CONVERGED, advance
 from orchestrator.coupling.inprocess import InProcessStructure, ModelBearings
@@ -40,6 +43,34 @@ __all__ = ["FusedStep", "coupled_step"]
 
 #: :func:`coupled_step` outcomes
 ACCEPTED, STRUCTURE_FAILED, BEARING_FAILED, NOT_CONVERGED = 0, 1, 2, 3
+#: the lengths of the bearing set's arguments that tell its kind (:func:`evaluate_set`)
+HYBRID_ARGUMENTS, AFFINE_ARGUMENTS = 11, 4
+
+
+def evaluate_set(bearings, states, out):
+    """The bearing set in compiled code: ``hybrid_set_global(*bearings, states, out)`` for the
+    arrays of a hybrid set (:meth:`bearing_fmu.hybrid.model.HybridSet.kernel_arguments`, 11
+    of them), ``affine_set_global(*bearings, states, out)`` for stacked affine laws
+    (:meth:`orchestrator.coupling.inprocess.ModelBearings.affine_laws`, 4): chosen when
+    :func:`coupled_step` compiles, so each kind has its own compiled (and cached) version.
+    Returns ``(failed bearing or -1, its status)``."""
+    raise NotImplementedError("evaluate_set runs in compiled code only")
+
+
+@overload(evaluate_set)
+def _evaluate_set(bearings, states, out):
+    if len(bearings) == HYBRID_ARGUMENTS:
+        def hybrid(bearings, states, out):
+            b = bearings
+            return hybrid_set_global(b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7], b[8],
+                                     b[9], b[10], states, out)
+        return hybrid
+    if len(bearings) == AFFINE_ARGUMENTS:
+        def affine(bearings, states, out):
+            b = bearings
+            return affine_set_global(b[0], b[1], b[2], b[3], states, out)
+        return affine
+    return None
 
 
 @njit(cache=True)
@@ -47,16 +78,15 @@ def coupled_step(hh, g_const, s0, w, x, v, a, f_c, unb_coef, t1,  # structure be
                  h, angle, err, has_err, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1,
                  pitch2, used0, has_used, f_scale, s_tol, s_max_iter,  # ... after the laws
                  force, stiff, active, inside, delta, load, xis, zout, residuals, x1, v1, a1,
-                 b_state, b_active, ws, iws, trig, coef, q, states, omega, clearance, fs, res,
-                 out,  # the bearings (hybrid_set_global's arguments)
+                 bearings, states, out,  # the bearing set (evaluate_set)
                  f0, kb, cb, tol, max_iterations, relaxation, stall, mismatches):
     """The iteration of :meth:`orchestrator.coupling.master.Master.step` from the laws
     ``f0, kb, cb`` (nb, 2), (nb, 2, 2) [N, N/m, N s/m].
 
-    The structure's arguments are :func:`gear_fmu.step.kernel.advance`'s without the laws,
-    the bearings' ``hybrid_set_global``'s (``states`` (nb, 4) receives the journal states of
-    each iterate, ``out`` (nb, 5, 2) the bearings' results there); ``mismatches``
-    (max_iterations,) receives each iteration's relative mismatch.
+    The structure's arguments are :func:`gear_fmu.step.kernel.advance`'s without the laws;
+    ``bearings`` the set's arrays (:func:`evaluate_set`), ``states`` (nb, 4) receives the
+    journal states of each iterate and ``out`` (nb, 5, 2) the bearings' results there;
+    ``mismatches`` (max_iterations,) receives each iteration's relative mismatch.
 
     Returns ``(outcome, iterations, structure status, structure passes, total mesh load,
     contact length, failed bearing, its status, relaxed, mismatch, f0, kb, cb)``: the
@@ -80,8 +110,7 @@ def coupled_step(hh, g_const, s0, w, x, v, a, f_c, unb_coef, t1,  # structure be
             for c in range(2):
                 states[b, c] = x1[N_GEAR + 2 * b + c]
                 states[b, 2 + c] = v1[N_GEAR + 2 * b + c]
-        bad, b_status = hybrid_set_global(b_state, b_active, ws, iws, trig, coef, q, states,
-                                          omega, clearance, fs, res, out)
+        bad, b_status = evaluate_set(bearings, states, out)
         if bad >= 0:
             return (BEARING_FAILED, it, status, k, total, length, bad, b_status, relaxed,
                     mismatch, f0, kb, cb)
@@ -108,29 +137,40 @@ def coupled_step(hh, g_const, s0, w, x, v, a, f_c, unb_coef, t1,  # structure be
 class FusedStep:
     """:meth:`~orchestrator.coupling.master.Master.step` as one :func:`coupled_step` for an
     in-process structure (:class:`orchestrator.coupling.inprocess.InProcessStructure`) and
-    in-process hybrid bearings of one n
-    (:class:`orchestrator.coupling.inprocess.ModelBearings` with a
-    :attr:`~orchestrator.coupling.inprocess.ModelBearings.hybrid_set`);
-    :func:`orchestrator.coupling.system.build_master` gives it to the master when both are."""
+    in-process bearings (:class:`orchestrator.coupling.inprocess.ModelBearings`) that are
+    hybrid bearings of one n (its
+    :attr:`~orchestrator.coupling.inprocess.ModelBearings.hybrid_set`) or linear ones (its
+    :meth:`~orchestrator.coupling.inprocess.ModelBearings.affine_laws`, once frozen at X0);
+    :func:`orchestrator.coupling.system.build_master` gives it to the master when they are."""
 
     def __init__(self, structure, bearings):
-        if bearings.hybrid_set is None:
-            raise ValueError("FusedStep: the bearings are not one set of hybrid bearings")
+        if not self.fits(structure, bearings):
+            raise ValueError("FusedStep: an in-process structure and in-process hybrid or "
+                             "linear bearings only")
         self.structure = structure
         self.bearings = bearings
         self._mismatches = None
 
     @staticmethod
     def fits(structure, bearings) -> bool:
-        """Whether the slaves can take the compiled step."""
-        return (isinstance(structure, InProcessStructure)
-                and isinstance(bearings, ModelBearings) and bearings.hybrid_set is not None)
+        """Whether the slaves can take the compiled step (the linear bearings: once frozen)."""
+        return (isinstance(structure, InProcessStructure) and isinstance(bearings, ModelBearings)
+                and (bearings.hybrid_set is not None
+                     or all(isinstance(m, LinearBearing | LinearisedBearing)
+                            for m in bearings.models)))
+
+    def _bearing_arguments(self):
+        """The set's arrays for :func:`evaluate_set`, or None (linear bearings not frozen)."""
+        if self.bearings.hybrid_set is not None:
+            return self.bearings.hybrid_set.kernel_arguments()
+        return self.bearings.affine_laws()
 
     def step(self, master, t: float, dt: float) -> StepReport | None:
         """The master's step from t to t + dt [s] (same arguments, counters and errors), or
         None for a step the compiled loop does not take (module docstring)."""
         st = self.structure.cycle.check_step(t, dt)
-        plan = st.compiled_step(dt)
+        arrays = self._bearing_arguments()
+        plan = None if arrays is None else st.compiled_step(dt)
         if plan is None:
             return None
         head, tail, outputs, _ = plan
@@ -142,9 +182,8 @@ class FusedStep:
         laws = master.laws
         (outcome, it, status, k, total, length, bad, b_status, relaxed, mismatch,
          f0, kb, cb) = coupled_step(
-            *head, *tail, *outputs, *bearings.hybrid_set.kernel_arguments(states, out),
-            laws.f0, laws.kb, laws.cb, master.tol, master.max_iterations, RELAXATION, STALL,
-            self._mismatches)
+            *head, *tail, *outputs, arrays, states, out, laws.f0, laws.kb, laws.cb,
+            master.tol, master.max_iterations, RELAXATION, STALL, self._mismatches)
         evaluations = it - (outcome == STRUCTURE_FAILED)
         master.total_iterations += it - (outcome in (STRUCTURE_FAILED, BEARING_FAILED))
         master.total_bearing_evaluations += evaluations

@@ -15,6 +15,7 @@ from bearing_fmu.affine import AffineLaws
 from bearing_fmu.base import BearingError, BearingModel
 from bearing_fmu.frames import LocalFrame
 from bearing_fmu.hybrid.model import HybridSet
+from bearing_fmu.linear import LinearBearing, LinearisedBearing
 from fmu_src.lifecycle import StructureCycle
 from fmu_src.state_codec import StateArrays, nest
 from fmu_src.states import (
@@ -131,6 +132,7 @@ class ModelBearings(BearingSet):
         # hybrid bearings of one n: one compiled call for the set (the same numbers)
         self._set = (HybridSet(self.models, self._q, self.omegas)
                      if HybridSet.fits(self.models) else None)
+        self._affine = None  # (the laws, their arrays) of affine_laws()
 
     def evaluate(self, states):
         nb = len(self.models)
@@ -161,6 +163,23 @@ class ModelBearings(BearingSet):
     def hybrid_set(self) -> HybridSet | None:
         """The compiled call of a set of hybrid bearings of one n, else None."""
         return self._set
+
+    def affine_laws(self):
+        """``(q, f0, kb, cb)`` stacked over the bearings ((nb, 2, 2), (nb, 2), (nb, 2, 2) x 2:
+        the global-to-local rotations and the local laws) when every bearing is an affine law
+        now (:class:`bearing_fmu.linear.LinearBearing`, or the ``linear`` model after its
+        freeze at X0), for a compiled caller (``bearing_fmu.affine.affine_set_global``);
+        else None."""
+        laws = tuple(m.frozen if isinstance(m, LinearisedBearing) else m for m in self.models)
+        if not all(isinstance(law, LinearBearing) for law in laws):
+            return None
+        if self._affine is None or self._affine[0] != laws:  # a restore replaces the laws
+            for law, omega in zip(laws, self.omegas, strict=True):
+                law.check_speed(omega)  # what evaluate_global checks at every call
+            self._affine = (laws, (self._q, np.array([law.law.f0 for law in laws]),
+                                   np.array([law.law.kb for law in laws]),
+                                   np.array([law.law.cb for law in laws])))
+        return self._affine[1]
 
     def record_states(self, states) -> None:
         """The journal states (nb, 4) [m, m/s] a compiled caller evaluated the set at last."""

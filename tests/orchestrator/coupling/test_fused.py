@@ -1,7 +1,8 @@
 """The master's step as one compiled call (:mod:`orchestrator.coupling.fused`) against the
 Python loop it replaces (:meth:`Master.step` without ``fused``): the same bits, counters and
-errors, step for step, spur and helical, through the relaxation and the steps with contact
-events that it leaves to the Python loop. The physics of the step is asserted elsewhere (the
+errors, step for step, spur and helical, hybrid and linear bearings, through the relaxation
+and the steps with contact events that it leaves to the Python loop; the other bearing models
+keep the Python loop. The physics of the step is asserted elsewhere (the
 monolithic Newton, the golden run, the order); through FMUs the Python loop runs, and the
 FMU suites compare it with in-process runs bit for bit."""
 
@@ -67,9 +68,11 @@ def _run_both(case, steps, monkeypatch):
     return compiled, sum(r is not None for r in taken)
 
 
-@pytest.mark.parametrize("name, steps", [("baguet2010_spur", 64), ("baguet2010_helical", 24)])
-def test_the_compiled_step_gives_the_bits_of_the_python_loop(name, steps, monkeypatch):
-    _, n_compiled = _run_both(load_case(name), steps, monkeypatch)
+@pytest.mark.parametrize("name, model, steps", [("baguet2010_spur", "hybrid", 64),
+                                                ("baguet2010_helical", "hybrid", 24),
+                                                ("baguet2010_spur", "linear", 64)])
+def test_the_compiled_step_gives_the_bits_of_the_python_loop(name, model, steps, monkeypatch):
+    _, n_compiled = _run_both(load_case(name, {"bearings.model": model}), steps, monkeypatch)
     # steps with contact events take the Python loop: both kinds ran
     assert 0 < n_compiled < steps
 
@@ -136,3 +139,12 @@ def test_a_failing_structure_step_fails_alike(monkeypatch):
     compiled, python = _fail_both(load_case("baguet2010_spur"), no_pass, monkeypatch)
     assert compiled == python
     assert compiled[0] is NewmarkConvergenceError and "did not converge" in compiled[1]
+
+
+def test_hybrid_and_linear_bearings_take_the_compiled_step_the_other_models_the_python_loop():
+    from bearing_fmu import MODELS
+
+    for model in MODELS:
+        m = build_master(load_case("baguet2010_spur", {"bearings.model": model}),
+                         in_process=True)
+        assert (m.fused is not None) == (model in ("hybrid", "linear")), model
