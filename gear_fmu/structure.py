@@ -63,7 +63,7 @@ from gear_fmu.modal.damping import DampingModel
 from gear_fmu.step.assembly import check_laws, check_laws_fast, finish_step, prepare_step
 from gear_fmu.step.condensation import N_BEARING, N_GEAR, NC, Condensation
 from gear_fmu.step.contact_loop import StepInfo, solve_condensed
-from gear_fmu.step.kernel import CONVERGED, SINGULAR, advance
+from gear_fmu.step.kernel import CONVERGED, SINGULAR, advance, contact_event
 from gear_fmu.step.newmark import NewmarkConvergenceError, newmark_coefficients
 from gear_fmu.system import GearShaftSystem
 
@@ -85,6 +85,11 @@ EVENT_SNAP = 1e-3
 _FRACTION = 2.0**30
 _NO_ERROR = np.zeros(12)  # no runout or mounting error
 _NO_SET = np.zeros(0, dtype=np.bool_)  # no contact set known
+#: sub-steps of one step that :meth:`Structure.compiled_step` takes (a spur step of the paper's
+#: case has at most 2, a helical one 3); a step with more takes the Python path
+MAX_PIECES = 4
+_SLOTS = MAX_PIECES  # the sub-step slots of the compiled call (its argument types)
+_NO_ERRORS = np.zeros((_SLOTS, 12))
 
 
 @dataclass(frozen=True)
@@ -351,7 +356,8 @@ class Structure:
         """``M^-1`` restricted to the gear-node columns, (n, 12) (internal order)."""
         if self._m_gear is None:
             cho = scipy.linalg.cho_factor(self._m)
-            self._m_gear = scipy.linalg.cho_solve(cho, np.eye(self._m.shape[0])[:, :N_GEAR])
+            self._m_gear = np.ascontiguousarray(
+                scipy.linalg.cho_solve(cho, np.eye(self._m.shape[0])[:, :N_GEAR]))
         return self._m_gear
 
     @one_blas_thread
@@ -401,34 +407,65 @@ class Structure:
         self._check_step(dt)
         t1 = self.t + dt
         what = f"Newmark step {self.n_steps + 1}"
-        pieces = self._sub_steps(dt) if self.locate_contact else None
-        if not pieces:
-            info = self._advance(dt, t1, self.pinion_angle(t1), f0, kb, cb, what)
+        pieces = self._pieces(dt)
+        if len(pieces) == 1 and pieces[0][3] is None:
+            info = self._advance(dt, t1, pieces[0][2], f0, kb, cb, what)
         else:
             info = StepInfo(t1, 0, 0.0)
-            t_start = self.t
-            side = EVENT_SIDE * self.mesh.pair.base_pitch / self.mesh.pair.base_radius[0]
-            for h, frac, events in pieces:
-                te = t1 if frac == 1.0 else t_start + frac * dt
-                angle = self.pinion_angle(te)
-                before, after = angle, angle
-                if events is not None:  # the sides of the events, wherever they were snapped
-                    first, last = events
-                    before = angle - side if angle <= first + side else first - side
-                    after = angle + side if angle >= last - side else last + side
+            for h, te, before, after in pieces:
                 sub = self._advance(h, te, before, f0, kb, cb, what)
                 info.iterations += sub.iterations
                 info.residual = max(info.residual, sub.residual)
                 info.residuals += sub.residuals
-                if events is not None:  # Xdd after the event (module docstring)
-                    after = self.mesh.evaluate(after, self.x[:N_GEAR])
-                    jump = after.force - self.mesh_state.force
-                    self.a = self.a + self._gear_compliance() @ jump
-                    self.active = after.active
-                    self.mesh_state = after
+                if after is not None:
+                    self._contact_event(after)
         self.t = t1
         self.n_steps += 1
         return info
+
+    def _pieces(self, dt: float) -> list:
+        """``[(h [s], end time [s], mesh angle of the sub-step [rad], angle after its event
+        [rad] or None)]`` of a step of dt: one piece without contact events, else the
+        sub-steps of :meth:`_sub_steps`, each ending on its events evaluated on their outer
+        sides (module docstring)."""
+        t1 = self.t + dt
+        cuts = self._sub_steps(dt) if self.locate_contact else None
+        if not cuts:
+            return [(dt, t1, self.pinion_angle(t1), None)]
+        out = []
+        t_start = self.t
+        side = EVENT_SIDE * self.mesh.pair.base_pitch / self.mesh.pair.base_radius[0]
+        for h, frac, events in cuts:
+            te = t1 if frac == 1.0 else t_start + frac * dt
+            angle = self.pinion_angle(te)
+            before, after = angle, None
+            if events is not None:  # the sides of the events, wherever they were snapped
+                first, last = events
+                before = angle - side if angle <= first + side else first - side
+                after = angle + side if angle >= last - side else last + side
+            out.append((h, te, before, after))
+        return out
+
+    def _contact_event(self, angle: float) -> None:
+        """Xdd, contact set and mesh state after a contact event: the mesh evaluated at pinion
+        ``angle`` [rad] after it, ``Xdd+ = Xdd- + M^-1 (F_mesh+ - F_mesh-)`` at the same X and
+        Xd (module docstring; :func:`gear_fmu.step.kernel.contact_event`)."""
+        mesh = self.mesh
+        n = mesh.n_lines * mesh.n_slices
+        force, stiff = np.empty(12), np.empty((12, 12))
+        active, inside = np.empty(n, dtype=np.bool_), np.empty(n, dtype=np.bool_)
+        delta, load, xi, z = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+        a = self.a.copy()
+        err = mesh.error_displacement(angle) if mesh.has_errors else _NO_ERROR
+        total, length = contact_event(angle, self.x, err, mesh.has_errors, *self._mesh_arrays,
+                                      self._gear_compliance(), self.mesh_state.force, a, force,
+                                      stiff, active, inside, delta, load, xi, z)
+        rb1, rb2 = mesh.pair.base_radius
+        te = rb1 * self.x[5] + rb2 * self.x[11]
+        self.a = a
+        self.active = active
+        self.mesh_state = MeshState(force, stiff, active, delta, load, inside, xi, z, total, te,
+                                    {"contact_length": length})
 
     def _check_step(self, dt: float) -> None:
         if self.active is None:
@@ -525,12 +562,7 @@ class Structure:
         buffers it writes (:meth:`_advance_result` reads them)."""
         cond, hh, g_const = self._dynamic(h)
         mesh = self.mesh
-        n = mesh.n_lines * mesh.n_slices
-        size = self.x.size
-        outputs = (np.empty(12), np.empty((12, 12)), np.empty(n, dtype=np.bool_),
-                   np.empty(n, dtype=np.bool_), np.empty(n), np.empty(n), np.empty(n),
-                   np.empty(n), np.empty(self.max_iter + 1), np.empty(size), np.empty(size),
-                   np.empty(size))
+        outputs = self._advance_outputs()
         err = mesh.error_displacement(angle) if mesh.has_errors else _NO_ERROR
         used = _NO_SET if self.active is None else self.active
         head = (hh, g_const, cond.s0, cond.w, self.x, self.v, self.a, self._f_c,
@@ -538,6 +570,16 @@ class Structure:
         tail = (h, angle, err, mesh.has_errors, *self._mesh_arrays, used,
                 self.active is not None, self._f_scale, self.tol, self.max_iter)
         return head, tail, outputs
+
+    def _advance_outputs(self) -> tuple:
+        """New buffers for what :func:`gear_fmu.step.kernel.advance` writes: the mesh state,
+        the residuals and the new X, Xd, Xdd."""
+        n = self.mesh.n_lines * self.mesh.n_slices
+        size = self.x.size
+        return (np.empty(12), np.empty((12, 12)), np.empty(n, dtype=np.bool_),
+                np.empty(n, dtype=np.bool_), np.empty(n), np.empty(n), np.empty(n),
+                np.empty(n), np.empty(self.max_iter + 1), np.empty(size), np.empty(size),
+                np.empty(size))
 
     def _advance_result(self, status, k, total, length, outputs, t1, what) -> StepInfo:
         """Raise the error of a failed :func:`gear_fmu.step.kernel.advance`, or take its new
@@ -563,28 +605,50 @@ class Structure:
         return StepInfo(t1, k, history[-1], history)
 
     def compiled_step(self, dt: float):
-        """The inputs of a step of dt as one call of :func:`gear_fmu.step.kernel.advance` with
-        the bearing laws left to the caller (a compiled coupled step,
-        :mod:`orchestrator.coupling.fused`): ``(head, tail, outputs, t1)``, the arguments
-        before the laws, those after them, the output buffers and the step's end [s]; None
-        for a step that takes the Python path (contact events inside it, timing on). Finish
-        it with :meth:`end_compiled_step`."""
+        """The inputs of a step of dt as one call of
+        :func:`gear_fmu.step.kernel.advance_pieces` with the bearing laws left to the caller (a
+        compiled coupled step, :mod:`orchestrator.coupling.fused`): ``(head, tail, outputs,
+        ends)``, the arguments before the laws, those after them, the output buffers and the
+        end time of each sub-step [s]; None for a step that takes the Python path (timing on,
+        more than :data:`MAX_PIECES` sub-steps). Finish it with :meth:`end_compiled_step`."""
         self._check_step(dt)
         if self._mesh_arrays is None or self.timing is not None:
             return None
-        if self.locate_contact and self._sub_steps(dt):
+        pieces = self._pieces(dt)
+        n = len(pieces)
+        if n > MAX_PIECES:
             return None
-        t1 = self.t + dt
-        return (*self._advance_inputs(dt, t1, self.pinion_angle(t1)), t1)
+        mesh = self.mesh
+        dyn = [self._dynamic(h) for h, _, _, _ in pieces]
+        dyn += dyn[:1] * (_SLOTS - n)  # unused slots: one type for every step
+        table = np.zeros((_SLOTS, 4))  # h [s], end [s], angle before, angle after [rad]
+        event = np.zeros(_SLOTS, dtype=np.bool_)
+        err, err_after = _NO_ERRORS, _NO_ERRORS
+        if mesh.has_errors:
+            err, err_after = np.zeros((_SLOTS, 12)), np.zeros((_SLOTS, 12))
+        for p, (h, te, before, after) in enumerate(pieces):
+            table[p] = h, te, before, math.nan if after is None else after
+            event[p] = after is not None
+            if mesh.has_errors:
+                err[p] = mesh.error_displacement(before)
+                if after is not None:
+                    err_after[p] = mesh.error_displacement(after)
+        head = (n, tuple(d[1] for d in dyn), tuple(d[2] for d in dyn),
+                tuple(d[0].s0 for d in dyn), tuple(d[0].w for d in dyn), table, event, err,
+                err_after, self.x, self.v, self.a, self._f_c, self._unb_coef)
+        tail = (mesh.has_errors, *self._mesh_arrays, self.active, True, self._f_scale, self.tol,
+                self.max_iter, self._gear_compliance())
+        outputs = self._advance_outputs()
+        return head, tail, outputs, [te for _, te, _, _ in pieces]
 
-    def end_compiled_step(self, step, status, k, total, length) -> StepInfo:
+    def end_compiled_step(self, step, status, piece, k, total, length) -> StepInfo:
         """What :meth:`step` does after its one compiled call: the error of a failed call, or
         the new state, time and step count; ``step`` from :meth:`compiled_step`, the other
-        arguments as :func:`gear_fmu.step.kernel.advance` returned them."""
-        _, _, outputs, t1 = step
-        info = self._advance_result(status, k, total, length, outputs, t1,
+        arguments as :func:`gear_fmu.step.kernel.advance_pieces` returned them."""
+        _, _, outputs, ends = step
+        info = self._advance_result(status, k, total, length, outputs, ends[piece],
                                     f"Newmark step {self.n_steps + 1}")
-        self.t = t1
+        self.t = ends[-1]
         self.n_steps += 1
         return info
 

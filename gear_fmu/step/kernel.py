@@ -29,7 +29,8 @@ from gear_fmu.step.condensation import N_GEAR, NC
 from gear_fmu.step.contact_loop import ROUNDOFF, _newton_solve, _residual_norm, _same_set
 from gear_fmu.step.newmark import newmark_kinematics
 
-__all__ = ["CONVERGED", "NOT_CONVERGED", "SINGULAR", "advance", "sum_squares"]
+__all__ = ["CONVERGED", "NOT_CONVERGED", "SINGULAR", "advance", "advance_pieces", "contact_event",
+           "sum_squares"]
 
 CONVERGED, NOT_CONVERGED, SINGULAR = 0, 1, 2
 
@@ -113,3 +114,72 @@ def advance(hh, g_const, s0, w, x, v, a, f_c, unb_coef, t1, f0, kb, cb, h,  # st
             used = active.copy()
         has_used = True
     return NOT_CONVERGED, max_iter, total, length
+
+
+@njit(cache=True)
+def contact_event(angle, x1, err, has_err, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1,
+                  pitch2, m_gear, force_before, a1, force, stiff, active, inside, delta, load,
+                  xis, zout):
+    """A contact event at the end of a sub-step (:mod:`gear_fmu.structure`, contact
+    location): the mesh evaluated at pinion ``angle`` [rad] (after the event) at the gear DOFs
+    of ``x1`` (plus ``err`` when ``has_err``), into ``force`` ... ``zout``, and the
+    acceleration ``a1`` raised by ``M^-1 (F_mesh+ - F_mesh-)`` at the same X and Xd
+    (``m_gear``: M^-1 restricted to the gear-node columns, (n, 12); ``force_before``: the mesh
+    force before the event, which may be ``force`` itself). Returns ``(total mesh load [N],
+    contact length [m])`` after the event."""
+    q = np.empty(N_GEAR)
+    jump = np.empty(N_GEAR)
+    for i in range(N_GEAR):
+        q[i] = x1[i] + err[i] if has_err else x1[i]
+        jump[i] = force_before[i]
+    total, length = _mesh_kernel(angle, q, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1,
+                                 pitch2, force, stiff, active, inside, delta, load, xis, zout,
+                                 False)
+    for i in range(N_GEAR):
+        jump[i] = force[i] - jump[i]
+    for i in range(a1.shape[0]):
+        acc = 0.0
+        for j in range(N_GEAR):
+            acc += m_gear[i, j] * jump[j]
+        a1[i] = a1[i] + acc
+    return total, length
+
+
+@njit(cache=True)
+def advance_pieces(n_pieces, hh, g_const, s0, w, table, event, err, err_after, x, v, a,
+                   f_c, unb_coef, f0, kb, cb, has_err, geo, xi_tab, k_tab, zs, dl, n_lines, dev,
+                   pitch1, pitch2, used0, has_used, f_scale, tol, max_iter, m_gear, force, stiff,
+                   active, inside, delta, load, xis, zout, residuals, x1, v1, a1):
+    """A step cut at its contact events (:meth:`gear_fmu.structure.Structure.step`) in one
+    call: sub-step ``p < n_pieces`` is :func:`advance` of length ``table[p, 0]`` [s] to
+    ``table[p, 1]`` [s] with the mesh at pinion angle ``table[p, 2]`` [rad] (``hh[p]`` ...
+    ``w[p]`` its condensation, ``err[p]`` its error displacement), from the state the sub-step
+    before left, then :func:`contact_event` at ``table[p, 3]`` (error displacement
+    ``err_after[p]``) where ``event[p]``; the arithmetic of the Python loop over the
+    sub-steps.
+
+    Returns ``(status, sub-step, passes, total mesh load [N], contact length [m])``: the
+    status of the last :func:`advance` and which sub-step it was; the final state in ``x1,
+    v1, a1`` and the final mesh evaluation in ``force`` ... ``zout``.
+    """
+    xs, vs, as_ = x, v, a
+    used = used0
+    status, k, total, length = CONVERGED, 0, 0.0, 0.0
+    for p in range(n_pieces):
+        status, k, total, length = advance(
+            hh[p], g_const[p], s0[p], w[p], xs, vs, as_, f_c, unb_coef, table[p, 1], f0, kb,
+            cb, table[p, 0], table[p, 2], err[p], has_err, geo, xi_tab, k_tab, zs, dl,
+            n_lines, dev, pitch1, pitch2, used, has_used, f_scale, tol, max_iter, force, stiff,
+            active, inside, delta, load, xis, zout, residuals, x1, v1, a1)
+        if status != CONVERGED:
+            return status, p, k, total, length
+        if event[p]:
+            total, length = contact_event(
+                table[p, 3], x1, err_after[p], has_err, geo, xi_tab, k_tab, zs, dl, n_lines,
+                dev, pitch1, pitch2, m_gear, force, a1, force, stiff, active, inside, delta,
+                load, xis, zout)
+        if p + 1 < n_pieces:
+            xs, vs, as_ = x1.copy(), v1.copy(), a1.copy()
+            used = active.copy()
+            has_used = True
+    return status, n_pieces - 1, k, total, length

@@ -13,8 +13,9 @@ the bits of the Python loop, and of the same step through FMUs (the tests compar
 structure's state is not saved and restored: every iteration starts from the same
 (X, Xdot, Xddot) and writes the new state into buffers.
 
-What the compiled loop does not take (a step with contact events, whose sub-steps and
-acceleration jumps are Python, or timing on) goes through the Python loop:
+A step cut at its contact events is one call too (:func:`gear_fmu.step.kernel.advance_pieces`);
+what the compiled loop does not take (timing on, more sub-steps than
+:data:`gear_fmu.structure.MAX_PIECES`) goes through the Python loop:
 :meth:`FusedStep.step` returns None and the master iterates itself. Failures come back as
 status codes and are raised in Python with the messages of the Python loop.
 """
@@ -29,7 +30,7 @@ from bearing_fmu.affine import AffineLaws, _relinearise, affine_set_global
 from bearing_fmu.hybrid._kernels import hybrid_set_global
 from bearing_fmu.linear import LinearBearing, LinearisedBearing
 from gear_fmu.step.condensation import N_GEAR
-from gear_fmu.step.kernel import CONVERGED, advance
+from gear_fmu.step.kernel import CONVERGED, advance_pieces
 from orchestrator.coupling.inprocess import InProcessStructure, ModelBearings
 from orchestrator.coupling.master import (
     RELAXATION,
@@ -74,52 +75,54 @@ def _evaluate_set(bearings, states, out):
 
 
 @njit(cache=True)
-def coupled_step(hh, g_const, s0, w, x, v, a, f_c, unb_coef, t1,  # structure before the laws
-                 h, angle, err, has_err, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1,
-                 pitch2, used0, has_used, f_scale, s_tol, s_max_iter,  # ... after the laws
+def coupled_step(n_pieces, hh, g_const, s0, w, table, event, err, err_after, x, v, a, f_c,
+                 unb_coef,  # the structure before the laws (advance_pieces)
+                 has_err, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1, pitch2, used0,
+                 has_used, f_scale, s_tol, s_max_iter, m_gear,  # ... after the laws
                  force, stiff, active, inside, delta, load, xis, zout, residuals, x1, v1, a1,
                  bearings, states, out,  # the bearing set (evaluate_set)
                  f0, kb, cb, tol, max_iterations, relaxation, stall, mismatches):
     """The iteration of :meth:`orchestrator.coupling.master.Master.step` from the laws
     ``f0, kb, cb`` (nb, 2), (nb, 2, 2) [N, N/m, N s/m].
 
-    The structure's arguments are :func:`gear_fmu.step.kernel.advance`'s without the laws;
-    ``bearings`` the set's arrays (:func:`evaluate_set`), ``states`` (nb, 4) receives the
-    journal states of each iterate and ``out`` (nb, 5, 2) the bearings' results there;
-    ``mismatches`` (max_iterations,) receives each iteration's relative mismatch.
+    The structure's arguments are :func:`gear_fmu.step.kernel.advance_pieces`'s without the
+    laws (a step cut at its contact events, or one piece); ``bearings`` the set's arrays
+    (:func:`evaluate_set`), ``states`` (nb, 4) receives the journal states of each iterate
+    and ``out`` (nb, 5, 2) the bearings' results there; ``mismatches`` (max_iterations,)
+    receives each iteration's relative mismatch.
 
-    Returns ``(outcome, iterations, structure status, structure passes, total mesh load,
-    contact length, failed bearing, its status, relaxed, mismatch, f0, kb, cb)``: the
-    outcome (:data:`ACCEPTED` ...), the structure kernel's returns of the last iteration, the
-    bearing set's, whether the step was relaxed, and the mismatch and the law the bearings
-    give at the last iterate (accepted: the next step's; the law used, else).
+    Returns ``(outcome, iterations, structure status, its sub-step, structure passes, total
+    mesh load, contact length, failed bearing, its status, relaxed, mismatch, f0, kb, cb)``:
+    the outcome (:data:`ACCEPTED` ...), the structure kernel's returns of the last iteration,
+    the bearing set's, whether the step was relaxed, and the mismatch and the law the
+    bearings give at the last iterate (accepted: the next step's; the law used, else).
     """
     nb = states.shape[0]
     relaxed = False
     mismatch = np.inf
     for it in range(1, max_iterations + 1):
-        status, k, total, length = advance(
-            hh, g_const, s0, w, x, v, a, f_c, unb_coef, t1, f0, kb, cb, h, angle, err,
-            has_err, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1, pitch2, used0,
-            has_used, f_scale, s_tol, s_max_iter, force, stiff, active, inside, delta, load,
-            xis, zout, residuals, x1, v1, a1)
+        status, piece, k, total, length = advance_pieces(
+            n_pieces, hh, g_const, s0, w, table, event, err, err_after, x, v, a, f_c, unb_coef,
+            f0, kb, cb, has_err, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1, pitch2,
+            used0, has_used, f_scale, s_tol, s_max_iter, m_gear, force, stiff, active, inside,
+            delta, load, xis, zout, residuals, x1, v1, a1)
         if status != CONVERGED:
-            return (STRUCTURE_FAILED, it, status, k, total, length, -1, 0, relaxed, mismatch,
-                    f0, kb, cb)
+            return (STRUCTURE_FAILED, it, status, piece, k, total, length, -1, 0, relaxed,
+                    mismatch, f0, kb, cb)
         for b in range(nb):  # Structure.journal_states
             for c in range(2):
                 states[b, c] = x1[N_GEAR + 2 * b + c]
                 states[b, 2 + c] = v1[N_GEAR + 2 * b + c]
         bad, b_status = evaluate_set(bearings, states, out)
         if bad >= 0:
-            return (BEARING_FAILED, it, status, k, total, length, bad, b_status, relaxed,
-                    mismatch, f0, kb, cb)
+            return (BEARING_FAILED, it, status, piece, k, total, length, bad, b_status,
+                    relaxed, mismatch, f0, kb, cb)
         mismatch, f0_new, kb_new, cb_new = _relinearise(
             states, np.ascontiguousarray(out[:, 0]), np.ascontiguousarray(out[:, 1:3]),
             np.ascontiguousarray(out[:, 3:5]), f0, kb, cb)
         if mismatch <= tol:
-            return (ACCEPTED, it, status, k, total, length, -1, 0, relaxed, mismatch, f0_new,
-                    kb_new, cb_new)
+            return (ACCEPTED, it, status, piece, k, total, length, -1, 0, relaxed, mismatch,
+                    f0_new, kb_new, cb_new)
         mismatches[it - 1] = mismatch
         if not relaxed and it >= 3 and mismatch > stall * mismatches[it - 3]:
             relaxed = True
@@ -130,8 +133,8 @@ def coupled_step(hh, g_const, s0, w, x, v, a, f_c, unb_coef, t1,  # structure be
             cb = relaxation * cb_new + r * cb
         else:
             f0, kb, cb = f0_new, kb_new, cb_new
-    return (NOT_CONVERGED, max_iterations, CONVERGED, 0, 0.0, 0.0, -1, 0, relaxed, mismatch,
-            f0, kb, cb)
+    return (NOT_CONVERGED, max_iterations, CONVERGED, 0, 0, 0.0, 0.0, -1, 0, relaxed,
+            mismatch, f0, kb, cb)
 
 
 class FusedStep:
@@ -180,7 +183,7 @@ class FusedStep:
         if self._mismatches is None or self._mismatches.size != master.max_iterations:
             self._mismatches = np.empty(master.max_iterations)
         laws = master.laws
-        (outcome, it, status, k, total, length, bad, b_status, relaxed, mismatch,
+        (outcome, it, status, piece, k, total, length, bad, b_status, relaxed, mismatch,
          f0, kb, cb) = coupled_step(
             *head, *tail, *outputs, arrays, states, out, laws.f0, laws.kb, laws.cb,
             master.tol, master.max_iterations, RELAXATION, STALL, self._mismatches)
@@ -190,14 +193,14 @@ class FusedStep:
         master.relaxed_steps += bool(relaxed)
         bearings.evaluations += nb * (evaluations - (outcome == BEARING_FAILED))
         if outcome == STRUCTURE_FAILED:
-            st.end_compiled_step(plan, status, k, total, length)  # raises the structure's
+            st.end_compiled_step(plan, status, piece, k, total, length)  # raises its error
         if outcome == BEARING_FAILED:
             bearings.raise_set_failure(bad, b_status, states)
         bearings.record_states(states)
         if outcome == NOT_CONVERGED:
             raise CouplingError(not_converged(t, dt, master.max_iterations, mismatch,
                                               master.tol))
-        st.end_compiled_step(plan, status, k, total, length)
+        st.end_compiled_step(plan, status, piece, k, total, length)
         new = AffineLaws(f0, kb, cb, states.copy(), out[:, 0].copy())
         master.laws = new
         return StepReport(it, mismatch, out[:, 0], new, states)

@@ -29,8 +29,9 @@ def _runs(fmu_dir, numba_cache=None, env_vars=None) -> dict:
                         env_vars=env_vars)
 
 
-#: kernels that call kernels of other files: the hybrid film's driver and the structure step
-CALLERS = ("hybrid/_kernels.*", "step/kernel.*")
+#: kernels that call kernels of other files: the hybrid film's driver, the structure step and
+#: the master's compiled step
+CALLERS = ("hybrid/_kernels.*", "step/kernel.*", "coupling/fused.*")
 
 
 def test_same_bits_with_a_cold_a_warm_and_a_half_warm_numba_cache(fmu_dir, tmp_path):

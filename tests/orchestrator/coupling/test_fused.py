@@ -1,10 +1,10 @@
 """The master's step as one compiled call (:mod:`orchestrator.coupling.fused`) against the
 Python loop it replaces (:meth:`Master.step` without ``fused``): the same bits, counters and
 errors, step for step, spur and helical, hybrid and linear bearings, through the relaxation
-and the steps with contact events that it leaves to the Python loop; the other bearing models
-keep the Python loop. The physics of the step is asserted elsewhere (the
-monolithic Newton, the golden run, the order); through FMUs the Python loop runs, and the
-FMU suites compare it with in-process runs bit for bit."""
+and the steps cut at contact events; the other bearing models keep the Python loop. The
+physics of the step is asserted elsewhere (the monolithic Newton, the golden run, the order);
+through FMUs the Python loop runs, and the FMU suites compare it with in-process runs bit for
+bit."""
 
 from __future__ import annotations
 
@@ -21,12 +21,13 @@ from orchestrator.coupling.master import CouplingError
 from orchestrator.coupling.system import build_master
 
 
-def _pair(case):
+def _pair(case, structure=None):
     """Two masters of ``case`` after the static solution: the compiled step and the Python
-    loop."""
+    loop (each on a structure from ``structure(case)`` if given)."""
     out = []
     for compiled in (True, False):
-        m = build_master(case, in_process=True)
+        m = build_master(case, in_process=True,
+                         structure=None if structure is None else structure(case))
         assert m.fused is not None
         if not compiled:
             m.fused = None
@@ -51,36 +52,78 @@ def _same_state(a, b):
         np.testing.assert_array_equal(getattr(a.laws, name), getattr(b.laws, name), name)
 
 
-def _run_both(case, steps, monkeypatch):
-    compiled, python = _pair(case)
+def _run_both(case, steps, monkeypatch, structure=None):
+    compiled, python = _pair(case, structure)
     taken = []
     step = fused_module.FusedStep.step
     monkeypatch.setattr(fused_module.FusedStep, "step",
                         lambda self, *a: taken.append(step(self, *a)) or taken[-1])
     dt = time_step(case)
+    events = 0
     for i in range(steps):
+        events += any(after is not None for *_, after in python.structure.physics._pieces(dt))
         rc, rp = compiled.step(i * dt, dt), python.step(i * dt, dt)
         assert (rc.iterations, rc.mismatch) == (rp.iterations, rp.mismatch), f"step {i + 1}"
         np.testing.assert_array_equal(rc.bearing_force, rp.bearing_force)
         np.testing.assert_array_equal(rc.states, rp.states)
     _same_state(compiled, python)
     assert _counters(compiled) == _counters(python)
-    return compiled, sum(r is not None for r in taken)
+    return compiled, sum(r is not None for r in taken), events
 
 
 @pytest.mark.parametrize("name, model, steps", [("baguet2010_spur", "hybrid", 64),
                                                 ("baguet2010_helical", "hybrid", 24),
                                                 ("baguet2010_spur", "linear", 64)])
 def test_the_compiled_step_gives_the_bits_of_the_python_loop(name, model, steps, monkeypatch):
-    _, n_compiled = _run_both(load_case(name, {"bearings.model": model}), steps, monkeypatch)
-    # steps with contact events take the Python loop: both kinds ran
-    assert 0 < n_compiled < steps
+    """Every step compiled, those cut at contact events (sub-steps and acceleration jumps)
+    among them."""
+    _, n_compiled, events = _run_both(load_case(name, {"bearings.model": model}), steps,
+                                      monkeypatch)
+    assert n_compiled == steps
+    assert 0 < events < steps
+
+
+def _with_runout(case):
+    """The case's structure with gear runouts: error displacements of the gear nodes at every
+    mesh evaluation, the ones after the contact events included."""
+    from fmu_src import description
+    from gear_fmu.mesh.element import MeshElement, ToothDeviations
+    from gear_fmu.structure import Structure
+
+    pair = description.gear_pair(case)
+    mesh = MeshElement(pair, pair.nominal_line_load(case["operation.torque"]),
+                       deviations=ToothDeviations(runout=(20e-6, 10e-6),
+                                                  runout_phase=(0.3, 1.1)))
+    assert mesh.has_errors
+    return Structure(description.gear_shaft_system(case, pair), mesh,
+                     description.structure_loads(case), zeta=description.damping(case),
+                     tol=case["simulation.tolerance"],
+                     consistent_start=case["simulation.consistent_start"],
+                     locate_contact=case["simulation.locate_contact"])
+
+
+def test_gear_runouts_give_the_same_bits(monkeypatch):
+    _, n_compiled, events = _run_both(load_case("baguet2010_spur"), 40, monkeypatch,
+                                      structure=_with_runout)
+    assert n_compiled == 40 and events > 0
+
+
+def test_a_step_with_more_sub_steps_than_the_compiled_loop_takes_goes_to_the_python_loop(
+        monkeypatch):
+    """With room for one piece only, the steps cut at their events take the Python loop
+    (the helical case: 2 or 3 pieces in most steps), with the same bits."""
+    import gear_fmu.structure
+
+    monkeypatch.setattr(gear_fmu.structure, "MAX_PIECES", 1)
+    _, n_compiled, events = _run_both(load_case("baguet2010_helical"), 24, monkeypatch)
+    assert events > 0
+    assert n_compiled == 24 - events
 
 
 def test_the_relaxed_step_at_300_rad_s_gives_the_same_bits(monkeypatch):
     """Step 408 at 300 rad/s puts Newton into a two-cycle and is relaxed (test_master)."""
     case = load_case("baguet2010_spur").with_overrides({"operation.speed": 300.0})
-    compiled, _ = _run_both(case, 13 * 32, monkeypatch)
+    compiled, _, _ = _run_both(case, 13 * 32, monkeypatch)
     assert compiled.relaxed_steps >= 1
 
 
