@@ -189,6 +189,10 @@ class Structure:
         self.active = None
         self.mesh_state = None
         self._dyn_cache: dict[float, tuple] = {}
+        # the compiled step's slots: condensations by sub-step lengths, and its piece table
+        self._slot_cache: dict[tuple, tuple] = {}
+        self._table = np.zeros((_SLOTS, 4))
+        self._event = np.zeros(_SLOTS, dtype=np.bool_)
         self.damping_model = zeta if isinstance(zeta, DampingModel) else DampingModel(
             ratio=float(zeta))
         self._reference_modes = None
@@ -216,6 +220,7 @@ class Structure:
         self._damping_full = damping_full
         self._c = self._permute(damping_full)
         self._dyn_cache.clear()
+        self._slot_cache.clear()
 
     def _require_damping(self) -> None:
         """Build the damping of the constructor's reference if nothing replaced it (at the
@@ -305,6 +310,7 @@ class Structure:
         f = self._f_const[NC:]
         self._dyn_cache = {dt: (cond, h, cond.g @ f)
                            for dt, (cond, h, _) in self._dyn_cache.items()}
+        self._slot_cache.clear()
 
     def pinion_angle(self, t: float) -> float:
         """Rigid-body pinion angle at t [rad]."""
@@ -619,27 +625,42 @@ class Structure:
         if n > MAX_PIECES:
             return None
         mesh = self.mesh
-        dyn = [self._dynamic(h) for h, _, _, _ in pieces]
-        dyn += dyn[:1] * (_SLOTS - n)  # unused slots: one type for every step
-        table = np.zeros((_SLOTS, 4))  # h [s], end [s], angle before, angle after [rad]
-        event = np.zeros(_SLOTS, dtype=np.bool_)
+        table, event = self._table, self._event  # read by the call only: reused
         err, err_after = _NO_ERRORS, _NO_ERRORS
         if mesh.has_errors:
             err, err_after = np.zeros((_SLOTS, 12)), np.zeros((_SLOTS, 12))
         for p, (h, te, before, after) in enumerate(pieces):
-            table[p] = h, te, before, math.nan if after is None else after
+            row = table[p]
+            row[0] = h
+            row[1] = te
+            row[2] = before
+            row[3] = math.nan if after is None else after
             event[p] = after is not None
             if mesh.has_errors:
                 err[p] = mesh.error_displacement(before)
                 if after is not None:
                     err_after[p] = mesh.error_displacement(after)
-        head = (n, tuple(d[1] for d in dyn), tuple(d[2] for d in dyn),
-                tuple(d[0].s0 for d in dyn), tuple(d[0].w for d in dyn), table, event, err,
+        head = (n, *self._slot_arrays(tuple(h for h, _, _, _ in pieces)), table, event, err,
                 err_after, self.x, self.v, self.a, self._f_c, self._unb_coef)
         tail = (mesh.has_errors, *self._mesh_arrays, self.active, True, self._f_scale, self.tol,
                 self.max_iter, self._gear_compliance())
         outputs = self._advance_outputs()
         return head, tail, outputs, [te for _, te, _, _ in pieces]
+
+    def _slot_arrays(self, lengths: tuple) -> tuple:
+        """``(hh, g_const, s0, w)`` of sub-steps of ``lengths`` [s] (:meth:`_dynamic`), each a
+        tuple of :data:`MAX_PIECES` slots (the unused ones repeat the first: one argument type
+        for every step), computed once per ``lengths``."""
+        hit = self._slot_cache.get(lengths)
+        if hit is None:
+            dyn = [self._dynamic(h) for h in lengths]
+            dyn += dyn[:1] * (_SLOTS - len(dyn))
+            hit = (tuple(d[1] for d in dyn), tuple(d[2] for d in dyn),
+                   tuple(d[0].s0 for d in dyn), tuple(d[0].w for d in dyn))
+            if len(self._slot_cache) > 256:
+                self._slot_cache.clear()
+            self._slot_cache[lengths] = hit
+        return hit
 
     def end_compiled_step(self, step, status, piece, k, total, length) -> StepInfo:
         """What :meth:`step` does after its one compiled call: the error of a failed call, or
