@@ -82,8 +82,8 @@ def coupled_step(n_pieces, hh, g_const, s0, w, table, event, err, err_after, x, 
                  force, stiff, active, inside, delta, load, xis, zout, residuals, x1, v1, a1,
                  bearings, states, out,  # the bearing set (evaluate_set)
                  f0, kb, cb, tol, max_iterations, relaxation, stall, mismatches):
-    """The iteration of :meth:`orchestrator.coupling.master.Master.step` from the laws
-    ``f0, kb, cb`` (nb, 2), (nb, 2, 2) [N, N/m, N s/m].
+    """The iteration of :meth:`orchestrator.coupling.master.Master.step` from the affine laws
+    of Eq. (17) ``f0, kb, cb`` (nb, 2), (nb, 2, 2) [N, N/m, N s/m].
 
     The structure's arguments are :func:`gear_fmu.step.kernel.advance_pieces`'s without the
     laws (a step cut at its contact events, or one piece); ``bearings`` the set's arrays

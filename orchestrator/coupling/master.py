@@ -33,7 +33,11 @@ calls whatever the transport.
 The slaves are reached only through :class:`StructureSlave` and :class:`BearingSet`, which
 declare everything the master and the runner use; :mod:`orchestrator.coupling.inprocess` (the
 physics objects directly) and :mod:`orchestrator.coupling.fmi` (the FMUs through fmpy)
-implement them.
+implement them. In-process, with hybrid or linear bearings, :meth:`Master.step` hands the
+whole iteration to one compiled call (:mod:`orchestrator.coupling.fused`, the ``fused``
+attribute that :func:`orchestrator.coupling.system.build_master` sets): the same kernels in
+the same order, so the same bits as the loop below, which stays the reference and serves the
+FMUs and the other bearing models.
 """
 
 from __future__ import annotations
@@ -324,7 +328,8 @@ class Master:
 
     @one_blas_thread
     def step(self, t: float, dt: float) -> StepReport:
-        """One coupled Newmark step from t to t + dt."""
+        """One coupled Newmark step from t to t + dt: Newton on the bearings' forces through
+        their affine laws (Eq. 17), linearised at each iterate (module docstring)."""
         if self.laws is None:
             raise CouplingError("call solve_static() (or set laws) before the first step")
         if self.fused is not None:
