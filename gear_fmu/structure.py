@@ -21,11 +21,11 @@ Time integration refinements (switched on by the case file, :mod:`fmu_src.descri
   of contact (:meth:`gear_fmu.mesh.element.MeshElement.event_angles`, known from the rigid-body
   kinematics). A step containing such angles is cut into sub-steps ending on them; a sub-step
   ending on an event is solved with the contact set before it (mesh evaluated
-  ``EVENT_SIDE`` base pitch earlier), then the acceleration is reset to the one after it,
-  ``Xdd+ = Xdd- + M^-1 (F_mesh+ - F_mesh-)`` at the same X and Xd. Each sub-step then
-  integrates a smooth problem and the scheme keeps its order 2. The bearing laws of the step
-  serve every sub-step (they are affine in X and Xd). No sub-step is shorter than
-  ``EVENT_SNAP`` dt: an event that close to the step's end is taken at the end, and events
+  ``EVENT_SIDE`` base pitch earlier, :mod:`gear_fmu.step.events`), then the acceleration is
+  reset to the one after it, ``Xdd+ = Xdd- + M^-1 (F_mesh+ - F_mesh-)`` at the same X and Xd.
+  Each sub-step then integrates a smooth problem and the scheme keeps its order 2. The bearing
+  laws of the step serve every sub-step (they are affine in X and Xd). No sub-step is shorter
+  than ``EVENT_SNAP`` dt: an event that close to the step's end is taken at the end, and events
   that close to each other as one (a step slightly off the mesh period's divisor brings the
   events back towards the step's end a little every step). Contact changes that are not
   kinematic (a tooth pair separating under dynamic load) are not located.
@@ -40,7 +40,6 @@ error, support loads) are in :mod:`gear_fmu.modal.analyses`.
 
 from __future__ import annotations
 
-import bisect
 import math
 import time
 from dataclasses import dataclass, replace
@@ -63,6 +62,7 @@ from gear_fmu.modal.damping import DampingModel
 from gear_fmu.step.assembly import check_laws, check_laws_fast, finish_step, prepare_step
 from gear_fmu.step.condensation import N_BEARING, N_GEAR, NC, Condensation
 from gear_fmu.step.contact_loop import StepInfo, solve_condensed
+from gear_fmu.step.events import ContactEvents
 from gear_fmu.step.kernel import CONVERGED, SINGULAR, advance, contact_event
 from gear_fmu.step.newmark import NewmarkConvergenceError, newmark_coefficients
 from gear_fmu.system import GearShaftSystem
@@ -71,18 +71,6 @@ __all__ = ["StepInfo", "Structure", "StructureLoads", "StructureState", "check_l
 
 #: first static iterate: pinion torsion [rad] that closes every potential contact
 INITIAL_APPROACH_ROTATION = 1e-3
-#: contact location: the side of an event the mesh is evaluated on, in base pitches (above the
-#: mesh kernel's snap of 1e-9 pitch, :mod:`gear_fmu.mesh.element`)
-EVENT_SIDE = 1e-8
-#: contact location: no sub-step is shorter than this fraction of dt. Newmark's acceleration
-#: update ``4 (x1 - x0 - h v0) / h^2 - a0`` amplifies the round-off of the solved x1 by 4 / h^2:
-#: a sub-step of 1e-7 dt turns 1e-20 m of round-off into accelerations of order 1e2 m/s^2
-#: at the paper's step, and runs at a step a few 1e-8 off the mesh period's divisor went
-#: wrong or failed. At 1e-3 dt it is below 1e-4 m/s^2; an event moved by at most 1e-3 dt.
-EVENT_SNAP = 1e-3
-#: sub-step fractions of dt are rounded to multiples of 2**-30, so that the condensations of
-#: the recurring sub-steps are computed once (:meth:`Structure._dynamic`)
-_FRACTION = 2.0**30
 _NO_ERROR = np.zeros(12)  # no runout or mounting error
 _NO_SET = np.zeros(0, dtype=np.bool_)  # no contact set known
 #: sub-steps of one step that :meth:`Structure.compiled_step` takes (a spur step of the paper's
@@ -174,7 +162,7 @@ class Structure:
         self.consistent_start = bool(consistent_start)
         self.locate_contact = bool(locate_contact) and hasattr(mesh, "event_angles")
         self._m_gear = None  # M^-1 restricted to the gear-node columns, when first needed
-        self._event_phases = None  # (mesh period [rad], event angles in it), when first needed
+        self._events = None  # the contact events (gear_fmu.step.events), when first needed
         #: the mesh's constant arrays for the compiled step (gear_fmu.step.kernel), or None:
         #: the Python loop of gear_fmu.step.contact_loop serves any other mesh object
         self._mesh_arrays = mesh.kernel_arrays() if isinstance(mesh, MeshElement) else None
@@ -431,26 +419,14 @@ class Structure:
 
     def _pieces(self, dt: float) -> list:
         """``[(h [s], end time [s], mesh angle of the sub-step [rad], angle after its event
-        [rad] or None)]`` of a step of dt: one piece without contact events, else the
-        sub-steps of :meth:`_sub_steps`, each ending on its events evaluated on their outer
-        sides (module docstring)."""
-        t1 = self.t + dt
-        cuts = self._sub_steps(dt) if self.locate_contact else None
-        if not cuts:
+        [rad] or None)]`` of a step of dt (:meth:`gear_fmu.step.events.ContactEvents.pieces`;
+        one piece without contact location)."""
+        if not self.locate_contact:
+            t1 = self.t + dt
             return [(dt, t1, self.pinion_angle(t1), None)]
-        out = []
-        t_start = self.t
-        side = EVENT_SIDE * self.mesh.pair.base_pitch / self.mesh.pair.base_radius[0]
-        for h, frac, events in cuts:
-            te = t1 if frac == 1.0 else t_start + frac * dt
-            angle = self.pinion_angle(te)
-            before, after = angle, None
-            if events is not None:  # the sides of the events, wherever they were snapped
-                first, last = events
-                before = angle - side if angle <= first + side else first - side
-                after = angle + side if angle >= last - side else last + side
-            out.append((h, te, before, after))
-        return out
+        if self._events is None:
+            self._events = ContactEvents(self.mesh, self.pinion_angle)
+        return self._events.pieces(self.t, dt)
 
     def _contact_event(self, angle: float) -> None:
         """Xdd, contact set and mesh state after a contact event: the mesh evaluated at pinion
@@ -478,56 +454,6 @@ class Structure:
             raise RuntimeError("call static() before the first step (initial state X0)")
         if not (dt > 0.0 and math.isfinite(dt)):
             raise ValueError(f"time step dt = {dt!r} s must be finite and > 0")
-
-    def _sub_steps(self, dt: float) -> list:
-        """``[(h, end fraction of dt, (first, last) event angle it ends on, or None)]`` of a
-        step with contact events (None without): the step cut at the event angles, fractions
-        rounded to ``2**-30``, none shorter than ``EVENT_SNAP`` dt (events that close to the
-        step's ends or to each other taken together; the mesh is then evaluated on the outer
-        sides of the events, not of the cut)."""
-        a0 = self.pinion_angle(self.t)
-        a1 = self.pinion_angle(self.t + dt)
-        tol = 1e-9 * self.mesh.pair.base_pitch / self.mesh.pair.base_radius[0]
-        snap = max(tol, EVENT_SNAP * (a1 - a0))  # module docstring
-        events = self._events_in(a0 - tol, a1 + snap)
-        if not events:
-            return None
-        cuts = []  # [end fraction, first event, last event]
-        for e in events:
-            if e - a0 <= snap:
-                continue  # at the step's start: the previous step ended on it
-            frac = 1.0 if a1 - e <= snap else round((e - a0) / (a1 - a0) * _FRACTION) / _FRACTION
-            if cuts and frac - cuts[-1][0] <= EVENT_SNAP:  # one cut for events that close
-                cuts[-1][0] = max(cuts[-1][0], frac)
-                cuts[-1][2] = e
-            elif 0.0 < frac:
-                cuts.append([frac, e, e])
-        if not cuts:
-            return None
-        ends = cuts + ([] if cuts[-1][0] == 1.0 else [[1.0, None, None]])
-        out, prev = [], 0.0
-        for frac, first, last in ends:
-            out.append(((frac - prev) * dt, frac, None if first is None else (first, last)))
-            prev = frac
-        return out
-
-    def _events_in(self, lo: float, hi: float) -> list:
-        """Contact event angles in ``(lo, hi]`` [rad]: those of one mesh period
-        (:meth:`gear_fmu.mesh.element.MeshElement.event_angles`, computed once) repeated with the
-        period ``2 pi / z1`` (the events of every slice recur with it)."""
-        if self._event_phases is None:
-            period = self.mesh.event_period
-            self._event_phases = (period, self.mesh.event_angles(0.0, period).tolist())
-        period, phases = self._event_phases
-        out = []
-        k = math.floor(lo / period)
-        while True:
-            base = k * period
-            for e in phases[bisect.bisect_right(phases, lo - base):]:
-                if base + e > hi:
-                    return out
-                out.append(base + e)
-            k += 1
 
     def _advance(self, h, t1, angle, f0, kb, cb, what) -> StepInfo:
         """One Newmark step of length h to t1 (mesh at ``angle``); updates X, Xd, Xdd and the

@@ -106,17 +106,19 @@ def test_event_schedule_repeats_the_events_of_one_mesh_period(helix):
     """The structure's periodic event schedule equals the mesh's events computed directly over
     any interval (spur: 2 per mesh period, helical: one entry and one exit per slice)."""
     from fmu_src.examples import paper_structure
+    from gear_fmu.step.events import ContactEvents
 
     st = paper_structure(helix)
+    events = ContactEvents(st.mesh, st.pinion_angle)
     period = st.mesh.event_period
     rng = np.random.default_rng(3)
     for lo in rng.uniform(0.0, 500.0, 200):
         hi = lo + rng.uniform(0.0, 2.5) * period
         direct = st.mesh.event_angles(lo, hi)
-        scheduled = np.array(st._events_in(lo, hi))
+        scheduled = np.array(events.between(lo, hi))
         assert scheduled.size == direct.size
         np.testing.assert_allclose(scheduled, direct, rtol=0, atol=1e-12)
-    assert len(st._events_in(0.0, period)) == (2 if helix == 0.0 else 40)
+    assert len(events.between(0.0, period)) == (2 if helix == 0.0 else 40)
 
 
 @pytest.mark.parametrize("name", ["baguet2010_spur", "baguet2010_helical"])

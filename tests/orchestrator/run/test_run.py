@@ -10,7 +10,7 @@ import pytest
 
 from fmu_src import description
 from fmu_src.case import CaseError, load_case, shipped_cases
-from gear_fmu.structure import EVENT_SIDE
+from gear_fmu.step.events import EVENT_SIDE
 from orchestrator.cli import main
 from orchestrator.coupling.inprocess import ModelBearings
 from orchestrator.coupling.system import build_master

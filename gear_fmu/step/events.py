@@ -1,0 +1,120 @@
+"""Contact location in a Newmark step (:mod:`gear_fmu.structure`, ``locate_contact``): the
+kinematic contact events that fall inside a step, and the step cut at them.
+
+A contact line enters or leaves the path of contact at pinion angles known from the
+rigid-body kinematics (:meth:`gear_fmu.mesh.element.MeshElement.event_angles`), which recur
+with the mesh period. :meth:`ContactEvents.pieces` cuts a step at them into sub-steps, each
+ending on its events; the structure solves a sub-step with the contact set before its events
+(mesh evaluated :data:`EVENT_SIDE` base pitch before them) and then resets the acceleration to
+the one after them (:func:`gear_fmu.step.kernel.contact_event`).
+"""
+
+from __future__ import annotations
+
+import bisect
+import math
+
+__all__ = ["EVENT_SIDE", "EVENT_SNAP", "ContactEvents"]
+
+#: the side of an event the mesh is evaluated on, in base pitches (above the mesh kernel's snap
+#: of 1e-9 pitch, :mod:`gear_fmu.mesh.element`)
+EVENT_SIDE = 1e-8
+#: no sub-step is shorter than this fraction of dt. Newmark's acceleration update
+#: ``4 (x1 - x0 - h v0) / h^2 - a0`` amplifies the round-off of the solved x1 by 4 / h^2: a
+#: sub-step of 1e-7 dt turns 1e-20 m of round-off into accelerations of order 1e2 m/s^2 at the
+#: paper's step, and runs at a step a few 1e-8 off the mesh period's divisor went wrong or
+#: failed. At 1e-3 dt it is below 1e-4 m/s^2; an event moved by at most 1e-3 dt.
+EVENT_SNAP = 1e-3
+#: sub-step fractions of dt are rounded to multiples of 2**-30, so that the condensations of
+#: the recurring sub-steps are computed once (:meth:`gear_fmu.structure.Structure._dynamic`)
+FRACTION = 2.0**30
+
+
+class ContactEvents:
+    """The contact events of a mesh element for a pinion turning as ``pinion_angle``.
+
+    Parameters
+    ----------
+    mesh : gear_fmu.mesh.element.MeshElement
+        Gives the event angles of one mesh period and the base pitch.
+    pinion_angle : callable
+        ``pinion_angle(t)``: the rigid-body pinion angle [rad] at time t [s].
+    """
+
+    def __init__(self, mesh, pinion_angle):
+        self.mesh = mesh
+        self.pinion_angle = pinion_angle
+        self._phases = None  # (mesh period [rad], event angles in it), when first needed
+
+    def pieces(self, t: float, dt: float) -> list:
+        """``[(h [s], end time [s], mesh angle of the sub-step [rad], angle after its event
+        [rad] or None)]`` of the step from t to t + dt [s]: one piece without contact events,
+        else the sub-steps of :meth:`cuts`, each ending on its events evaluated on their
+        outer sides (:data:`EVENT_SIDE`)."""
+        t1 = t + dt
+        cuts = self.cuts(t, dt)
+        if not cuts:
+            return [(dt, t1, self.pinion_angle(t1), None)]
+        out = []
+        pair = self.mesh.pair
+        side = EVENT_SIDE * pair.base_pitch / pair.base_radius[0]
+        for h, frac, events in cuts:
+            te = t1 if frac == 1.0 else t + frac * dt
+            angle = self.pinion_angle(te)
+            before, after = angle, None
+            if events is not None:  # the sides of the events, wherever they were snapped
+                first, last = events
+                before = angle - side if angle <= first + side else first - side
+                after = angle + side if angle >= last - side else last + side
+            out.append((h, te, before, after))
+        return out
+
+    def cuts(self, t: float, dt: float) -> list | None:
+        """``[(h, end fraction of dt, (first, last) event angle it ends on, or None)]`` of the
+        step from t to t + dt [s] with contact events (None without): the step cut at the
+        event angles, fractions rounded to ``2**-30``, none shorter than :data:`EVENT_SNAP` dt
+        (events that close to the step's ends or to each other taken together; the mesh is
+        then evaluated on the outer sides of the events, not of the cut)."""
+        a0 = self.pinion_angle(t)
+        a1 = self.pinion_angle(t + dt)
+        tol = 1e-9 * self.mesh.pair.base_pitch / self.mesh.pair.base_radius[0]
+        snap = max(tol, EVENT_SNAP * (a1 - a0))
+        events = self.between(a0 - tol, a1 + snap)
+        if not events:
+            return None
+        cuts = []  # [end fraction, first event, last event]
+        for e in events:
+            if e - a0 <= snap:
+                continue  # at the step's start: the previous step ended on it
+            frac = 1.0 if a1 - e <= snap else round((e - a0) / (a1 - a0) * FRACTION) / FRACTION
+            if cuts and frac - cuts[-1][0] <= EVENT_SNAP:  # one cut for events that close
+                cuts[-1][0] = max(cuts[-1][0], frac)
+                cuts[-1][2] = e
+            elif 0.0 < frac:
+                cuts.append([frac, e, e])
+        if not cuts:
+            return None
+        ends = cuts + ([] if cuts[-1][0] == 1.0 else [[1.0, None, None]])
+        out, prev = [], 0.0
+        for frac, first, last in ends:
+            out.append(((frac - prev) * dt, frac, None if first is None else (first, last)))
+            prev = frac
+        return out
+
+    def between(self, lo: float, hi: float) -> list:
+        """Contact event angles in ``(lo, hi]`` [rad]: those of one mesh period
+        (:meth:`gear_fmu.mesh.element.MeshElement.event_angles`, computed once) repeated with
+        the period ``2 pi / z1`` (the events of every slice recur with it)."""
+        if self._phases is None:
+            period = self.mesh.event_period
+            self._phases = (period, self.mesh.event_angles(0.0, period).tolist())
+        period, phases = self._phases
+        out = []
+        k = math.floor(lo / period)
+        while True:
+            base = k * period
+            for e in phases[bisect.bisect_right(phases, lo - base):]:
+                if base + e > hi:
+                    return out
+                out.append(base + e)
+            k += 1
