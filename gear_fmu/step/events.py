@@ -26,7 +26,7 @@ EVENT_SIDE = 1e-8
 #: failed. At 1e-3 dt it is below 1e-4 m/s^2; an event moved by at most 1e-3 dt.
 EVENT_SNAP = 1e-3
 #: sub-step fractions of dt are rounded to multiples of 2**-30, so that the condensations of
-#: the recurring sub-steps are computed once (:meth:`gear_fmu.structure.Structure._dynamic`)
+#: the recurring sub-steps are computed once (``gear_fmu.structure.Structure._dynamic``)
 FRACTION = 2.0**30
 
 
