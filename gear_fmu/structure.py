@@ -433,21 +433,14 @@ class Structure:
         ``angle`` [rad] after it, ``Xdd+ = Xdd- + M^-1 (F_mesh+ - F_mesh-)`` at the same X and
         Xd (module docstring; :func:`gear_fmu.step.kernel.contact_event`)."""
         mesh = self.mesh
-        n = mesh.n_lines * mesh.n_slices
-        force, stiff = np.empty(12), np.empty((12, 12))
-        active, inside = np.empty(n, dtype=np.bool_), np.empty(n, dtype=np.bool_)
-        delta, load, xi, z = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+        buffers = self._mesh_buffers()
         a = self.a.copy()
         err = mesh.error_displacement(angle) if mesh.has_errors else _NO_ERROR
         total, length = contact_event(angle, self.x, err, mesh.has_errors, *self._mesh_arrays,
-                                      self._gear_compliance(), self.mesh_state.force, a, force,
-                                      stiff, active, inside, delta, load, xi, z)
-        rb1, rb2 = mesh.pair.base_radius
-        te = rb1 * self.x[5] + rb2 * self.x[11]
+                                      self._gear_compliance(), self.mesh_state.force, a,
+                                      *buffers)
         self.a = a
-        self.active = active
-        self.mesh_state = MeshState(force, stiff, active, delta, load, inside, xi, z, total, te,
-                                    {"contact_length": length})
+        self._take_mesh_state(buffers, total, length, self.x)
 
     def _check_step(self, dt: float) -> None:
         if self.active is None:
@@ -503,37 +496,49 @@ class Structure:
                 self.active is not None, self._f_scale, self.tol, self.max_iter)
         return head, tail, outputs
 
-    def _advance_outputs(self) -> tuple:
-        """New buffers for what :func:`gear_fmu.step.kernel.advance` writes: the mesh state,
-        the residuals and the new X, Xd, Xdd."""
+    def _mesh_buffers(self) -> tuple:
+        """New buffers for a mesh evaluation of the compiled kernels: force, tangent, contact
+        set, slices inside the path of contact, approach, load, abscissa, axial position."""
         n = self.mesh.n_lines * self.mesh.n_slices
-        size = self.x.size
         return (np.empty(12), np.empty((12, 12)), np.empty(n, dtype=np.bool_),
                 np.empty(n, dtype=np.bool_), np.empty(n), np.empty(n), np.empty(n),
-                np.empty(n), np.empty(self.max_iter + 1), np.empty(size), np.empty(size),
-                np.empty(size))
+                np.empty(n))
+
+    def _take_mesh_state(self, buffers, total, length, x) -> None:
+        """The mesh evaluation in ``buffers`` (:meth:`_mesh_buffers`), of total load
+        ``total`` [N] and contact length ``length`` [m] at the state ``x``, as the current
+        mesh state and contact set."""
+        force, stiff, active, inside, delta, load, xi, z = buffers
+        rb1, rb2 = self.mesh.pair.base_radius
+        te = rb1 * x[5] + rb2 * x[11]
+        self.mesh_state = MeshState(force, stiff, active, delta, load, inside, xi, z, total, te,
+                                    {"contact_length": length})
+        self.active = active
+
+    def _advance_outputs(self) -> tuple:
+        """New buffers for what :func:`gear_fmu.step.kernel.advance` writes: the mesh
+        evaluation (:meth:`_mesh_buffers`), the residuals and the new X, Xd, Xdd."""
+        size = self.x.size
+        return (*self._mesh_buffers(), np.empty(self.max_iter + 1), np.empty(size),
+                np.empty(size), np.empty(size))
 
     def _advance_result(self, status, k, total, length, outputs, t1, what) -> StepInfo:
         """Raise the error of a failed :func:`gear_fmu.step.kernel.advance`, or take its new
         state and mesh evaluation from ``outputs`` (:meth:`_advance_inputs`)."""
-        force, stiff, active, inside, delta, load, xi, z, residuals, x1, v1, a1 = outputs
+        mesh_buffers, (residuals, x1, v1, a1) = outputs[:8], outputs[8:]
         history = residuals[:k + 1].tolist()
         if status == SINGULAR:
             raise NewmarkConvergenceError(
                 f"{what} at t = {t1:.9g} s: singular tangent at iteration {k} "
-                f"({int(np.count_nonzero(active))} mesh slices in contact; with no tooth "
+                f"({int(np.count_nonzero(mesh_buffers[2]))} mesh slices in contact; with no tooth "
                 "contact the pinion is free in torsion - check the torque sign)")
         if status != CONVERGED:
             raise NewmarkConvergenceError(
                 f"{what} at t = {t1:.9g} s did not converge: relative residual "
                 f"{history[-1]:.3e} (tol {self.tol:.1e}) after {self.max_iter} iterations; "
                 f"last residuals {', '.join(f'{v:.2e}' for v in history[-5:])}")
-        rb1, rb2 = self.mesh.pair.base_radius
-        te = rb1 * x1[5] + rb2 * x1[11]
-        self.mesh_state = MeshState(force, stiff, active, delta, load, inside, xi, z, total, te,
-                                    {"contact_length": length})
+        self._take_mesh_state(mesh_buffers, total, length, x1)
         self.x, self.v, self.a = x1, v1, a1
-        self.active = active
         return StepInfo(t1, k, history[-1], history)
 
     def compiled_step(self, dt: float):
