@@ -77,7 +77,13 @@ class LinearBearing(BearingModel):
 
     @classmethod
     def linearise(cls, model: BearingModel, x0: float, y0: float, omega: float) -> LinearBearing:
-        """8 coefficients of ``model`` at the static position (x0, y0) [m], speed omega [rad/s]."""
+        """8 coefficients of ``model`` at the static position (x0, y0) [m], speed omega [rad/s].
+
+        ``model`` is evaluated there twice: the second call starts from the first's solution,
+        so that a solver ending with a first-order corrector (the hybrid model's Newton on t,
+        whose Jacobians are then off by up to 1e-4) gives the Jacobians of a converged solve.
+        """
+        model.evaluate(x0, y0, 0.0, 0.0, omega)
         r = model.evaluate(x0, y0, 0.0, 0.0, omega)
         return cls(model.bearing, (x0, y0), r.force, r.stiffness, r.damping, omega)
 

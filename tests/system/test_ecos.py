@@ -91,10 +91,11 @@ def ecos_python(ssp_file):
 
 
 def test_ecos_runs_the_ssp_as_a_jacobi_master_would(ecos_python):
-    """ecos's trajectories equal the emulated Jacobi scheme's to round-off over 64 steps, not
-    to the bit: the hybrid film solver starts from its last solution, and ecos calls the
-    bearing FMUs in its own sequence (measured 6.9e-13 relative to the largest position,
-    9.0e-11 velocities; asserted with a margin of 3 on the larger)."""
+    """ecos's trajectories equal the emulated Jacobi scheme's to the film solver's accuracy
+    over 64 steps, not to the bit: the hybrid film solver starts from its last solution (its
+    force within tol = 1e-8 of the exact one, whatever the start), and ecos calls the bearing
+    FMUs in its own sequence (measured: X0 3.4e-12 and positions 3.7e-12 relative to the
+    largest position, velocities 9.5e-11; asserted with a margin of 3, 2.6 on velocities)."""
     from fmu_src.case import load_case
     from orchestrator.studies.coupling_accuracy import non_iterative
 
@@ -105,14 +106,15 @@ def test_ecos_runs_the_ssp_as_a_jacobi_master_would(ecos_python):
     velocity = float(np.abs(x[:, :, 2:] - ref[:, :, 2:]).max() / np.abs(ref[:, :, 2:]).max())
     print(f"\necos vs the emulated Jacobi master, {STEPS} steps: positions {position:.1e}, "
           f"velocities {velocity:.1e}")
-    assert float(np.abs(x[0, :, :2] - ref[0, :, :2]).max() / scale) < 1e-13  # the same X0
-    assert position < 4e-12 and velocity < 2.5e-10
+    assert float(np.abs(x[0, :, :2] - ref[0, :, :2]).max() / scale) < 1e-11  # the same X0
+    assert position < 1.2e-11 and velocity < 2.5e-10
 
 
 def test_the_non_iterative_coupling_error_at_the_papers_step(ecos_python, tmp_path):
     """ecos vs ``gsb run`` (iterative, through the same FMUs) over 64 steps: the difference is
-    the explicit coupling's; measured 0.80 % of the largest journal displacement at step 64
-    (asserted below 1.2 %), after agreeing to round-off at step 1."""
+    the explicit coupling's; measured 0.75 % of the largest journal displacement at step 64
+    (asserted below 1.2 %), after agreeing to the film solver's accuracy at step 1 (3.4e-12,
+    asserted below 1e-11: test above)."""
     from fmu_src.case import load_case
     from orchestrator.run.results import read_results
     from orchestrator.run.runner import run_case
@@ -128,7 +130,7 @@ def test_the_non_iterative_coupling_error_at_the_papers_step(ecos_python, tmp_pa
           f"{diff[0]:.1e} after step 1, {diff[-1]:.2e} after step {STEPS} (relative to the "
           f"largest displacement; {np.abs(x[-1, :, :2] - pos[-1]).max() / orbit:.1%} of the "
           f"orbit's peak-to-peak {orbit:.2e} m)")
-    assert diff[0] < 1e-13
+    assert diff[0] < 1e-11
     assert diff[-1] < 1.2e-2
 
 
