@@ -3,12 +3,13 @@
 Minimising the Ritz functional over ``a >= 0`` is the LCP ``a >= 0, w = A a - b >= 0,
 a.w = 0`` with A symmetric cyclic tridiagonal (a Stieltjes matrix): the Swift-Stieber condition
 (Eq. 4) at the discrete free boundaries. Solved exactly by a primal-dual active set with flux
-extrapolation (docs/hybrid-method.md, section 4); the Thomas factors of ``A_PP`` over the runs
-of consecutive active nodes serve the Newton on t and the Jacobians too.
+extrapolation (docs/hybrid-method.md, section 4); the twisted Thomas factors of ``A_PP`` over
+the runs of consecutive active nodes serve the Newton on t and the Jacobians too.
 """
 
 from __future__ import annotations
 
+import numpy as np
 from numba import njit
 
 from bearing_fmu.hybrid._workspace import CP, LO, NEW, PIV, A, B, D
@@ -19,20 +20,18 @@ EXTRAP_PASSES = 12
 
 @njit(cache=True)
 def factor_solve(ws, active, order, runs, rhs, out):
-    """Thomas factors (inverse pivots) of A_PP over the runs of consecutive active nodes, and
-    the solution of A_PP out_P = rhs_P (out = 0 off P), in one walk of the ring.
+    """Twisted Thomas factors of A_PP over the runs of consecutive active nodes, and the
+    solution of A_PP out_P = rhs_P (out = 0 off P), in one walk of the ring.
 
     The ring is walked from the node after an inactive one, so no run wraps (no cyclic
-    coupling left). Each run is factorised and eliminated forwards in the same loop, the two
-    recurrences being independent chains the processor overlaps, then substituted backwards.
-    Returns the number of runs; run r covers positions ``runs[r] <= k < runs[n + r]`` of
-    ``order``, whose factors :func:`substitute` uses for further right-hand sides.
+    coupling left). Each run is factorised from both ends towards its middle node at once:
+    two independent recurrences the processor overlaps (a Thomas sweep is a chain of
+    divisions, bound by their latency), the middle solved last, then both halves substituted
+    back outwards. Returns the number of runs; run r covers positions ``runs[r] <= k <
+    runs[n + r]`` of ``order``, whose factors :func:`substitute` uses for further
+    right-hand sides.
     """
     n = active.shape[0]
-    d = ws[D]
-    lo = ws[LO]
-    cp = ws[CP]
-    piv = ws[PIV]
     inact0 = 0
     for i in range(n):
         if not active[i]:
@@ -47,34 +46,86 @@ def factor_solve(ws, active, order, runs, rhs, out):
     nr = 0
     k = 0
     while k < n:
-        i = order[k]
-        if not active[i]:
-            out[i] = 0.0
+        if not active[order[k]]:
+            out[order[k]] = 0.0
             k += 1
             continue
-        start = k
-        piv[k] = 1.0 / d[i]
-        cp[k] = lo[i] * piv[k]
-        prev = rhs[i] * piv[k]
-        out[i] = prev
-        k += 1
-        while k < n and active[order[k]]:
-            i = order[k]
-            lk = lo[order[k - 1]]
-            piv[k] = 1.0 / (d[i] - lk * cp[k - 1])
-            cp[k] = lo[i] * piv[k]
-            prev = (rhs[i] - lk * prev) * piv[k]
-            out[i] = prev
-            k += 1
-        runs[nr] = start
-        runs[n + nr] = k
+        end = k + 1
+        while end < n and active[order[end]]:
+            end += 1
+        runs[nr] = k
+        runs[n + nr] = end
         nr += 1
-        nxt = prev
-        for kb in range(k - 2, start - 1, -1):
-            i = order[kb]
-            nxt = out[i] - cp[kb] * nxt
-            out[i] = nxt
+        _twisted_run(ws, order, k, end, rhs, out)
+        k = end
     return nr
+
+
+@njit(cache=True)
+def _twisted_run(ws, order, k0, k1, rhs, out):
+    """Factors and solution on the run of positions k0 <= k < k1 (:func:`factor_solve`).
+
+    With m = (k0 + k1) // 2 the middle position: for k < m, ``piv[k]`` and ``cp[k]`` are the
+    forward (top-down) inverse pivot and A(k, k+1) piv[k]; for k > m, the backward
+    (bottom-up) ones with A(k, k-1) piv[k]; ``piv[m]`` is the inverse of the middle's Schur
+    complement. Node order[k] couples to order[k + 1] by lo[order[k]].
+    """
+    d = ws[D]
+    lo = ws[LO]
+    cp = ws[CP]
+    piv = ws[PIV]
+    m = (k0 + k1) // 2
+    nb = k1 - 1 - m  # bottom-up steps; the top-down ones are nb or nb + 1
+    ct = 0.0  # top: cp of the previous position, its y, its coupling to the next
+    yt = 0.0
+    lt = 0.0
+    cb = 0.0  # bottom: the same from below
+    yb = 0.0
+    for j in range(nb):
+        it = order[k0 + j]
+        p = 1.0 / (d[it] - lt * ct)
+        piv[k0 + j] = p
+        yt = (rhs[it] - lt * yt) * p
+        out[it] = yt
+        lt = lo[it]
+        ct = lt * p
+        cp[k0 + j] = ct
+        kb = k1 - 1 - j
+        ib = order[kb]
+        ub = lo[ib]
+        q = 1.0 / (d[ib] - ub * cb)
+        piv[kb] = q
+        yb = (rhs[ib] - ub * yb) * q
+        out[ib] = yb
+        cb = lo[order[kb - 1]] * q
+        cp[kb] = cb
+    if m - k0 > nb:  # one more top-down step
+        it = order[m - 1]
+        p = 1.0 / (d[it] - lt * ct)
+        piv[m - 1] = p
+        yt = (rhs[it] - lt * yt) * p
+        out[it] = yt
+        lt = lo[it]
+        ct = lt * p
+        cp[m - 1] = ct
+    im = order[m]
+    um = lo[im] if nb > 0 else 0.0
+    p = 1.0 / (d[im] - lt * ct - um * cb)
+    piv[m] = p
+    x = (rhs[im] - lt * yt - um * yb) * p
+    out[im] = x
+    xt = x
+    xb = x
+    for j in range(nb):
+        it = order[m - 1 - j]
+        xt = out[it] - cp[m - 1 - j] * xt
+        out[it] = xt
+        ib = order[m + 1 + j]
+        xb = out[ib] - cp[m + 1 + j] * xb
+        out[ib] = xb
+    if m - k0 > nb:
+        it = order[k0]
+        out[it] = out[it] - cp[k0] * xt
 
 
 @njit(cache=True)
@@ -90,18 +141,41 @@ def substitute(ws, active, order, runs, nr, rhs, out):
     for r in range(nr):
         k0 = runs[r]
         k1 = runs[n + r]
-        i = order[k0]
-        prev = rhs[i] * piv[k0]
-        out[i] = prev
-        for k in range(k0 + 1, k1):
-            i = order[k]
-            prev = (rhs[i] - lo[order[k - 1]] * prev) * piv[k]
-            out[i] = prev
-        nxt = prev
-        for k in range(k1 - 2, k0 - 1, -1):
-            i = order[k]
-            nxt = out[i] - cp[k] * nxt
-            out[i] = nxt
+        m = (k0 + k1) // 2
+        nb = k1 - 1 - m
+        yt = 0.0
+        lt = 0.0
+        yb = 0.0
+        for j in range(nb):
+            it = order[k0 + j]
+            yt = (rhs[it] - lt * yt) * piv[k0 + j]
+            out[it] = yt
+            lt = lo[it]
+            kb = k1 - 1 - j
+            ib = order[kb]
+            yb = (rhs[ib] - lo[ib] * yb) * piv[kb]
+            out[ib] = yb
+        if m - k0 > nb:
+            it = order[m - 1]
+            yt = (rhs[it] - lt * yt) * piv[m - 1]
+            out[it] = yt
+            lt = lo[it]
+        im = order[m]
+        um = lo[im] if nb > 0 else 0.0
+        x = (rhs[im] - lt * yt - um * yb) * piv[m]
+        out[im] = x
+        xt = x
+        xb = x
+        for j in range(nb):
+            it = order[m - 1 - j]
+            xt = out[it] - cp[m - 1 - j] * xt
+            out[it] = xt
+            ib = order[m + 1 + j]
+            xb = out[ib] - cp[m + 1 + j] * xb
+            out[ib] = xb
+        if m - k0 > nb:
+            it = order[k0]
+            out[it] = out[it] - cp[k0] * xt
 
 
 @njit(cache=True)
@@ -115,41 +189,59 @@ def substitute4(ws, active, order, runs, nr, r0, o0):
         if not active[i]:
             for q in range(4):
                 ws[o0 + q, i] = 0.0
+    t = np.empty(4)  # top-down y, bottom-up y, solution (a few bytes: no workspace row)
+    b = np.empty(4)
     for r in range(nr):
         k0 = runs[r]
         k1 = runs[n + r]
-        i = order[k0]
-        p0 = ws[r0, i] * piv[k0]
-        p1 = ws[r0 + 1, i] * piv[k0]
-        p2 = ws[r0 + 2, i] * piv[k0]
-        p3 = ws[r0 + 3, i] * piv[k0]
-        ws[o0, i] = p0
-        ws[o0 + 1, i] = p1
-        ws[o0 + 2, i] = p2
-        ws[o0 + 3, i] = p3
-        for k in range(k0 + 1, k1):
-            l = lo[order[k - 1]]
-            pv = piv[k]
-            i = order[k]
-            p0 = (ws[r0, i] - l * p0) * pv
-            p1 = (ws[r0 + 1, i] - l * p1) * pv
-            p2 = (ws[r0 + 2, i] - l * p2) * pv
-            p3 = (ws[r0 + 3, i] - l * p3) * pv
-            ws[o0, i] = p0
-            ws[o0 + 1, i] = p1
-            ws[o0 + 2, i] = p2
-            ws[o0 + 3, i] = p3
-        for k in range(k1 - 2, k0 - 1, -1):
-            i = order[k]
-            c = cp[k]
-            p0 = ws[o0, i] - c * p0
-            p1 = ws[o0 + 1, i] - c * p1
-            p2 = ws[o0 + 2, i] - c * p2
-            p3 = ws[o0 + 3, i] - c * p3
-            ws[o0, i] = p0
-            ws[o0 + 1, i] = p1
-            ws[o0 + 2, i] = p2
-            ws[o0 + 3, i] = p3
+        m = (k0 + k1) // 2
+        nb = k1 - 1 - m
+        lt = 0.0
+        for q in range(4):
+            t[q] = 0.0
+            b[q] = 0.0
+        for j in range(nb):
+            it = order[k0 + j]
+            p = piv[k0 + j]
+            kb = k1 - 1 - j
+            ib = order[kb]
+            ub = lo[ib]
+            pb = piv[kb]
+            for q in range(4):
+                t[q] = (ws[r0 + q, it] - lt * t[q]) * p
+                ws[o0 + q, it] = t[q]
+                b[q] = (ws[r0 + q, ib] - ub * b[q]) * pb
+                ws[o0 + q, ib] = b[q]
+            lt = lo[it]
+        if m - k0 > nb:
+            it = order[m - 1]
+            p = piv[m - 1]
+            for q in range(4):
+                t[q] = (ws[r0 + q, it] - lt * t[q]) * p
+                ws[o0 + q, it] = t[q]
+            lt = lo[it]
+        im = order[m]
+        um = lo[im] if nb > 0 else 0.0
+        p = piv[m]
+        for q in range(4):
+            x = (ws[r0 + q, im] - lt * t[q] - um * b[q]) * p
+            ws[o0 + q, im] = x
+            t[q] = x
+            b[q] = x
+        for j in range(nb):
+            it = order[m - 1 - j]
+            ct = cp[m - 1 - j]
+            ib = order[m + 1 + j]
+            cb = cp[m + 1 + j]
+            for q in range(4):
+                t[q] = ws[o0 + q, it] - ct * t[q]
+                ws[o0 + q, it] = t[q]
+                b[q] = ws[o0 + q, ib] - cb * b[q]
+                ws[o0 + q, ib] = b[q]
+        if m - k0 > nb:
+            it = order[k0]
+            for q in range(4):
+                ws[o0 + q, it] = ws[o0 + q, it] - cp[k0] * t[q]
 
 
 @njit(cache=True)
