@@ -56,8 +56,16 @@ def film_jacobian(ws, active, order, runs, nr, g, jss, dsig, sc, ss, jx, jv, st)
     qmy = 0.0
     sfa = 0.0
     cfa = 0.0
-    im = n - 1
+    # off P, a_i = 0 (the LCP's solution), so the sums skip those nodes: the terms they would
+    # add are exact zeros
     for i in range(n):
+        if not active[i]:
+            ws[RQ, i] = 0.0
+            ws[RQ + 1, i] = 0.0
+            ws[RQ + 2, i] = 0.0
+            ws[RQ + 3, i] = 0.0
+            continue
+        im = i - 1 if i > 0 else n - 1
         ip = i + 1 if i < n - 1 else 0
         ai = a[i]
         kax, max_ = km_node(kx, x11, x12, x22, a, im, i, ip)
@@ -68,19 +76,12 @@ def film_jacobian(ws, active, order, runs, nr, g, jss, dsig, sc, ss, jx, jv, st)
         qmy += ai * may
         sfa += sn[i] * ai
         cfa += cs[i] * ai
-        if active[i]:
-            gs = g0 * dsig * sn[i]
-            gc = g0 * dsig * cs[i]
-            ws[RQ, i] = (g2 * kax + g1 * max_) + gs
-            ws[RQ + 1, i] = (g2 * kay + g1 * may) - gc
-            ws[RQ + 2, i] = -2.0 * gc
-            ws[RQ + 3, i] = -2.0 * gs
-        else:
-            ws[RQ, i] = 0.0
-            ws[RQ + 1, i] = 0.0
-            ws[RQ + 2, i] = 0.0
-            ws[RQ + 3, i] = 0.0
-        im = i
+        gs = g0 * dsig * sn[i]
+        gc = g0 * dsig * cs[i]
+        ws[RQ, i] = (g2 * kax + g1 * max_) + gs
+        ws[RQ + 1, i] = (g2 * kay + g1 * may) - gc
+        ws[RQ + 2, i] = -2.0 * gc
+        ws[RQ + 3, i] = -2.0 * gs
     sq[0] = 0.5 * (g[G2_T] * qkx + g[G1_T] * qmx)
     sq[1] = 0.5 * (g[G2_T] * qky + g[G1_T] * qmy)
     gd = g[G0_T] * dsig
@@ -93,8 +94,9 @@ def film_jacobian(ws, active, order, runs, nr, g, jss, dsig, sc, ss, jx, jv, st)
     for q in range(4):
         cda[q] = 0.0
     for i in range(n):
-        for q in range(4):
-            cda[q] += cv[i] * ws[DA + q, i]
+        if active[i]:  # c and da0 vanish off P
+            for q in range(4):
+                cda[q] += cv[i] * ws[DA + q, i]
     dts = ws[SCR + 3, 8:12]
     for q in range(4):
         dts[q] = -(sq[q] - cda[q]) / jss  # dt_q = -(s_q + c.da0) / J*''
@@ -105,10 +107,11 @@ def film_jacobian(ws, active, order, runs, nr, g, jss, dsig, sc, ss, jx, jv, st)
         s1[q] = 0.0
         s2[q] = 0.0
     for i in range(n):
-        for q in range(4):
-            dai = -ws[DA + q, i] - z[i] * dts[q]  # da_q = da0 - z dt_q
-            s1[q] += dai * cs[i]
-            s2[q] += dai * sn[i]
+        if active[i]:  # da_q vanishes off P
+            for q in range(4):
+                dai = -ws[DA + q, i] - z[i] * dts[q]  # da_q = da0 - z dt_q
+                s1[q] += dai * cs[i]
+                s2[q] += dai * sn[i]
     for q in range(4):
         col0 = -dsig * (g[G0] * s1[q] + g[G0_T] * dts[q] * sc)
         col1 = -dsig * (g[G0] * s2[q] + g[G0_T] * dts[q] * ss)

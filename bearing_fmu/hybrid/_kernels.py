@@ -62,15 +62,17 @@ def _stationarity(ws, active, g):
     qk = 0.0
     qm = 0.0
     af = 0.0
-    im = n - 1
     for i in range(n):
+        if not active[i]:  # a_i = 0 off P: the sums' terms there are exact zeros
+            cv[i] = 0.0
+            continue
+        im = i - 1 if i > 0 else n - 1
         ip = i + 1 if i < n - 1 else 0
         kai, mai = km_node(ke, m11, m12, m22, a, im, i, ip)
         qk += a[i] * kai
         qm += a[i] * mai
         af += a[i] * fb[i]
-        cv[i] = (g2t * kai + g1t * mai - g0t * fb[i]) if active[i] else 0.0
-        im = i
+        cv[i] = g2t * kai + g1t * mai - g0t * fb[i]
     return qk, qm, af
 
 
