@@ -28,7 +28,7 @@ import numpy as np
 from pythonfmu.enums import Fmi2Status
 
 from bearing_fmu import BearingData, BearingError, model_class
-from bearing_fmu.frames import LocalFrame, state_to_local
+from bearing_fmu.frames import LocalFrame
 from fmu_src.contract import (
     DAMPING_NAMES,
     EVAL_NAMES,
@@ -136,6 +136,7 @@ class BearingSlave(ContractSlave):
         cls = model_class(self.model_name)
         self._model = cls.from_parameters(bearing, **{o.key: v[o.key] for o in cls.options})
         self._frame = LocalFrame(v["frame_angle"], int(v["rotation_sign"]))
+        self._q = self._frame.q.ravel().tolist()  # q00, q01, q10, q11 as floats
         self._dirty_model = False
 
     def _local_state(self):
@@ -176,9 +177,12 @@ class BearingSlave(ContractSlave):
             _check_finite(law, s)
         v.update(zip(_LAW_NAMES, law, strict=True))
         v.update(zip(EVAL_NAMES, s, strict=True))
-        # the local position as the models form it (a numpy product of a 2 x 2 matrix would
-        # cost a large share of a hybrid evaluation, and round differently, through BLAS)
-        x, y, _, _ = state_to_local(q, state)
+        # the local position as the models form it (state_to_local's products and sums, in
+        # its order: the same bits, without a compiled call's dispatch or numpy's 2 x 2
+        # product, which would cost a share of a hybrid evaluation and round differently)
+        q00, q01, q10, q11 = self._q
+        x = q00 * s[0] + q01 * s[1]
+        y = q10 * s[0] + q11 * s[1]
         v["eccentricity"] = math.hypot(x, y) / v["C"]
         v["n_solves"] = int(v["n_solves"]) + 1
 
