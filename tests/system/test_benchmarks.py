@@ -22,6 +22,7 @@ SMALLEST = {
     "transmission_fmu.py": ["--periods", "1", "--repeat", "1"],
     "campbell.py": ["--repeat", "1", "--speeds", "3"],
     "kernel_parts.py": ["--steps", "2", "--calls", "10"],
+    "bearing_set.py": ["--steps", "2", "--repeat", "1"],
 }
 
 
