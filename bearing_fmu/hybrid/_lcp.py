@@ -114,6 +114,14 @@ def _twisted_run(ws, order, k0, k1, rhs, out):
     piv[m] = p
     x = (rhs[im] - lt * yt - um * yb) * p
     out[im] = x
+    _back_substitute(order, cp, k0, m, nb, x, out)
+
+
+@njit(cache=True)
+def _back_substitute(order, cp, k0, m, nb, x, out):
+    """The two halves of a run of :func:`_twisted_run` (positions from k0, middle m, nb
+    bottom-up steps) substituted back outwards from the middle's solution x: ``out`` holds
+    the eliminated right-hand side and receives the solution."""
     xt = x
     xb = x
     for j in range(nb):
@@ -164,18 +172,7 @@ def substitute(ws, active, order, runs, nr, rhs, out):
         um = lo[im] if nb > 0 else 0.0
         x = (rhs[im] - lt * yt - um * yb) * piv[m]
         out[im] = x
-        xt = x
-        xb = x
-        for j in range(nb):
-            it = order[m - 1 - j]
-            xt = out[it] - cp[m - 1 - j] * xt
-            out[it] = xt
-            ib = order[m + 1 + j]
-            xb = out[ib] - cp[m + 1 + j] * xb
-            out[ib] = xb
-        if m - k0 > nb:
-            it = order[k0]
-            out[it] = out[it] - cp[k0] * xt
+        _back_substitute(order, cp, k0, m, nb, x, out)
 
 
 @njit(cache=True)
