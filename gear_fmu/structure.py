@@ -525,7 +525,7 @@ class Structure:
     def _advance_result(self, status, k, total, length, outputs, t1, what) -> StepInfo:
         """Raise the error of a failed :func:`gear_fmu.step.kernel.advance`, or take its new
         state and mesh evaluation from ``outputs`` (:meth:`_advance_inputs`)."""
-        mesh_buffers, (residuals, x1, v1, a1) = outputs[:8], outputs[8:]
+        mesh_buffers, (residuals, x1, v1, a1) = outputs[:-4], outputs[-4:]
         history = residuals[:k + 1].tolist()
         if status == SINGULAR:
             raise NewmarkConvergenceError(
