@@ -176,16 +176,21 @@ def _slice_stiffness(xi, xi_tab, k_tab, dl):
     return ((1.0 - f) * k_tab[i0] + f * k_tab[i0 + 1]) * dl
 
 
-@njit(cache=True)
-def _mesh_kernel(angle, q, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1, pitch2,
-                 force, stiff, active, inside, delta, load, xis, zout, same_angle):
-    """Slices of all contact lines at pinion angle ``angle`` (module docstring).
+#: columns of a row of the slice cache (:meth:`MeshElement.kernel_arrays`): the structure
+#: vector V (12), the slice stiffness k dl [N/m], the deviation e [m], the abscissa xi [m],
+#: whether the slice is on the path of contact, whether it is in the set of the cached tangent
+_KDL, _E, _XI, _INSIDE, _IN_TANGENT = 12, 13, 14, 15, 16
+#: the cache's last row: the pinion angle its rows belong to [rad], whether the tangent is kept
+_ANGLE, _HAS_TANGENT = 0, 1
+#: columns of the slice cache
+CACHE_COLUMNS = 17
 
-    ``same_angle``: the arrays hold this kernel's evaluation at the same angle (a Newton pass
-    of one step). The tangent ``stiff`` depends on the angle and the contact set only (the
-    slices' positions and stiffnesses), so it is kept when the set is the same, and otherwise
-    assembled in a second sweep over the slices in contact, in the order of the first.
-    """
+
+@njit(cache=True)
+def _slice_geometry(angle, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1, pitch2, cache):
+    """What a slice contributes at pinion ``angle`` [rad] whatever the DOFs: its abscissa,
+    whether it is on the path of contact and there its V, k dl and deviation e, into the rows
+    of ``cache`` (module docstring, Eq. 9); the last row records the angle, no tangent yet."""
     xi_a, xi_e, pbt, tanb = geo[0], geo[1], geo[2], geo[3]
     rb1 = geo[4]
     ns = zs.size
@@ -198,31 +203,20 @@ def _mesh_kernel(angle, q, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1, pit
     nvec[0] = ns_u * us
     nvec[1] = ns_u * ut
     nvec[2] = nz
-    for i in range(12):
-        force[i] = 0.0
-    total = 0.0
-    length = 0.0
-    same_set = same_angle
-    v = np.empty(12)
     for s in range(ns):
         z = zs[s]
         w = (rb1 * angle - z * tanb) / pbt
         fl = math.floor(w + _SNAP)  # a line within _SNAP pitch of xi_A has entered
         fr = max(w - fl, 0.0)
         for j in range(n_lines):
-            m = j * ns + s
-            was_active = active[m]
+            row = cache[j * ns + s]
             xi = xi_a + pbt * (fr + j)
-            xis[m] = xi
-            zout[m] = z
+            row[_XI] = xi
             ins = (xi >= xi_a) and (xi < xi_e)
-            inside[m] = ins
-            active[m] = False
-            load[m] = 0.0
-            delta[m] = 0.0
+            row[_INSIDE] = 1.0 if ins else 0.0
             if ins:
-                kdl = _slice_stiffness(xi, xi_tab, k_tab, dl)
-                _structure_vector(xi, z, geo, nvec, v)
+                row[_KDL] = _slice_stiffness(xi, xi_tab, k_tab, dl)
+                _structure_vector(xi, z, geo, nvec, row)
                 # deviations (open the gap when > 0)
                 e = 0.0
                 if ca1 > 0.0 and xi > xi_e - l1:
@@ -236,33 +230,82 @@ def _mesh_kernel(angle, q, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1, pit
                     e += pitch1[pair % z1n]
                 if z2n > 0:
                     e += pitch2[pair % z2n]
-                d = -e
+                row[_E] = e
+    last = cache[n_lines * ns]
+    last[_ANGLE] = angle
+    last[_HAS_TANGENT] = 0.0
+
+
+@njit(cache=True)
+def _mesh_kernel(angle, q, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1, pitch2, cache,
+                 tangent, force, stiff, active, inside, delta, load, xis, zout):
+    """Slices of all contact lines at pinion angle ``angle`` (module docstring).
+
+    ``cache`` and ``tangent`` are the mesh's (:meth:`MeshElement.kernel_arrays`): what depends
+    on the angle only (:func:`_slice_geometry`) is computed once per angle, and the tangent
+    ``stiff``, which depends on the angle and the contact set only, is assembled once per set
+    (in a second sweep over the slices in contact). Every value is the one a fresh evaluation
+    computes, bit for bit: the cache saves work, never changes a result. A Newton pass and the
+    iterations of a coupled step evaluate the mesh at one angle.
+    """
+    ns = zs.size
+    n = n_lines * ns
+    last = cache[n]
+    if not last[_ANGLE] == angle:  # (a NaN angle is never cached)
+        _slice_geometry(angle, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1, pitch2, cache)
+    for i in range(12):
+        force[i] = 0.0
+    total = 0.0
+    length = 0.0
+    same_set = last[_HAS_TANGENT] > 0.0
+    for s in range(ns):
+        for j in range(n_lines):
+            m = j * ns + s
+            row = cache[m]
+            xis[m] = row[_XI]
+            zout[m] = zs[s]
+            ins = row[_INSIDE] > 0.0
+            inside[m] = ins
+            active[m] = False
+            load[m] = 0.0
+            delta[m] = 0.0
+            if ins:
+                d = -row[_E]
                 for c in range(12):
-                    d += v[c] * q[c]
+                    d += row[c] * q[c]
                 delta[m] = d
                 if d > 0.0:
                     active[m] = True
-                    fm = kdl * d
+                    fm = row[_KDL] * d
                     load[m] = fm
                     total += fm
                     length += dl
                     for c in range(12):
-                        force[c] -= v[c] * fm
-            if active[m] != was_active:
+                        force[c] -= row[c] * fm
+            if active[m] != (row[_IN_TANGENT] > 0.0):
                 same_set = False
-    if not same_set:
+    if same_set:
         for i in range(12):
             for j in range(12):
-                stiff[i, j] = 0.0
-        for s in range(ns):
-            for j in range(n_lines):
-                m = j * ns + s
-                if active[m]:
-                    kdl = _slice_stiffness(xis[m], xi_tab, k_tab, dl)
-                    _structure_vector(xis[m], zout[m], geo, nvec, v)
-                    for c in range(12):
-                        for c2 in range(12):
-                            stiff[c, c2] += kdl * v[c] * v[c2]
+                stiff[i, j] = tangent[i, j]
+        return total, length
+    for i in range(12):
+        for j in range(12):
+            stiff[i, j] = 0.0
+    for s in range(ns):
+        for j in range(n_lines):
+            m = j * ns + s
+            row = cache[m]
+            row[_IN_TANGENT] = 1.0 if active[m] else 0.0
+            if active[m]:
+                kdl = row[_KDL]
+                for c in range(12):
+                    for c2 in range(12):
+                        stiff[c, c2] += kdl * row[c] * row[c2]
+    for i in range(12):
+        for j in range(12):
+            tangent[i, j] = stiff[i, j]
+    last[_HAS_TANGENT] = 1.0
     return total, length
 
 
@@ -336,6 +379,10 @@ class MeshElement:
         self._has_errors = bool(self._runout or self._mounting.any())
         n = self.n_lines * self.n_slices
         self._n = n
+        # what the kernel computes once per pinion angle and once per contact set (_mesh_kernel)
+        self._cache = np.zeros((n + 1, CACHE_COLUMNS))
+        self._cache[n, _ANGLE] = math.nan
+        self._tangent = np.zeros((12, 12))
 
     @property
     def mesh_stiffness_per_width(self) -> float:
@@ -415,10 +462,12 @@ class MeshElement:
         return self._has_errors
 
     def kernel_arrays(self) -> tuple:
-        """The constant arguments of the mesh kernel after (angle, q), in its order: what a
-        compiled caller (:mod:`gear_fmu.step.kernel`) passes on."""
+        """The arguments of the mesh kernel after (angle, q), in its order: what a compiled
+        caller (:mod:`gear_fmu.step.kernel`) passes on. The last two are the mesh's cache of
+        what depends on the angle and the contact set only (``_mesh_kernel``), which the
+        kernel updates; the others are constant."""
         return (self._geo, self.xi_table, self.k_table, self.z_slices, self.dl, self.n_lines,
-                self._dev, self._pitch[0], self._pitch[1])
+                self._dev, self._pitch[0], self._pitch[1], self._cache, self._tangent)
 
     def evaluate(self, pinion_angle: float, q12) -> MeshState:
         """Mesh force, tangent and contact set at a pinion angle [rad] and gear-node DOFs (12,)."""
@@ -437,8 +486,8 @@ class MeshElement:
         z = np.empty(n)
         total, length = _mesh_kernel(
             float(pinion_angle), qe, self._geo, self.xi_table, self.k_table, self.z_slices,
-            self.dl, self.n_lines, self._dev, self._pitch[0], self._pitch[1], force, stiff,
-            active, inside, delta, load, xi, z, False)
+            self.dl, self.n_lines, self._dev, self._pitch[0], self._pitch[1], self._cache,
+            self._tangent, force, stiff, active, inside, delta, load, xi, z)
         rb1, rb2 = self.pair.base_radius
         te = rb1 * q[5] + rb2 * q[11]
         return MeshState(force, stiff, active, delta, load, inside, xi, z, total, te,

@@ -50,7 +50,7 @@ def sum_squares(f0):
 @njit(cache=True)
 def advance(hh, g_const, s0, w, x, v, a, f_c, unb_coef, t1, f0, kb, cb, h,  # step (Eq. 12-16)
             angle, err, has_err, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1, pitch2,
-            used0, has_used, f_scale, tol, max_iter,  # contact loop (Fig. 4)
+            cache, tangent, used0, has_used, f_scale, tol, max_iter,  # contact loop (Fig. 4)
             force, stiff, active, inside, delta, load, xis, zout, residuals,  # mesh state out
             x1, v1, a1):  # state out
     """One Newmark step of length ``h`` with the mesh element at pinion ``angle`` [rad]:
@@ -83,8 +83,8 @@ def advance(hh, g_const, s0, w, x, v, a, f_c, unb_coef, t1, f0, kb, cb, h,  # st
         for i in range(N_GEAR):
             q[i] = xc[i] + err[i] if has_err else xc[i]
         total, length = _mesh_kernel(angle, q, geo, xi_tab, k_tab, zs, dl, n_lines, dev,
-                                     pitch1, pitch2, force, stiff, active, inside, delta, load,
-                                     xis, zout, k > 0)
+                                     pitch1, pitch2, cache, tangent, force, stiff, active,
+                                     inside, delta, load, xis, zout)
         ff = np.dot(force, force)
         scale = max(f_scale, math.sqrt(ff))
         scale = scale if scale > 0.0 else 1.0
@@ -118,8 +118,8 @@ def advance(hh, g_const, s0, w, x, v, a, f_c, unb_coef, t1, f0, kb, cb, h,  # st
 
 @njit(cache=True)
 def contact_event(angle, x1, err, has_err, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1,
-                  pitch2, m_gear, force_before, a1, force, stiff, active, inside, delta, load,
-                  xis, zout):
+                  pitch2, cache, tangent, m_gear, force_before, a1, force, stiff, active,
+                  inside, delta, load, xis, zout):
     """A contact event at the end of a sub-step (:mod:`gear_fmu.structure`, contact
     location): the mesh evaluated at pinion ``angle`` [rad] (after the event) at the gear DOFs
     of ``x1`` (plus ``err`` when ``has_err``), into ``force`` ... ``zout``, and the
@@ -133,8 +133,8 @@ def contact_event(angle, x1, err, has_err, geo, xi_tab, k_tab, zs, dl, n_lines, 
         q[i] = x1[i] + err[i] if has_err else x1[i]
         jump[i] = force_before[i]
     total, length = _mesh_kernel(angle, q, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1,
-                                 pitch2, force, stiff, active, inside, delta, load, xis, zout,
-                                 False)
+                                 pitch2, cache, tangent, force, stiff, active, inside, delta,
+                                 load, xis, zout)
     for i in range(N_GEAR):
         jump[i] = force[i] - jump[i]
     for i in range(a1.shape[0]):
@@ -148,8 +148,9 @@ def contact_event(angle, x1, err, has_err, geo, xi_tab, k_tab, zs, dl, n_lines, 
 @njit(cache=True)
 def advance_pieces(n_pieces, hh, g_const, s0, w, table, event, err, err_after, x, v, a,
                    f_c, unb_coef, f0, kb, cb, has_err, geo, xi_tab, k_tab, zs, dl, n_lines, dev,
-                   pitch1, pitch2, used0, has_used, f_scale, tol, max_iter, m_gear, force, stiff,
-                   active, inside, delta, load, xis, zout, residuals, x1, v1, a1):
+                   pitch1, pitch2, cache, tangent, used0, has_used, f_scale, tol, max_iter,
+                   m_gear, force, stiff, active, inside, delta, load, xis, zout, residuals, x1,
+                   v1, a1):
     """A step cut at its contact events (:meth:`gear_fmu.structure.Structure.step`) in one
     call: sub-step ``p < n_pieces`` is :func:`advance` of length ``table[p, 0]`` [s] to
     ``table[p, 1]`` [s] with the mesh at pinion angle ``table[p, 2]`` [rad] (``hh[p]`` ...
@@ -169,15 +170,16 @@ def advance_pieces(n_pieces, hh, g_const, s0, w, table, event, err, err_after, x
         status, k, total, length = advance(
             hh[p], g_const[p], s0[p], w[p], xs, vs, as_, f_c, unb_coef, table[p, 1], f0, kb,
             cb, table[p, 0], table[p, 2], err[p], has_err, geo, xi_tab, k_tab, zs, dl,
-            n_lines, dev, pitch1, pitch2, used, has_used, f_scale, tol, max_iter, force, stiff,
-            active, inside, delta, load, xis, zout, residuals, x1, v1, a1)
+            n_lines, dev, pitch1, pitch2, cache, tangent, used, has_used, f_scale, tol,
+            max_iter, force, stiff, active, inside, delta, load, xis, zout, residuals, x1, v1,
+            a1)
         if status != CONVERGED:
             return status, p, k, total, length
         if event[p]:
             total, length = contact_event(
                 table[p, 3], x1, err_after[p], has_err, geo, xi_tab, k_tab, zs, dl, n_lines,
-                dev, pitch1, pitch2, m_gear, force, a1, force, stiff, active, inside, delta,
-                load, xis, zout)
+                dev, pitch1, pitch2, cache, tangent, m_gear, force, a1, force, stiff, active,
+                inside, delta, load, xis, zout)
         if p + 1 < n_pieces:
             xs, vs, as_ = x1.copy(), v1.copy(), a1.copy()
             used = active.copy()

@@ -77,8 +77,9 @@ def _evaluate_set(bearings, states, out):
 @njit(cache=True)
 def coupled_step(n_pieces, hh, g_const, s0, w, table, event, err, err_after, x, v, a, f_c,
                  unb_coef,  # the structure before the laws (advance_pieces)
-                 has_err, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1, pitch2, used0,
-                 has_used, f_scale, s_tol, s_max_iter, m_gear,  # ... after the laws
+                 has_err, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1, pitch2, cache,
+                 tangent, used0, has_used, f_scale, s_tol, s_max_iter,
+                 m_gear,  # ... after the laws
                  force, stiff, active, inside, delta, load, xis, zout, residuals, x1, v1, a1,
                  bearings, states, out,  # the bearing set (evaluate_set)
                  f0, kb, cb, tol, max_iterations, relaxation, stall, mismatches):
@@ -104,8 +105,8 @@ def coupled_step(n_pieces, hh, g_const, s0, w, table, event, err, err_after, x, 
         status, piece, k, total, length = advance_pieces(
             n_pieces, hh, g_const, s0, w, table, event, err, err_after, x, v, a, f_c, unb_coef,
             f0, kb, cb, has_err, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1, pitch2,
-            used0, has_used, f_scale, s_tol, s_max_iter, m_gear, force, stiff, active, inside,
-            delta, load, xis, zout, residuals, x1, v1, a1)
+            cache, tangent, used0, has_used, f_scale, s_tol, s_max_iter, m_gear, force, stiff,
+            active, inside, delta, load, xis, zout, residuals, x1, v1, a1)
         if status != CONVERGED:
             return (STRUCTURE_FAILED, it, status, piece, k, total, length, -1, 0, relaxed,
                     mismatch, f0, kb, cb)
