@@ -102,6 +102,7 @@ def _locator_class():
 
         def __init__(self, py_func, py_file: str, root: str):
             self._lineno = py_func.__code__.co_firstlineno
+            self._py_file = py_file  # where numba's "cannot cache" warning points
             rel = Path(py_file).resolve().relative_to(root)
             self._version = PREFIX + code_hash(root)
             self._stamp = (self._version, rel.as_posix())

@@ -47,3 +47,24 @@ def test_a_kernel_calling_the_packages_is_cached_with_their_version_and_its_own_
     assert second.get_cache_path() == first.get_cache_path()
     assert second.get_source_stamp() != first.get_source_stamp()
     assert second.get_source_stamp()[:2] == first.get_source_stamp()[:2]
+
+
+def test_a_kernel_numba_cannot_cache_is_compiled_with_numba_s_warning(tmp_path, monkeypatch):
+    """A kernel of the packages that numba cannot cache (here: it sets numba's thread count
+    inside, a dynamic global) compiles and runs with numba's own "cannot cache" warning, which
+    points to its file: the locator has the source file numba's warning asks for (it raised
+    AttributeError instead)."""
+    import numba
+    import pytest
+    from numba.core import config
+    from numba.core.errors import NumbaWarning
+
+    monkeypatch.setattr(config, "CACHE_DIR", str(tmp_path / "numba"))
+    path = ROOT / "bearing_fmu" / "static.py"  # a file of the packages: this project's locator
+    namespace = {"numba": numba}
+    exec(compile("def threads():\n    numba.set_num_threads(1)\n"
+                 "    return numba.get_num_threads()\n", str(path), "exec"), namespace)
+    kernel = numba.njit(cache=True)(namespace["threads"])
+    with pytest.warns(NumbaWarning, match='Cannot cache compiled function "threads"') as seen:
+        assert kernel() == 1
+    assert any(w.filename == str(path) for w in seen)
