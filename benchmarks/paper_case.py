@@ -1,14 +1,16 @@
 """Wall time of the paper's spur case (Table 4): 2048 mesh periods, 65,536 steps.
 
 Usage: ``python benchmarks/paper_case.py [--periods N] [--skip-fmu] [--contact-location]
-[--breakdown]``
+[--threads N] [--breakdown]``
 
 Runs, in one process and in this order: hybrid bearings in-process, the linear 8-coefficient
 model in-process (Table 4 case 0), hybrid through the FMUs (fmpy), and prints wall time,
 steps/s, bearing evaluations (= Reynolds solves for the film models), coupled iterations per
 step, and the ratios. ``--contact-location`` adds hybrid in-process runs of the spur and
 helical cases with ``simulation.locate_contact`` off (the steps not cut at the contact events,
-:mod:`gear_fmu.structure`) and the ratio of the default (on) to them. The numba kernels are
+:mod:`gear_fmu.structure`) and the ratio of the default (on) to them. ``--threads N`` adds the
+hybrid in-process run with its bearings on N threads (``gsb run --threads``) and the ratio of
+the run on one thread to it. The numba kernels are
 compiled before the clock starts (a 2-period warm-up run per configuration). The paper needed
 8 minutes for case 2 in 2010.
 
@@ -176,6 +178,8 @@ def main() -> None:
     parser.add_argument("--skip-fmu", action="store_true")
     parser.add_argument("--contact-location", action="store_true",
                         help="also time the runs with simulation.locate_contact off")
+    parser.add_argument("--threads", type=int, default=1,
+                        help="also time the hybrid in-process run on this many threads")
     parser.add_argument("--breakdown", action="store_true",
                         help="only the per-iteration breakdown (hybrid, in-process and FMUs)")
     args = parser.parse_args()
@@ -189,6 +193,8 @@ def main() -> None:
     configs = [("hybrid", True), ("linear", True)]
     if not args.skip_fmu:
         configs.append(("hybrid", False))
+    if args.threads > 1:
+        configs.append(("hybrid", True, "threads"))
     if args.contact_location:
         configs += [("hybrid", True, "no-location"), ("hybrid", True, "helical"),
                     ("hybrid", True, "helical-no-location")]
@@ -199,6 +205,9 @@ def main() -> None:
         for model, in_process, *variant in configs:
             kw = dict(in_process=in_process, out_dir=tmp, progress=False)
             name = variant[0] if variant else ""
+            if name == "threads":  # the same results file name: another folder
+                kw |= dict(threads=args.threads, out_dir=f"{tmp}/threads")
+                name = f"{args.threads} threads"
             run = load_case("baguet2010_helical" if "helical" in name else CASE,
                             {"simulation.locate_contact": "no-location" not in name,
                              "bearings.model": model})
@@ -208,13 +217,16 @@ def main() -> None:
             label = f"{model:7s} {'in-process' if in_process else 'FMUs (fmpy)'} {name}"
             rows[(model, in_process, *variant)] = s
             solves = 4 * s.bearing_evaluations
-            print(f"{label:24s} {s.wall_time:7.1f} s  {s.steps_per_second:7.0f} steps/s  "
+            print(f"{label:28s} {s.wall_time:7.1f} s  {s.steps_per_second:7.0f} steps/s  "
                   f"{s.iterations_per_step:5.2f} it/step  {solves:9d} bearing evaluations  "
                   f"static {s.static_time * 1e3:.0f} ms")
     ref = rows[("hybrid", True)].wall_time
     print(f"linear / hybrid (in-process): {rows[('linear', True)].wall_time / ref:.2f}")
     if ("hybrid", False) in rows:
         print(f"FMU / in-process (hybrid): {rows[('hybrid', False)].wall_time / ref:.2f}")
+    if ("hybrid", True, "threads") in rows:
+        print(f"hybrid in-process, 1 / {args.threads} threads: "
+              f"{ref / rows[('hybrid', True, 'threads')].wall_time:.2f}")
     if args.contact_location:
         off = rows[("hybrid", True, "no-location")].wall_time
         print(f"spur: contact location on / off: {ref / off:.3f}")

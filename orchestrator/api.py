@@ -42,7 +42,7 @@ def _with(case: Case, periods: int | None, bearing: str | None) -> Case:
 def simulate(case, periods: int | None = None, bearing: str | None = None, *,
              in_process: bool = False, steps: int | None = None,
              results_dir: str | Path | None = None, fmu_dir: str | Path | None = None,
-             progress: bool = True) -> Result:
+             progress: bool = True, threads: int = 1) -> Result:
     """Static solution X0, then the transient of ``case``; the result in memory.
 
     Parameters
@@ -66,6 +66,9 @@ def simulate(case, periods: int | None = None, bearing: str | None = None, *,
         Folder of the built FMUs (default: the per-user cache, built there if missing).
     progress : bool
         A progress line on stderr.
+    threads : int
+        In-process: how many threads share the hybrid bearings (the same numbers, bit for
+        bit; faster with a core to spare, which each thread keeps busy while the run lasts).
 
     Returns
     -------
@@ -87,10 +90,10 @@ def simulate(case, periods: int | None = None, bearing: str | None = None, *,
 
     case = _with(_case(case), periods, bearing)
     if results_dir is None:
-        return simulate_case(RunSpec.of(case, in_process, None, fmu_dir, steps),
+        return simulate_case(RunSpec.of(case, in_process, None, fmu_dir, steps, threads),
                              progress=progress)
     summary = run_case(case, in_process=in_process, out_dir=results_dir, fmu_dir=fmu_dir,
-                       progress=progress, steps=steps)
+                       progress=progress, steps=steps, threads=threads)
     result = Result.from_file(summary.results)
     result.summary = summary
     return result

@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from bearing_fmu.frames import law_to_global, state_to_local
 from bearing_fmu.hybrid._jacobian import film_jacobian
@@ -392,4 +392,25 @@ def hybrid_set_global(states, active, ws, iws, trig, coef, q, omega, clearance, 
                                s[b], omega[b], clearance[b], fs[b], res[b], out[b])
         if status != 0:
             return b, status
+    return -1, 0
+
+
+
+@njit(cache=True, parallel=True)
+def hybrid_set_threads(states, active, ws, iws, trig, coef, q, omega, clearance, fs, res,
+                       status, s, out):
+    """:func:`hybrid_set_global` with the bearings shared among the threads of numba's
+    threading layer, as many as ``numba.set_num_threads`` gave the calling thread
+    (:meth:`bearing_fmu.hybrid.model.HybridSet.use_threads`; set in Python: the call inside
+    would make this kernel and its callers uncachable). Each bearing is the same
+    :func:`hybrid_global` call on its own memory as in the serial loop, so the bits do not
+    depend on the thread count. Every bearing is evaluated, also after a failing one;
+    ``status`` (nb,) int64 receives their statuses. Returns ``(-1, 0)``, or the index of the
+    first bearing whose status is not 0 and that status."""
+    for b in prange(states.shape[0]):
+        status[b] = hybrid_global(states[b:b + 1], active[b], ws[b], iws[b], trig[b], coef,
+                                  q[b], s[b], omega[b], clearance[b], fs[b], res[b], out[b])
+    for b in range(states.shape[0]):
+        if status[b] != 0:
+            return b, status[b]
     return -1, 0

@@ -33,7 +33,7 @@ from bearing_fmu.hybrid import _kernels as _k
 from bearing_fmu.hybrid import _workspace as _ws
 from bearing_fmu.hybrid.axial import AXIAL_COEF, axial_shape
 
-__all__ = ["HybridBearing", "HybridConvergenceError", "HybridSet"]
+__all__ = ["HybridBearing", "HybridConvergenceError", "HybridSet", "threading_layer"]
 
 _STATUS = {
     1: "the active-set (LCP) iteration did not converge",
@@ -244,6 +244,8 @@ class HybridSet:
         for b, m in enumerate(self.models):
             m._state, m._active, m._ws = self._states[b:b + 1], self._active[b], self._ws[b]
             m._iws, m._trig, m._res = self._iws[b], self._trig[b], self._res[b]
+        self.threads = 1  # use_threads
+        self._status = np.zeros(len(self.models), dtype=np.int64)  # hybrid_set_threads's
 
     @staticmethod
     def fits(models) -> bool:
@@ -251,20 +253,59 @@ class HybridSet:
         return (len(models) > 0 and all(type(m) is HybridBearing for m in models)
                 and len({m.n for m in models}) == 1)
 
+    def use_threads(self, threads: int) -> int:
+        """Share the bearings among ``threads`` threads (1: one after the other, the default):
+        ``hybrid_set_threads`` instead of ``hybrid_set_global``, the same bits. Worth it with
+        a core to spare: the threads wait for work by spinning, so each keeps a core busy
+        while the set is in use (numba's OpenMP layer). Returns the thread count in use: 1,
+        with a :class:`RuntimeWarning` saying what is missing, when numba has no OpenMP or TBB
+        threading layer here (:func:`threading_layer`). ValueError for a count that is not a
+        whole number from 1 to numba's ``NUMBA_NUM_THREADS``."""
+        import numba
+
+        limit = numba.config.NUMBA_NUM_THREADS
+        if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)) or not (
+                1 <= threads <= limit):
+            raise ValueError(f"threads = {threads!r}: need a whole number from 1 to {limit} "
+                             "(numba's NUMBA_NUM_THREADS on this machine)")
+        threads = int(threads)
+        if threads > 1 and threading_layer() is None:
+            import warnings
+
+            warnings.warn(f"threads = {threads}: numba has no OpenMP or TBB threading layer "
+                          "here, so the bearings run on 1 thread (install the GNU OpenMP "
+                          "runtime, libgomp.so.1, e.g. apt install libgomp1, or pip install "
+                          "tbb)", RuntimeWarning, stacklevel=2)
+            threads = 1
+        self.threads = threads
+        return threads
+
     def evaluate_global(self, states, out) -> None:
         """Film force [N], Kb [N/m], Cb [N s/m] (global frame) of every bearing at its global
         journal state ``states`` (nb, 4) [m, m/s] into ``out`` (nb, 5, 2) (rows as
         :meth:`HybridBearing.evaluate_global`). A failing bearing raises that bearing's
         error, with its index in ``bearing_index`` (0-based)."""
-        b, status = _k.hybrid_set_global(*self.kernel_arguments(), states, out)
+        args = self.kernel_arguments()
+        kernel = _k.hybrid_set_global if self.threads == 1 else _k.hybrid_set_threads
+        b, status = kernel(*args, states, out)
         if b >= 0:
             self.raise_status(b, status, states)
 
     def kernel_arguments(self) -> tuple:
-        """The arguments of ``hybrid_set_global`` before the journal states and the output:
-        what a compiled caller passes on (:mod:`orchestrator.coupling.fused`)."""
-        return (self._states, self._active, self._ws, self._iws, self._trig, AXIAL_COEF,
+        """The arguments of ``hybrid_set_global`` before the journal states and the output
+        (11), or of ``hybrid_set_threads`` on more than one thread (12: the statuses' array
+        after them): what a compiled caller passes on (:mod:`orchestrator.coupling.fused`).
+        On more than one thread this also gives the calling thread that many numba threads
+        (``numba.set_num_threads``, a setting of the calling thread) for the calls that
+        follow."""
+        args = (self._states, self._active, self._ws, self._iws, self._trig, AXIAL_COEF,
                 self._q, self._omega, self._clearance, self._fs, self._res)
+        if self.threads == 1:
+            return args
+        import numba
+
+        numba.set_num_threads(self.threads)
+        return (*args, self._status)
 
     def raise_status(self, b, status, states) -> None:
         """Raise the error of bearing ``b`` (0-based) whose call returned ``status`` at the
@@ -274,3 +315,23 @@ class HybridSet:
         except BearingError as exc:
             exc.bearing_index = int(b)
             raise
+
+
+def threading_layer() -> str | None:
+    """The threading layer numba runs :meth:`HybridSet.use_threads`'s threads on, ``"omp"`` or
+    ``"tbb"``, or None when neither loads here. Its ``"workqueue"`` layer is never taken: it
+    was six times slower than OpenMP for the paper's bearings (machine A) and aborts a process
+    that launches parallel kernels from two threads at once. Asked before the first parallel
+    call, this restricts numba's choice to those two (its ``"threadsafe"`` setting) unless
+    ``NUMBA_THREADING_LAYER`` chose otherwise."""
+    import numba
+    from numba.np.ufunc import parallel
+
+    if not parallel._is_initialized and numba.config.THREADING_LAYER == "default":
+        numba.config.THREADING_LAYER = "threadsafe"
+    try:
+        parallel._launch_threads()
+    except ValueError:  # "No threading layer could be loaded"
+        return None
+    layer = numba.threading_layer()
+    return layer if layer in ("omp", "tbb") else None

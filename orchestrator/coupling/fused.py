@@ -27,7 +27,7 @@ from numba import njit
 from numba.extending import overload
 
 from bearing_fmu.affine import AffineLaws, _relinearise, affine_set_global
-from bearing_fmu.hybrid._kernels import hybrid_set_global
+from bearing_fmu.hybrid._kernels import hybrid_set_global, hybrid_set_threads
 from bearing_fmu.linear import LinearBearing, LinearisedBearing
 from gear_fmu.step.condensation import N_GEAR
 from gear_fmu.step.kernel import CONVERGED, advance_pieces
@@ -45,13 +45,14 @@ __all__ = ["FusedStep", "coupled_step"]
 #: :func:`coupled_step` outcomes
 ACCEPTED, STRUCTURE_FAILED, BEARING_FAILED, NOT_CONVERGED = 0, 1, 2, 3
 #: the lengths of the bearing set's arguments that tell its kind (:func:`evaluate_set`)
-HYBRID_ARGUMENTS, AFFINE_ARGUMENTS = 11, 4
+HYBRID_ARGUMENTS, THREADED_ARGUMENTS, AFFINE_ARGUMENTS = 11, 12, 4
 
 
 def evaluate_set(bearings, states, out):
     """The bearing set in compiled code: ``hybrid_set_global(*bearings, states, out)`` for the
     arrays of a hybrid set (:meth:`bearing_fmu.hybrid.model.HybridSet.kernel_arguments`, 11
-    of them), ``affine_set_global(*bearings, states, out)`` for stacked affine laws
+    of them; ``hybrid_set_threads`` for its 12 on more than one thread),
+    ``affine_set_global(*bearings, states, out)`` for stacked affine laws
     (:meth:`orchestrator.coupling.inprocess.ModelBearings.affine_laws`, 4): chosen when
     :func:`coupled_step` compiles, so each kind has its own compiled (and cached) version.
     Returns ``(failed bearing or -1, its status)``."""
@@ -66,6 +67,12 @@ def _evaluate_set(bearings, states, out):
             return hybrid_set_global(b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7], b[8],
                                      b[9], b[10], states, out)
         return hybrid
+    if len(bearings) == THREADED_ARGUMENTS:
+        def threaded(bearings, states, out):
+            b = bearings
+            return hybrid_set_threads(b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7], b[8],
+                                      b[9], b[10], b[11], states, out)
+        return threaded
     if len(bearings) == AFFINE_ARGUMENTS:
         def affine(bearings, states, out):
             b = bearings

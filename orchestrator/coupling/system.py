@@ -24,7 +24,8 @@ __all__ = ["announce_compilation", "build_master"]
 
 
 def build_master(case: Case, in_process: bool = False, fmu_dir: Path | str | None = None,
-                 fmus: dict | None = None, structure: Structure | None = None) -> Master:
+                 fmus: dict | None = None, structure: Structure | None = None,
+                 threads: int = 1) -> Master:
     """The master of a case with its two slaves (``master.structure``, ``master.bearings``).
 
     In-process the physics objects of :mod:`fmu_src.description` are driven directly; through
@@ -40,6 +41,10 @@ def build_master(case: Case, in_process: bool = False, fmu_dir: Path | str | Non
     of one built from the case, e.g. one structure linearised with the bearings of several
     speeds (:class:`orchestrator.analysis.campbell.Linearisation`): the caller vouches that it
     is the case's.
+
+    ``threads`` (in-process): how many threads share the bearings when they are hybrid ones of
+    one n (:meth:`bearing_fmu.hybrid.model.HybridSet.use_threads`; other bearings run as they
+    do on one).
     """
     tol = case["simulation.tolerance"]
     max_it = case["simulation.max_iterations"]
@@ -60,6 +65,8 @@ def build_master(case: Case, in_process: bool = False, fmu_dir: Path | str | Non
             bearings = ModelBearings(description.bearing_models(case),
                                      description.BEARING_FRAMES,
                                      description.bearing_speeds(case))
+            if threads != 1 and bearings.hybrid_set is not None:
+                bearings.hybrid_set.use_threads(threads)
     elif fmus is not None:
         from orchestrator.coupling import fmi
 

@@ -246,7 +246,7 @@ class Runner:
     def start(self) -> None:
         """The master and its two slaves (:func:`~orchestrator.coupling.system.build_master`)."""
         s = self.spec
-        self.master = build_master(s.case, s.in_process, s.fmu_dir, s.fmus)
+        self.master = build_master(s.case, s.in_process, s.fmu_dir, s.fmus, threads=s.threads)
         self.stop_if_asked("before the static solution")
 
     def static(self) -> Static:
@@ -379,13 +379,15 @@ def simulate_case(spec: RunSpec, progress: bool = False, echo_warnings: bool = T
 def run_case(case: Case, in_process: bool = False, out_dir: Path | str = "results",
              fmu_dir: Path | str | None = None, progress: bool = True, fmus: dict | None = None,
              steps: int | None = None, overwrite: bool = False, flush_seconds: float = 1.0,
-             echo_warnings: bool = True) -> RunSummary:
+             echo_warnings: bool = True, threads: int = 1) -> RunSummary:
     """Run a case into a results file (module docstring); returns a :class:`RunSummary`.
 
     The case carries every setting (the bearing model in ``bearings.model``, the length in
     ``simulation.mesh_periods``: :meth:`fmu_src.case.Case.with_overrides`). ``steps``: stop
     after this many time steps (a quick look; default: all the periods'). ``echo_warnings``:
     print the checks' warnings on stderr (they are also in the summary and the results file).
+    ``threads``: how many threads share the hybrid bearings of an in-process run
+    (:class:`~orchestrator.run.spec.RunSpec`).
     The results file is named after the effective parameters
     (:func:`orchestrator.run.files.results_name`). An existing complete one of the same inputs
     answers instead of a run (:func:`stored_summary`, ``summary.stored``; ``overwrite``
@@ -401,7 +403,7 @@ def run_case(case: Case, in_process: bool = False, out_dir: Path | str = "result
     :class:`~orchestrator.run.progress.RunInterrupted` after SIGINT or SIGTERM, which stop the
     run between two steps with the results file closed and marked interrupted.
     """
-    spec = RunSpec.of(case, in_process, fmus, fmu_dir, steps)
+    spec = RunSpec.of(case, in_process, fmus, fmu_dir, steps, threads)
     name = run_files.results_name(spec.case, spec.label, in_process, steps,
                                   None if fmus is None else fmus["bearings"][0])
     attributes = spec.attributes()
@@ -434,7 +436,8 @@ def stored_summary(path: Path) -> RunSummary:
 
 
 def resume_run(path: Path | str, periods: int | None = None, fmu_dir: Path | str | None = None,
-               progress: bool = True, flush_seconds: float = 1.0) -> RunSummary:
+               progress: bool = True, flush_seconds: float = 1.0,
+               threads: int = 1) -> RunSummary:
     """Continue the run of a results file from its last checkpoint (``gsb run --resume``).
 
     The case comes from the file (``case_toml``), the static solution is solved again and must
@@ -442,7 +445,7 @@ def resume_run(path: Path | str, periods: int | None = None, fmu_dir: Path | str
     restored from the checkpoint (:meth:`orchestrator.coupling.master.Master.checkpoint`;
     through FMUs, their serialised FMU states) and the steps go on in the same file: the
     trajectory is that of an uninterrupted run. ``periods`` extends the run (default: the
-    file's own length).
+    file's own length); ``threads`` as :func:`run_case`'s (the same bits).
 
     The checkpoint is numeric arrays (:mod:`fmu_src.state_codec`), checked before anything is
     computed: a pickle (the format of older versions, which can run code when loaded), another
@@ -491,7 +494,7 @@ def resume_run(path: Path | str, periods: int | None = None, fmu_dir: Path | str
     if periods is not None:
         case = case.with_overrides({"simulation.mesh_periods": check_periods(periods)})
     steps = None if periods is not None else int(a["steps_total"])
-    spec = RunSpec.of(case, a["mode"] == "in-process", None, fmu_dir, steps)
+    spec = RunSpec.of(case, a["mode"] == "in-process", None, fmu_dir, steps, threads)
     if spec.n_steps <= rows:
         raise RunError(f"--resume {path}: the file already holds {rows} steps "
                        f"({rows / steps_per_period:g} mesh periods); give --periods above "

@@ -19,7 +19,8 @@ from fmu_src.case import Case
 from fmu_src.contract import bearing_fmu_name
 from fmu_src.units import symbol
 
-__all__ = ["ATTRIBUTE_UNITS", "RunError", "RunSpec", "check_periods", "with_units"]
+__all__ = ["ATTRIBUTE_UNITS", "RunError", "RunSpec", "check_periods", "check_threads",
+           "with_units"]
 
 
 class RunError(RuntimeError):
@@ -34,26 +35,50 @@ def check_periods(periods) -> int:
     return int(periods)
 
 
+def check_threads(threads, in_process: bool) -> int:
+    """``threads`` (``--threads``) as a whole number from 1 to numba's ``NUMBA_NUM_THREADS``,
+    above 1 for an in-process run only; RunError naming the value and the limit otherwise."""
+    import numba
+
+    limit = numba.config.NUMBA_NUM_THREADS
+    if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)) or not (
+            1 <= threads <= limit):
+        raise RunError(f"--threads {threads!r}: need a whole number from 1 to {limit} (numba's "
+                       "NUMBA_NUM_THREADS on this machine)")
+    if threads > 1 and not in_process:
+        raise RunError(f"--threads {threads}: threads share the bearings of an in-process run "
+                       "(--in-process); through the FMUs the master calls each bearing FMU in "
+                       "turn")
+    return int(threads)
+
+
 @dataclass(frozen=True)
 class RunSpec:
     """One run: ``case`` (checked, with every override applied), the transport (``in_process``;
     through FMUs ``fmus`` names FMU files of the user's own, else ``fmu_dir`` the folder of
-    the built ones) and ``steps`` (None: all of ``simulation.mesh_periods``)."""
+    the built ones), ``steps`` (None: all of ``simulation.mesh_periods``) and ``threads``,
+    how many threads share the hybrid bearings of an in-process run
+    (:meth:`bearing_fmu.hybrid.model.HybridSet.use_threads`: the same bits whatever the
+    count, so it is no setting of the results and not stored with them)."""
 
     case: Case
     in_process: bool = False
     fmus: dict | None = None
     fmu_dir: Path | str | None = None
     steps: int | None = None
+    threads: int = 1
 
     @classmethod
     def of(cls, case: Case, in_process: bool = False, fmus: dict | None = None,
-           fmu_dir=None, steps: int | None = None) -> RunSpec:
-        """The spec of a case, its number of periods checked (:func:`check_periods`)."""
+           fmu_dir=None, steps: int | None = None, threads: int = 1) -> RunSpec:
+        """The spec of a case, its number of periods checked (:func:`check_periods`), and its
+        steps and threads (:func:`check_threads`)."""
         check_periods(case["simulation.mesh_periods"])
         if steps is not None and (isinstance(steps, bool) or int(steps) < 1):
             raise RunError(f"steps = {steps!r}: need at least one step")
-        return cls(case, in_process, fmus, fmu_dir, None if steps is None else int(steps))
+        threads = check_threads(threads, in_process)
+        return cls(case, in_process, fmus, fmu_dir, None if steps is None else int(steps),
+                   threads)
 
     @property
     def dt(self) -> float:

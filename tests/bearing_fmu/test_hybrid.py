@@ -469,3 +469,29 @@ def test_a_set_takes_only_hybrid_bearings_of_one_n():
     assert HybridSet.fits([HybridBearing(unit(0.5)), HybridBearing(unit(1.0))])
     assert not HybridSet.fits([HybridBearing(unit(0.5)), HybridBearing(unit(0.5), n=96)])
     assert not HybridSet.fits([])
+
+
+def test_a_set_on_threads_checks_its_count_and_says_when_numba_cannot_give_them(monkeypatch):
+    """use_threads: a whole number from 1 to numba's NUMBA_NUM_THREADS (ValueError naming the
+    value and the limit); without an OpenMP or TBB layer, a warning that names what to
+    install, and the serial kernel."""
+    import numba
+
+    from bearing_fmu.hybrid import model as hybrid_model
+    from bearing_fmu.hybrid.model import HybridSet
+
+    bearing = BearingData(0.07, 0.035, 150e-6, 0.0288)
+    models = [HybridBearing(bearing, n=48) for _ in range(2)]
+    hs = HybridSet(models, np.stack([np.eye(2)] * 2), [300.0, 300.0])
+    limit = numba.config.NUMBA_NUM_THREADS
+    for bad in (0, limit + 1, 1.5, True):
+        with pytest.raises(ValueError, match=rf"threads = {bad!r}: need a whole number from 1 "
+                                             rf"to {limit} \(numba's NUMBA_NUM_THREADS"):
+            hs.use_threads(bad)
+    assert hs.threads == 1 and len(hs.kernel_arguments()) == 11
+    if limit >= 2:
+        monkeypatch.setattr(hybrid_model, "threading_layer", lambda: None)
+        with pytest.warns(RuntimeWarning, match=r"threads = 2: numba has no OpenMP or TBB "
+                                                r"threading layer here.*libgomp.*pip install tbb"):
+            assert hs.use_threads(2) == 1
+        assert hs.threads == 1 and len(hs.kernel_arguments()) == 11

@@ -119,6 +119,25 @@ def test_override_errors_name_the_option_and_the_closest_field(tmp_path, capsys)
            "shafts.inner_diameter[0] = 0.1 m must be smaller than" in line
 
 
+def test_thread_counts_are_refused_before_anything_runs(tmp_path, capsys):
+    """--threads: a whole number from 1 to numba's NUMBA_NUM_THREADS; above 1 for an
+    in-process run only (the master calls the bearing FMUs in turn)."""
+    import numba
+
+    limit = numba.config.NUMBA_NUM_THREADS
+    for value in (0, limit + 1):
+        line = one_error_line(*in_process(capsys, "run", "baguet2010_spur", "--in-process",
+                                          "--threads", value, "--out", tmp_path), "run")
+        assert f"--threads {value}: need a whole number from 1 to {limit} (numba's " \
+               "NUMBA_NUM_THREADS on this machine)" in line, line
+    if limit >= 2:
+        line = one_error_line(*in_process(capsys, "run", "baguet2010_spur", "--threads", 2,
+                                          "--out", tmp_path), "run")
+        assert "--threads 2: threads share the bearings of an in-process run (--in-process)" \
+            in line, line
+    assert not any(tmp_path.iterdir())  # refused before a results file was opened
+
+
 def test_bearing_calculator_errors_follow_the_convention(tmp_path, capsys):
     """Every bad input of ``gsb bearing`` names the option and its value, exit 2."""
     line = one_error_line(*gsb("bearing", "--l-over-d", "0.5", "--eccentricity", "1.2",

@@ -21,13 +21,14 @@ from orchestrator.coupling.master import CouplingError
 from orchestrator.coupling.system import build_master
 
 
-def _pair(case, structure=None):
+def _pair(case, structure=None, threads=(1, 1)):
     """Two masters of ``case`` after the static solution: the compiled step and the Python
-    loop (each on a structure from ``structure(case)`` if given)."""
+    loop (each on a structure from ``structure(case)`` if given, their hybrid bearings on
+    ``threads`` threads)."""
     out = []
-    for compiled in (True, False):
+    for compiled, n in zip((True, False), threads, strict=True):
         m = build_master(case, in_process=True,
-                         structure=None if structure is None else structure(case))
+                         structure=None if structure is None else structure(case), threads=n)
         assert m.fused is not None
         if not compiled:
             m.fused = None
@@ -52,8 +53,8 @@ def _same_state(a, b):
         np.testing.assert_array_equal(getattr(a.laws, name), getattr(b.laws, name), name)
 
 
-def _run_both(case, steps, monkeypatch, structure=None):
-    compiled, python = _pair(case, structure)
+def _run_both(case, steps, monkeypatch, structure=None, threads=(1, 1)):
+    compiled, python = _pair(case, structure, threads)
     taken = []
     step = fused_module.FusedStep.step
     monkeypatch.setattr(fused_module.FusedStep, "step",
@@ -127,7 +128,7 @@ def test_the_relaxed_step_at_300_rad_s_gives_the_same_bits(monkeypatch):
     assert compiled.relaxed_steps >= 1
 
 
-def _fail_both(case, change, monkeypatch):
+def _fail_both(case, change, monkeypatch, threads=(1, 1)):
     """The exception of one step of each master after ``change(master)``, and the counters;
     the compiled master's step must not have left it to the Python loop."""
     step = fused_module.FusedStep.step
@@ -141,7 +142,7 @@ def _fail_both(case, change, monkeypatch):
 
     monkeypatch.setattr(fused_module.FusedStep, "step", spy)
     out = []
-    for m in _pair(case):
+    for m in _pair(case, threads=threads):
         change(m)
         dt = time_step(case)
         with pytest.raises(Exception) as info:
@@ -149,7 +150,8 @@ def _fail_both(case, change, monkeypatch):
         # where a failed step leaves the structure is not compared: the Python loop leaves
         # it at the last iterate (or before it), the compiled one before the step, and a run
         # stops there without a checkpoint (orchestrator.run.runner)
-        out.append((type(info.value), str(info.value), _counters(m)[:4]))
+        out.append((type(info.value), str(info.value), _counters(m)[:4],
+                    getattr(info.value, "bearing", None)))
     assert len(left) == 1  # the compiled master's step raised inside the compiled path
     return out
 
@@ -163,15 +165,45 @@ def test_a_step_that_does_not_converge_fails_alike(monkeypatch):
     assert compiled[0] is CouplingError and "did not converge in 4 iterations" in compiled[1]
 
 
-def test_a_failing_bearing_fails_alike(monkeypatch):
-    """Laws that throw the journals out of their clearance: the first bearing's state check."""
+@pytest.mark.parametrize("threads", [(1, 1), (2, 1), (1, 2)], ids=["1", "2-compiled", "2-loop"])
+def test_a_failing_bearing_fails_alike(threads, monkeypatch):
+    _need_threads(max(threads))
+    """Laws that throw the journals of the second shaft out of their clearance: bearing 3's
+    state check, also when the bearings share two threads (every bearing is evaluated there;
+    the first failing one is reported, as the serial loop, which stops at it)."""
     def push(m):
         laws = m.laws
-        m.laws = AffineLaws(laws.f0 + 1e7, laws.kb, laws.cb)
+        f0 = laws.f0.copy()
+        f0[2:] += 1e7
+        m.laws = AffineLaws(f0, laws.kb, laws.cb)
 
-    compiled, python = _fail_both(load_case("baguet2010_spur"), push, monkeypatch)
+    compiled, python = _fail_both(load_case("baguet2010_spur"), push, monkeypatch, threads)
     assert compiled == python
     assert issubclass(compiled[0], BearingError)
+    assert compiled[3] == 3
+
+
+@pytest.mark.parametrize("name, steps", [("baguet2010_spur", 32), ("baguet2010_helical", 16)])
+@pytest.mark.parametrize("threads", [(2, 1), (1, 2)], ids=["2-compiled", "2-loop"])
+def test_bearings_on_two_threads_give_the_bits_of_one(name, steps, threads, monkeypatch):
+    """The hybrid bearings shared by two threads (``build_master(threads=2)``), in the
+    compiled step or in the Python loop, against one thread in the other path: the same bits
+    step for step (each bearing is the serial call on its own memory)."""
+    _need_threads(2)
+    compiled, n_compiled, _ = _run_both(load_case(name), steps, monkeypatch, threads=threads)
+    assert n_compiled == steps
+    assert compiled.bearings.hybrid_set.threads == threads[0]
+
+
+def _need_threads(n):
+    """Skip unless numba can give the bearings ``n`` threads here."""
+    import numba
+
+    from bearing_fmu.hybrid.model import threading_layer
+
+    if n > 1 and (numba.config.NUMBA_NUM_THREADS < n or threading_layer() is None):
+        pytest.skip(f"numba cannot run {n} threads here (NUMBA_NUM_THREADS "
+                    f"{numba.config.NUMBA_NUM_THREADS}, threading layer {threading_layer()})")
 
 
 def test_a_failing_structure_step_fails_alike(monkeypatch):
