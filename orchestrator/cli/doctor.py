@@ -1,9 +1,10 @@
 """``gsb doctor``: what this machine gives the package, and what is missing with its fix.
 
-Prints the Python and the packages the FMUs need, the cache folders (FMUs, numba's compiled
-kernels, the FMUs' staged code), whether the FMUs' native layer is built (and why not), and
-which Python an FMU host will start. ``--rebuild`` tries the native layer again, showing
-CMake's output. Exit code 0 when nothing is missing, 1 otherwise.
+Prints the Python and the packages the FMUs need, whether numba can give an in-process run's
+bearings threads, the cache folders (FMUs, numba's compiled kernels, the FMUs' staged code),
+whether the FMUs' native layer is built (and why not), and which Python an FMU host will
+start. ``--rebuild`` tries the native layer again, showing CMake's output. Exit code 0 when
+nothing is missing, 1 otherwise.
 """
 
 from __future__ import annotations
@@ -80,6 +81,23 @@ def _python(lines: list, problems: list) -> None:
                         f"pythonfmu=={VENDORED_PYTHONFMU}")
 
 
+def _threads(lines: list, problems: list) -> None:
+    """Whether ``gsb run --in-process --threads N`` can share the bearings among threads (an
+    option: nothing is a problem without it)."""
+    import numba
+
+    from bearing_fmu.hybrid.model import threading_layer
+
+    layer = threading_layer()
+    limit = numba.config.NUMBA_NUM_THREADS
+    if layer is None:
+        lines.append("threads      none: numba has no OpenMP or TBB layer here, so --threads "
+                     "stays at 1 (apt install libgomp1, or pip install tbb)")
+    else:
+        lines.append(f"threads      numba's {layer} layer, up to {limit}: gsb run --in-process "
+                     f"--threads {min(limit, 4)} shares the hybrid bearings")
+
+
 def _caches(lines: list, problems: list) -> None:
     """The per-user cache, the FMUs of this code version, numba's kernels, the staged code."""
     from fmu_src.build.fmus import code_hash
@@ -148,7 +166,7 @@ def _hosts(lines: list, problems: list) -> None:
 def report() -> tuple[list[str], list[str]]:
     """(lines to print, problems with their fix)."""
     lines, problems = [], []
-    for part in (_python, _caches, _native, _hosts):
+    for part in (_python, _threads, _caches, _native, _hosts):
         part(lines, problems)
     return lines, problems
 

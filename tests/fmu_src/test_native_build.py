@@ -94,6 +94,11 @@ def test_gsb_doctor_names_the_python_the_caches_and_the_native_layer(fmu_dir, tm
     assert sys.executable in out and "numba " in out and "pythonfmu 0.7.0" in out
     assert "native layer built:" in out and "libgsb-loader.so" in out
     assert "imports numpy, scipy, numba and threadpoolctl: ok" in out
+    from bearing_fmu.hybrid.model import threading_layer  # the same answer in this process
+
+    layer = threading_layer()
+    assert (f"threads      numba's {layer} layer, up to " if layer else
+            "threads      none: numba has no OpenMP or TBB layer here") in out
     if proc.returncode == 0:
         assert "nothing missing" in out
     else:
