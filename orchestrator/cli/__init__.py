@@ -44,11 +44,38 @@ def _show_startup(show: bool) -> None:
         log.propagate = False
 
 
+def _show_warnings(command: str):
+    """A ``warnings.showwarning`` that prints a warning of this package (what a run says once,
+    such as threads it cannot use) as one line ``gsb <command>: warning: <message>`` on
+    stderr; other warnings as Python prints them."""
+    import warnings
+    from pathlib import Path
+
+    packages = [Path(sys.modules[name].__file__).resolve().parent
+                for name in ("bearing_fmu", "gear_fmu", "fmu_src", "orchestrator")]
+    default = warnings.showwarning
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        try:
+            path = Path(filename).resolve()
+            ours = any(path.is_relative_to(p) for p in packages)
+        except (OSError, ValueError):
+            ours = False
+        if not ours:
+            return default(message, category, filename, lineno, file, line)
+        print(f"gsb {command}: warning: {message}", file=sys.stderr if file is None else file)
+    return show
+
+
 def main(argv: list[str] | None = None) -> int:
+    import warnings
+
     args = make_parser().parse_args(argv)
     _show_startup(not getattr(args, "quiet", False))
     try:
-        return args.func(args)
+        with warnings.catch_warnings():
+            warnings.showwarning = _show_warnings(args.command)
+            return args.func(args)
     except RunInterrupted as exc:
         print(f"gsb {args.command}: {exc}", file=sys.stderr)
         return exc.exit_code

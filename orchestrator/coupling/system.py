@@ -10,6 +10,7 @@ the studies all couple a case through it.
 from __future__ import annotations
 
 import logging
+import warnings
 from pathlib import Path
 
 from bearing_fmu import numba_cache
@@ -65,8 +66,8 @@ def build_master(case: Case, in_process: bool = False, fmu_dir: Path | str | Non
             bearings = ModelBearings(description.bearing_models(case),
                                      description.BEARING_FRAMES,
                                      description.bearing_speeds(case))
-            if threads != 1 and bearings.hybrid_set is not None:
-                bearings.hybrid_set.use_threads(threads)
+            if threads != 1:
+                _share_bearings(bearings, threads, case["bearings.model"])
     elif fmus is not None:
         from orchestrator.coupling import fmi
 
@@ -79,6 +80,17 @@ def build_master(case: Case, in_process: bool = False, fmu_dir: Path | str | Non
     announce_compilation(cold)  # after the FMUs' build: the kernels compile on first calls
     fused = FusedStep(structure, bearings) if FusedStep.fits(structure, bearings) else None
     return Master(structure, bearings, tol, max_it, fused=fused)
+
+
+def _share_bearings(bearings: ModelBearings, threads: int, model: str) -> None:
+    """Give the hybrid bearings of an in-process run ``threads`` threads
+    (:meth:`bearing_fmu.hybrid.model.HybridSet.use_threads`); say once that other bearing
+    models run on one thread (nothing would share them)."""
+    if bearings.hybrid_set is not None:
+        bearings.hybrid_set.use_threads(threads)
+        return
+    warnings.warn(f"threads = {threads}: the {model} bearings run on one thread (threads share "
+                  "hybrid bearings only)", RuntimeWarning, stacklevel=3)
 
 
 def announce_compilation(cold: bool) -> None:

@@ -138,6 +138,22 @@ def test_thread_counts_are_refused_before_anything_runs(tmp_path, capsys):
     assert not any(tmp_path.iterdir())  # refused before a results file was opened
 
 
+def test_threads_for_other_bearings_are_said_once_on_one_line(tmp_path, capsys):
+    """--threads with bearings that are not hybrid ones: the run goes on, one thread, and
+    says so on one line of the command's own (no Python warning format, no source path)."""
+    import numba
+
+    if numba.config.NUMBA_NUM_THREADS < 2:
+        pytest.skip("numba allows one thread here")
+    code, err = in_process(capsys, "run", "baguet2010_spur", "--in-process", "--threads", 2,
+                           "--bearing", "linear", "--periods", 1, "--no-figures", "--quiet",
+                           "--out", tmp_path)
+    assert code == 0, err
+    lines = [ln for ln in err.splitlines() if "thread" in ln]
+    assert lines == ["gsb run: warning: threads = 2: the linear bearings run on one thread "
+                     "(threads share hybrid bearings only)"], err
+
+
 def test_bearing_calculator_errors_follow_the_convention(tmp_path, capsys):
     """Every bad input of ``gsb bearing`` names the option and its value, exit 2."""
     line = one_error_line(*gsb("bearing", "--l-over-d", "0.5", "--eccentricity", "1.2",

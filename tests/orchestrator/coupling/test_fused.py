@@ -195,6 +195,16 @@ def test_bearings_on_two_threads_give_the_bits_of_one(name, steps, threads, monk
     assert compiled.bearings.hybrid_set.threads == threads[0]
 
 
+def test_threads_for_bearings_that_are_not_hybrid_ones_are_said_to_do_nothing():
+    """The linear bearings (an affine law each) are not shared: said once, one thread."""
+    _need_threads(2)
+    with pytest.warns(RuntimeWarning, match=r"threads = 2: the linear bearings run on one "
+                                            r"thread \(threads share hybrid bearings only\)"):
+        m = build_master(load_case("baguet2010_spur", {"bearings.model": "linear"}),
+                         in_process=True, threads=2)
+    assert m.bearings.hybrid_set is None
+
+
 def _need_threads(n):
     """Skip unless numba can give the bearings ``n`` threads here."""
     import numba
