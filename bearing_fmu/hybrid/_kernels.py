@@ -395,7 +395,6 @@ def hybrid_set_global(states, active, ws, iws, trig, coef, q, omega, clearance, 
     return -1, 0
 
 
-
 @njit(cache=True, parallel=True)
 def hybrid_set_threads(states, active, ws, iws, trig, coef, q, omega, clearance, fs, res,
                        status, s, out):

@@ -33,7 +33,8 @@ from bearing_fmu.hybrid import _kernels as _k
 from bearing_fmu.hybrid import _workspace as _ws
 from bearing_fmu.hybrid.axial import AXIAL_COEF, axial_shape
 
-__all__ = ["HybridBearing", "HybridConvergenceError", "HybridSet", "threading_layer"]
+__all__ = ["HybridBearing", "HybridConvergenceError", "HybridSet", "thread_count",
+           "threading_layer"]
 
 _STATUS = {
     1: "the active-set (LCP) iteration did not converge",
@@ -261,14 +262,7 @@ class HybridSet:
         with a :class:`RuntimeWarning` saying what is missing, when numba has no OpenMP or TBB
         threading layer here (:func:`threading_layer`). ValueError for a count that is not a
         whole number from 1 to numba's ``NUMBA_NUM_THREADS``."""
-        import numba
-
-        limit = numba.config.NUMBA_NUM_THREADS
-        if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)) or not (
-                1 <= threads <= limit):
-            raise ValueError(f"threads = {threads!r}: need a whole number from 1 to {limit} "
-                             "(numba's NUMBA_NUM_THREADS on this machine)")
-        threads = int(threads)
+        threads = thread_count(threads, "threads = ")
         if threads > 1 and threading_layer() is None:
             import warnings
 
@@ -315,6 +309,20 @@ class HybridSet:
         except BearingError as exc:
             exc.bearing_index = int(b)
             raise
+
+
+def thread_count(threads, what: str) -> int:
+    """``threads`` as a whole number from 1 to numba's ``NUMBA_NUM_THREADS`` (what
+    :meth:`HybridSet.use_threads` takes); ValueError naming the value after ``what`` (such as
+    ``"--threads "``) and the limit otherwise."""
+    import numba
+
+    limit = numba.config.NUMBA_NUM_THREADS
+    if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)) or not (
+            1 <= threads <= limit):
+        raise ValueError(f"{what}{threads!r}: need a whole number from 1 to {limit} (numba's "
+                         "NUMBA_NUM_THREADS on this machine)")
+    return int(threads)
 
 
 def threading_layer() -> str | None:

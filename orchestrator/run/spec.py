@@ -37,19 +37,19 @@ def check_periods(periods) -> int:
 
 def check_threads(threads, in_process: bool) -> int:
     """``threads`` (``--threads``) as a whole number from 1 to numba's ``NUMBA_NUM_THREADS``,
-    above 1 for an in-process run only; RunError naming the value and the limit otherwise."""
-    import numba
+    above 1 for an in-process run only; RunError naming the value and the limit otherwise
+    (:func:`bearing_fmu.hybrid.model.thread_count`)."""
+    from bearing_fmu.hybrid.model import thread_count
 
-    limit = numba.config.NUMBA_NUM_THREADS
-    if isinstance(threads, bool) or not isinstance(threads, (int, np.integer)) or not (
-            1 <= threads <= limit):
-        raise RunError(f"--threads {threads!r}: need a whole number from 1 to {limit} (numba's "
-                       "NUMBA_NUM_THREADS on this machine)")
+    try:
+        threads = thread_count(threads, "--threads ")
+    except ValueError as exc:
+        raise RunError(str(exc)) from None
     if threads > 1 and not in_process:
         raise RunError(f"--threads {threads}: threads share the bearings of an in-process run "
                        "(--in-process); through the FMUs the master calls each bearing FMU in "
                        "turn")
-    return int(threads)
+    return threads
 
 
 @dataclass(frozen=True)
