@@ -38,8 +38,8 @@ def add_parser(sub) -> None:
                    help="run the Python slaves directly, without the FMI layer")
     p.add_argument("--threads", type=int, default=1,
                    help="in-process: threads that share the four hybrid bearings (default 1; "
-                        "2 is about 1.2-1.3 x faster with a core to spare, which the second "
-                        "thread keeps busy; the same numbers, bit for bit)")
+                        "2 made the paper's case 1.1-1.3 x faster with a core to spare, which "
+                        "the second thread keeps busy; the same numbers, bit for bit)")
     p.add_argument("--out", default="results", help="output folder (default results/)")
     p.add_argument("--overwrite", action="store_true",
                    help="compute the run again and replace its existing results file (a "

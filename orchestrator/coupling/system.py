@@ -14,6 +14,7 @@ import warnings
 from pathlib import Path
 
 from bearing_fmu import numba_cache
+from bearing_fmu.hybrid.model import thread_count
 from fmu_src import description
 from fmu_src.case import Case
 from gear_fmu.structure import Structure
@@ -43,9 +44,9 @@ def build_master(case: Case, in_process: bool = False, fmu_dir: Path | str | Non
     speeds (:class:`orchestrator.analysis.campbell.Linearisation`): the caller vouches that it
     is the case's.
 
-    ``threads`` (in-process): how many threads share the bearings when they are hybrid ones of
-    one n (:meth:`bearing_fmu.hybrid.model.HybridSet.use_threads`; other bearings run as they
-    do on one).
+    ``threads``: how many threads share the bearings when they are in-process hybrid ones of
+    one n (:meth:`bearing_fmu.hybrid.model.HybridSet.use_threads`); any other bearings run on
+    one, which a warning says.
     """
     tol = case["simulation.tolerance"]
     max_it = case["simulation.max_iterations"]
@@ -66,8 +67,6 @@ def build_master(case: Case, in_process: bool = False, fmu_dir: Path | str | Non
             bearings = ModelBearings(description.bearing_models(case),
                                      description.BEARING_FRAMES,
                                      description.bearing_speeds(case))
-            if threads != 1:
-                _share_bearings(bearings, threads, case["bearings.model"])
     elif fmus is not None:
         from orchestrator.coupling import fmi
 
@@ -77,20 +76,26 @@ def build_master(case: Case, in_process: bool = False, fmu_dir: Path | str | Non
         from orchestrator.coupling import fmi
 
         structure, bearings = fmi.system_from_case(case, fmu_dir=fmu_dir)
+    if threads != 1:
+        _share_bearings(bearings, threads, "the bearing FMUs" if fmus is not None or not
+                        in_process else f"the {case['bearings.model']} bearings")
     announce_compilation(cold)  # after the FMUs' build: the kernels compile on first calls
     fused = FusedStep(structure, bearings) if FusedStep.fits(structure, bearings) else None
     return Master(structure, bearings, tol, max_it, fused=fused)
 
 
-def _share_bearings(bearings: ModelBearings, threads: int, model: str) -> None:
-    """Give the hybrid bearings of an in-process run ``threads`` threads
-    (:meth:`bearing_fmu.hybrid.model.HybridSet.use_threads`); say once that other bearing
-    models run on one thread (nothing would share them)."""
-    if bearings.hybrid_set is not None:
-        bearings.hybrid_set.use_threads(threads)
+def _share_bearings(bearings, threads: int, what: str) -> None:
+    """Give the in-process hybrid bearings of a run ``threads`` threads
+    (:meth:`bearing_fmu.hybrid.model.HybridSet.use_threads`); say once that any other bearings
+    (``what``: other models, bearing FMUs) run on one thread, after the same check of the
+    count."""
+    hybrid = getattr(bearings, "hybrid_set", None)
+    if hybrid is not None:
+        hybrid.use_threads(threads)
         return
-    warnings.warn(f"threads = {threads}: the {model} bearings run on one thread (threads share "
-                  "hybrid bearings only)", RuntimeWarning, stacklevel=3)
+    thread_count(threads, "threads = ")
+    warnings.warn(f"threads = {threads}: {what} run on one thread (threads share hybrid "
+                  "bearings only)", RuntimeWarning, stacklevel=3)
 
 
 def announce_compilation(cold: bool) -> None:

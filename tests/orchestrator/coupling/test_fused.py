@@ -196,13 +196,17 @@ def test_bearings_on_two_threads_give_the_bits_of_one(name, steps, threads, monk
 
 
 def test_threads_for_bearings_that_are_not_hybrid_ones_are_said_to_do_nothing():
-    """The linear bearings (an affine law each) are not shared: said once, one thread."""
+    """The linear bearings (an affine law each) are not shared: said once, one thread; a
+    count out of range is refused as for hybrid bearings."""
     _need_threads(2)
     with pytest.warns(RuntimeWarning, match=r"threads = 2: the linear bearings run on one "
                                             r"thread \(threads share hybrid bearings only\)"):
         m = build_master(load_case("baguet2010_spur", {"bearings.model": "linear"}),
                          in_process=True, threads=2)
     assert m.bearings.hybrid_set is None
+    with pytest.raises(ValueError, match=r"threads = 0: need a whole number from 1 to"):
+        build_master(load_case("baguet2010_spur", {"bearings.model": "linear"}),
+                     in_process=True, threads=0)  # the count is checked all the same
 
 
 def _need_threads(n):
