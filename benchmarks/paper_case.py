@@ -23,8 +23,9 @@ sum of the timed calls. The timers add about 0.5 us per call (measured by the ra
 runs with and without them). A third run times the compiled kernels alone (:data:`KERNELS`:
 the structure's step, the hybrid bearing, the master's update) and prints the ratio of the
 total to their sum: what is left is Python and, through FMUs, the FMI layer. In-process the
-master takes most steps as one compiled call (:mod:`orchestrator.coupling.fused`, timed as
-one line); the third run uses the master's Python loop, whose kernels can be timed apart.
+master takes most steps in compiled calls of many steps each (:mod:`orchestrator.coupling.
+fused`, timed as one line with the Python around them); the third run uses the master's
+Python loop, whose kernels can be timed apart.
 """
 
 from __future__ import annotations
@@ -59,7 +60,9 @@ TIMED = [
     ("laws in / journals out", FMU_STRUCTURE, "journal_states"),
     ("master: linearise + mismatch", "bearing_fmu.affine.AffineLaws", "relinearise"),
     ("compiled coupled step", "orchestrator.coupling.fused.FusedStep", "step"),
+    ("compiled coupled step", "orchestrator.coupling.fused.FusedStep", "steps"),
     ("outputs + results writer", "orchestrator.run.results.ResultsWriter", "append"),
+    ("outputs + results writer", "orchestrator.run.results.ResultsWriter", "append_rows"),
     ("outputs + results writer", "orchestrator.coupling.master.StructureSlave", "step_outputs"),
     ("outputs + results writer", FMU_STRUCTURE, "step_outputs"),
 ]

@@ -60,7 +60,13 @@ from gear_fmu.mesh.element import MeshElement, MeshState
 from gear_fmu.modal.analyses import reference_damping
 from gear_fmu.modal.damping import DampingModel
 from gear_fmu.step.assembly import check_laws, check_laws_fast, finish_step, prepare_step
-from gear_fmu.step.condensation import N_BEARING, N_GEAR, NC, Condensation
+from gear_fmu.step.condensation import (
+    N_BEARING,
+    N_GEAR,
+    NC,
+    Condensation,
+    CondensationSlots,
+)
 from gear_fmu.step.contact_loop import StepInfo, solve_condensed
 from gear_fmu.step.events import ContactEvents
 from gear_fmu.step.kernel import CONVERGED, SINGULAR, advance, contact_event
@@ -73,10 +79,10 @@ __all__ = ["StepInfo", "Structure", "StructureLoads", "StructureState", "check_l
 INITIAL_APPROACH_ROTATION = 1e-3
 _NO_ERROR = np.zeros(12)  # no runout or mounting error
 _NO_SET = np.zeros(0, dtype=np.bool_)  # no contact set known
-#: sub-steps of one step that :meth:`Structure.compiled_step` takes (a spur step of the paper's
+#: sub-steps of one step that :meth:`Structure.steps_plan` takes (a spur step of the paper's
 #: case has at most 2, a helical one 3); a step with more takes the Python path
 MAX_PIECES = 4
-_SLOTS = MAX_PIECES  # the sub-step slots of the compiled call (its argument types)
+_SLOTS = 4  # the sub-step slots of the compiled call (orchestrator.coupling.fused)
 _NO_ERRORS = np.zeros((_SLOTS, 12))
 
 
@@ -177,10 +183,8 @@ class Structure:
         self.active = None
         self.mesh_state = None
         self._dyn_cache: dict[float, tuple] = {}
-        # the compiled step's slots: condensations by sub-step lengths, and its piece table
-        self._slot_cache: dict[tuple, tuple] = {}
-        self._table = np.zeros((_SLOTS, 4))
-        self._event = np.zeros(_SLOTS, dtype=np.bool_)
+        # the compiled steps' condensations, by sub-step length
+        self._condensations = CondensationSlots()
         self.damping_model = zeta if isinstance(zeta, DampingModel) else DampingModel(
             ratio=float(zeta))
         self._reference_modes = None
@@ -208,7 +212,7 @@ class Structure:
         self._damping_full = damping_full
         self._c = self._permute(damping_full)
         self._dyn_cache.clear()
-        self._slot_cache.clear()
+        self._condensations.clear()
 
     def _require_damping(self) -> None:
         """Build the damping of the constructor's reference if nothing replaced it (at the
@@ -298,7 +302,7 @@ class Structure:
         f = self._f_const[NC:]
         self._dyn_cache = {dt: (cond, h, cond.g @ f)
                            for dt, (cond, h, _) in self._dyn_cache.items()}
-        self._slot_cache.clear()
+        self._condensations.clear()
 
     def pinion_angle(self, t: float) -> float:
         """Rigid-body pinion angle at t [rad]."""
@@ -417,16 +421,18 @@ class Structure:
         self.n_steps += 1
         return info
 
-    def _pieces(self, dt: float) -> list:
+    def _pieces(self, dt: float, t: float | None = None) -> list:
         """``[(h [s], end time [s], mesh angle of the sub-step [rad], angle after its event
-        [rad] or None)]`` of a step of dt (:meth:`gear_fmu.step.events.ContactEvents.pieces`;
-        one piece without contact location)."""
+        [rad] or None)]`` of a step of dt from ``t`` [s] (default: the structure's time)
+        (:meth:`gear_fmu.step.events.ContactEvents.pieces`; one piece without contact
+        location)."""
+        t = self.t if t is None else t
         if not self.locate_contact:
-            t1 = self.t + dt
+            t1 = t + dt
             return [(dt, t1, self.pinion_angle(t1), None)]
         if self._events is None:
             self._events = ContactEvents(self.mesh, self.pinion_angle)
-        return self._events.pieces(self.t, dt)
+        return self._events.pieces(t, dt)
 
     def _contact_event(self, angle: float) -> None:
         """Xdd, contact set and mesh state after a contact event: the mesh evaluated at pinion
@@ -541,68 +547,73 @@ class Structure:
         self.x, self.v, self.a = x1, v1, a1
         return StepInfo(t1, k, history[-1], history)
 
-    def compiled_step(self, dt: float):
-        """The inputs of a step of dt as one call of
-        :func:`gear_fmu.step.kernel.advance_pieces` with the bearing laws left to the caller (a
-        compiled coupled step, :mod:`orchestrator.coupling.fused`): ``(head, tail, outputs,
-        ends)``, the arguments before the laws, those after them, the output buffers and the
-        end time of each sub-step [s]; None for a step that takes the Python path (timing on,
-        more than :data:`MAX_PIECES` sub-steps). Finish it with :meth:`end_compiled_step`."""
+    def steps_plan(self, dt: float, n: int):
+        """The next steps of dt, at most ``n``, as the inputs of the compiled loop over steps
+        (:func:`orchestrator.coupling.fused.coupled_steps`); it stops before a step of more
+        than :data:`MAX_PIECES` sub-steps. ``(head, tail, ends)``: the arguments before the
+        state (per step its sub-step count, the condensation slot of each sub-step, the
+        condensations, piece tables, events and error displacements, one row of these for a
+        mesh without errors), those after it, and the end times [s] of each step's sub-steps
+        (what :meth:`step` reaches). None when the next step takes the Python path (timing
+        on, more than :data:`MAX_PIECES` sub-steps). Finish it with :meth:`end_steps`."""
         self._check_step(dt)
         if self._mesh_arrays is None or self.timing is not None:
             return None
-        pieces = self._pieces(dt)
-        n = len(pieces)
-        if n > MAX_PIECES:
+        t, steps, slotted = self.t, [], []
+        slots = self._condensations
+        while len(steps) < n:
+            pieces = self._pieces(dt, t)
+            lengths = [h for h, _, _, _ in pieces]
+            if len(pieces) > MAX_PIECES or not slots.make_room(lengths, first=not steps):
+                break
+            steps.append(pieces)
+            slotted.append([slots.slot(h, self._dynamic) for h in lengths])
+            t = pieces[-1][1]
+        if not steps:
             return None
-        mesh = self.mesh
-        table, event = self._table, self._event  # read by the call only: reused
-        err, err_after = _NO_ERRORS, _NO_ERRORS
+        m, mesh = len(steps), self.mesh
+        counts = np.empty(m, dtype=np.int64)
+        index = np.empty((m, _SLOTS), dtype=np.int64)
+        tables = np.zeros((m, _SLOTS, 4))
+        events = np.zeros((m, _SLOTS), dtype=np.bool_)
+        err = err_after = _NO_ERRORS[None]
         if mesh.has_errors:
-            err, err_after = np.zeros((_SLOTS, 12)), np.zeros((_SLOTS, 12))
-        for p, (h, te, before, after) in enumerate(pieces):
-            row = table[p]
-            row[0] = h
-            row[1] = te
-            row[2] = before
-            row[3] = math.nan if after is None else after
-            event[p] = after is not None
-            if mesh.has_errors:
-                err[p] = mesh.error_displacement(before)
-                if after is not None:
-                    err_after[p] = mesh.error_displacement(after)
-        head = (n, *self._slot_arrays(tuple(h for h, _, _, _ in pieces)), table, event, err,
-                err_after, self.x, self.v, self.a, self._f_c, self._unb_coef)
-        tail = (mesh.has_errors, *self._mesh_arrays, self.active, True, self._f_scale, self.tol,
-                self.max_iter, self._gear_compliance())
-        outputs = self._advance_outputs()
-        return head, tail, outputs, [te for _, te, _, _ in pieces]
+            err, err_after = np.zeros((m, _SLOTS, 12)), np.zeros((m, _SLOTS, 12))
+        for i, pieces in enumerate(steps):
+            counts[i] = len(pieces)
+            index[i] = slotted[i][0]  # the unused slots: the first's
+            index[i, :len(pieces)] = slotted[i]
+            for p, (h, te, before, after) in enumerate(pieces):
+                tables[i, p] = h, te, before, math.nan if after is None else after
+                events[i, p] = after is not None
+                if mesh.has_errors:
+                    err[i, p] = mesh.error_displacement(before)
+                    if after is not None:
+                        err_after[i, p] = mesh.error_displacement(after)
+        head = (counts, index, *slots.arrays(), tables, events, err, err_after)
+        tail = (self._f_c, self._unb_coef, mesh.has_errors, *self._mesh_arrays, self._f_scale,
+                self.tol, self.max_iter, self._gear_compliance())
+        return head, tail, [[te for _, te, _, _ in pieces] for pieces in steps]
 
-    def _slot_arrays(self, lengths: tuple) -> tuple:
-        """``(hh, g_const, s0, w)`` of sub-steps of ``lengths`` [s] (:meth:`_dynamic`), each a
-        tuple of :data:`MAX_PIECES` slots (the unused ones repeat the first: one argument type
-        for every step), computed once per ``lengths``."""
-        hit = self._slot_cache.get(lengths)
-        if hit is None:
-            dyn = [self._dynamic(h) for h in lengths]
-            dyn += dyn[:1] * (_SLOTS - len(dyn))
-            hit = (tuple(d[1] for d in dyn), tuple(d[2] for d in dyn),
-                   tuple(d[0].s0 for d in dyn), tuple(d[0].w for d in dyn))
-            if len(self._slot_cache) > 256:
-                self._slot_cache.clear()
-            self._slot_cache[lengths] = hit
-        return hit
+    def end_steps(self, ends, count: int, x, v, a, buffers, total, length) -> None:
+        """Take the state after the first ``count`` steps of :meth:`steps_plan` (its
+        ``ends``): X, Xd, Xdd, and the mesh evaluation of the last step in ``buffers``
+        (``_mesh_buffers``) of total load ``total`` [N] and contact length ``length`` [m];
+        the time and step count advance as ``count`` calls of :meth:`step` would."""
+        if count:
+            self._take_mesh_state(buffers, total, length, x)
+            self.x, self.v, self.a = x, v, a
+            self.t = ends[count - 1][-1]
+            self.n_steps += count
 
-    def end_compiled_step(self, step, status, piece, k, total, length) -> StepInfo:
-        """What :meth:`step` does after its one compiled call: the error of a failed call, or
-        the new state, time and step count; ``step`` from :meth:`compiled_step`, the other
-        arguments as :func:`gear_fmu.step.kernel.advance_pieces` returned them."""
-        _, _, outputs, ends = step
-        info = self._advance_result(status, k, total, length, outputs, ends[piece],
-                                    f"Newmark step {self.n_steps + 1}")
-        self.t = ends[-1]
-        self.n_steps += 1
-        return info
+    def raise_failed_step(self, status, k, outputs, t1) -> None:
+        """Raise the error of the sub-step to ``t1`` [s] of a compiled step
+        (:func:`orchestrator.coupling.fused.coupled_steps`) that returned ``status`` after
+        ``k`` passes, its residuals and mesh evaluation in ``outputs``
+        (``_advance_outputs``): the error of the Python path."""
+        if status == CONVERGED:
+            raise ValueError("raise_failed_step: the step converged")
+        self._advance_result(status, k, 0.0, 0.0, outputs, t1, f"Newmark step {self.n_steps + 1}")
 
     # ------------------------------------------------------------------ state
     def get_state(self) -> StructureState:

@@ -140,20 +140,40 @@ def run_paper_case(out_dir, periods, in_process=True, fmu_dir=None, bearing="hyb
     return read_results(s.results), s
 
 
+def before_step(monkeypatch, at: int, action) -> None:
+    """Call ``action()`` just before the master takes the ``at``-th coupled step of a run from
+    t = 0, however the runner asks for it: a block of compiled steps
+    (:meth:`orchestrator.coupling.master.Master.steps`) ends before that step, which then goes
+    through :meth:`~orchestrator.coupling.master.Master.step`."""
+    from orchestrator.coupling import master as master_module
+
+    real_step, real_steps = master_module.Master.step, master_module.Master.steps
+    index = at - 1
+
+    def step(self, t, dt):
+        if round(t / dt) == index:
+            action()
+        return real_step(self, t, dt)
+
+    def steps(self, first, dt, n):
+        if first <= index < first + n:
+            if first == index:
+                return None
+            n = index - first
+        return real_steps(self, first, dt, n)
+
+    monkeypatch.setattr(master_module.Master, "step", step)
+    monkeypatch.setattr(master_module.Master, "steps", steps)
+
+
 def fail_master_step(monkeypatch, at: int) -> None:
     """Make the master's ``at``-th coupled step raise a CouplingError (a run failing midway)."""
     from orchestrator.coupling import master as master_module
 
-    calls = {"n": 0}
-    real_step = master_module.Master.step
+    def fail():
+        raise master_module.CouplingError("forced failure for the test")
 
-    def failing(self, t, dt):
-        calls["n"] += 1
-        if calls["n"] == at:
-            raise master_module.CouplingError("forced failure for the test")
-        return real_step(self, t, dt)
-
-    monkeypatch.setattr(master_module.Master, "step", failing)
+    before_step(monkeypatch, at, fail)
 
 
 # ----------------------------------------------------------------- structure stand-ins

@@ -13,7 +13,7 @@ import numpy as np
 import scipy.linalg
 from numba import njit
 
-__all__ = ["NC", "N_BEARING", "N_GEAR", "Condensation", "gauss_solve"]
+__all__ = ["NC", "N_BEARING", "N_GEAR", "Condensation", "CondensationSlots", "gauss_solve"]
 
 N_GEAR = 12  # gear-node DOFs in the condensed block (pinion node, gear node)
 N_BEARING = 4  # bearings, 2 DOFs (u, v) each
@@ -43,6 +43,61 @@ class Condensation:
         # rows: (-W^T, A_rr^-1) applied to b_r gives (z correction, y)
         self.g = np.vstack([-self.w.T, arr_inv])
 
+
+
+class CondensationSlots:
+    """The condensations of the sub-step lengths of a run, stacked for a compiled loop over
+    steps (:meth:`gear_fmu.structure.Structure.steps_plan`): slot k holds ``(hh, g_const, s0,
+    w)`` of one length h [s] as the structure's ``_dynamic(h)`` gives them (copies: the same
+    numbers). At most ``CAPACITY`` lengths (the sub-steps of a step commensurate with the
+    mesh period recur, a few per period); a full set starts again empty."""
+
+    CAPACITY = 64
+
+    def __init__(self):
+        self._index: dict[float, int] = {}
+        self._stacks: tuple | None = None
+        self._n = 0
+
+    def clear(self) -> None:
+        """Forget every slot (the condensations changed: damping, torque)."""
+        self._index.clear()
+        self._n = 0
+
+    def make_room(self, lengths, first: bool) -> bool:
+        """Whether the slots can take sub-steps of ``lengths`` [s] besides the ones they hold;
+        for the ``first`` step of a plan they are emptied if they cannot."""
+        new = len({h for h in lengths if h not in self._index})
+        if self._n + new <= self.CAPACITY:
+            return True
+        if first:
+            self.clear()
+            return new <= self.CAPACITY
+        return False
+
+    def slot(self, h: float, dynamic) -> int:
+        """The slot of sub-step length ``h`` [s], filled from ``dynamic(h)`` -> ``(cond, hh,
+        g_const)`` the first time (after :meth:`make_room` said there is room)."""
+        k = self._index.get(h)
+        if k is None:
+            cond, hh, g_const = dynamic(h)
+            parts = (hh, g_const, cond.s0, cond.w)
+            if self._stacks is None or self._n == len(self._stacks[0]):
+                size = min(self.CAPACITY, max(4, 2 * self._n))
+                stacks = tuple(np.empty((size, *p.shape)) for p in parts)
+                if self._stacks is not None:
+                    for new, old in zip(stacks, self._stacks, strict=True):
+                        new[:self._n] = old[:self._n]
+                self._stacks = stacks
+            for stack, part in zip(self._stacks, parts, strict=True):
+                stack[self._n] = part
+            k = self._index[h] = self._n
+            self._n += 1
+        return k
+
+    def arrays(self) -> tuple:
+        """``(hh, g_const, s0, w)`` of every slot, stacked along the first axis."""
+        return tuple(s[:self._n] for s in self._stacks)
 
 @njit(cache=True)
 def gauss_solve(s, rhs):

@@ -359,6 +359,20 @@ class Master:
             self.structure.set_state(saved)
         raise CouplingError(not_converged(t, dt, self.max_iterations, mismatch, self.tol))
 
+    @one_blas_thread
+    def steps(self, first: int, dt: float, n: int):
+        """Up to ``n`` steps of dt from step ``first`` (t = first dt [s]) in one compiled
+        call where the slaves allow it (:meth:`orchestrator.coupling.fused.FusedStep.steps`):
+        the same steps as ``n`` calls of :meth:`step`, without Python between them. A
+        :class:`~orchestrator.coupling.fused.StepBlock` of the steps taken and the error of a
+        step that failed (the steps before it taken), or None: take the next step with
+        :meth:`step`."""
+        if self.laws is None:
+            raise CouplingError("call solve_static() (or set laws) before the first step")
+        if self.fused is None or n < 1:
+            return None
+        return self.fused.steps(self, first, dt, n)
+
 
 def not_converged(t, dt, max_iterations, mismatch, tol) -> str:
     """The message of a step from t [s] that did not converge."""

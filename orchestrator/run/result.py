@@ -116,6 +116,14 @@ class MemoryRecorder:
             rows.append(np.array(row[name], dtype=float))
         self.rows += 1
 
+    def append_rows(self, count: int, flush: bool = True, **rows) -> None:
+        """``count`` rows at once, each channel ``(count, *shape)`` (``flush`` has no use in
+        memory)."""
+        for name, kept in self._rows.items():
+            kept.extend(np.asarray(rows[name], dtype=float).reshape(
+                count, *self.channel_shapes[name]))
+        self.rows += count
+
     def close(self, complete: bool = True, checkpoint: bool = True, **attrs) -> None:
         self.attrs |= {"complete": bool(complete), **attrs}
 

@@ -264,8 +264,32 @@ class ResultsWriter:
         if self._n >= self.capacity or time.monotonic() - self._last >= self.flush_seconds:
             self.flush()
 
-    def flush(self) -> None:
-        """Write the buffered rows and the checkpoint, and flush the file."""
+    def append_rows(self, count: int, flush: bool = True, **rows) -> None:
+        """``count`` rows at once, each channel ``(count, *shape)``. The checkpoint of a
+        flush is the state after the last of them, so rows are written without one until all
+        are in; ``flush=False``: none after them either (a block of steps that ended on a
+        failed step: the state after it is not one to resume from)."""
+        try:
+            blocks = [(buf, rows[name]) for name, buf in self._buf.items()]
+        except KeyError:
+            missing = set(self.channels) - set(rows)
+            raise ValueError(f"rows lack channels {sorted(missing)}") from None
+        done = 0
+        while done < count:
+            if self._n >= self.capacity:
+                self._write()
+            i = self._n
+            m = min(count - done, self.capacity - i)
+            for buf, values in blocks:
+                buf[i:i + m] = values[done:done + m]
+            self._n = i + m
+            done += m
+        if flush and (self._n >= self.capacity
+                      or time.monotonic() - self._last >= self.flush_seconds):
+            self.flush()
+
+    def _write(self) -> None:
+        """Write the buffered rows (no checkpoint, no flush of the file)."""
         n = self._n
         if n:
             for name, buf in self._buf.items():
@@ -274,6 +298,10 @@ class ResultsWriter:
                 ds[self.rows:self.rows + n] = buf[:n]
             self.rows += n
             self._n = 0
+
+    def flush(self) -> None:
+        """Write the buffered rows and the checkpoint, and flush the file."""
+        self._write()
         self.file.flush()
         if self.checkpoint is not None:
             self._store_checkpoint(self.checkpoint())

@@ -16,9 +16,9 @@ def _locator(root: Path):
     """The locator numba would use for the master's compiled step in the code under root."""
     path = root / "orchestrator" / "coupling" / "fused.py"
     namespace: dict = {}
-    code = compile("def coupled_step():\n    pass\n", str(path), "exec")
+    code = compile("def coupled_steps():\n    pass\n", str(path), "exec")
     exec(code, namespace)
-    return numba_cache._locator_class().from_function(namespace["coupled_step"], str(path))
+    return numba_cache._locator_class().from_function(namespace["coupled_steps"], str(path))
 
 
 def test_a_kernel_calling_the_packages_is_cached_with_their_version_and_its_own_content(

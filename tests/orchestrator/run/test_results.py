@@ -40,6 +40,47 @@ def test_exception_keeps_flushed_rows_and_marks_incomplete(tmp_path):
     np.testing.assert_array_equal(r["x"], np.arange(9.0))
 
 
+def test_rows_appended_in_blocks_are_the_rows_appended_one_by_one(tmp_path):
+    """Blocks of 5 rows through a buffer of 3 (``append_rows``, the runner's blocks of
+    steps): the same file as row by row. A checkpoint is the state after the last row of the
+    block it follows: taken only once the whole block is in (its row count), never in the
+    middle of one, and not after a block appended without a flush (a block ended by a failed
+    step)."""
+    from orchestrator.run.results import read_checkpoint
+
+    def channels():
+        return {"F": ((4, 2), "N", "bearing forces")}
+
+    rows = np.arange(20 * 8, dtype=float).reshape(20, 4, 2)
+    with ResultsWriter(tmp_path / "one.h5", channels(), capacity=3) as w:
+        for k in range(20):
+            w.append(time=k * 1e-4, F=rows[k])
+    calls = []  # the rows stored when each checkpoint was taken
+
+    def checkpoint():
+        calls.append(w.rows)
+        return str(w.rows).encode()
+
+    with ResultsWriter(tmp_path / "blocks.h5", channels(), capacity=3, flush_seconds=0.0,
+                       checkpoint=checkpoint) as w:
+        for first in range(0, 15, 5):
+            w.append_rows(5, time=np.arange(first, first + 5) * 1e-4, F=rows[first:first + 5])
+            assert read_checkpoint_now(w) == (first + 5, str(first + 5).encode())
+        w.append_rows(5, flush=False, time=np.arange(15, 20) * 1e-4, F=rows[15:])
+        w.close(complete=False, checkpoint=False)
+    one, blocks = read_results(tmp_path / "one.h5"), read_results(tmp_path / "blocks.h5")
+    for name in ("time", "F"):
+        np.testing.assert_array_equal(blocks[name], one[name])
+    assert calls == [5, 10, 15]
+    assert read_checkpoint(tmp_path / "blocks.h5") == (15, b"15")
+
+
+def read_checkpoint_now(w):
+    """The writer's last checkpoint, read from its open file: (rows, state bytes)."""
+    slot, size, rows = (int(v) for v in w.file["resume/index"][:])
+    return rows, bytes(w.file[f"resume/slot{slot}"][:size])
+
+
 def test_killed_process_keeps_flushed_blocks(tmp_path):
     """A hard kill (no clean-up at all) still leaves every flushed block readable."""
     path = tmp_path / "r.h5"

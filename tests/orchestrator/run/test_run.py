@@ -18,7 +18,7 @@ from orchestrator.run.results import read_results
 from orchestrator.run.runner import run_case
 from orchestrator.run.spec import RunError
 from tests.gear_fmu.reference_newmark import newmark_step
-from tests.helpers import fail_master_step, monolithic_structure
+from tests.helpers import before_step, fail_master_step, monolithic_structure
 
 SPUR = "baguet2010_spur"
 HELICAL = "baguet2010_helical"
@@ -296,7 +296,6 @@ def test_a_run_in_memory_keeps_its_steps_when_a_step_fails_or_ctrl_c_stops_it(mo
     import signal
 
     import orchestrator as gsb
-    from orchestrator.coupling import master as master_module
 
     full = gsb.simulate("baguet2010_spur", periods=2, in_process=True, progress=False)
     fail_master_step(monkeypatch, at=40)
@@ -308,16 +307,8 @@ def test_a_run_in_memory_keeps_its_steps_when_a_step_fails_or_ctrl_c_stops_it(mo
     assert kept.attrs["complete"] is False and "forced failure" in kept.attrs["stopped_by"]
 
     monkeypatch.undo()
-    real_step = master_module.Master.step
-    calls = {"n": 0}
-
-    def interrupted(self, t, dt):
-        calls["n"] += 1
-        if calls["n"] == 20:  # Ctrl-C arrives during step 20: the run stops after it
-            os.kill(os.getpid(), signal.SIGINT)
-        return real_step(self, t, dt)
-
-    monkeypatch.setattr(master_module.Master, "step", interrupted)
+    # Ctrl-C arrives during step 20: the run stops after it
+    before_step(monkeypatch, 20, lambda: os.kill(os.getpid(), signal.SIGINT))
     with pytest.raises(gsb.RunInterrupted, match=r"after step 20 of 64") as stopped:
         gsb.simulate("baguet2010_spur", periods=2, in_process=True, progress=False)
     assert stopped.value.exit_code == 130

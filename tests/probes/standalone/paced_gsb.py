@@ -2,7 +2,8 @@
 
 ``python tests/probes/standalone/paced_gsb.py <pace [s]> <gsb arguments>``, run by its path
 (the environment of a user's ``gsb``: the package as installed): a sleep of ``pace`` before
-every coupled step of the master, everything else as in ``gsb``; exits with ``gsb``'s code.
+every coupled step of the master (the compiled loop takes one step per call),
+everything else as in ``gsb``; exits with ``gsb``'s code.
 """
 
 from __future__ import annotations
@@ -16,13 +17,18 @@ def main(argv: list[str] | None = None) -> int:
     pace = float(argv[0])
     from orchestrator.coupling import master
 
-    step = master.Master.step
+    step, steps = master.Master.step, master.Master.steps
 
     def paced(self, t, dt):
         time.sleep(pace)
         return step(self, t, dt)
 
+    def paced_block(self, first, dt, n):  # blocks of one step, each paced
+        time.sleep(pace)
+        return steps(self, first, dt, 1)
+
     master.Master.step = paced
+    master.Master.steps = paced_block
     from orchestrator.cli import main as gsb
 
     return gsb(argv[1:])
