@@ -73,7 +73,8 @@ from gear_fmu.step.kernel import CONVERGED, SINGULAR, advance, contact_event
 from gear_fmu.step.newmark import NewmarkConvergenceError, newmark_coefficients
 from gear_fmu.system import GearShaftSystem
 
-__all__ = ["StepInfo", "Structure", "StructureLoads", "StructureState", "check_laws"]
+__all__ = ["StepInfo", "StepsPlan", "Structure", "StructureLoads", "StructureState",
+           "check_laws"]
 
 #: first static iterate: pinion torsion [rad] that closes every potential contact
 INITIAL_APPROACH_ROTATION = 1e-3
@@ -84,6 +85,26 @@ _NO_SET = np.zeros(0, dtype=np.bool_)  # no contact set known
 MAX_PIECES = 4
 _SLOTS = 4  # the sub-step slots of the compiled call (orchestrator.coupling.fused)
 _NO_ERRORS = np.zeros((_SLOTS, 12))
+
+
+@dataclass(frozen=True)
+class StepsPlan:
+    """The structure's arguments of the compiled loop over steps
+    (:func:`orchestrator.coupling.fused.coupled_steps`) for m steps planned ahead
+    (:meth:`Structure.steps_plan`), in the kernel's order: ``head``, per step its sub-step
+    count, the condensation slot of each sub-step, the condensations
+    (:class:`gear_fmu.step.condensation.CondensationSlots`), piece tables, events and error
+    displacements (one row of these for a mesh without errors); ``state``, copies of X, Xd,
+    Xdd the kernel advances; ``tail``, the mesh and the solver's settings; ``work``, the
+    iterations' buffers; ``kept``, the mesh evaluation the last accepted step ended on (its
+    contact set the next step's); ``ends``, the end times [s] of each step's sub-steps."""
+
+    head: tuple
+    state: tuple
+    tail: tuple
+    work: tuple
+    kept: tuple
+    ends: list
 
 
 @dataclass(frozen=True)
@@ -549,13 +570,10 @@ class Structure:
 
     def steps_plan(self, dt: float, n: int):
         """The next steps of dt, at most ``n``, as the inputs of the compiled loop over steps
-        (:func:`orchestrator.coupling.fused.coupled_steps`); it stops before a step of more
-        than :data:`MAX_PIECES` sub-steps. ``(head, tail, ends)``: the arguments before the
-        state (per step its sub-step count, the condensation slot of each sub-step, the
-        condensations, piece tables, events and error displacements, one row of these for a
-        mesh without errors), those after it, and the end times [s] of each step's sub-steps
-        (what :meth:`step` reaches). None when the next step takes the Python path (timing
-        on, more than :data:`MAX_PIECES` sub-steps). Finish it with :meth:`end_steps`."""
+        (:func:`orchestrator.coupling.fused.coupled_steps`), a :class:`StepsPlan`; it stops
+        before a step of more than :data:`MAX_PIECES` sub-steps. None when the next step takes
+        the Python path (timing on, more than :data:`MAX_PIECES` sub-steps). Finish it with
+        :meth:`end_steps`."""
         self._check_step(dt)
         if self._mesh_arrays is None or self.timing is not None:
             return None
@@ -590,20 +608,25 @@ class Structure:
                     err[i, p] = mesh.error_displacement(before)
                     if after is not None:
                         err_after[i, p] = mesh.error_displacement(after)
-        head = (counts, index, *slots.arrays(), tables, events, err, err_after)
-        tail = (self._f_c, self._unb_coef, mesh.has_errors, *self._mesh_arrays, self._f_scale,
-                self.tol, self.max_iter, self._gear_compliance())
-        return head, tail, [[te for _, te, _, _ in pieces] for pieces in steps]
+        kept = self._mesh_buffers()
+        kept[2][:] = self.active  # the contact set the first step starts from
+        return StepsPlan(
+            (counts, index, *slots.arrays(), tables, events, err, err_after),
+            (self.x.copy(), self.v.copy(), self.a.copy()),
+            (self._f_c, self._unb_coef, mesh.has_errors, *self._mesh_arrays, self._f_scale,
+             self.tol, self.max_iter, self._gear_compliance()),
+            self._advance_outputs(), kept, [[te for _, te, _, _ in p] for p in steps])
 
-    def end_steps(self, ends, count: int, x, v, a, buffers, total, length) -> None:
-        """Take the state after the first ``count`` steps of :meth:`steps_plan` (its
-        ``ends``): X, Xd, Xdd, and the mesh evaluation of the last step in ``buffers``
-        (``_mesh_buffers``) of total load ``total`` [N] and contact length ``length`` [m];
-        the time and step count advance as ``count`` calls of :meth:`step` would."""
+    def end_steps(self, plan: StepsPlan, count: int, total: float, length: float) -> None:
+        """Take the state after the first ``count`` steps of ``plan`` (:meth:`steps_plan`):
+        X, Xd, Xdd, and the mesh evaluation the last of them ended on, of total load
+        ``total`` [N] and contact length ``length`` [m]; the time and step count advance as
+        ``count`` calls of :meth:`step` would."""
         if count:
-            self._take_mesh_state(buffers, total, length, x)
+            x, v, a = plan.state
+            self._take_mesh_state(plan.kept, total, length, x)
             self.x, self.v, self.a = x, v, a
-            self.t = ends[count - 1][-1]
+            self.t = plan.ends[count - 1][-1]
             self.n_steps += count
 
     def raise_failed_step(self, status, k, outputs, t1) -> None:

@@ -281,28 +281,23 @@ class FusedStep:
         plan = None if arrays is None else st.steps_plan(dt, n)
         if plan is None:
             return None
-        head, tail, ends = plan
-        m, nb = len(ends), len(self.bearings.models)
-        x, v, a = st.x.copy(), st.v.copy(), st.a.copy()
-        work = st._advance_outputs()
-        kept = st._mesh_buffers()
-        kept[2][:] = st.active  # the contact set the first step starts from
+        m, nb = len(plan.ends), len(self.bearings.models)
         states, out = np.empty((nb, 4)), np.empty((nb, 5, 2))
         rec = (np.empty((m, nb, 4)), np.empty((m, nb, 2)), np.empty(m), np.empty((m, N_GEAR)),
                np.empty(m, dtype=np.int64))
         laws = master.laws
         (count, relaxed_steps, total, length, f0, kb, cb, outcome, it, status, piece, k, bad,
          b_status, relaxed, mismatch) = coupled_steps(
-            m, *head, x, v, a, *tail, *work, *kept, arrays, states, out, laws.f0, laws.kb,
-            laws.cb, master.tol, master.max_iterations, RELAXATION, STALL,
-            self._scratch(master), *rec)
+            m, *plan.head, *plan.state, *plan.tail, *plan.work, *plan.kept, arrays, states,
+            out, laws.f0, laws.kb, laws.cb, master.tol, master.max_iterations, RELAXATION,
+            STALL, self._scratch(master), *rec)
         its = rec[4][:count]
         done = int(its.sum())
         master.total_iterations += done
         master.total_bearing_evaluations += done
         master.relaxed_steps += relaxed_steps
         self.bearings.evaluations += nb * done
-        st.end_steps(ends, count, x, v, a, kept, total, length)
+        st.end_steps(plan, count, total, length)
         if count:
             self.bearings.record_states(rec[0][count - 1])
             master.laws = AffineLaws(f0, kb, cb, rec[0][count - 1].copy(),
@@ -315,8 +310,8 @@ class FusedStep:
         if count < m:  # step count failed: its error, as the Python loop raises it
             self._count(master, outcome, it, relaxed)
             try:
-                self._raise(master, time_of(count), dt, work, ends[count], outcome, status,
-                            piece, k, bad, b_status, mismatch, states)
+                self._raise(master, time_of(count), dt, plan.work, plan.ends[count], outcome,
+                            status, piece, k, bad, b_status, mismatch, states)
             except Exception as exc:  # handed to the caller with the rows
                 block.error = exc
         return block
