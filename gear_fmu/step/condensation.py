@@ -44,7 +44,6 @@ class Condensation:
         self.g = np.vstack([-self.w.T, arr_inv])
 
 
-
 class CondensationSlots:
     """The condensations of the sub-step lengths of a run, stacked for a compiled loop over
     steps (:meth:`gear_fmu.structure.Structure.steps_plan`): slot k holds ``(hh, g_const, s0,
@@ -98,6 +97,7 @@ class CondensationSlots:
     def arrays(self) -> tuple:
         """``(hh, g_const, s0, w)`` of every slot, stacked along the first axis."""
         return tuple(s[:self._n] for s in self._stacks)
+
 
 @njit(cache=True)
 def gauss_solve(s, rhs):
