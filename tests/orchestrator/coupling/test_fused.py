@@ -195,6 +195,18 @@ def test_bearings_on_two_threads_give_the_bits_of_one(name, steps, threads, monk
     assert compiled.bearings.hybrid_set.threads == threads[0]
 
 
+def test_blocks_on_two_threads_give_the_bits_of_single_steps_on_two():
+    """Blocks of steps (``test_blocks``) with the bearings on two threads, here where the
+    threaded kernel is compiled once for the suite's worker."""
+    from tests.orchestrator.coupling.test_blocks import _compare
+
+    _need_threads(2)
+    blocked, single, error, in_blocks, _ = _compare(load_case("baguet2010_spur"), 48,
+                                                    threads=2)
+    assert error is None and in_blocks == 48
+    _same_state(blocked, single)
+
+
 def test_threads_for_bearings_that_are_not_hybrid_ones_are_said_to_do_nothing():
     """The linear bearings (an affine law each) are not shared: said once, one thread; a
     count out of range is refused as for hybrid bearings."""
