@@ -219,6 +219,10 @@ class BearingModel(ABC):
     name: str = ""
     #: settings a case file or an FMU parameter can carry (:class:`~bearing_fmu.base.ModelOption`)
     options: tuple[ModelOption, ...] = ()
+    #: True for a model whose law is affine in the journal state (Eq. 17) once initialised:
+    #: :meth:`affine_law` then gives it, and the master's compiled steps evaluate it
+    #: (:mod:`orchestrator.coupling.fused`)
+    affine: bool = False
 
     def __init__(self, bearing: BearingData) -> None:
         if not isinstance(bearing, BearingData):
@@ -281,6 +285,13 @@ class BearingModel(ABC):
         out[0] = qt @ r.force
         out[1:3] = qt @ r.stiffness @ q
         out[3:5] = qt @ r.damping @ q
+
+    def affine_law(self, omega: float):
+        """The law at speed ``omega`` [rad/s] as Eq. (17) in the local frame
+        (:class:`bearing_fmu.affine.AffineLaws`; :func:`bearing_fmu.affine.affine_global`
+        evaluates it as :meth:`evaluate_global` does, bit for bit) when it is affine in the
+        state now (:attr:`affine`), else None."""
+        return None
 
     def end_initialization(self, x: float, y: float, omega: float) -> None:  # noqa: B027
         """Called once the static solution X0 is known, with the journal position there [m]

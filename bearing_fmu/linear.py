@@ -55,6 +55,7 @@ class LinearBearing(BearingModel):
     """
 
     name = "linear"
+    affine = True
 
     def __init__(self, bearing, position0, force0, stiffness, damping, omega):
         super().__init__(bearing)
@@ -97,6 +98,11 @@ class LinearBearing(BearingModel):
             )
         return omega
 
+    def affine_law(self, omega) -> AffineLaws:
+        """The frozen law (:meth:`check_speed`: only at the speed it holds at)."""
+        self.check_speed(omega)
+        return self.law
+
     def evaluate(self, x, y, xdot, ydot, omega) -> BearingResult:
         self.check_speed(omega)
         force = self.law.force(np.array([x, y, xdot, ydot], dtype=float))
@@ -131,6 +137,7 @@ class LinearisedBearing(BearingModel):
 
     name = "linear"
     options = HybridBearing.options
+    affine = True
 
     def __init__(self, bearing, film: BearingModel | None = None):
         super().__init__(bearing)
@@ -149,6 +156,10 @@ class LinearisedBearing(BearingModel):
     def end_initialization(self, x, y, omega) -> None:
         """Freeze Eq. (18) at the static position (x, y) [m], speed omega [rad/s]."""
         self.frozen = LinearBearing.linearise(self.film, x, y, omega)
+
+    def affine_law(self, omega) -> AffineLaws | None:
+        """The frozen law once :meth:`end_initialization` froze it, None before."""
+        return None if self.frozen is None else self.frozen.affine_law(omega)
 
     def evaluate(self, x, y, xdot, ydot, omega) -> BearingResult:
         law = self.film if self.frozen is None else self.frozen

@@ -1,5 +1,6 @@
 """The master's coupled steps in one compiled call, for the in-process structure and a set
-of hybrid bearings (Table 4 case 2) or of linear ones (case 0).
+of hybrid bearings (Table 4 case 2) or of affine laws (the linear bearings of case 0, the
+lumped springs of Fig. 16: :attr:`bearing_fmu.base.BearingModel.affine`).
 
 :meth:`orchestrator.coupling.master.Master.step` iterates in Python: per iteration a
 structure step, the bearings at the new journal states, the test and the new laws
@@ -36,7 +37,6 @@ from numba.extending import overload
 
 from bearing_fmu.affine import AffineLaws, _relinearise, affine_set_global
 from bearing_fmu.hybrid._kernels import hybrid_set_global, hybrid_set_threads
-from bearing_fmu.linear import LinearBearing, LinearisedBearing
 from gear_fmu.step.condensation import N_GEAR
 from gear_fmu.step.kernel import CONVERGED, advance_pieces
 from orchestrator.coupling.inprocess import InProcessStructure, ModelBearings
@@ -227,28 +227,27 @@ class FusedStep:
     in-process structure (:class:`orchestrator.coupling.inprocess.InProcessStructure`) and
     in-process bearings (:class:`orchestrator.coupling.inprocess.ModelBearings`) that are
     hybrid bearings of one n (its
-    :attr:`~orchestrator.coupling.inprocess.ModelBearings.hybrid_set`) or linear ones (its
+    :attr:`~orchestrator.coupling.inprocess.ModelBearings.hybrid_set`) or affine ones (its
     :meth:`~orchestrator.coupling.inprocess.ModelBearings.affine_laws`, once frozen at X0);
     :func:`orchestrator.coupling.system.build_master` gives it to the master when they are."""
 
     def __init__(self, structure, bearings):
         if not self.fits(structure, bearings):
             raise ValueError("FusedStep: an in-process structure and in-process hybrid or "
-                             "linear bearings only")
+                             "affine bearings only")
         self.structure = structure
         self.bearings = bearings
         self._mismatches = None
 
     @staticmethod
     def fits(structure, bearings) -> bool:
-        """Whether the slaves can take the compiled step (the linear bearings: once frozen)."""
+        """Whether the slaves can take the compiled step (the linear bearings: once frozen,
+        :attr:`bearing_fmu.base.BearingModel.affine`)."""
         return (isinstance(structure, InProcessStructure) and isinstance(bearings, ModelBearings)
-                and (bearings.hybrid_set is not None
-                     or all(isinstance(m, LinearBearing | LinearisedBearing)
-                            for m in bearings.models)))
+                and (bearings.hybrid_set is not None or all(m.affine for m in bearings.models)))
 
     def _bearing_arguments(self):
-        """The set's arrays for :func:`evaluate_set`, or None (linear bearings not frozen)."""
+        """The set's arrays for :func:`evaluate_set`, or None (affine laws not frozen yet)."""
         if self.bearings.hybrid_set is not None:
             return self.bearings.hybrid_set.kernel_arguments()
         return self.bearings.affine_laws()

@@ -15,7 +15,6 @@ from bearing_fmu.affine import AffineLaws
 from bearing_fmu.base import BearingError, BearingModel
 from bearing_fmu.frames import LocalFrame
 from bearing_fmu.hybrid.model import HybridSet
-from bearing_fmu.linear import LinearBearing, LinearisedBearing
 from fmu_src.lifecycle import StructureCycle
 from fmu_src.state_codec import StateArrays, nest
 from fmu_src.states import (
@@ -166,19 +165,18 @@ class ModelBearings(BearingSet):
 
     def affine_laws(self):
         """``(q, f0, kb, cb)`` stacked over the bearings ((nb, 2, 2), (nb, 2), (nb, 2, 2) x 2:
-        the global-to-local rotations and the local laws) when every bearing is an affine law
-        now (:class:`bearing_fmu.linear.LinearBearing`, or the ``linear`` model after its
-        freeze at X0), for a compiled caller (``bearing_fmu.affine.affine_set_global``);
-        else None."""
-        laws = tuple(m.frozen if isinstance(m, LinearisedBearing) else m for m in self.models)
-        if not all(isinstance(law, LinearBearing) for law in laws):
+        the global-to-local rotations and the local laws) when every bearing's law is affine
+        now (:meth:`bearing_fmu.base.BearingModel.affine_law`: the ``linear`` model after its
+        freeze at X0, the ``lumped`` one), for a compiled caller
+        (``bearing_fmu.affine.affine_set_global``); else None."""
+        laws = tuple(m.affine_law(w) for m, w in zip(self.models, self.omegas, strict=True))
+        if any(law is None for law in laws):
             return None
-        if self._affine is None or self._affine[0] != laws:  # a restore replaces the laws
-            for law, omega in zip(laws, self.omegas, strict=True):
-                law.check_speed(omega)  # what evaluate_global checks at every call
-            self._affine = (laws, (self._q, np.array([law.law.f0 for law in laws]),
-                                   np.array([law.law.kb for law in laws]),
-                                   np.array([law.law.cb for law in laws])))
+        if self._affine is None or any(a is not b for a, b in zip(self._affine[0], laws,
+                                                                    strict=True)):
+            self._affine = (laws, (self._q, np.array([law.f0 for law in laws]),
+                                   np.array([law.kb for law in laws]),
+                                   np.array([law.cb for law in laws])))
         return self._affine[1]
 
     def record_states(self, states) -> None:

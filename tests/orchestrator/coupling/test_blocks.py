@@ -141,7 +141,8 @@ def _compare(case, n, structure=None, threads=1, change=None, warm=0):
 
 @pytest.mark.parametrize("name, model, steps", [("baguet2010_spur", "hybrid", 96),
                                                 ("baguet2010_helical", "hybrid", 32),
-                                                ("baguet2010_spur", "linear", 96)])
+                                                ("baguet2010_spur", "linear", 96),
+                                                ("baguet2010_spur", "lumped", 96)])
 def test_blocks_give_the_bits_of_single_steps(name, model, steps):
     """Steps cut at contact events among them (test_fused counts them)."""
     blocked, single, error, in_blocks, long_blocks = _compare(
