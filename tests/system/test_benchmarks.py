@@ -23,6 +23,7 @@ SMALLEST = {
     "campbell.py": ["--repeat", "1", "--speeds", "3"],
     "kernel_parts.py": ["--steps", "2", "--calls", "10"],
     "bearing_set.py": ["--steps", "2", "--repeat", "1"],
+    "base_runs.py": ["--periods", "2", "--cases", "spur", "--models", "lumped"],
 }
 
 
