@@ -49,9 +49,10 @@ class CondensationSlots:
     steps (:meth:`gear_fmu.structure.Structure.steps_plan`): slot k holds ``(hh, g_const, s0,
     w)`` of one length h [s] as the structure's ``_dynamic(h)`` gives them (copies: the same
     numbers). At most ``CAPACITY`` lengths (the sub-steps of a step commensurate with the
-    mesh period recur, a few per period); a full set starts again empty."""
+    mesh period recur: at most :data:`gear_fmu.structure.MAX_PIECES` per step of a period, 128
+    at the paper's 32 steps; the helical case has 54); a full set starts again empty."""
 
-    CAPACITY = 64
+    CAPACITY = 128
 
     def __init__(self):
         self._index: dict[float, int] = {}

@@ -25,9 +25,13 @@ EVENT_SIDE = 1e-8
 #: paper's step, and runs at a step a few 1e-8 off the mesh period's divisor went wrong or
 #: failed. At 1e-3 dt it is below 1e-4 m/s^2; an event moved by at most 1e-3 dt.
 EVENT_SNAP = 1e-3
-#: sub-step fractions of dt are rounded to multiples of 2**-30, so that the condensations of
-#: the recurring sub-steps are computed once (``gear_fmu.structure.Structure._dynamic``)
-FRACTION = 2.0**30
+#: sub-step fractions of dt are rounded to multiples of 2**-16 (an event moved by at most
+#: 8e-6 dt), so that the condensations of the recurring sub-steps are computed once
+#: (``gear_fmu.structure.Structure._dynamic``). A step starts at the structure's time, a sum of
+#: steps whose round-off drifts from k dt (2.4e-8 dt after the helical case's 65,536 steps):
+#: rounded much finer (2**-30), the fractions would follow that drift and the helical case's
+#: 54 recurring lengths would become hundreds, each condensed anew
+FRACTION = 2.0**16
 
 
 class ContactEvents:
@@ -72,7 +76,7 @@ class ContactEvents:
     def cuts(self, t: float, dt: float) -> list | None:
         """``[(h, end fraction of dt, (first, last) event angle it ends on, or None)]`` of the
         step from t to t + dt [s] with contact events (None without): the step cut at the
-        event angles, fractions rounded to ``2**-30``, none shorter than :data:`EVENT_SNAP` dt
+        event angles, fractions rounded to ``2**-16``, none shorter than :data:`EVENT_SNAP` dt
         (events that close to the step's ends or to each other taken together; the mesh is
         then evaluated on the outer sides of the events, not of the cut)."""
         a0 = self.pinion_angle(t)
