@@ -56,7 +56,7 @@ from gear_fmu.loads import (
     unbalance_amplitudes,
     unbalance_force,
 )
-from gear_fmu.mesh.element import MeshElement, MeshState
+from gear_fmu.mesh.element import MeshElement, MeshState, transmission_error
 from gear_fmu.modal.analyses import reference_damping
 from gear_fmu.modal.damping import DampingModel
 from gear_fmu.step.assembly import check_laws, check_laws_fast, finish_step, prepare_step
@@ -536,8 +536,7 @@ class Structure:
         ``total`` [N] and contact length ``length`` [m] at the state ``x``, as the current
         mesh state and contact set."""
         force, stiff, active, inside, delta, load, xi, z = buffers
-        rb1, rb2 = self.mesh.pair.base_radius
-        te = rb1 * x[5] + rb2 * x[11]
+        te = transmission_error(self.mesh.pair.base_radius, x[:N_GEAR])
         self.mesh_state = MeshState(force, stiff, active, delta, load, inside, xi, z, total, te,
                                     {"contact_length": length})
         self.active = active

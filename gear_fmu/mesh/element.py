@@ -52,7 +52,7 @@ from numba import njit
 from gear_fmu.mesh.geometry import GearPair
 from gear_fmu.mesh.tooth_stiffness import mesh_stiffness_table
 
-__all__ = ["MeshElement", "MeshState", "ToothDeviations"]
+__all__ = ["MeshElement", "MeshState", "ToothDeviations", "transmission_error"]
 
 
 @dataclass(frozen=True)
@@ -108,6 +108,14 @@ class ToothDeviations:
                              "(parabolic)")
         if len(self.mounting) != 12:
             raise ValueError(f"mounting has {len(self.mounting)} entries, expected 12")
+
+
+def transmission_error(base_radius, q):
+    """Elastic transmission error ``r_b1 theta1 + r_b2 theta2`` [m] of the gear-node DOFs
+    ``q`` (..., 12) [m, rad] (rotations about the shaft axes: DOF 5 of each node, pinion
+    first), base radii ``(r_b1, r_b2)`` [m]; a number for one state, an array for several."""
+    rb1, rb2 = base_radius
+    return rb1 * q[..., 5] + rb2 * q[..., 11]
 
 
 @dataclass
@@ -488,7 +496,6 @@ class MeshElement:
             float(pinion_angle), qe, self._geo, self.xi_table, self.k_table, self.z_slices,
             self.dl, self.n_lines, self._dev, self._pitch[0], self._pitch[1], self._cache,
             self._tangent, force, stiff, active, inside, delta, load, xi, z)
-        rb1, rb2 = self.pair.base_radius
-        te = rb1 * q[5] + rb2 * q[11]
+        te = transmission_error(self.pair.base_radius, q)
         return MeshState(force, stiff, active, delta, load, inside, xi, z, total, te,
                          {"contact_length": length})

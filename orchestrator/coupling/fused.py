@@ -37,6 +37,7 @@ from numba.extending import overload
 
 from bearing_fmu.affine import AffineLaws, _relinearise, affine_set_global
 from bearing_fmu.hybrid._kernels import hybrid_set_global, hybrid_set_threads
+from gear_fmu.mesh.element import transmission_error
 from gear_fmu.step.condensation import N_GEAR
 from gear_fmu.step.kernel import CONVERGED, advance_pieces
 from orchestrator.coupling.inprocess import InProcessStructure, ModelBearings
@@ -302,9 +303,8 @@ class FusedStep:
             master.laws = AffineLaws(f0, kb, cb, rec[0][count - 1].copy(),
                                      rec[1][count - 1].copy())
         gear = rec[3][:count]
-        rb1, rb2 = st.mesh.pair.base_radius
         block = StepBlock(count, rec[0][:count], rec[1][:count], rec[2][:count],
-                          rb1 * gear[:, 5] + rb2 * gear[:, 11],
+                          transmission_error(st.mesh.pair.base_radius, gear),
                           gear.reshape(count, 2, 6)[:, :, :2], its, mismatch)
         if count < m:  # step count failed: its error, as the Python loop raises it
             self._count(master, outcome, it, relaxed)
