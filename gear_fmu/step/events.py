@@ -23,7 +23,8 @@ EVENT_SIDE = 1e-8
 #: ``4 (x1 - x0 - h v0) / h^2 - a0`` amplifies the round-off of the solved x1 by 4 / h^2: a
 #: sub-step of 1e-7 dt turns 1e-20 m of round-off into accelerations of order 1e2 m/s^2 at the
 #: paper's step, and runs at a step a few 1e-8 off the mesh period's divisor went wrong or
-#: failed. At 1e-3 dt it is below 1e-4 m/s^2; an event moved by at most 1e-3 dt.
+#: failed. At 1e-3 dt it is below 1e-4 m/s^2; an event moved by at most 1e-3 dt. (On the
+#: coarse grain of :data:`DRIFT_FRACTION` a piece may be one grain, 9.8e-4 dt.)
 EVENT_SNAP = 1e-3
 #: sub-step fractions of dt are rounded to multiples of 2**-16 (an event moved by at most
 #: 8e-6 dt), so that the condensations of the recurring sub-steps are computed once
@@ -32,6 +33,14 @@ EVENT_SNAP = 1e-3
 #: rounded much finer (2**-30), the fractions would follow that drift and the helical case's
 #: 54 recurring lengths would become hundreds, each condensed anew
 FRACTION = 2.0**16
+#: the grain of a step that does not recur with the mesh period, one whose events move through
+#: it by more than a 2**-16 grain in 16 mesh periods (:meth:`ContactEvents.fraction_grain`):
+#: a host's rounded step (libcosim keeps whole nanoseconds: the paper's step rounded so moves
+#: the events by 5.1e-4 dt per mesh period). Rounded to 2**-16, nearly every step cut at an
+#: event would be a new sub-step length to condense (0.55 ms each, 4 per mesh period there,
+#: 28 % of the run); to 2**-10 about one per mesh period. An event moves by at most 4.9e-4 dt
+#: (half of EVENT_SNAP), a cut piece is at least 2**-10 dt (9.8e-4 dt, about EVENT_SNAP)
+DRIFT_FRACTION = 2.0**10
 
 
 class ContactEvents:
@@ -76,9 +85,11 @@ class ContactEvents:
     def cuts(self, t: float, dt: float) -> list | None:
         """``[(h, end fraction of dt, (first, last) event angle it ends on, or None)]`` of the
         step from t to t + dt [s] with contact events (None without): the step cut at the
-        event angles, fractions rounded to ``2**-16``, none shorter than :data:`EVENT_SNAP` dt
-        (events that close to the step's ends or to each other taken together; the mesh is
-        then evaluated on the outer sides of the events, not of the cut)."""
+        event angles, fractions rounded to ``2**-16`` (``2**-10`` for a step that does not
+        recur with the mesh period: :meth:`fraction_grain`), none shorter than
+        :data:`EVENT_SNAP` dt (events that close to the step's ends or to each other taken
+        together; the mesh is then evaluated on the outer sides of the events, not of the
+        cut)."""
         a0 = self.pinion_angle(t)
         a1 = self.pinion_angle(t + dt)
         tol = 1e-9 * self.mesh.pair.base_pitch / self.mesh.pair.base_radius[0]
@@ -86,11 +97,12 @@ class ContactEvents:
         events = self.between(a0 - tol, a1 + snap)
         if not events:
             return None
+        grain = self.fraction_grain(a1 - a0)
         cuts = []  # [end fraction, first event, last event]
         for e in events:
             if e - a0 <= snap:
                 continue  # at the step's start: the previous step ended on it
-            frac = 1.0 if a1 - e <= snap else round((e - a0) / (a1 - a0) * FRACTION) / FRACTION
+            frac = 1.0 if a1 - e <= snap else round((e - a0) / (a1 - a0) * grain) / grain
             if cuts and frac - cuts[-1][0] <= EVENT_SNAP:  # one cut for events that close
                 cuts[-1][0] = max(cuts[-1][0], frac)
                 cuts[-1][2] = e
@@ -105,14 +117,28 @@ class ContactEvents:
             prev = frac
         return out
 
+    def fraction_grain(self, step_angle: float) -> float:
+        """How finely the cut fractions of a step of ``step_angle`` [rad] of pinion are rounded
+        (their inverse grain): :data:`FRACTION`, or :data:`DRIFT_FRACTION` when the events
+        move through the steps by more than a grain of it in 16 mesh periods (the step does
+        not recur with the mesh period)."""
+        period, _ = self._event_phases()
+        steps = period / step_angle
+        drift = abs(steps - round(steps))  # of a step, per mesh period
+        return FRACTION if 16.0 * drift * FRACTION <= 1.0 else DRIFT_FRACTION
+
+    def _event_phases(self) -> tuple:
+        """(mesh period [rad], the event angles in it), computed once."""
+        if self._phases is None:
+            period = self.mesh.event_period
+            self._phases = (period, self.mesh.event_angles(0.0, period).tolist())
+        return self._phases
+
     def between(self, lo: float, hi: float) -> list:
         """Contact event angles in ``(lo, hi]`` [rad]: those of one mesh period
         (:meth:`gear_fmu.mesh.element.MeshElement.event_angles`, computed once) repeated with
         the period ``2 pi / z1`` (the events of every slice recur with it)."""
-        if self._phases is None:
-            period = self.mesh.event_period
-            self._phases = (period, self.mesh.event_angles(0.0, period).tolist())
-        period, phases = self._phases
+        period, phases = self._event_phases()
         out = []
         k = math.floor(lo / period)
         while True:

@@ -177,3 +177,64 @@ def test_the_helical_case_condenses_each_recurring_sub_step_once(monkeypatch):
           "lengths in one mesh period's schedule")
     assert len(schedule) > 40  # the steps are cut
     assert len(made) <= len(schedule)
+
+
+def _nanosecond_run(case, steps, monkeypatch):
+    """Journal states, bearing forces, mesh force and TE of ``steps`` steps of the case's step
+    rounded to whole nanoseconds (a libcosim host's clock: 5.1e-4 dt of event drift per mesh
+    period), and how many sub-step lengths were condensed."""
+    import gear_fmu.structure
+
+    made = []
+    real = gear_fmu.structure.Condensation
+    monkeypatch.setattr(gear_fmu.structure, "Condensation",
+                        lambda *a: made.append(1) or real(*a))
+    h = round(description.time_step(case) * 1e9) * 1e-9
+    master = build_master(case, in_process=True)
+    try:
+        master.solve_static()
+        master.exit_initialization()
+        made.clear()
+        rows = []
+        for k in range(steps):
+            r = master.step(k * h, h)
+            rows.append((r.states[:, :2].copy(), r.states[:, 2:].copy(),
+                         np.array(r.bearing_force), master.structure.mesh_force(),
+                         master.structure.transmission_error()))
+    finally:
+        master.close()
+    return [np.array(channel) for channel in zip(*rows, strict=True)], len(made)
+
+
+def test_a_step_that_does_not_recur_with_the_mesh_period_cuts_on_a_coarser_grain(monkeypatch):
+    """A host's rounded step moves the contact events through the steps; with the cut
+    fractions on the 2**-16 grain nearly every cut step was a new length to condense (0.55 ms
+    each). On the 2**-10 grain (``gear_fmu.step.events.DRIFT_FRACTION``) the spur case
+    condenses 9 lengths in 4 mesh periods against 15 (in 256: 276 against 1,019), and the
+    run moves by 1.8e-2 of the golden run's tolerance (a tenth of what halving the step
+    moves it; bound 5e-2). A step that recurs keeps the fine grain."""
+    import gear_fmu.step.events as events
+    from tests.golden import channel_tolerances, load_fixture
+
+    case = load_case("baguet2010_spur")
+    dt = description.time_step(case)
+    cut = build_master(case, in_process=True)
+    try:
+        ev = events.ContactEvents(cut.structure.physics.mesh, cut.structure.physics.pinion_angle)
+        angle = cut.structure.physics.pinion_angle(dt) - cut.structure.physics.pinion_angle(0.0)
+        h = round(dt * 1e9) * 1e-9
+        assert ev.fraction_grain(angle) == events.FRACTION
+        assert ev.fraction_grain(angle * h / dt) == events.DRIFT_FRACTION
+    finally:
+        cut.close()
+    coarse, n_coarse = _nanosecond_run(case, 128, monkeypatch)
+    monkeypatch.setattr(events, "DRIFT_FRACTION", events.FRACTION)
+    fine, n_fine = _nanosecond_run(case, 128, monkeypatch)
+    golden = load_fixture()["runs"]["shipped"]
+    tolerances = channel_tolerances(golden["64"], golden["32"])
+    ratio = max(float((np.abs(a - b).reshape(128, -1).max(axis=0) / tolerances[name]).max())
+                for name, a, b in zip(tolerances, coarse, fine, strict=True))
+    print(f"\nspur case, 128 steps of dt rounded to 1 ns: {n_coarse} condensations on the "
+          f"coarse grain, {n_fine} on the fine one; change / golden tolerance {ratio:.1e}")
+    assert n_coarse <= 0.6 * n_fine
+    assert ratio <= 5e-2
