@@ -1,7 +1,7 @@
 """Wall time of the transmission FMU (``gsb export-fmu``) against the in-process run.
 
 Usage: ``python benchmarks/transmission_fmu.py [--periods N] [--repeat R] [--fmu PATH]
-[--case NAME] [--nanoseconds]``
+[--case NAME] [--nanoseconds] [--every K]``
 
 Builds the case's transmission FMU (or takes ``--fmu``), then times, alternating ``R``
 times in this one process: the in-process run (``orchestrator.simulate(..., in_process=True)``,
@@ -12,6 +12,9 @@ time [s], the medians and their ratio FMU / in-process. ``--case``: another ship
 the paper's spur case). ``--nanoseconds``: the host steps by the case's step rounded to whole
 nanoseconds, as libcosim keeps time (a step that does not recur with the mesh period:
 :data:`gear_fmu.step.events.DRIFT_FRACTION`); the in-process run keeps the case's step.
+``--every K``: the host's communication step is K of the case's steps (the FMU cuts it into K
+internal steps, :func:`orchestrator.coupling.transmission.internal_steps`) and it reads the
+outputs after each: a system model that exchanges less often than the gears need.
 """
 
 from __future__ import annotations
@@ -67,6 +70,8 @@ def main() -> None:
     p.add_argument("--case", default=CASE, help=f"a shipped case (default {CASE})")
     p.add_argument("--nanoseconds", action="store_true",
                    help="the FMU's host step rounded to whole nanoseconds (libcosim's clock)")
+    p.add_argument("--every", type=int, default=1,
+                   help="the host's step in case steps (default 1)")
     args = p.parse_args()
 
     from fmu_src.build.fmus import build_transmission_fmu
@@ -75,7 +80,10 @@ def main() -> None:
 
     case = load_case(args.case)
     dt = time_step(case)
-    host_dt = round(dt * 1e9) * 1e-9 if args.nanoseconds else dt
+    if args.every < 1:
+        p.error(f"--every {args.every}: the host's step is at least one case step")
+    host_dt = args.every * dt
+    host_dt = round(host_dt * 1e9) * 1e-9 if args.nanoseconds else host_dt
     steps = args.periods * case["simulation.steps_per_mesh_period"]
     with tempfile.TemporaryDirectory() as tmp:
         fmu = args.fmu or str(build_transmission_fmu(case, tmp))
@@ -84,9 +92,10 @@ def main() -> None:
         a, b = [], []
         for k in range(args.repeat):
             a.append(in_process(case, args.periods))
-            b.append(through_fmu(fmu, host_dt, steps))
+            b.append(through_fmu(fmu, host_dt, steps // args.every))
             print(f"pair {k + 1}: in-process {a[-1]:.2f} s, transmission FMU {b[-1]:.2f} s "
-                  f"({args.periods} mesh periods, {steps} steps of {host_dt!r} s)", flush=True)
+                  f"({args.periods} mesh periods, {steps // args.every} host steps of "
+                  f"{host_dt!r} s)", flush=True)
     ma, mb = statistics.median(a), statistics.median(b)
     print(f"median: in-process {ma:.2f} s, transmission FMU {mb:.2f} s, "
           f"FMU / in-process {mb / ma:.3f}")

@@ -273,6 +273,10 @@ class FusedStep:
         takes it."""
         return self._block(master, first * dt, dt, n, lambda k: (first + k) * dt)
 
+    def steps_from(self, master, t: float, dt: float, n: int) -> StepBlock | None:
+        """:meth:`steps` from the time ``t`` [s] (the structure's), step k's time t + k dt."""
+        return self._block(master, t, dt, n, lambda k: t + k * dt)
+
     def _block(self, master, t: float, dt: float, n: int, time_of) -> StepBlock | None:
         """:meth:`steps` from t [s]; ``time_of(k)``: the time [s] of the block's step k, as
         the caller's messages give it."""

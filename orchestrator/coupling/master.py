@@ -373,6 +373,17 @@ class Master:
             return None
         return self.fused.steps(self, first, dt, n)
 
+    @one_blas_thread
+    def steps_from(self, t: float, dt: float, n: int):
+        """:meth:`steps` from the time ``t`` [s] (the structure's) for a caller whose times
+        are not whole multiples of dt (an FMU's communication steps cut into equal steps):
+        the messages of a failed step k give t + k dt."""
+        if self.laws is None:
+            raise CouplingError("call solve_static() (or set laws) before the first step")
+        if self.fused is None or n < 1:
+            return None
+        return self.fused.steps_from(self, t, dt, n)
+
 
 def not_converged(t, dt, max_iterations, mismatch, tol) -> str:
     """The message of a step from t [s] that did not converge."""

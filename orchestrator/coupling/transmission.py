@@ -221,11 +221,13 @@ class TransmissionSlave(ContractSlave):
         report = master.solve_static()
         self._master, self._static_key = master, self._key()
         self._iterations = report.iterations
-        self._record(report)
+        self._record(report.states, report.bearing_force)
 
-    def _record(self, report) -> None:
+    def _record(self, states, bearing_force) -> None:
+        """The outputs: journal states (nb, 4) [m, m/s], film forces (nb, 2) [N], and the
+        structure's mesh force [N] and transmission error [m] now."""
         s = self._master.structure
-        self._outputs = [*report.states.ravel().tolist(), *report.bearing_force.ravel().tolist(),
+        self._outputs = [*states.ravel().tolist(), *bearing_force.ravel().tolist(),
                          float(s.mesh_force()), float(s.transmission_error())]
 
     # --- FMI life cycle -----------------------------------------------------------------------
@@ -261,12 +263,8 @@ class TransmissionSlave(ContractSlave):
             n = internal_steps(step_size, self._dt)
             h = step_size / n
             st.set_torque(self._get_torque())
-            iterations = 0
             with ONE_BLAS_THREAD:  # once for the n steps (module bearing_fmu.blas_threads)
-                for _ in range(n):
-                    report = self._master.step(st.t, h)
-                    iterations += report.iterations
-                    self._steps += 1
+                iterations, last = self._steps_of(st, n, h)
         except Exception as exc:  # anything raised here would be fatal for the host
             self._error = self.output_failed(
                 f"doStep from t = {current_time:.9g} s, h = {step_size:.6g} s failed", exc)
@@ -274,8 +272,31 @@ class TransmissionSlave(ContractSlave):
             self._outputs = list(_NAN)
             return False
         self._iterations = iterations
-        self._record(report)
+        self._record(*last)
         return True
+
+    def _steps_of(self, st, n: int, h: float):
+        """``n`` coupled steps of ``h`` [s]: in compiled blocks where the master takes them
+        (the same steps as one by one), else one by one. Their coupled iterations, and the
+        last step's journal states and bearing forces; the error of a step that fails, the
+        steps before it taken."""
+        master, done, iterations = self._master, 0, 0
+        while done < n:
+            block = master.steps_from(st.t, h, n - done)
+            if block is None:
+                report = master.step(st.t, h)
+                done += 1
+                self._steps += 1
+                iterations += report.iterations
+                last = (report.states, report.bearing_force)
+                continue
+            done += block.count
+            self._steps += block.count
+            iterations += int(block.iterations.sum())
+            if block.error is not None:
+                raise block.error
+            last = (block.states[-1], block.bearing_force[-1])
+        return iterations, last
 
     def terminate(self):
         if self._master is not None:

@@ -209,6 +209,22 @@ def test_a_step_no_bearing_can_carry(transmission_fmu):
     assert "status 2 (discard)" in got["doStep again"]
 
 
+def test_a_step_that_fails_inside_a_longer_communication_step(transmission_fmu):
+    """The same torque with communication steps of 4 dt (4 internal steps each, taken in one
+    compiled block): the doStep refused is the one holding the internal step that failed at
+    dt (14 steps of dt taken, the 15th refused: the third of the fourth doStep of 4 dt), with
+    the same statuses."""
+    dt = _dt(_case())
+    one, four = (run_isolated(module="tests.probes.transmission",
+                              args=["impossible_step", {"fmu": str(transmission_fmu), "h": h,
+                                                        "torque": 2e5}])
+                 for h in (dt, 4 * dt))
+    assert one["ok_steps"] % 4 > 0  # the failing step is inside a doStep of 4 dt
+    assert four["ok_steps"] == one["ok_steps"] // 4
+    for what, status in (("doStep", 2), ("getReal", 3), ("doStep again", 2)):
+        assert f"status {status}" in four[what]
+
+
 def test_a_bearing_fmu_of_your_own_carried_inside(fmu_dir, tmp_path):
     """``gsb export-fmu --bearing-fmu BearingLumped.fmu`` carries that FMU and runs the four
     bearings through it (fmpy inside the FMU): the bits of gsb run with the lumped model, which
