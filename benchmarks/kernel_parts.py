@@ -93,15 +93,16 @@ def _substitute(n, ws, active, iws, nr, out):
 
 
 @njit
-def _prepare(n, hh, g_const, x, v, a, f_c, unb, f0, kb, cb, s0, dt):
+def _prepare(n, mc, g, g_const, x, v, a, f_c, unb, f0, kb, cb, s0, dt):
     for _ in range(n):
-        prepare_step(hh, g_const, x, v, a, f_c, unb, f0, kb, cb, s0, dt, N_GEAR)
+        prepare_step(mc, g, g_const, x, v, a, f_c, unb, f0, kb, cb, s0, dt, N_GEAR)
 
 
 @njit
-def _history(n, hh, x, v, a, dt):
+def _history(n, mc, g, x, v, a, dt):
+    nc = g.shape[0] - g.shape[1]
     for _ in range(n):
-        hh @ newmark_history(x, v, a, dt)
+        g @ (mc @ newmark_history(x, v, a, dt))[nc:]
 
 
 @njit
@@ -179,21 +180,23 @@ def main() -> None:
     for label, value in rows:
         print(f"  {label:50s} {value:6.2f}")
 
-    cond, hh, g_const = st._dynamic(dt)
+    cond, g_const = st._dynamic(dt)
     unb = np.empty(4)
     unbalance_into(st._unb_coef, st.t + dt, unb)
     laws = master.laws
-    step_args = (hh, g_const, st.x, st.v, st.a, st._f_c, unb, laws.f0, laws.kb, laws.cb,
+    step_args = (st._mc, cond.g, g_const, st.x, st.v, st.a, st._f_c, unb, laws.f0, laws.kb, laws.cb,
                  cond.s0, dt)
     s_lin, z0, _ = prepare_step(*step_args, N_GEAR)
-    print(f"structure step ({hh.shape[0]} x {hh.shape[1]} history product, {NC} condensed "
+    print(f"structure step ({st._mc.shape[0]} x {st._mc.shape[1]} history product and its "
+          f"{cond.g.shape[0]} x {cond.g.shape[1]} condensation, {NC} condensed "
           f"DOFs, {st.mesh.n_lines} x {st.mesh.n_slices} mesh slices)")
     angle = st.pinion_angle(st.t)
     q = np.ascontiguousarray(st.x[:N_GEAR])
     force, stiff = _mesh(1, True, angle, q, *st._mesh_arrays)
     xc = np.ascontiguousarray(st.x[:NC])
     rows = [("right-hand side and tangent (prepare_step)", timed(n, _prepare, *step_args)),
-            ("... its history product alone", timed(n, _history, hh, st.x, st.v, st.a, dt)),
+            ("... its history product alone",
+             timed(n, _history, st._mc, cond.g, st.x, st.v, st.a, dt)),
             ("one mesh evaluation, tangent assembled",
              timed(n, _mesh, True, angle, q, *st._mesh_arrays)),
             ("... at the angle and contact set of the last one",

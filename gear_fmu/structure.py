@@ -232,6 +232,7 @@ class Structure:
         self._pending_reference = None
         self._damping_full = damping_full
         self._c = self._permute(damping_full)
+        self._mc = np.hstack([self._m, self._c])  # b = [M C] @ [p; q] (prepare_step)
         self._dyn_cache.clear()
         self._condensations.clear()
 
@@ -321,8 +322,7 @@ class Structure:
         self.loads = replace(self.loads, torque=torque)  # checked: finite
         self._forces()
         f = self._f_const[NC:]
-        self._dyn_cache = {dt: (cond, h, cond.g @ f)
-                           for dt, (cond, h, _) in self._dyn_cache.items()}
+        self._dyn_cache = {dt: (cond, cond.g @ f) for dt, (cond, _) in self._dyn_cache.items()}
         self._condensations.clear()
 
     def pinion_angle(self, t: float) -> float:
@@ -344,10 +344,7 @@ class Structure:
         self._require_damping()
         c0, c1, _ = newmark_coefficients(dt)
         cond = Condensation(c0 * self._m + c1 * self._c + self._k)
-        mc = np.hstack([self._m, self._c])  # b = [M C] @ [p; q]
-        h = np.vstack([mc[:NC], cond.g @ mc[NC:]])
-        g_const = cond.g @ self._f_const[NC:]
-        entry = (cond, h, g_const)
+        entry = (cond, cond.g @ self._f_const[NC:])
         if len(self._dyn_cache) > 256:
             self._dyn_cache.clear()
         self._dyn_cache[dt] = entry
@@ -482,11 +479,11 @@ class Structure:
         if self._mesh_arrays is not None and timing is None:
             return self._advance_compiled(h, t1, angle, f0, kb, cb, what)
         t0 = time.perf_counter() if timing is not None else 0.0
-        cond, hh, g_const = self._dynamic(h)
+        cond, g_const = self._dynamic(h)
         x, v, a = self.x, self.v, self.a
         unb = unbalance_force(self._unb, self._omega, t1)  # Eq. (10)
-        s_lin, z0, y = prepare_step(hh, g_const, x, v, a, self._f_c, unb, f0, kb, cb, cond.s0,
-                                     h, N_GEAR)
+        s_lin, z0, y = prepare_step(self._mc, cond.g, g_const, x, v, a, self._f_c, unb, f0, kb,
+                                     cb, cond.s0, h, N_GEAR)
         f_scale = max(self._f_scale, math.sqrt(float(np.sum(f0 * f0))))
         if timing is not None:
             timing["assembly"] += time.perf_counter() - t0
@@ -512,12 +509,12 @@ class Structure:
         """The arguments of :func:`gear_fmu.step.kernel.advance` for a step of length h to t1
         (mesh at ``angle``): those before the bearing laws, those after them, and the output
         buffers it writes (:meth:`_advance_result` reads them)."""
-        cond, hh, g_const = self._dynamic(h)
+        cond, g_const = self._dynamic(h)
         mesh = self.mesh
         outputs = self._advance_outputs()
         err = mesh.error_displacement(angle) if mesh.has_errors else _NO_ERROR
         used = _NO_SET if self.active is None else self.active
-        head = (hh, g_const, cond.s0, cond.w, self.x, self.v, self.a, self._f_c,
+        head = (self._mc, cond.g, g_const, cond.s0, cond.w, self.x, self.v, self.a, self._f_c,
                 self._unb_coef, t1)
         tail = (h, angle, err, mesh.has_errors, *self._mesh_arrays, used,
                 self.active is not None, self._f_scale, self.tol, self.max_iter)
@@ -610,7 +607,7 @@ class Structure:
         kept = self._mesh_buffers()
         kept[2][:] = self.active  # the contact set the first step starts from
         return StepsPlan(
-            (counts, index, *slots.arrays(), tables, events, err, err_after),
+            (counts, index, self._mc, *slots.arrays(), tables, events, err, err_after),
             (self.x.copy(), self.v.copy(), self.a.copy()),
             (self._f_c, self._unb_coef, mesh.has_errors, *self._mesh_arrays, self._f_scale,
              self.tol, self.max_iter, self._gear_compliance()),

@@ -19,23 +19,28 @@ __all__ = ["check_laws", "check_laws_fast", "finish_step", "prepare_step"]
 
 
 @njit(cache=True)
-def prepare_step(h, g_const, x, v, a, f_c, unb, f0, kb, cb, s0, dt, ng):
+def prepare_step(mc, g, g_const, x, v, a, f_c, unb, f0, kb, cb, s0, dt, ng):
     """Right-hand side and condensed tangent of one Newmark step (Eq. 12, 14, 16).
 
+    ``mc`` = [M C] (n, 2n) turns the Newmark history [p; q] into b = M p + C q; ``g``
+    (:class:`gear_fmu.step.condensation.Condensation`) condenses its r part. Only ``g``
+    depends on the step's length: a new length costs its condensation, not a product with
+    [M C] (what a step that does not recur with the mesh period asks at most cut steps).
     Returns ``s_lin`` (nc, nc) = S0 + Kb + c1 Cb, ``z0`` (nc,) and ``y`` = A_rr^-1 b_r.
     """
     nc = s0.shape[0]
     _, c1, _ = newmark_coefficients(dt)
     pq = newmark_history(x, v, a, dt)
-    out = h @ pq
+    b = mc @ pq
+    out = g @ b[nc:]  # -W^T b_r, then A_rr^-1 b_r
     z0 = np.empty(nc)
     for i in range(nc):
-        z0[i] = out[i] + out[nc + i] + g_const[i] + f_c[i]
+        z0[i] = b[i] + out[i] + g_const[i] + f_c[i]
     z0[0] += unb[0]  # pinion node (u, v)
     z0[1] += unb[1]
     z0[6] += unb[2]  # gear node (u, v)
     z0[7] += unb[3]
-    y = out[2 * nc:] + g_const[nc:]
+    y = out[nc:] + g_const[nc:]
     s_lin = s0.copy()
     for j in range(4):
         o = ng + 2 * j

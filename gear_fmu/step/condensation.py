@@ -40,13 +40,15 @@ class Condensation:
         arr_inv = scipy.linalg.cho_solve(cho, np.eye(arr.shape[0]))
         self.w = arr_inv @ acr.T  # A_rr^-1 A_rc
         self.s0 = acc - acr @ self.w
-        # rows: (-W^T, A_rr^-1) applied to b_r gives (z correction, y)
-        self.g = np.vstack([-self.w.T, arr_inv])
+        # rows: (-W^T, A_rr^-1) applied to b_r gives (z correction, y); C order, as the
+        # compiled steps' slots hold it: a product's rounding follows the layout (BLAS
+        # takes an F-order matrix by columns, a C-order one by rows)
+        self.g = np.ascontiguousarray(np.vstack([-self.w.T, arr_inv]))
 
 
 class CondensationSlots:
     """The condensations of the sub-step lengths of a run, stacked for a compiled loop over
-    steps (:meth:`gear_fmu.structure.Structure.steps_plan`): slot k holds ``(hh, g_const, s0,
+    steps (:meth:`gear_fmu.structure.Structure.steps_plan`): slot k holds ``(g, g_const, s0,
     w)`` of one length h [s] as the structure's ``_dynamic(h)`` gives them (copies: the same
     numbers). At most ``CAPACITY`` lengths (the sub-steps of a step commensurate with the
     mesh period recur: at most :data:`gear_fmu.structure.MAX_PIECES` per step of a period, 128
@@ -76,12 +78,12 @@ class CondensationSlots:
         return False
 
     def slot(self, h: float, dynamic) -> int:
-        """The slot of sub-step length ``h`` [s], filled from ``dynamic(h)`` -> ``(cond, hh,
+        """The slot of sub-step length ``h`` [s], filled from ``dynamic(h)`` -> ``(cond,
         g_const)`` the first time (after :meth:`make_room` said there is room)."""
         k = self._index.get(h)
         if k is None:
-            cond, hh, g_const = dynamic(h)
-            parts = (hh, g_const, cond.s0, cond.w)
+            cond, g_const = dynamic(h)
+            parts = (cond.g, g_const, cond.s0, cond.w)
             if self._stacks is None or self._n == len(self._stacks[0]):
                 size = min(self.CAPACITY, max(4, 2 * self._n))
                 stacks = tuple(np.empty((size, *p.shape)) for p in parts)
@@ -96,7 +98,7 @@ class CondensationSlots:
         return k
 
     def arrays(self) -> tuple:
-        """``(hh, g_const, s0, w)`` of every slot, stacked along the first axis."""
+        """``(g, g_const, s0, w)`` of every slot, stacked along the first axis."""
         return tuple(s[:self._n] for s in self._stacks)
 
 

@@ -48,7 +48,7 @@ def sum_squares(f0):
 
 
 @njit(cache=True)
-def advance(hh, g_const, s0, w, x, v, a, f_c, unb_coef, t1, f0, kb, cb, h,  # step (Eq. 12-16)
+def advance(mc, g, g_const, s0, w, x, v, a, f_c, unb_coef, t1, f0, kb, cb, h,  # Eq. 12-16
             angle, err, has_err, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1, pitch2,
             cache, tangent, used0, has_used, f_scale, tol, max_iter,  # contact loop (Fig. 4)
             force, stiff, active, inside, delta, load, xis, zout, residuals,  # mesh state out
@@ -56,7 +56,7 @@ def advance(hh, g_const, s0, w, x, v, a, f_c, unb_coef, t1, f0, kb, cb, h,  # st
     """One Newmark step of length ``h`` with the mesh element at pinion ``angle`` [rad]:
     Eq. (12), (14), (16) assembled, Newton-Raphson with the contact loop, Eq. (13), (15).
 
-    Inputs as :func:`gear_fmu.step.assembly.prepare_step` (``hh``, ``g_const``, ``s0``, ``w``
+    Inputs as :func:`gear_fmu.step.assembly.prepare_step` (``g``, ``g_const``, ``s0``, ``w``
     from the condensation at h; the unbalance of Eq. (10) at the step's end ``t1`` [s] from
     ``unb_coef``, :func:`gear_fmu.loads.unbalance_into`) and
     :func:`gear_fmu.step.contact_loop.solve_condensed`
@@ -71,7 +71,7 @@ def advance(hh, g_const, s0, w, x, v, a, f_c, unb_coef, t1, f0, kb, cb, h,  # st
     """
     unb = np.empty(4)
     unbalance_into(unb_coef, t1, unb)
-    s_lin, z0, y = prepare_step(hh, g_const, x, v, a, f_c, unb, f0, kb, cb, s0, h, N_GEAR)
+    s_lin, z0, y = prepare_step(mc, g, g_const, x, v, a, f_c, unb, f0, kb, cb, s0, h, N_GEAR)
     f_scale = max(f_scale, math.sqrt(sum_squares(f0)))
     xc = x[:NC] + h * v[:NC]
     used = used0.copy()
@@ -146,14 +146,14 @@ def contact_event(angle, x1, err, has_err, geo, xi_tab, k_tab, zs, dl, n_lines, 
 
 
 @njit(cache=True)
-def advance_pieces(n_pieces, hh, g_const, s0, w, table, event, err, err_after, x, v, a,
+def advance_pieces(n_pieces, mc, g, g_const, s0, w, table, event, err, err_after, x, v, a,
                    f_c, unb_coef, f0, kb, cb, has_err, geo, xi_tab, k_tab, zs, dl, n_lines, dev,
                    pitch1, pitch2, cache, tangent, used0, has_used, f_scale, tol, max_iter,
                    m_gear, force, stiff, active, inside, delta, load, xis, zout, residuals, x1,
                    v1, a1):
     """A step cut at its contact events (:meth:`gear_fmu.structure.Structure.step`) in one
     call: sub-step ``p < n_pieces`` is :func:`advance` of length ``table[p, 0]`` [s] to
-    ``table[p, 1]`` [s] with the mesh at pinion angle ``table[p, 2]`` [rad] (``hh[p]`` ...
+    ``table[p, 1]`` [s] with the mesh at pinion angle ``table[p, 2]`` [rad] (``g[p]`` ...
     ``w[p]`` its condensation, ``err[p]`` its error displacement), from the state the sub-step
     before left, then :func:`contact_event` at ``table[p, 3]`` (error displacement
     ``err_after[p]``) where ``event[p]``; the arithmetic of the Python loop over the
@@ -168,7 +168,7 @@ def advance_pieces(n_pieces, hh, g_const, s0, w, table, event, err, err_after, x
     status, k, total, length = CONVERGED, 0, 0.0, 0.0
     for p in range(n_pieces):
         status, k, total, length = advance(
-            hh[p], g_const[p], s0[p], w[p], xs, vs, as_, f_c, unb_coef, table[p, 1], f0, kb,
+            mc, g[p], g_const[p], s0[p], w[p], xs, vs, as_, f_c, unb_coef, table[p, 1], f0, kb,
             cb, table[p, 0], table[p, 2], err[p], has_err, geo, xi_tab, k_tab, zs, dl,
             n_lines, dev, pitch1, pitch2, cache, tangent, used, has_used, f_scale, tol,
             max_iter, force, stiff, active, inside, delta, load, xis, zout, residuals, x1, v1,

@@ -91,7 +91,7 @@ def _evaluate_set(bearings, states, out):
 
 
 @njit(cache=True)
-def coupled_steps(n, counts, slots, hh_k, g_const_k, s0_k, w_k, tables, events, errs,
+def coupled_steps(n, counts, slots, mc, g_k, g_const_k, s0_k, w_k, tables, events, errs,
                   errs_after, x, v, a, f_c, unb_coef, has_err, geo, xi_tab, k_tab, zs, dl,
                   n_lines, dev, pitch1, pitch2, cache, tangent, f_scale, s_tol, s_max_iter,
                   m_gear,  # the structure (Structure.steps_plan)
@@ -105,7 +105,7 @@ def coupled_steps(n, counts, slots, hh_k, g_const_k, s0_k, w_k, tables, events, 
     [N, N/m, N s/m] the step before accepted, until one is not accepted.
 
     Step i has ``counts[i]`` sub-steps (:meth:`gear_fmu.structure.Structure.steps_plan`),
-    sub-step p the condensation ``hh_k[slots[i, p]]`` ... ``w_k[slots[i, p]]``
+    sub-step p ``mc`` ([M C]) and the condensation ``g_k[slots[i, p]]`` ... ``w_k[slots[i, p]]``
     (:class:`gear_fmu.step.condensation.CondensationSlots`; four slots,
     :data:`gear_fmu.structure.MAX_PIECES`) and row p of ``tables[i]``, ``events[i]``,
     ``errs[i]`` and ``errs_after[i]`` (row 0 of these for every step without gear errors):
@@ -134,7 +134,7 @@ def coupled_steps(n, counts, slots, hh_k, g_const_k, s0_k, w_k, tables, events, 
     for i in range(n):
         row = i if has_err else 0
         k0, k1, k2, k3 = slots[i, 0], slots[i, 1], slots[i, 2], slots[i, 3]
-        hh = (hh_k[k0], hh_k[k1], hh_k[k2], hh_k[k3])
+        g = (g_k[k0], g_k[k1], g_k[k2], g_k[k3])
         g_const = (g_const_k[k0], g_const_k[k1], g_const_k[k2], g_const_k[k3])
         s0 = (s0_k[k0], s0_k[k1], s0_k[k2], s0_k[k3])
         w = (w_k[k0], w_k[k1], w_k[k2], w_k[k3])
@@ -143,7 +143,7 @@ def coupled_steps(n, counts, slots, hh_k, g_const_k, s0_k, w_k, tables, events, 
         outcome, relaxed, mismatch = NOT_CONVERGED, False, np.inf
         for it in range(1, max_iterations + 1):
             status, piece, k, total, length = advance_pieces(
-                counts[i], hh, g_const, s0, w, tables[i], events[i], errs[row],
+                counts[i], mc, g, g_const, s0, w, tables[i], events[i], errs[row],
                 errs_after[row], x, v, a, f_c, unb_coef, law_f0, law_kb, law_cb, has_err, geo,
                 xi_tab, k_tab, zs, dl, n_lines, dev, pitch1, pitch2, cache, tangent, k_active,
                 True, f_scale, s_tol, s_max_iter, m_gear, force, stiff, active, inside, delta,
