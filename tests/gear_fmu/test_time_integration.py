@@ -148,6 +148,18 @@ def test_a_step_a_hair_off_the_mesh_periods_divisor(name):
     assert diff < 5e-8
 
 
+def _counted_condensations(monkeypatch) -> list:
+    """A list that grows by one entry per condensation the structure computes from now on
+    (each new sub-step length's; clear it to count from a later point)."""
+    import gear_fmu.structure
+
+    made = []
+    real = gear_fmu.structure.Condensation
+    monkeypatch.setattr(gear_fmu.structure, "Condensation",
+                        lambda *a: made.append(1) or real(*a))
+    return made
+
+
 def test_the_helical_case_condenses_each_recurring_sub_step_once(monkeypatch):
     """The helical case cuts most steps at contact events into sub-steps whose lengths recur
     every mesh period; each length's condensation (a factorisation of the 107 DOFs' step
@@ -155,12 +167,7 @@ def test_the_helical_case_condenses_each_recurring_sub_step_once(monkeypatch):
     from k dt (2.4e-8 dt after 65,536 steps): with the cut fractions rounded to 2**-30 the
     lengths followed the drift, and 8192 steps condensed 117 lengths, not the 54 of one
     period's schedule."""
-    import gear_fmu.structure
-
-    made = []
-    real = gear_fmu.structure.Condensation
-    monkeypatch.setattr(gear_fmu.structure, "Condensation",
-                        lambda *a: made.append(1) or real(*a))
+    made = _counted_condensations(monkeypatch)
     case = load_case("baguet2010_helical", {"bearings.model": "linear"})
     master = build_master(case, in_process=True)
     master.solve_static()
@@ -183,12 +190,7 @@ def _nanosecond_run(case, steps, monkeypatch):
     """Journal states, bearing forces, mesh force and TE of ``steps`` steps of the case's step
     rounded to whole nanoseconds (a libcosim host's clock: 5.1e-4 dt of event drift per mesh
     period), and how many sub-step lengths were condensed."""
-    import gear_fmu.structure
-
-    made = []
-    real = gear_fmu.structure.Condensation
-    monkeypatch.setattr(gear_fmu.structure, "Condensation",
-                        lambda *a: made.append(1) or real(*a))
+    made = _counted_condensations(monkeypatch)
     h = round(description.time_step(case) * 1e9) * 1e-9
     master = build_master(case, in_process=True)
     try:
