@@ -18,6 +18,16 @@ that do not fit together such as C >= D/2) makes the read of the outputs return 
 fmi2DoStep return fmi2Discard, with the reason in the log: a fixed-step host that steps, then
 exchanges, learns it at the step, never from NaN read with fmi2OK. The doStep evaluates the law
 at the current inputs unless a read already has (one evaluation per input, whoever asks first).
+
+The journal state, the law and its bookkeeping live in one float64 array, the law buffer of
+:mod:`bearing_fmu.hybrid._native`. For the hybrid model the patched FMU library
+(``fmu_src/native/patches/0011-native-bearing-law.patch``) asks the slave's
+``_fmi_native_law`` for it once, and from then on serves the master's set of the four state
+inputs and read of the ten law outputs itself, calling the compiled law without Python, while
+the slave keeps the buffer *armed* (after an evaluation of its own at the current parameters
+and speed). Any other call, a failure, a changed parameter or speed, and a restored state go
+through Python, which disarms the buffer until it has evaluated the law again. Both paths call
+the same kernel on the same arrays: the same bits.
 """
 
 from __future__ import annotations
@@ -29,6 +39,8 @@ from pythonfmu.enums import Fmi2Status
 
 from bearing_fmu import BearingData, BearingError, model_class
 from bearing_fmu.frames import LocalFrame
+from bearing_fmu.hybrid import _native as law_buffer
+from bearing_fmu.hybrid.model import HybridBearing
 from fmu_src.contract import (
     DAMPING_NAMES,
     EVAL_NAMES,
@@ -51,6 +63,13 @@ __all__ = ["BearingSlave", "pin_namespace"]
 
 #: the law's outputs in the order of BearingModel.evaluate_global's rows (force, Kb, Cb)
 _LAW_NAMES = FORCE_NAMES + STIFFNESS_NAMES + DAMPING_NAMES
+_STATE = slice(law_buffer.IO_STATE, law_buffer.IO_STATE + 4)
+_LAW = slice(law_buffer.IO_LAW, law_buffer.IO_LAW + 10)
+_EVAL = slice(law_buffer.IO_EVAL, law_buffer.IO_EVAL + 4)
+#: the variables kept in the law buffer, by their index there
+_IN_BUFFER = {name: i for names, part in ((STATE_NAMES, _STATE), (_LAW_NAMES, _LAW),
+                                          (EVAL_NAMES, _EVAL))
+              for name, i in zip(names, range(part.start, part.stop), strict=True)}
 
 
 class BearingSlave(ContractSlave):
@@ -65,14 +84,19 @@ class BearingSlave(ContractSlave):
             "damping at the journal state, global frame, SI units (Baguet & Jacquenot 2010)."
         )
         variables = bearing_variables()
-        self._values = {v.name: v.start for v in variables}
+        # the parameters and omega; the journal state, the law and n_solves are in _io
+        self._values = {v.name: v.start for v in variables if v.name not in _IN_BUFFER}
+        self._io = np.zeros(law_buffer.IO_SIZE)
+        self._io[law_buffer.IO_DIRTY] = 1.0
+        self._ctx = np.zeros(law_buffer.CTX_SIZE, dtype=np.int64)  # the model's arrays
+        self._native = False  # whether the library evaluates the law itself when armed
+        self._ctx_of = None  # the model whose arrays _ctx names
+        self._ecc, self._ecc_at = 0.0, 0.0  # eccentricity, at that count of evaluations
         self._dirty_model = True
-        self._dirty_outputs = True
         self._model = None
         self._frame = None
         self._failed = False
-        self._out = np.zeros((5, 2))  # force, Kb, Cb of the last evaluation (global frame)
-        self._out_flat = self._out.reshape(10)  # the same memory in the outputs' order
+        self._out = self._io[_LAW].reshape(5, 2)  # force, Kb, Cb (global frame), in _io
         for v in variables:
             setter = None
             if v.causality in ("parameter", "input"):
@@ -83,16 +107,54 @@ class BearingSlave(ContractSlave):
         self._state_vrs = [vr[n] for n in STATE_NAMES]
         self._law_vrs = [vr[n] for n in _LAW_NAMES]
 
+    @property
+    def _dirty_outputs(self) -> bool:
+        """Whether the inputs changed since the law was evaluated (in the law buffer, where the
+        library's own set of the state inputs marks it)."""
+        return self._io[law_buffer.IO_DIRTY] != 0.0
+
+    @_dirty_outputs.setter
+    def _dirty_outputs(self, dirty: bool) -> None:
+        self._io[law_buffer.IO_DIRTY] = 1.0 if dirty else 0.0
+
+    def _fmi_native_law(self):
+        """What the patched library needs to serve the state inputs and the law outputs itself
+        (module docstring): ``(layout, law, context, buffer, state value references, law value
+        references)``, the three in the middle addresses; None for a model with no compiled
+        law. Called once per instance; the addresses hold while the slave lives."""
+        if not issubclass(model_class(self.model_name), HybridBearing):
+            return None
+        self._native = True
+        return (law_buffer.LAYOUT, law_buffer.hybrid_law, self._ctx.ctypes.data,
+                self._io.ctypes.data, tuple(self._state_vrs), tuple(self._law_vrs))
+
+    def _arm(self) -> None:
+        """Let the library evaluate the law itself from now on: after an evaluation of the
+        current model at the current speed (the force scale is the one that evaluation used)."""
+        if not self._native:
+            return
+        io = self._io
+        if self._ctx_of is not self._model:  # a new model (a few us: once per model)
+            law_buffer.fill_context(self._ctx, self._model)
+            io[law_buffer.IO_Q:law_buffer.IO_Q + 4] = self._q
+            io[law_buffer.IO_C] = self._model.bearing.clearance
+            self._ctx_of = self._model
+        io[law_buffer.IO_OMEGA], io[law_buffer.IO_FS] = self._model._scale
+        io[law_buffer.IO_ARMED] = 1.0
+
+    def _disarm(self) -> None:
+        self._io[law_buffer.IO_ARMED] = 0.0
+
     # --- FMI plumbing ------------------------------------------------------------------------
     # The master sets the 4 state inputs and reads the 10 law outputs in one call each: served
     # without the per-variable loop (same checks and effect).
     def set_real(self, vrs, values):
         if vrs == self._state_vrs and all(map(math.isfinite, values)):
-            v = self._values
-            for name, value in zip(STATE_NAMES, values, strict=True):
-                if v[name] != value:
-                    v[name] = value
-                    self._dirty_outputs = True
+            io = self._io
+            for i, value in enumerate(values):
+                if io[i] != value:
+                    io[i] = value
+                    io[law_buffer.IO_DIRTY] = 1.0
             return None
         return super().set_real(vrs, values)  # refuses a non-finite value with its message
 
@@ -102,35 +164,70 @@ class BearingSlave(ContractSlave):
                 self._update()
             if self._failed:
                 self._read_status = 3  # fmi2Error: the reason is in the log
-            v = self._values
-            return self._with_status([v[n] for n in _LAW_NAMES])
+            return self._with_status(self._io[_LAW].tolist())
         return super().get_real(vrs)
 
     def _getter(self, name, output: bool):
-        values = self._values
-        if output:
-            def get():
-                if self._dirty_outputs:
-                    self._update()
-                if self._failed:
-                    self._read_status = 3  # fmi2Error: the reason is in the log
-                return values[name]
-        else:
-            def get():
-                return values[name]
+        values, io = self._values, self._io
+        if not output:
+            if name in _IN_BUFFER:
+                i = _IN_BUFFER[name]
+                return lambda: float(io[i])
+            return lambda: values[name]
+        if name in _IN_BUFFER:
+            i = _IN_BUFFER[name]
+            read = lambda: float(io[i])  # noqa: E731
+        elif name == "eccentricity":
+            read = self._eccentricity
+        else:  # n_solves
+            read = lambda: int(io[law_buffer.IO_SOLVES])  # noqa: E731
+
+        def get():
+            if self._dirty_outputs:
+                self._update()
+            if self._failed:
+                self._read_status = 3  # fmi2Error: the reason is in the log
+            return read()
         return get
 
     def _setter(self, name, model):
+        if name in _IN_BUFFER:
+            i = _IN_BUFFER[name]
+
+            def set_state(value):
+                if self._io[i] != value:
+                    self._io[i] = value
+                    self._dirty_outputs = True
+            return set_state
+
         def set_(value):
             if self._values[name] != value:
+                self._eccentricity()  # of the last evaluation, with the parameters it used
                 self._values[name] = value
                 self._dirty_outputs = True
+                self._disarm()  # a new speed, or a new model: the buffer's are stale
                 if model:
                     self._dirty_model = True
         return set_
 
+    def _eccentricity(self) -> float:
+        """e/C at the state of the last evaluation (computed on the first read after it)."""
+        io = self._io
+        if io[law_buffer.IO_SOLVES] != self._ecc_at:  # never before a first evaluation
+            s0, s1 = float(io[law_buffer.IO_EVAL]), float(io[law_buffer.IO_EVAL + 1])
+            # the local position as the models form it (state_to_local's products and sums, in
+            # its order: the same bits, without a compiled call's dispatch or numpy's 2 x 2
+            # product, which would round differently)
+            q00, q01, q10, q11 = self._q
+            x = q00 * s0 + q01 * s1
+            y = q10 * s0 + q11 * s1
+            self._ecc = math.hypot(x, y) / self._values["C"]
+            self._ecc_at = io[law_buffer.IO_SOLVES]
+        return self._ecc
+
     # --- physics ------------------------------------------------------------------------------
     def _build_model(self):
+        self._disarm()  # the context names the arrays of the model replaced
         v = self._values
         bearing = BearingData(v["D"], v["L"], v["C"], v["mu"])
         cls = model_class(self.model_name)
@@ -140,9 +237,9 @@ class BearingSlave(ContractSlave):
         self._dirty_model = False
 
     def _local_state(self):
-        v = self._values
-        x, y = self._frame.to_local((v["s"], v["t"]))
-        xd, yd = self._frame.to_local((v["s_dot"], v["t_dot"]))
+        s, t, s_dot, t_dot = self._io[_STATE].tolist()
+        x, y = self._frame.to_local((s, t))
+        xd, yd = self._frame.to_local((s_dot, t_dot))
         return x, y, xd, yd
 
     def _update(self, during: str | None = None):
@@ -159,32 +256,35 @@ class BearingSlave(ContractSlave):
             if during is not None:
                 where += f"{during}: the law cannot be computed at the current inputs: "
             self.log(where + describe_exception(exc), Fmi2Status.error)
-            for name in _LAW_NAMES:
-                self._values[name] = math.nan
+            self._disarm()
+            self._io[_LAW] = math.nan
         self._dirty_outputs = False
 
     def _evaluate(self):
         """Force, Kb, Cb in the global frame (the model's :meth:`~bearing_fmu.base.
-        BearingModel.evaluate_global`: one compiled call for the hybrid model)."""
+        BearingModel.evaluate_global`: one compiled call for the hybrid model), or the error
+        of the library's own evaluation that failed at these inputs (its status pending in the
+        law buffer: the same error the Python path raises, from the same kernel's state)."""
         if self._dirty_model:
             self._build_model()
-        v = self._values
-        s = [v[name] for name in STATE_NAMES]
+        io = self._io
+        s = io[_STATE].tolist()
         q, state = self._frame.q, np.array(s)
-        self._model.evaluate_global(q, state, v["omega"], self._out)
-        law = self._out_flat.tolist()
+        status = int(io[law_buffer.IO_STATUS])
+        if status:
+            io[law_buffer.IO_STATUS] = 0.0
+            if status == law_buffer.NOT_FINITE:
+                _check_finite(io[_LAW].tolist(), s)
+            self._model.raise_status(status, q, state, self._values["omega"])
+            raise BearingError(f"the compiled law failed with status {status}")  # not reached
+        self._model.evaluate_global(q, state, self._values["omega"], self._out)
+        law = io[_LAW].tolist()
         if not math.isfinite(sum(law)):  # finite terms may overflow the sum: then look closer
             _check_finite(law, s)
-        v.update(zip(_LAW_NAMES, law, strict=True))
-        v.update(zip(EVAL_NAMES, s, strict=True))
-        # the local position as the models form it (state_to_local's products and sums, in
-        # its order: the same bits, without a compiled call's dispatch or numpy's 2 x 2
-        # product, which would cost a share of a hybrid evaluation and round differently)
-        q00, q01, q10, q11 = self._q
-        x = q00 * s[0] + q01 * s[1]
-        y = q10 * s[0] + q11 * s[1]
-        v["eccentricity"] = math.hypot(x, y) / v["C"]
-        v["n_solves"] = int(v["n_solves"]) + 1
+        io[_EVAL] = s
+        io[law_buffer.IO_SOLVES] += 1.0
+        self._eccentricity()
+        self._arm()
 
     # --- FMI life cycle -----------------------------------------------------------------------
     def exit_initialization_mode(self):
@@ -212,7 +312,12 @@ class BearingSlave(ContractSlave):
     # outputs bit for bit. Serialised: ``values/<variable>`` (its FMI type), ``dirty_outputs``,
     # ``failed``, ``has_model`` and ``model/...`` (fmu_src.states) --------------------------
     def _get_fmu_state(self):
-        state = {"values": dict(self._values), "dirty_outputs": self._dirty_outputs,
+        values = dict(self._values)
+        io = self._io
+        values.update((name, float(io[i])) for name, i in _IN_BUFFER.items())
+        values["n_solves"] = int(io[law_buffer.IO_SOLVES])
+        values["eccentricity"] = self._eccentricity()
+        state = {"values": values, "dirty_outputs": self._dirty_outputs,
                  "failed": self._failed}
         if self._model is not None and not self._dirty_model:
             state["model"] = bearing_state_arrays(self._model)
@@ -221,8 +326,16 @@ class BearingSlave(ContractSlave):
     def _set_fmu_state(self, state):
         try:
             model = state.get("model")
+            self._disarm()
+            values = dict(state["values"])
+            io = self._io
+            for name, i in _IN_BUFFER.items():
+                io[i] = values.pop(name)
+            io[law_buffer.IO_SOLVES] = values.pop("n_solves")
+            io[law_buffer.IO_STATUS] = 0.0
+            self._ecc, self._ecc_at = values.pop("eccentricity"), io[law_buffer.IO_SOLVES]
             self._values.clear()
-            self._values.update(state["values"])
+            self._values.update(values)
             self._dirty_model = True
             self._build_model()
             if model is not None:

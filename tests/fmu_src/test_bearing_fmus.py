@@ -68,6 +68,32 @@ def test_fmu_equals_in_process_model_in_global_frame(fmu_dir, model):
         fmu.close()
 
 
+@pytest.mark.parametrize("model", list(MODELS))
+def test_the_hybrid_law_is_served_without_python_with_the_same_bits(fmu_dir, model):
+    """The master's set of the journal state and read of the law (FmuBearings.evaluate) along
+    7 evaluations, one of which fails for the film models (a journal outside the clearance),
+    and for the hybrid model an eighth, a squeeze velocity its solver cannot converge at (it
+    then starts cold): after each, the FMU gives
+    the in-process model's outputs bit for bit; each failure is an error with its reason; and
+    n_solves counts the evaluations that succeeded. For the hybrid model the patched library
+    serves the calls with the compiled law once the slave has evaluated it: the slave's Python
+    sees the first evaluation, each failure (to raise and log it) and the evaluation after it
+    (which arms the library again): 3 sets and 5 reads of the 16 calls. The other models have
+    no compiled law: Python serves all 14."""
+    out = run_here(module=PROBES, args=["native_law", {
+        "fmu": fmu_dir / (bearing_fmu_name(model) + ".fmu"), "model": model}])
+    assert out["same"] == [True] * 6, out
+    errors = out["errors"]
+    if model != "lumped":  # a spring: any state is valid
+        assert "eccentricity ratio 1.2" in errors["outside"], errors
+    if model == "hybrid":
+        assert "did not converge" in errors["fast"], errors
+    assert out["n_solves"] == 6 + sum(e is None for e in errors.values()), out
+    expected = dict(set_real=3, get_real=5) if model == "hybrid" else dict(set_real=7,
+                                                                           get_real=7)
+    assert out["calls"] == expected
+
+
 def test_fmu_error_is_reported_not_fatal_and_state_round_trips(fmu_dir):
     out = run_here(module=PROBES, args=["error_and_state_round_trip",
                                         {"fmu": fmu_dir / "BearingShort.fmu"}])

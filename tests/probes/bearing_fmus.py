@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+import contextlib
+
 import numpy as np
 
 from tests.probes import dispatch, probes_of
@@ -62,7 +64,70 @@ def many_instances(fmu: str) -> dict:
     return dict(same=bool(all(np.array_equal(f[0], g) for g in f)))
 
 
-PROBES = probes_of(error_and_state_round_trip, linear_freeze, many_instances)
+def native_law(fmu: str, model: str) -> dict:
+    """The master's calls on one bearing FMU along a sequence of journal states (a frame
+    turned and mirrored), with a journal outside the clearance and one where the law overflows
+    among them, against the in-process model; and how many of the calls reached the slave's
+    Python (``BearingSlave.set_real`` and ``get_real`` counted): the patched library serves
+    the others with the compiled law (fmu_src/native/patches/0011-native-bearing-law.patch)."""
+    from bearing_fmu import BearingData, model_class
+    from bearing_fmu.frames import LocalFrame
+    from fmu_src.slaves.bearing import BearingSlave
+    from orchestrator.coupling.fmi import FmuBearings, FmuError
+    from orchestrator.coupling.inprocess import ModelBearings
+
+    calls = {"set_real": 0, "get_real": 0}
+    originals = {name: BearingSlave.__dict__[name] for name in calls}
+
+    def counted(name):
+        def call(self, *args):
+            calls[name] += 1
+            return originals[name](self, *args)
+        return call
+
+    c = 110e-6
+    params = dict(D=0.09, L=0.065, C=c, mu=0.0288, frame_angle=0.3, rotation_sign=-1)
+    ref = ModelBearings([model_class(model).from_parameters(BearingData(0.09, 0.065, c,
+                                                                        0.0288))],
+                        [LocalFrame(0.3, -1)], [54.0])
+    for name in calls:
+        setattr(BearingSlave, name, counted(name))
+    fmu = FmuBearings([fmu], [params], [54.0])
+    out = {"same": [], "errors": {}}
+    calls.update(set_real=0, get_real=0)  # the evaluations' calls only
+    try:
+        states = [[0.4 * c, -0.3 * c, 1e-3, 0.0]]
+        states += [[(0.4 + 0.02 * k) * c, -0.3 * c, 1e-3, -2e-3 * k] for k in range(1, 6)]
+        # the journal outside the clearance (the state check), and a squeeze velocity at
+        # which the hybrid solver does not converge (it starts cold next time)
+        bad = {2: ("outside", [1.2 * c, 0.0, 0.0, 0.0])}
+        if model == "hybrid":
+            bad[4] = ("fast", [0.4 * c, -0.3 * c, 1e100, 0.0])
+        for k, state in enumerate(states):
+            if k in bad:
+                name, x = bad[k]
+                with contextlib.suppress(Exception):
+                    ref.evaluate(np.array([x]))
+                try:
+                    fmu.evaluate(np.array([x]))
+                    out["errors"][name] = None
+                except FmuError as exc:
+                    out["errors"][name] = exc.reason
+            x = np.array([state])
+            same = all(np.array_equal(a, b) for a, b in zip(ref.evaluate(x), fmu.evaluate(x),
+                                                             strict=True))
+            out["same"].append(bool(same))
+        out["calls"] = dict(calls)
+        s = fmu.slaves[0]
+        out["n_solves"] = int(s.fmu.getInteger([s.vr["n_solves"]])[0])
+    finally:
+        for name, f in originals.items():
+            setattr(BearingSlave, name, f)
+        fmu.close()
+    return out
+
+
+PROBES = probes_of(error_and_state_round_trip, linear_freeze, many_instances, native_law)
 
 
 def main(argv: list[str] | None = None) -> None:
