@@ -24,14 +24,17 @@ runs with and without them). A third run times the compiled kernels alone (:data
 the structure's step, the hybrid bearing, the master's update) and prints the ratio of the
 total to their sum: what is left is Python and, through FMUs, the FMI layer. In-process the
 master takes most steps in compiled calls of many steps each (:mod:`orchestrator.coupling.
-fused`, timed as one line with the Python around them); the third run uses the master's
-Python loop, whose kernels can be timed apart.
+fused`, timed as one line with the Python around them), and through FMUs the bearing FMUs'
+native layer calls the hybrid law without Python (``fmu_src/native/patches/0011-native-
+bearing-law.patch``, timed within "bearing evaluation"); the third run uses the master's
+Python loop and the bearing FMUs' Python, whose kernels can be timed apart.
 """
 
 from __future__ import annotations
 
 import argparse
 import contextlib
+import importlib
 import platform
 import tempfile
 import time
@@ -123,18 +126,24 @@ def timed_calls(targets=TIMED, counts: dict | None = None):
 @contextlib.contextmanager
 def python_loop():
     """The master's Python loop instead of its compiled step (:mod:`orchestrator.coupling.
-    fused`), whose kernels cannot be timed one by one."""
-    try:
-        from orchestrator.coupling.fused import FusedStep
-    except ModuleNotFoundError:  # a commit without it
+    fused`), and the bearing FMUs' law through their Python instead of their native layer
+    (``fmu_src/native/patches/0011-native-bearing-law.patch``): the kernels these call
+    without Python cannot be timed one by one."""
+    with contextlib.ExitStack() as undo:
+        for module, owner, name, value in (
+                ("orchestrator.coupling.fused", "FusedStep", "fits",
+                 staticmethod(lambda *a: False)),
+                ("fmu_src.slaves.bearing", "BearingSlave", "_fmi_native_law",
+                 lambda self: None)):
+            try:
+                cls = getattr(importlib.import_module(module), owner)
+            except (ModuleNotFoundError, AttributeError):  # a commit without it
+                continue
+            if name not in cls.__dict__:
+                continue
+            undo.callback(setattr, cls, name, cls.__dict__[name])
+            setattr(cls, name, value)
         yield
-        return
-    fits = FusedStep.__dict__["fits"]
-    FusedStep.fits = staticmethod(lambda *a: False)
-    try:
-        yield
-    finally:
-        FusedStep.fits = fits
 
 
 def breakdown(periods: int, in_process: bool) -> None:
