@@ -79,7 +79,7 @@ def test_the_hybrid_law_is_served_without_python_with_the_same_bits(fmu_dir, mod
     serves the calls with the compiled law once the slave has evaluated it: the slave's Python
     sees the first evaluation, each failure (to raise and log it) and the evaluation after it
     (which arms the library again): 3 sets and 5 reads of the 16 calls. The other models have
-    no compiled law: Python serves all 14."""
+    no compiled law: Python serves all 14. The same after fmi2Reset."""
     out = run_here(module=PROBES, args=["native_law", {
         "fmu": fmu_dir / (bearing_fmu_name(model) + ".fmu"), "model": model}])
     assert out["same"] == [True] * 6, out
@@ -92,6 +92,11 @@ def test_the_hybrid_law_is_served_without_python_with_the_same_bits(fmu_dir, mod
     expected = dict(set_real=3, get_real=5) if model == "hybrid" else dict(set_real=7,
                                                                            get_real=7)
     assert out["calls"] == expected
+    # after fmi2Reset (a new slave) the same again: the library asks the new slave for its
+    # buffer; it serves the calls once the slave has evaluated the law (2 of 6 in Python)
+    assert out["after_reset"] == [True] * 3, out
+    assert out["calls_after_reset"] == (dict(set_real=1, get_real=1) if model == "hybrid"
+                                        else dict(set_real=3, get_real=3))
 
 
 def test_fmu_error_is_reported_not_fatal_and_state_round_trips(fmu_dir):

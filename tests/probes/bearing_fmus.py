@@ -120,6 +120,18 @@ def native_law(fmu: str, model: str) -> dict:
         out["calls"] = dict(calls)
         s = fmu.slaves[0]
         out["n_solves"] = int(s.fmu.getInteger([s.vr["n_solves"]])[0])
+        # fmi2Reset: a new slave, whose buffer the library asks for again
+        s.fmu.reset()
+        s.fmu.setupExperiment(startTime=0.0)
+        s.fmu.enterInitializationMode()
+        s.set({k: v for k, v in params.items() if k in s.vr} | {"omega": 54.0})
+        ref = ModelBearings([model_class(model).from_parameters(
+            BearingData(0.09, 0.065, c, 0.0288))], [LocalFrame(0.3, -1)], [54.0])
+        calls.update(set_real=0, get_real=0)
+        out["after_reset"] = [bool(all(np.array_equal(a, b) for a, b in zip(
+            ref.evaluate(x), fmu.evaluate(x), strict=True)))
+            for x in (np.array([state]) for state in states[:3])]
+        out["calls_after_reset"] = dict(calls)
     finally:
         for name, f in originals.items():
             setattr(BearingSlave, name, f)
