@@ -30,9 +30,11 @@ from bearing_fmu.hybrid import _workspace as _ws
 from bearing_fmu.hybrid._kernels import hybrid_global
 from bearing_fmu.hybrid.axial import AXIAL_COEF
 
-__all__ = ["CTX_SIZE", "IO_SIZE", "LAYOUT", "NOT_FINITE", "fill_context", "hybrid_law"]
+__all__ = ["CTX_SIZE", "IO_SIZE", "LAYOUT", "NOT_FINITE", "arm", "fill_context", "hybrid_law"]
 
-#: the layout's name: the library serves the calls natively only for a buffer it knows
+#: the layout's name: the library serves the calls natively only for a buffer it knows. The
+#: patch repeats IO_LAW, IO_DIRTY and IO_ARMED: a change of the layout changes this name there
+#: and here
 LAYOUT = "gsb-bearing-law-1"
 
 # --- the law buffer (float64) ------------------------------------------------------------------
@@ -105,10 +107,11 @@ def _law_c(ctx, io):
 hybrid_law = _law_c.address
 
 
-def fill_context(ctx: np.ndarray, model) -> None:
+def fill_context(ctx: np.ndarray, io: np.ndarray, model, q) -> None:
     """Write into ``ctx`` (int64, :data:`CTX_SIZE`) the addresses of the arrays of the
-    :class:`~bearing_fmu.hybrid.model.HybridBearing` ``model``: valid while the model lives and
-    keeps them (it never replaces them: its state is set in place)."""
+    :class:`~bearing_fmu.hybrid.model.HybridBearing` ``model``, valid while the model lives and
+    keeps them (it never replaces them: its state is set in place), and into the law buffer
+    ``io`` its frame ``q`` (q00, q01, q10, q11) and clearance."""
     arrays = {CTX_STATE: model._state, CTX_ACTIVE: model._active, CTX_WS: model._ws,
               CTX_IWS: model._iws, CTX_TRIG: model._trig, CTX_COEF: AXIAL_COEF,
               CTX_RES: model._res}
@@ -117,3 +120,13 @@ def fill_context(ctx: np.ndarray, model) -> None:
             raise ValueError(f"context slot {slot}: the array is not C-contiguous")
         ctx[slot] = a.ctypes.data
     ctx[CTX_NODES] = model.n
+    io[IO_Q:IO_Q + 4] = q
+    io[IO_C] = model.bearing.clearance
+
+
+def arm(io: np.ndarray, model) -> None:
+    """Arm the law buffer ``io`` after an evaluation of ``model`` (its context filled by
+    :func:`fill_context`): the speed and force scale of that evaluation, which the next ones
+    at the same speed use."""
+    io[IO_OMEGA], io[IO_FS] = model._scale
+    io[IO_ARMED] = 1.0

@@ -133,14 +133,10 @@ class BearingSlave(ContractSlave):
         current model at the current speed (the force scale is the one that evaluation used)."""
         if not self._native:
             return
-        io = self._io
         if self._ctx_of is not self._model:  # a new model (a few us: once per model)
-            law_buffer.fill_context(self._ctx, self._model)
-            io[law_buffer.IO_Q:law_buffer.IO_Q + 4] = self._q
-            io[law_buffer.IO_C] = self._model.bearing.clearance
+            law_buffer.fill_context(self._ctx, self._io, self._model, self._q)
             self._ctx_of = self._model
-        io[law_buffer.IO_OMEGA], io[law_buffer.IO_FS] = self._model._scale
-        io[law_buffer.IO_ARMED] = 1.0
+        law_buffer.arm(self._io, self._model)
 
     def _disarm(self) -> None:
         self._io[law_buffer.IO_ARMED] = 0.0
