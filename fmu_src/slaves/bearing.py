@@ -20,7 +20,7 @@ exchanges, learns it at the step, never from NaN read with fmi2OK. The doStep ev
 at the current inputs unless a read already has (one evaluation per input, whoever asks first).
 
 The journal state, the law and its bookkeeping live in one float64 array, the law buffer of
-:mod:`bearing_fmu.hybrid._native`. For the hybrid model the patched FMU library
+:mod:`bearing_fmu.hybrid.law_buffer`. For the hybrid model the patched FMU library
 (``fmu_src/native/patches/0011-native-bearing-law.patch``) asks the slave's
 ``_fmi_native_law`` for it once, and from then on serves the master's set of the four state
 inputs and read of the ten law outputs itself, calling the compiled law without Python, while
@@ -39,7 +39,7 @@ from pythonfmu.enums import Fmi2Status
 
 from bearing_fmu import BearingData, BearingError, model_class
 from bearing_fmu.frames import LocalFrame
-from bearing_fmu.hybrid import _native as law_buffer
+from bearing_fmu.hybrid import law_buffer
 from bearing_fmu.hybrid.model import HybridBearing
 from fmu_src.contract import (
     DAMPING_NAMES,
@@ -124,9 +124,16 @@ class BearingSlave(ContractSlave):
         law. Called once per instance; the addresses hold while the slave lives."""
         if not issubclass(model_class(self.model_name), HybridBearing):
             return None
+        try:  # compiles the C function, or loads it from numba's cache
+            from bearing_fmu.hybrid._native import hybrid_law
+        except Exception as exc:  # the Python path serves every call: say so, once
+            self.log(f"{self.instance_name}: the compiled law cannot be loaded, the law is "
+                     f"evaluated through Python (slower, the same results): "
+                     f"{describe_exception(exc)}", Fmi2Status.warning)
+            return None
         self._native = True
-        return (law_buffer.LAYOUT, law_buffer.hybrid_law, self._ctx.ctypes.data,
-                self._io.ctypes.data, tuple(self._state_vrs), tuple(self._law_vrs))
+        return (law_buffer.LAYOUT, hybrid_law, self._ctx.ctypes.data, self._io.ctypes.data,
+                tuple(self._state_vrs), tuple(self._law_vrs))
 
     def _arm(self) -> None:
         """Let the library evaluate the law itself from now on: after an evaluation of the

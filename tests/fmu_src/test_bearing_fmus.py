@@ -99,6 +99,19 @@ def test_the_hybrid_law_is_served_without_python_with_the_same_bits(fmu_dir, mod
                                         else dict(set_real=3, get_real=3))
 
 
+def test_a_hybrid_fmu_without_its_compiled_law_says_so_and_serves_in_python(fmu_dir):
+    """If the compiled law cannot be loaded (an unimportable module here), the hybrid FMU
+    logs a warning saying so and why, once per instance, and its Python serves every call
+    with the same bits."""
+    out = run_here(module=PROBES, args=["native_law", {
+        "fmu": fmu_dir / "BearingHybrid.fmu", "model": "hybrid", "without_compiled_law": True}])
+    assert out["same"] == [True] * 6 and out["after_reset"] == [True] * 3, out
+    assert out["calls"] == dict(set_real=8, get_real=8), out["calls"]
+    warnings = [m for m in out["log"] if "the compiled law cannot be loaded" in m]
+    assert len(warnings) == 1 and warnings[0].startswith("[warning]"), out["log"]
+    assert "ImportError" in warnings[0] or "ModuleNotFoundError" in warnings[0], warnings
+
+
 def test_fmu_error_is_reported_not_fatal_and_state_round_trips(fmu_dir):
     out = run_here(module=PROBES, args=["error_and_state_round_trip",
                                         {"fmu": fmu_dir / "BearingShort.fmu"}])

@@ -64,12 +64,16 @@ def many_instances(fmu: str) -> dict:
     return dict(same=bool(all(np.array_equal(f[0], g) for g in f)))
 
 
-def native_law(fmu: str, model: str) -> dict:
+def native_law(fmu: str, model: str, without_compiled_law: bool = False) -> dict:
     """The master's calls on one bearing FMU along a sequence of journal states (a frame
     turned and mirrored), with a journal outside the clearance and one where the law overflows
     among them, against the in-process model; and how many of the calls reached the slave's
     Python (``BearingSlave.set_real`` and ``get_real`` counted): the patched library serves
-    the others with the compiled law (fmu_src/native/patches/0011-native-bearing-law.patch)."""
+    the others with the compiled law (fmu_src/native/patches/0011-native-bearing-law.patch).
+    ``without_compiled_law``: as if the compiled law could not be loaded (its module made
+    unimportable); ``log`` has the FMU's messages."""
+    import sys
+
     from bearing_fmu import BearingData, model_class
     from bearing_fmu.frames import LocalFrame
     from fmu_src.slaves.bearing import BearingSlave
@@ -92,7 +96,17 @@ def native_law(fmu: str, model: str) -> dict:
                         [LocalFrame(0.3, -1)], [54.0])
     for name in calls:
         setattr(BearingSlave, name, counted(name))
-    fmu = FmuBearings([fmu], [params], [54.0])
+    native = "bearing_fmu.hybrid._native"
+    was = sys.modules.get(native)
+    if without_compiled_law:
+        sys.modules[native] = None  # import raises ImportError
+    try:
+        fmu = FmuBearings([fmu], [params], [54.0])
+    finally:
+        if without_compiled_law:
+            sys.modules.pop(native)
+            if was is not None:
+                sys.modules[native] = was
     out = {"same": [], "errors": {}}
     calls.update(set_real=0, get_real=0)  # the evaluations' calls only
     try:
@@ -132,6 +146,7 @@ def native_law(fmu: str, model: str) -> dict:
             ref.evaluate(x), fmu.evaluate(x), strict=True)))
             for x in (np.array([state]) for state in states[:3])]
         out["calls_after_reset"] = dict(calls)
+        out["log"] = list(s.messages)
     finally:
         for name, f in originals.items():
             setattr(BearingSlave, name, f)
