@@ -92,6 +92,9 @@ def test_the_hybrid_law_is_served_without_python_with_the_same_bits(fmu_dir, mod
     expected = dict(set_real=3, get_real=5) if model == "hybrid" else dict(set_real=7,
                                                                            get_real=7)
     assert out["calls"] == expected
+    # a journal state that is not finite is refused by fmi2SetReal, with the slave's message
+    assert "fmi2SetReal returned error" in out["nan"] and "not a finite number" in out["nan"]
+    assert out["same_after_nan"]
     # after fmi2Reset (a new slave) the same again: the library asks the new slave for its
     # buffer; it serves the calls once the slave has evaluated the law (2 of 6 in Python)
     assert out["after_reset"] == [True] * 3, out

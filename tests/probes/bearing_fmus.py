@@ -134,6 +134,16 @@ def native_law(fmu: str, model: str, without_compiled_law: bool = False) -> dict
         out["calls"] = dict(calls)
         s = fmu.slaves[0]
         out["n_solves"] = int(s.fmu.getInteger([s.vr["n_solves"]])[0])
+        try:  # a state that is not finite: refused by the set, in the slave's Python
+            fmu.evaluate(np.array([[np.nan, 0.0, 0.0, 0.0]]))
+            out["nan"] = None
+        except FmuError as exc:
+            out["nan"] = exc.reason
+        # the last state again (the refused set applied its finite values, as the
+        # per-variable path does): the in-process model's law
+        x = np.array([states[-1]])
+        out["same_after_nan"] = all(np.array_equal(a, b) for a, b in zip(
+            ref.evaluate(x), fmu.evaluate(x), strict=True))
         # fmi2Reset: a new slave, whose buffer the library asks for again
         s.fmu.reset()
         s.fmu.setupExperiment(startTime=0.0)
