@@ -20,18 +20,15 @@ compiler.
 
 from __future__ import annotations
 
-import shutil
 import signal
 import subprocess
 import zipfile
-from pathlib import Path
 
 import pytest
 
-from fmu_src.build.native import NATIVE_DIR
+from tests.fmu_src.c_hosts import compile_host
 from tests.helpers import probe_command, probe_env
 
-HOST_C = Path(__file__).resolve().parent / "hosts" / "exit_host.c"
 FMU = "BearingHybrid"
 STEPS = 3
 #: what a crash or a heap corruption leaves on stderr
@@ -41,20 +38,10 @@ RUNS = [pytest.param(4, id="4-runs"), pytest.param(50, id="50-runs", marks=pytes
 
 @pytest.fixture(scope="module")
 def hosts(tmp_path_factory):
-    """(the C program, the shared library) compiled from :data:`HOST_C`."""
-    cc = shutil.which("gcc") or shutil.which("cc")
-    if cc is None:
-        pytest.skip("no C compiler (gcc or cc on PATH) to build the test hosts")
+    """(the C program, the shared library) compiled from ``hosts/exit_host.c``."""
     out = tmp_path_factory.mktemp("exit_hosts")
-    include = NATIVE_DIR / "upstream" / "src"  # fmi/fmi2Functions.h
-    program, library = out / "exit_host", out / "libexit_host.so"
-    for cmd in ([cc, "-O1", "-Wall", "-DEXIT_HOST_MAIN", f"-I{include}", str(HOST_C),
-                 "-o", str(program), "-ldl"],
-                [cc, "-O1", "-Wall", "-shared", "-fPIC", f"-I{include}", str(HOST_C),
-                 "-o", str(library), "-ldl"]):
-        proc = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
-        assert proc.returncode == 0, f"{' '.join(cmd)}:\n{proc.stderr[-2000:]}"
-    return program, library
+    return (compile_host("exit_host.c", out / "exit_host", "-DEXIT_HOST_MAIN"),
+            compile_host("exit_host.c", out / "libexit_host.so", "-shared", "-fPIC"))
 
 
 @pytest.fixture(scope="module")

@@ -12,34 +12,22 @@ counted). Skipped without a C compiler.
 from __future__ import annotations
 
 import math
-import shutil
 import subprocess
 import zipfile
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-from fmu_src.build.native import NATIVE_DIR
 from fmu_src.contract import DAMPING_NAMES, FORCE_NAMES, STATE_NAMES, STIFFNESS_NAMES
+from tests.fmu_src.c_hosts import compile_host
 from tests.helpers import probe_env
 
-HOST_C = Path(__file__).resolve().parent / "hosts" / "law_host.c"
 FMU = "BearingHybrid"
 
 
 @pytest.fixture(scope="module")
 def law_host(tmp_path_factory):
-    cc = shutil.which("gcc") or shutil.which("cc")
-    if cc is None:
-        pytest.skip("no C compiler (gcc or cc on PATH) to build the test host")
-    out = tmp_path_factory.mktemp("law_host")
-    program = out / "law_host"
-    cmd = [cc, "-O1", "-Wall", f"-I{NATIVE_DIR / 'upstream' / 'src'}", str(HOST_C), "-o",
-           str(program), "-ldl"]
-    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
-    assert proc.returncode == 0, f"{' '.join(cmd)}:\n{proc.stderr[-2000:]}"
-    return program
+    return compile_host("law_host.c", tmp_path_factory.mktemp("law_host") / "law_host")
 
 
 def _reference(states):

@@ -16,32 +16,15 @@
  * shared library only). At exit they print "exit: fmi2Terminate <status>" and
  * "exit: fmi2FreeInstance done" on stdout, so that the test knows they ran.
  */
-#include <dlfcn.h>
-#include <stdarg.h>
-#include <stdio.h>
-#include <stdlib.h>
-#include <string.h>
+#define HOST_NAME "exit_host"
+#include "host.h"
 
-#include "fmi/fmi2Functions.h"
+#include <string.h>
 
 static fmi2Component instance = NULL;
 static fmi2TerminateTYPE* terminate_ = NULL;
 static fmi2FreeInstanceTYPE* free_instance = NULL;
 static int at_destructor = 0;
-
-static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status,
-                   fmi2String category, fmi2String message, ...)
-{
-    (void)env;
-    va_list args;
-    va_start(args, message);
-    fprintf(stderr, "[%s %d %s] ", name ? name : "", (int)status, category ? category : "");
-    vfprintf(stderr, message, args);
-    fprintf(stderr, "\n");
-    va_end(args);
-}
-
-static const fmi2CallbackFunctions callbacks = {logger, calloc, free, NULL, NULL};
 
 static void end_instance(void)
 {
@@ -60,13 +43,6 @@ __attribute__((destructor)) static void at_unload(void)
     if (at_destructor) end_instance();
 }
 
-#define RESOLVE(var, type, name)                                                       \
-    type* var = (type*)dlsym(lib, name);                                               \
-    if (var == NULL) {                                                                 \
-        fprintf(stderr, "exit_host: %s lacks %s\n", binary, name);                    \
-        return 2;                                                                      \
-    }
-
 #define CHECK(call)                                                                    \
     if ((call) != fmi2OK) {                                                            \
         fprintf(stderr, "exit_host: %s failed\n", #call);                             \
@@ -77,14 +53,7 @@ __attribute__((destructor)) static void at_unload(void)
 int exit_host_start(const char* folder, const char* model, const char* guid, int steps,
                     int how)
 {
-    char binary[4096], resources[4096];
-    snprintf(binary, sizeof binary, "%s/binaries/linux64/%s.so", folder, model);
-    snprintf(resources, sizeof resources, "file://%s/resources", folder);
-    void* lib = dlopen(binary, RTLD_NOW | RTLD_LOCAL);
-    if (lib == NULL) {
-        fprintf(stderr, "exit_host: %s\n", dlerror());
-        return 1;
-    }
+    OPEN_FMU(folder, model)
     RESOLVE(instantiate, fmi2InstantiateTYPE, "fmi2Instantiate")
     RESOLVE(setup, fmi2SetupExperimentTYPE, "fmi2SetupExperiment")
     RESOLVE(enter, fmi2EnterInitializationModeTYPE, "fmi2EnterInitializationMode")

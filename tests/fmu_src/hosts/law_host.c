@@ -11,33 +11,8 @@
  * its own process. The FMU's loader loads libpython; the patched library serves these calls
  * with the compiled law (fmu_src/native/patches/0011-native-bearing-law.patch).
  */
-#include <dlfcn.h>
-#include <stdarg.h>
-#include <stdio.h>
-#include <stdlib.h>
-
-#include "fmi/fmi2Functions.h"
-
-static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status,
-                   fmi2String category, fmi2String message, ...)
-{
-    (void)env;
-    va_list args;
-    va_start(args, message);
-    fprintf(stderr, "[%s %d %s] ", name ? name : "", (int)status, category ? category : "");
-    vfprintf(stderr, message, args);
-    fprintf(stderr, "\n");
-    va_end(args);
-}
-
-static const fmi2CallbackFunctions callbacks = {logger, calloc, free, NULL, NULL};
-
-#define RESOLVE(var, type, name)                                                       \
-    type* var = (type*)dlsym(lib, name);                                               \
-    if (var == NULL) {                                                                 \
-        fprintf(stderr, "law_host: %s lacks %s\n", binary, name);                     \
-        return 2;                                                                      \
-    }
+#define HOST_NAME "law_host"
+#include "host.h"
 
 int main(int argc, char** argv)
 {
@@ -46,14 +21,7 @@ int main(int argc, char** argv)
                         "<4 state vrs> <10 law vrs> <states, 4 numbers each>\n");
         return 64;
     }
-    char binary[4096], resources[4096];
-    snprintf(binary, sizeof binary, "%s/binaries/linux64/%s.so", argv[1], argv[2]);
-    snprintf(resources, sizeof resources, "file://%s/resources", argv[1]);
-    void* lib = dlopen(binary, RTLD_NOW | RTLD_LOCAL);
-    if (lib == NULL) {
-        fprintf(stderr, "law_host: %s\n", dlerror());
-        return 1;
-    }
+    OPEN_FMU(argv[1], argv[2])
     RESOLVE(instantiate, fmi2InstantiateTYPE, "fmi2Instantiate")
     RESOLVE(setup, fmi2SetupExperimentTYPE, "fmi2SetupExperiment")
     RESOLVE(enter, fmi2EnterInitializationModeTYPE, "fmi2EnterInitializationMode")
