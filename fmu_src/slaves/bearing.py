@@ -84,7 +84,8 @@ class BearingSlave(ContractSlave):
             "damping at the journal state, global frame, SI units (Baguet & Jacquenot 2010)."
         )
         variables = bearing_variables()
-        # the parameters and omega; the journal state, the law and n_solves are in _io
+        # the parameters and omega; the journal state, the law, the state it was evaluated at
+        # and n_solves are in _io (the law buffer)
         self._values = {v.name: v.start for v in variables if v.name not in _IN_BUFFER}
         self._io = np.zeros(law_buffer.IO_SIZE)
         self._io[law_buffer.IO_DIRTY] = 1.0
