@@ -287,7 +287,6 @@ class BearingSlave(ContractSlave):
             _check_finite(law, s)
         io[_EVAL] = s
         io[law_buffer.IO_SOLVES] += 1.0
-        self._eccentricity()
         self._arm()
 
     # --- FMI life cycle -----------------------------------------------------------------------

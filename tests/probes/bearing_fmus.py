@@ -91,9 +91,13 @@ def native_law(fmu: str, model: str, without_compiled_law: bool = False) -> dict
 
     c = 110e-6
     params = dict(D=0.09, L=0.065, C=c, mu=0.0288, frame_angle=0.3, rotation_sign=-1)
-    ref = ModelBearings([model_class(model).from_parameters(BearingData(0.09, 0.065, c,
-                                                                        0.0288))],
-                        [LocalFrame(0.3, -1)], [54.0])
+
+    def reference():  # the in-process model, cold
+        bearing = BearingData(0.09, 0.065, c, 0.0288)
+        return ModelBearings([model_class(model).from_parameters(bearing)],
+                             [LocalFrame(0.3, -1)], [54.0])
+
+    ref = reference()
     for name in calls:
         setattr(BearingSlave, name, counted(name))
     native = "bearing_fmu.hybrid._native"
@@ -149,8 +153,7 @@ def native_law(fmu: str, model: str, without_compiled_law: bool = False) -> dict
         s.fmu.setupExperiment(startTime=0.0)
         s.fmu.enterInitializationMode()
         s.set({k: v for k, v in params.items() if k in s.vr} | {"omega": 54.0})
-        ref = ModelBearings([model_class(model).from_parameters(
-            BearingData(0.09, 0.065, c, 0.0288))], [LocalFrame(0.3, -1)], [54.0])
+        ref = reference()
         calls.update(set_real=0, get_real=0)
         out["after_reset"] = [bool(all(np.array_equal(a, b) for a, b in zip(
             ref.evaluate(x), fmu.evaluate(x), strict=True)))
