@@ -24,6 +24,14 @@ pythonfmu callback would be fatal for the instance and its host. A step that can
 (a Newton iteration that does not converge, a step longer than :data:`MAX_STEP_MESH_PERIODS`
 mesh periods) leaves the structure at no computed state: its outputs then read fmi2Error and
 further steps are refused until ``fmi2SetFMUstate`` restores a saved state.
+
+The slave keeps the 56 law inputs and the 16 journal outputs in one float64 array, the *I/O
+buffer* (layout: the ``IO_*`` constants), and answers ``_fmi_native_io`` with its address. The
+patched FMU library (``fmu_src/native/patches/0012-native-structure-io.patch``) then serves the
+master's two calls around each doStep itself: fmi2SetReal of the 56 law inputs (finite values)
+while the slave is stepping (the laws act at the next doStep only), and fmi2GetReal of the 16
+journal outputs while the buffer holds those of the current state (a doStep computes them).
+Neither enters Python; every other call does, and reads and writes the same buffer.
 """
 
 from __future__ import annotations
@@ -55,7 +63,7 @@ from fmu_src.slaves.support import (
 from fmu_src.state_codec import StateArrays, StateFormatError, nest
 from fmu_src.states import structure_state_arrays, structure_state_from_arrays
 
-__all__ = ["CASE_RESOURCE", "GearShaftSlave"]
+__all__ = ["CASE_RESOURCE", "IO_LAYOUT", "GearShaftSlave"]
 
 #: the case an FMU carries, in its resources
 CASE_RESOURCE = "case.toml"
@@ -64,6 +72,16 @@ _LAWS = law_input_names()
 _OUTPUTS = [*journal_output_names(), *(f"omega_{j}" for j in range(1, 5)),
             *(name for name, _, _ in GEAR_OUTPUTS)]
 _SUPPORT = support_load_names()
+
+#: the I/O buffer's layout (module docstring): the library serves the calls natively only for
+#: a buffer it knows; the patch repeats the indices, and a change of them changes this name
+#: there and here
+IO_LAYOUT = "gsb-structure-io-1"
+IO_LAWS = 0  # 0-55: the law inputs (order of fmu_src.contract.law_input_names)
+IO_JOURNALS = 56  # 56-71: the journal outputs (order of fmu_src.contract.journal_output_names)
+IO_LAWS_ARMED = 72  # 1.0: stepping, so the library may write the laws
+IO_JOURNALS_VALID = 73  # 1.0: IO_JOURNALS are the outputs of the current state (no failure)
+IO_SIZE = 74
 _NAN_OUTPUTS = [math.nan] * len(_OUTPUTS)
 _FLAGS = ("dirty", "failed")
 #: the kind tag of this slave's serialised states (fmu_src.state_codec)
@@ -94,13 +112,15 @@ class GearShaftSlave(ContractSlave):
         variables = gear_variables(self._base)
         starts = {v.name: v.start for v in variables}
         self._overrides: dict = {}  # case field -> value set through a parameter
-        self._laws = [float(starts[n]) for n in _LAWS]  # never rebound: setters hold it
+        self._io = np.zeros(IO_SIZE)  # the I/O buffer (module docstring)
+        self._laws = self._io[IO_LAWS:IO_LAWS + len(_LAWS)]  # never rebound: setters hold it
+        self._laws[:] = [float(starts[n]) for n in _LAWS]
         self._outputs = list(_NAN_OUTPUTS)
         self._iterations = 0
         self._support: list | None = None
         self._cycle = StructureCycle(self._build_structure)  # phases shared with in-process
         self._start_time = 0.0
-        self._dirty = True  # outputs must be recomputed from the structure
+        self._dirty_outputs = True  # outputs must be recomputed from the structure
         self._failed = False  # the last output computation failed
         self._error: str | None = None  # a failure that forbids stepping (build, initialisation)
         self._register_all(variables)
@@ -140,6 +160,45 @@ class GearShaftSlave(ContractSlave):
         self._law_vrs = [vr[n] for n in _LAWS]
         self._journal_vrs = [vr[n] for n in _OUTPUTS[:16]]
 
+    def _fmi_native_io(self):
+        """What the patched library needs to serve the law inputs and the journal outputs
+        itself (module docstring): ``(layout, buffer address, law value references, journal
+        value references)``. Called once per instance; the address holds while the slave
+        lives (the buffer is never replaced)."""
+        return (IO_LAYOUT, self._io.ctypes.data, tuple(self._law_vrs), tuple(self._journal_vrs))
+
+    @property
+    def _dirty(self) -> bool:
+        """The outputs must be recomputed from the structure (then the buffer's journal outputs
+        are not those of the current state either)."""
+        return self._dirty_outputs
+
+    @_dirty.setter
+    def _dirty(self, dirty: bool) -> None:
+        self._dirty_outputs = dirty
+        if dirty:
+            self._io[IO_JOURNALS_VALID] = 0.0
+
+    def _arm_laws(self) -> None:
+        """Let the library write the laws while stepping: they then act at the next doStep
+        only (set_real), so a set changes nothing else. Called after every phase change."""
+        self._io[IO_LAWS_ARMED] = 1.0 if self._cycle.stepping else 0.0
+
+    def _take_outputs(self, outputs: list) -> None:
+        """``outputs`` (finite) as the current state's, the journal ones in the buffer too."""
+        self._outputs = outputs
+        self._failed = False
+        self._dirty = False
+        self._io[IO_JOURNALS:IO_JOURNALS + 16] = outputs[:16]
+        self._io[IO_JOURNALS_VALID] = 1.0
+
+    def _fail_outputs(self) -> None:
+        """No outputs: they read NaN with fmi2Error until the structure has a state again."""
+        self._outputs = list(_NAN_OUTPUTS)
+        self._failed = True
+        self._dirty = False
+        self._io[IO_JOURNALS_VALID] = 0.0
+
     # The master sets all 56 law inputs and reads the 16 journal states in one call each:
     # served without the per-variable loop (same checks and effect, several times cheaper).
     def set_real(self, vrs, values):
@@ -151,7 +210,7 @@ class GearShaftSlave(ContractSlave):
             laws = self._laws
             if self._cycle.stepping:
                 laws[:] = values
-            elif laws != values:
+            elif laws.tolist() != values:
                 laws[:] = values
                 self._cycle.laws_changed()
                 self._dirty = True
@@ -169,13 +228,14 @@ class GearShaftSlave(ContractSlave):
 
     def _reset_structure(self) -> None:
         self._cycle.reset()
+        self._arm_laws()
         self._support = None
         self._dirty = True
         self._error = None
 
     def _law_getter(self, i):
         laws = self._laws
-        return lambda: laws[i]
+        return lambda: float(laws[i])
 
     def _law_setter(self, i):
         laws = self._laws
@@ -237,25 +297,27 @@ class GearShaftSlave(ContractSlave):
             st = self._ensure_structure()
             if self._cycle.needs_static:
                 self._solve_static()
-            if st.mesh_state is None:
-                raise RuntimeError("the structure has no solution yet (no static solution)")
-            ms = st.mesh_state
-            outputs = [*st.journal_states().ravel().tolist(),
-                       *self._speeds,
-                       float(ms.total_load), float(ms.transmission_error),
-                       *st.gear_displacements()[:, :2].ravel().tolist()]  # u, v of each
-            if not math.isfinite(sum(outputs)):  # finite terms may overflow the sum
-                bad = [n for n, x in zip(_OUTPUTS, outputs, strict=True) if not math.isfinite(x)]
-                if bad:
-                    raise FloatingPointError(f"outputs not finite: {', '.join(bad)}")
-            self._outputs = outputs
-            self._failed = False
+            self._take_outputs(self._outputs_of(st))
         except Exception as exc:  # anything raised here would be fatal for the host
             what = "static solution" if not self._cycle.stepping else "outputs"
             self.output_failed(f"{what} failed", exc)
-            self._outputs = list(_NAN_OUTPUTS)
-            self._failed = True
-        self._dirty = False
+            self._fail_outputs()
+
+    def _outputs_of(self, st) -> list:
+        """The outputs of the structure's current state, in the order of ``_OUTPUTS``; raises
+        when it has no solution or an output is not finite."""
+        if st.mesh_state is None:
+            raise RuntimeError("the structure has no solution yet (no static solution)")
+        ms = st.mesh_state
+        outputs = [*st.journal_states().ravel().tolist(),
+                   *self._speeds,
+                   float(ms.total_load), float(ms.transmission_error),
+                   *st.gear_displacements()[:, :2].ravel().tolist()]  # u, v of each
+        if not math.isfinite(sum(outputs)):  # finite terms may overflow the sum
+            bad = [n for n, x in zip(_OUTPUTS, outputs, strict=True) if not math.isfinite(x)]
+            if bad:
+                raise FloatingPointError(f"outputs not finite: {', '.join(bad)}")
+        return outputs
 
     def _compute_support(self) -> None:
         try:
@@ -282,6 +344,7 @@ class GearShaftSlave(ContractSlave):
         except Exception as exc:  # anything raised here would be fatal for the host
             self._cycle.phase = Phase.STEPPING  # steps are refused with the reason
             self._error = self.output_failed("initialisation failed", exc)
+        self._arm_laws()
         self._dirty = True
 
     def do_step(self, current_time, step_size):
@@ -308,12 +371,13 @@ class GearShaftSlave(ContractSlave):
             if st is not None and self._cycle.stepping:  # the structure is at no computed state
                 if self._error is None:
                     self._error = failed
-                self._outputs = list(_NAN_OUTPUTS)
-                self._failed = True
-                self._dirty = False
+                self._fail_outputs()
             return False
         self._iterations = info.iterations
-        self._dirty = True
+        try:  # computed now, so that the library serves the master's read of the journals
+            self._take_outputs(self._outputs_of(st))
+        except Exception:  # the read computes them again and reports why, with its status
+            self._dirty = True
         return True
 
     # --- FMU state ----------------------------------------------------------------------------
@@ -322,7 +386,7 @@ class GearShaftSlave(ContractSlave):
         return {
             "overrides": dict(self._overrides),
             "structure": None if st is None else st.get_state(),
-            "laws": list(self._laws),
+            "laws": self._laws.tolist(),
             "outputs": list(self._outputs),
             "iterations": self._iterations,
             "phase": self._cycle.phase.name,
@@ -333,6 +397,7 @@ class GearShaftSlave(ContractSlave):
         }
 
     def _set_fmu_state(self, state):
+        self._io[IO_JOURNALS_VALID] = 0.0  # until the state is restored
         try:
             overrides = state["overrides"]
             if overrides != self._overrides:
@@ -360,11 +425,17 @@ class GearShaftSlave(ContractSlave):
             self._outputs = list(state["outputs"])
             self._iterations = state["iterations"]
             cycle.phase = Phase[state["phase"]]
+            self._arm_laws()
             self._dirty = state["dirty"]
             self._failed = state["failed"]
             self._error = state["error"]
+            if not (self._dirty or self._failed):
+                self._take_outputs(self._outputs)
+            else:
+                self._io[IO_JOURNALS_VALID] = 0.0
         except Exception as exc:  # anything raised here would be fatal for the host
             self._error = self.output_failed("cannot restore the FMU state", exc)
+            self._arm_laws()
             return FMI_ERROR
         return None
 

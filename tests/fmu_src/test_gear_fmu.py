@@ -135,6 +135,31 @@ def test_master_through_the_fmu_equals_master_in_process(comparison):
     assert its[0] == its[1] and max(its[0]) >= 2  # rollbacks (set_state) happened
 
 
+
+def test_the_laws_and_journals_are_served_without_python_with_the_same_bits(gear_fmu):
+    """The patched library serves the master's set of the 56 law inputs (while stepping) and
+    its read of the 16 journal outputs (those of the current state) from the slave's buffer;
+    what it does not serve reaches the slave's Python, whose calls are counted. Along the way
+    the journals equal the in-process structure's bit for bit."""
+    out = run_here(module=PROBES, args=["native_io", {"fmu": gear_fmu, "case": CASE}])
+    assert len(out["same"]) == 2 + 12 + 3 + 1 + 3 + 1 + 1 + 2 + 4 and all(out["same"])
+    calls = out["calls"]
+    # initialisation: each set makes the static solution stale, each solve reads in Python;
+    # the second read of a solution is the library's
+    assert calls["initialisation"] == {"set_real": 2, "get_real": 2}
+    # stepping: none, through steps, a restored state and the steps after it
+    assert calls["steps"] == {"set_real": 0, "get_real": 0}
+    assert calls["restored"] == {"set_real": 0, "get_real": 0}
+    # laws with a NaN go to the slave, which refuses them (none applied: the step after it
+    # takes the laws set before)
+    assert calls["nan"] == {"set_real": 1, "get_real": 0}
+    assert "C_ts_2 is not a finite number (no input applied)" in out["nan"]
+    # after a failed step the journals read fmi2Error in Python, until a state is restored
+    assert calls["failure"] == {"set_real": 0, "get_real": 1}
+    assert "reading the journal states (status error)" in out["after_failure"]
+    # fmi2Reset makes a new slave: the library serves it as the first
+    assert calls["after_reset"] == {"set_real": 2, "get_real": 2}
+
 def test_a_checked_case_reaches_the_fmu_unchanged(tmp_path):
     """Case.to_toml: a Case with overrides written as a case file reloads to the same values."""
     from fmu_src.case import load_case

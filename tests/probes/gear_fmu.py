@@ -4,6 +4,7 @@ bearing laws (run in the test's process)."""
 
 from __future__ import annotations
 
+import contextlib
 import math
 
 import numpy as np
@@ -200,7 +201,129 @@ def failures(fmu: str) -> dict:
     return dict(msgs=msgs, same=same, n=structure.n_steps)
 
 
-PROBES = probes_of(refuse_bad_values, comparison, failures)
+def native_io(fmu: str, case: str) -> dict:
+    """The master's calls on the gear-shaft FMU (the 56 law inputs set, a doStep, the 16
+    journal outputs read), beside the in-process structure with the same laws, and how many
+    of the sets and reads reached the slave's Python (``GearShaftSlave.set_real`` and
+    ``get_real`` counted): the patched library serves the others from the slave's buffer
+    (fmu_src/native/patches/0012-native-structure-io.patch). Along: initialisation (static
+    solutions), steps with alternating laws, a restored state, laws with a NaN, a failed step,
+    and fmi2Reset."""
+    from bearing_fmu.affine import AffineLaws
+    from fmu_src import description
+    from fmu_src.case import load_case
+    from fmu_src.slaves.gear_shaft import GearShaftSlave
+    from orchestrator.coupling.fmi import FmuError, FmuStructure
+    from orchestrator.coupling.inprocess import InProcessStructure
+
+    calls = {"set_real": 0, "get_real": 0}
+    originals = {name: GearShaftSlave.__dict__[name] for name in calls}
+
+    def counted(name):
+        def call(self, *args):
+            calls[name] += 1
+            return originals[name](self, *args)
+        return call
+
+    def count() -> dict:
+        out = dict(calls)
+        calls.update(set_real=0, get_real=0)
+        return out
+
+    law_a, law_b = laws()
+    case = load_case(case)
+    r = {"same": [], "calls": {}}
+
+    def start(structure, ref):
+        for law in (law_b, law_a):  # two static solutions, as the master's iteration
+            ref.set_bearing_laws(law)
+            structure.set_bearing_laws(law)
+            ref.solve_static()
+            structure.solve_static()
+            r["same"].append(bool((structure.journal_states() == ref.journal_states()).all()))
+        ref.exit_initialization()
+        structure.exit_initialization()
+
+    def steps(structure, ref, t, n):
+        for k in range(n):
+            law = law_a if k % 2 else law_b
+            ref.set_bearing_laws(law)
+            structure.set_bearing_laws(law)
+            ref.do_step(t, dt)
+            structure.do_step(t, dt)
+            t += dt
+            r["same"].append(bool((structure.journal_states() == ref.journal_states()).all()))
+        return t
+
+    for name in calls:
+        setattr(GearShaftSlave, name, counted(name))
+    structure = FmuStructure(fmu)
+    try:
+        ref = InProcessStructure(description.structure(case))
+        dt = ref.structure.mesh_period / 32
+        count()
+        start(structure, ref)
+        r["calls"]["initialisation"] = count()
+        t = steps(structure, ref, 0.0, 12)
+        r["calls"]["steps"] = count()
+        # a restored state: its journals, then the same steps again
+        saved, rsaved = structure.get_state(), ref.get_state()
+        steps(structure, ref, t, 3)
+        structure.set_state(saved)
+        ref.set_state(rsaved)
+        r["same"].append(bool((structure.journal_states() == ref.journal_states()).all()))
+        t = steps(structure, ref, t, 3)
+        r["calls"]["restored"] = count()
+        # laws with a NaN: refused by the set, in the slave's Python, none applied
+        structure.set_bearing_laws(law_a)
+        bad = AffineLaws(law_a.f0, law_a.kb, law_a.cb.copy())
+        bad.cb[1, 1, 0] = math.nan
+        try:
+            structure.set_bearing_laws(bad)
+            r["nan"] = None
+        except FmuError as exc:
+            r["nan"] = str(exc)
+        structure.do_step(t, dt)  # with the laws set before (law_a)
+        ref.set_bearing_laws(law_a)
+        ref.do_step(t, dt)
+        t += dt
+        r["same"].append(bool((structure.journal_states() == ref.journal_states()).all()))
+        r["calls"]["nan"] = count()
+        # a failed step: the journals read fmi2Error, in Python, until a state is restored
+        saved = structure.get_state()
+        structure.set_bearing_laws(AffineLaws(np.full((4, 2), 1e300), law_a.kb, law_a.cb))
+        with contextlib.suppress(FmuError):
+            structure.do_step(t, dt)
+        try:
+            structure.journal_states()
+            r["after_failure"] = None
+        except FmuError as exc:
+            r["after_failure"] = str(exc)
+        structure.set_state(saved)
+        ref.do_step(t, dt)
+        structure.set_bearing_laws(law_a)
+        structure.do_step(t, dt)
+        r["same"].append(bool((structure.journal_states() == ref.journal_states()).all()))
+        r["calls"]["failure"] = count()
+        # fmi2Reset: a new slave, whose buffer the library asks for again
+        f = structure.slave.fmu
+        f.reset()
+        f.setupExperiment(startTime=0.0)
+        f.enterInitializationMode()
+        structure.in_init, structure.t, structure.n_steps = True, 0.0, 0
+        ref = InProcessStructure(description.structure(case))
+        count()
+        start(structure, ref)
+        steps(structure, ref, 0.0, 4)
+        r["calls"]["after_reset"] = count()
+    finally:
+        for name, f in originals.items():
+            setattr(GearShaftSlave, name, f)
+        structure.close()
+    return r
+
+
+PROBES = probes_of(refuse_bad_values, comparison, failures, native_io)
 
 
 def main(argv: list[str] | None = None) -> None:
