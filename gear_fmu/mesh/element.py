@@ -115,6 +115,8 @@ def transmission_error(base_radius, q):
     ``q`` (..., 12) [m, rad] (rotations about the shaft axes: DOF 5 of each node, pinion
     first), base radii ``(r_b1, r_b2)`` [m]; a number for one state, an array for several."""
     rb1, rb2 = base_radius
+    if q.ndim == 1:  # one state: numbers, not 0-d arrays (the same arithmetic, faster)
+        return float(rb1 * q[5] + rb2 * q[11])
     return rb1 * q[..., 5] + rb2 * q[..., 11]
 
 
