@@ -190,6 +190,7 @@ class Structure:
         self.locate_contact = bool(locate_contact) and hasattr(mesh, "event_angles")
         self._m_gear = None  # M^-1 restricted to the gear-node columns, when first needed
         self._events = None  # the contact events (gear_fmu.step.events), when first needed
+        self._last_pieces = None  # (t, dt, pieces) of the last step (_pieces)
         #: the mesh's constant arrays for the compiled step (gear_fmu.step.kernel), or None:
         #: the Python loop of gear_fmu.step.contact_loop serves any other mesh object
         self._mesh_arrays = mesh.kernel_arrays() if isinstance(mesh, MeshElement) else None
@@ -300,6 +301,7 @@ class Structure:
         self._f_const = f  # static part of F0(t)
         self._f_c = np.ascontiguousarray(f[:NC])
         self._omega = shaft_speeds(ld, sys_.teeth)
+        self._last_pieces = None  # the mesh angles move with the speeds
         self._unb = unbalance_amplitudes(sys_.shaft_masses, ld.unbalance, self._omega)
         # [M1 e1 omega^2, M2 e2 omega_2^2, omega, omega_2]: Eq. (10) inside the compiled step
         self._unb_coef = np.array([*self._unb, *self._omega], dtype=float)
@@ -443,14 +445,21 @@ class Structure:
         """``[(h [s], end time [s], mesh angle of the sub-step [rad], angle after its event
         [rad] or None)]`` of a step of dt from ``t`` [s] (default: the structure's time)
         (:meth:`gear_fmu.step.events.ContactEvents.pieces`; one piece without contact
-        location)."""
+        location). The last step's are kept: a coupled step is computed again from the same
+        t at each iteration of the master."""
         t = self.t if t is None else t
+        last = self._last_pieces
+        if last is not None and last[0] == t and last[1] == dt:
+            return last[2]
         if not self.locate_contact:
             t1 = t + dt
-            return [(dt, t1, self.pinion_angle(t1), None)]
-        if self._events is None:
-            self._events = ContactEvents(self.mesh, self.pinion_angle)
-        return self._events.pieces(t, dt)
+            pieces = [(dt, t1, self.pinion_angle(t1), None)]
+        else:
+            if self._events is None:
+                self._events = ContactEvents(self.mesh, self.pinion_angle)
+            pieces = self._events.pieces(t, dt)
+        self._last_pieces = (t, dt, pieces)
+        return pieces
 
     def _contact_event(self, angle: float) -> None:
         """Xdd, contact set and mesh state after a contact event: the mesh evaluated at pinion
