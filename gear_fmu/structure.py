@@ -85,6 +85,12 @@ _NO_SET = np.zeros(0, dtype=np.bool_)  # no contact set known
 MAX_PIECES = 4
 _SLOTS = 4  # the sub-step slots of the compiled call (orchestrator.coupling.fused)
 _NO_ERRORS = np.zeros((_SLOTS, 12))
+#: where :meth:`Structure.state_outputs` takes its values in ``[x[:NC], v[:NC]]``: at each
+#: bearing node 1-4 u, v, udot, vdot (global s, t), then u, v of the pinion and gear nodes
+_STATE_OUTPUTS = np.array([*(k for j in range(4) for k in (N_GEAR + 2 * j, N_GEAR + 2 * j + 1,
+                                                          NC + N_GEAR + 2 * j,
+                                                          NC + N_GEAR + 2 * j + 1)),
+                           0, 1, 6, 7])
 
 
 @dataclass(frozen=True)
@@ -660,14 +666,18 @@ class Structure:
     # ------------------------------------------------------------------ outputs
     def journal_states(self) -> np.ndarray:
         """(4, 4) [u, v, udot, vdot] at bearing nodes 1-4, global (s, t) frame [m, m/s]."""
-        out = np.empty((4, 4))
-        out[:, :2] = self.x[N_GEAR:NC].reshape(4, 2)
-        out[:, 2:] = self.v[N_GEAR:NC].reshape(4, 2)
-        return out
+        xv = np.concatenate((self.x[:NC], self.v[:NC]))
+        return xv.take(_STATE_OUTPUTS[:16]).reshape(4, 4)
 
     def gear_displacements(self) -> np.ndarray:
         """(2, 6) DOFs (u, v, w, phi, psi, theta) of the pinion and gear nodes."""
         return self.x[:N_GEAR].reshape(2, 6).copy()
+
+    def state_outputs(self) -> list[float]:
+        """:meth:`journal_states` (16, row by row) then u, v of the pinion and gear nodes (4,
+        :meth:`gear_displacements`) as a list: what an FMU outputs at every step, in one
+        gather [m, m/s]."""
+        return np.concatenate((self.x[:NC], self.v[:NC])).take(_STATE_OUTPUTS).tolist()
 
     def mesh_force(self) -> float:
         """Total normal mesh force of the current state [N]."""

@@ -309,10 +309,9 @@ class GearShaftSlave(ContractSlave):
         if st.mesh_state is None:
             raise RuntimeError("the structure has no solution yet (no static solution)")
         ms = st.mesh_state
-        outputs = [*st.journal_states().ravel().tolist(),
-                   *self._speeds,
-                   float(ms.total_load), float(ms.transmission_error),
-                   *st.gear_displacements()[:, :2].ravel().tolist()]  # u, v of each
+        values = st.state_outputs()  # the journal states, then u, v of the gear nodes
+        outputs = [*values[:16], *self._speeds, float(ms.total_load),
+                   float(ms.transmission_error), *values[16:]]
         if not math.isfinite(sum(outputs)):  # finite terms may overflow the sum
             bad = [n for n, x in zip(_OUTPUTS, outputs, strict=True) if not math.isfinite(x)]
             if bad:
