@@ -385,7 +385,7 @@ class GearShaftSlave(ContractSlave):
         return {
             "overrides": dict(self._overrides),
             "structure": None if st is None else st.get_state(),
-            "laws": self._laws.tolist(),
+            "laws": self._laws.copy(),
             "outputs": list(self._outputs),
             "iterations": self._iterations,
             "phase": self._cycle.phase.name,
@@ -464,7 +464,7 @@ class GearShaftSlave(ContractSlave):
     @classmethod
     def _state_from_arrays(cls, arrays: StateArrays):
         state = {"overrides": overrides_from_arrays(arrays),
-                 "laws": arrays.array("laws", "float64", (len(_LAWS),)).tolist(),
+                 "laws": arrays.array("laws", "float64", (len(_LAWS),)),
                  "outputs": arrays.array("outputs", "float64", (len(_OUTPUTS),)).tolist(),
                  "iterations": arrays.int("iterations"),
                  "error": arrays.text("error") if arrays.has("error") else None,
