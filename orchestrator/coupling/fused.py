@@ -29,8 +29,6 @@ Python loop, after the steps of the block before the failed one are taken.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 from numba import njit
 from numba.extending import overload
@@ -45,6 +43,7 @@ from orchestrator.coupling.master import (
     RELAXATION,
     STALL,
     CouplingError,
+    StepBlock,
     StepReport,
     not_converged,
 )
@@ -204,23 +203,6 @@ def coupled_steps(n, counts, slots, mc, g_k, g_const_k, s0_k, w_k, tables, event
         k_zout[:] = zout
     return (n, relaxed_steps, total_kept, length_kept, f0, kb, cb, outcome, it, status, piece,
             k, bad, b_status, relaxed, mismatch)
-
-
-@dataclass
-class StepBlock:
-    """Steps taken by one :func:`coupled_steps` call (:meth:`FusedStep.steps`): what the
-    runner records of each accepted step, rows in step order, and the error of the step that
-    ended the block early (None when all were accepted)."""
-
-    count: int
-    states: np.ndarray  # (count, nb, 4) accepted journal states [m, m/s]
-    bearing_force: np.ndarray  # (count, nb, 2) [N]
-    mesh_force: np.ndarray  # (count,) [N]
-    transmission_error: np.ndarray  # (count,) [m]
-    gear_nodes: np.ndarray  # (count, 2, 2) u, v of the pinion and gear nodes [m]
-    iterations: np.ndarray  # (count,)
-    mismatch: float  # the last step's relative mismatch (at its acceptance, or failure)
-    error: Exception | None = None
 
 
 class FusedStep:

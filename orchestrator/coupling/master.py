@@ -59,6 +59,7 @@ __all__ = [
     "BearingSet",
     "CouplingError",
     "Master",
+    "StepBlock",
     "StepReport",
     "StructureSlave",
     "decode_checkpoint",
@@ -218,6 +219,23 @@ class StepReport:
 
 
 @dataclass
+class StepBlock:
+    """Steps taken by one call of :meth:`Master.steps`: what the runner records of each
+    accepted step, rows in step order, and the error of the step that ended the block early
+    (None when all were accepted)."""
+
+    count: int
+    states: np.ndarray  # (count, nb, 4) accepted journal states [m, m/s]
+    bearing_force: np.ndarray  # (count, nb, 2) [N]
+    mesh_force: np.ndarray  # (count,) [N]
+    transmission_error: np.ndarray  # (count,) [m]
+    gear_nodes: np.ndarray  # (count, 2, 2) u, v of the pinion and gear nodes [m]
+    iterations: np.ndarray  # (count,)
+    mismatch: float  # the last step's relative mismatch (at its acceptance, or failure)
+    error: Exception | None = None
+
+
+@dataclass
 class Master:
     """Couple a structure slave with a bearing set.
 
@@ -360,29 +378,60 @@ class Master:
         raise CouplingError(not_converged(t, dt, self.max_iterations, mismatch, self.tol))
 
     @one_blas_thread
-    def steps(self, first: int, dt: float, n: int):
-        """Up to ``n`` steps of dt from step ``first`` (t = first dt [s]) in one compiled
-        call where the slaves allow it (:meth:`orchestrator.coupling.fused.FusedStep.steps`):
-        the same steps as ``n`` calls of :meth:`step`, without Python between them. A
-        :class:`~orchestrator.coupling.fused.StepBlock` of the steps taken and the error of a
-        step that failed (the steps before it taken), or None: take the next step with
-        :meth:`step`."""
+    def steps(self, first: int, dt: float, n: int) -> StepBlock | None:
+        """Up to ``n`` steps of dt from step ``first`` (t = first dt [s]): the same steps as
+        ``n`` calls of :meth:`step`, in one compiled call where the slaves allow it
+        (:meth:`orchestrator.coupling.fused.FusedStep.steps`), else by :meth:`step` in a loop
+        that gathers the structure's outputs of each step for the block. A
+        :class:`StepBlock` of the steps taken and the error of a step that failed (the steps
+        before it taken), or None: take the next step with :meth:`step`."""
         if self.laws is None:
             raise CouplingError("call solve_static() (or set laws) before the first step")
-        if self.fused is None or n < 1:
+        if n < 1:
             return None
+        if self.fused is None:
+            return self._loop_steps(dt, n, lambda k: (first + k) * dt)
         return self.fused.steps(self, first, dt, n)
 
     @one_blas_thread
-    def steps_from(self, t: float, dt: float, n: int):
+    def steps_from(self, t: float, dt: float, n: int) -> StepBlock | None:
         """:meth:`steps` from the time ``t`` [s] (the structure's) for a caller whose times
         are not whole multiples of dt (an FMU's communication steps cut into equal steps):
         the messages of a failed step k give t + k dt."""
         if self.laws is None:
             raise CouplingError("call solve_static() (or set laws) before the first step")
-        if self.fused is None or n < 1:
+        if n < 1:
             return None
+        if self.fused is None:
+            return self._loop_steps(dt, n, lambda k: t + k * dt)
         return self.fused.steps_from(self, t, dt, n)
+
+    def _loop_steps(self, dt: float, n: int, time_of) -> StepBlock:
+        """``n`` steps of :meth:`step` (step k from ``time_of(k)`` [s]) with the structure's
+        outputs after each (:meth:`StructureSlave.step_outputs`), as a block: the caller's
+        work between steps (recording a row, checking for signals) is paid once per block.
+        The first step that fails ends the block, its error in it."""
+        states, forces, mesh, te, gear, its = [], [], [], [], [], []
+        mismatch, error = math.nan, None
+        for k in range(n):
+            try:
+                report = self.step(time_of(k), dt)
+            except Exception as exc:  # handed to the caller with the rows (as FusedStep)
+                error = exc
+                break
+            mesh_force, transmission_error, gear_nodes = self.structure.step_outputs()
+            states.append(report.states)
+            forces.append(report.bearing_force)
+            mesh.append(mesh_force)
+            te.append(transmission_error)
+            gear.append(gear_nodes)
+            its.append(report.iterations)
+            mismatch = report.mismatch
+        count, nb = len(its), self.structure.n_bearings
+        return StepBlock(count, np.array(states).reshape(count, nb, 4),
+                         np.array(forces).reshape(count, nb, 2), np.array(mesh, dtype=float),
+                         np.array(te, dtype=float), np.array(gear).reshape(count, 2, 2),
+                         np.array(its, dtype=np.int64), mismatch, error)
 
 
 def not_converged(t, dt, max_iterations, mismatch, tol) -> str:

@@ -75,9 +75,10 @@ from orchestrator.run.spec import RunError, RunSpec, check_periods, with_units
 __all__ = ["RunSummary", "Runner", "resume_run", "run_case", "simulate_case",
            "stored_summary"]
 
-#: steps handed to the compiled loop at most per call
+#: steps per block at most (a compiled call in-process, the master's Python loop otherwise)
 #: (:meth:`orchestrator.coupling.master.Master.steps`): signals, the progress bar and the
-#: results file's flushes are seen between calls (128 steps of the paper's case: about 20 ms)
+#: results file's flushes are seen between calls (128 steps of the paper's case: about 20 ms
+#: in-process, 60 ms through the FMUs)
 BLOCK_STEPS = 128
 
 

@@ -6,7 +6,9 @@ gear runouts, through the relaxation (on two threads: ``test_fused``, the module
 the threaded kernel); steps that the compiled loop does not take end a block and take
 :meth:`Master.step`. The physics of the step is asserted elsewhere (the
 monolithic Newton, the golden run, the order); runs through the runner are compared with
-runs through FMUs, which never take blocks, by the FMU suites."""
+runs through FMUs by the FMU suites. Slaves the compiled loop does not take (other bearing
+models, FMUs) take blocks of the master's Python loop, which gather the steps' rows: the same
+bits and errors as single steps too."""
 
 from __future__ import annotations
 
@@ -230,3 +232,31 @@ def test_condensation_slots_that_fill_up_end_the_block_and_start_again(monkeypat
     _, _, error, in_blocks, _ = _compare(load_case("baguet2010_helical"), 32)
     assert error is None and in_blocks == 32
     assert len(clears) >= 2
+
+
+def test_blocks_of_the_python_loop_give_the_bits_of_single_steps_and_fail_alike():
+    """The short-bearing model is not compiled into the coupled step: its master's blocks are
+    :meth:`Master.step` in a loop. The same rows, counters and state as single steps; a
+    structure that fails from step 12 on (no Newton pass allowed) fails inside the second
+    block, after the eleven steps before it, with the error of a single step."""
+    case = load_case("baguet2010_spur", {"bearings.model": "short"})
+    blocked, single, error, in_blocks, long_blocks = _compare(case, 24)
+    assert blocked.fused is None and error is None
+    assert in_blocks == 24 and long_blocks == -(-24 // BLOCK)
+    _same_state(blocked, single)
+    assert _counters(blocked) == _counters(single)
+
+    def fail_from_step_12(m):
+        do_step = m.structure.do_step
+
+        def step(t, dt):
+            if t > 10.5 * dt:
+                m.structure.physics.max_iter = 0
+            return do_step(t, dt)
+        m.structure.do_step = step
+
+    blocked, single, error, in_blocks, _ = _compare(case, 24, change=fail_from_step_12)
+    assert isinstance(error, NewmarkConvergenceError)
+    assert str(error).startswith("Newmark step 12 at t = ") and "did not converge" in str(error)
+    assert in_blocks == 11 and 11 % BLOCK != 0  # inside a block
+    assert _counters(blocked) == _counters(single)
