@@ -428,10 +428,8 @@ class GearShaftSlave(ContractSlave):
             self._dirty = state["dirty"]
             self._failed = state["failed"]
             self._error = state["error"]
-            if not (self._dirty or self._failed):
+            if not (self._dirty or self._failed):  # the saved outputs are the state's
                 self._take_outputs(self._outputs)
-            else:
-                self._io[IO_JOURNALS_VALID] = 0.0
         except Exception as exc:  # anything raised here would be fatal for the host
             self._error = self.output_failed("cannot restore the FMU state", exc)
             self._arm_laws()

@@ -420,8 +420,8 @@ class Master:
                 error = exc
                 break
             mesh_force, transmission_error, gear_nodes = self.structure.step_outputs()
-            states.append(report.states)
-            forces.append(report.bearing_force)
+            states.append(report.states.copy())  # a slave may reuse its buffers
+            forces.append(report.bearing_force.copy())
             mesh.append(mesh_force)
             te.append(transmission_error)
             gear.append(gear_nodes)
