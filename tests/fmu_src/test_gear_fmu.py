@@ -136,12 +136,14 @@ def test_master_through_the_fmu_equals_master_in_process(comparison):
 
 
 
-def test_the_laws_and_journals_are_served_without_python_with_the_same_bits(gear_fmu):
+@pytest.mark.parametrize("case", [CASE, "baguet2010_helical"])
+def test_the_laws_and_journals_are_served_without_python_with_the_same_bits(gear_fmu, case):
     """The patched library serves the master's set of the 56 law inputs (while stepping) and
     its read of the 16 journal outputs (those of the current state) from the slave's buffer;
     what it does not serve reaches the slave's Python, whose calls are counted. Along the way
-    the journals equal the in-process structure's bit for bit."""
-    out = run_here(module=PROBES, args=["native_io", {"fmu": gear_fmu, "case": CASE}])
+    the journals equal the in-process structure's bit for bit (the spur case the FMU carries,
+    and the helical one set through its parameters)."""
+    out = run_here(module=PROBES, args=["native_io", {"fmu": gear_fmu, "case": case}])
     assert len(out["same"]) == 2 + 12 + 3 + 1 + 3 + 1 + 1 + 2 + 4 and all(out["same"])
     calls = out["calls"]
     # initialisation: each set makes the static solution stale, each solve reads in Python;

@@ -257,7 +257,7 @@ def native_io(fmu: str, case: str) -> dict:
 
     for name in calls:
         setattr(GearShaftSlave, name, counted(name))
-    structure = FmuStructure(fmu)
+    structure = FmuStructure(fmu, case=case)
     try:
         ref = InProcessStructure(description.structure(case))
         dt = ref.structure.mesh_period / 32
@@ -310,6 +310,7 @@ def native_io(fmu: str, case: str) -> dict:
         f.reset()
         f.setupExperiment(startTime=0.0)
         f.enterInitializationMode()
+        structure._set_case(case)  # the parameters are back at their start values
         structure.in_init, structure.t, structure.n_steps = True, 0.0, 0
         ref = InProcessStructure(description.structure(case))
         count()
