@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import shutil
 import subprocess
+import zipfile
 from pathlib import Path
 
 import pytest
@@ -26,3 +27,15 @@ def compile_host(source: str, output: Path, *flags: str) -> Path:
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0, f"{' '.join(cmd)}:\n{proc.stderr[-2000:]}"
     return output
+
+
+def unzip_fmu(fmu: Path, folder: Path):
+    """``fmu`` unzipped into ``folder`` for a C host (its Linux binary made executable): its
+    model description and its variables' value references by name."""
+    from fmpy import read_model_description
+
+    with zipfile.ZipFile(fmu) as z:
+        z.extractall(folder)
+    md = read_model_description(str(fmu))
+    (folder / "binaries" / "linux64" / f"{md.coSimulation.modelIdentifier}.so").chmod(0o755)
+    return md, {v.name: v.valueReference for v in md.modelVariables}

@@ -22,11 +22,10 @@ from __future__ import annotations
 
 import signal
 import subprocess
-import zipfile
 
 import pytest
 
-from tests.fmu_src.c_hosts import compile_host
+from tests.fmu_src.c_hosts import compile_host, unzip_fmu
 from tests.helpers import probe_command, probe_env
 
 FMU = "BearingHybrid"
@@ -47,14 +46,9 @@ def hosts(tmp_path_factory):
 @pytest.fixture(scope="module")
 def unzipped(fmu_dir, tmp_path_factory):
     """(the folder of the unzipped bearing FMU, its GUID)."""
-    from fmpy import read_model_description
-
-    fmu = fmu_dir / f"{FMU}.fmu"
     folder = tmp_path_factory.mktemp("exit_host_fmu")
-    with zipfile.ZipFile(fmu) as z:
-        z.extractall(folder)
-    (folder / "binaries" / "linux64" / f"{FMU}.so").chmod(0o755)
-    return folder, read_model_description(str(fmu)).guid
+    md, _ = unzip_fmu(fmu_dir / f"{FMU}.fmu", folder)
+    return folder, md.guid
 
 
 def _check(runs, command, env, cwd):

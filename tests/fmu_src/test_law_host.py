@@ -13,13 +13,12 @@ from __future__ import annotations
 
 import math
 import subprocess
-import zipfile
 
 import numpy as np
 import pytest
 
 from fmu_src.contract import DAMPING_NAMES, FORCE_NAMES, STATE_NAMES, STIFFNESS_NAMES
-from tests.fmu_src.c_hosts import compile_host
+from tests.fmu_src.c_hosts import compile_host, unzip_fmu
 from tests.helpers import probe_env
 
 FMU = "BearingHybrid"
@@ -55,15 +54,8 @@ def _reference(states):
 
 
 def test_a_c_host_reads_the_hybrid_law_of_the_in_process_model(law_host, fmu_dir, tmp_path):
-    from fmpy import read_model_description
-
-    fmu = fmu_dir / f"{FMU}.fmu"
     folder = tmp_path / "fmu"
-    with zipfile.ZipFile(fmu) as z:
-        z.extractall(folder)
-    (folder / "binaries" / "linux64" / f"{FMU}.so").chmod(0o755)
-    md = read_model_description(str(fmu))
-    vr = {v.name: v.valueReference for v in md.modelVariables}
+    md, vr = unzip_fmu(fmu_dir / f"{FMU}.fmu", folder)
     _, c = _reference([])
     states = [[(0.3 + 0.01 * k) * c, -0.4 * c, 1e-3 * k, -2e-3] for k in range(5)]
     states.insert(3, [1.2 * c, 0.0, 0.0, 0.0])  # outside the clearance: the read fails

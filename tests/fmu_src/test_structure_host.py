@@ -12,13 +12,12 @@ Skipped without a C compiler.
 from __future__ import annotations
 
 import subprocess
-import zipfile
 
 import numpy as np
 import pytest
 
 from fmu_src.contract import journal_output_names, law_input_names, pack_laws
-from tests.fmu_src.c_hosts import compile_host
+from tests.fmu_src.c_hosts import compile_host, unzip_fmu
 from tests.helpers import probe_env
 from tests.probes.gear_fmu import laws
 
@@ -66,15 +65,8 @@ def _reference(law_a, law_b):
 
 def test_a_c_host_steps_the_gear_fmu_as_the_in_process_structure(structure_host, fmu_dir,
                                                                   tmp_path):
-    from fmpy import read_model_description
-
-    fmu = fmu_dir / f"{FMU}.fmu"
     folder = tmp_path / "fmu"
-    with zipfile.ZipFile(fmu) as z:
-        z.extractall(folder)
-    (folder / "binaries" / "linux64" / f"{FMU}.so").chmod(0o755)
-    md = read_model_description(str(fmu))
-    vr = {v.name: v.valueReference for v in md.modelVariables}
+    md, vr = unzip_fmu(fmu_dir / f"{FMU}.fmu", folder)
     law_a, law_b = laws()
     expected, dt = _reference(law_a, law_b)
     values = []
