@@ -9,6 +9,7 @@ as one JSON line by :func:`dispatch`. No tests here.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import sys
 from collections.abc import Callable
@@ -28,3 +29,26 @@ def dispatch(probes: dict[str, Callable[..., object]], argv: list[str] | None = 
 def probes_of(*functions: Callable[..., object]) -> dict[str, Callable[..., object]]:
     """The probes of a module, by name."""
     return {f.__name__: f for f in functions}
+
+
+@contextlib.contextmanager
+def counted_calls(cls: type, names: tuple[str, ...]):
+    """The calls of the methods ``names`` of ``cls`` counted while the block runs (a slave's,
+    to tell which FMI calls reached its Python): yields ``{name: count}``, which the caller
+    may reset; the methods are restored after the block."""
+    calls = dict.fromkeys(names, 0)
+    originals = {name: cls.__dict__[name] for name in names}
+
+    def counted(name):
+        def call(self, *args):
+            calls[name] += 1
+            return originals[name](self, *args)
+        return call
+
+    for name in names:
+        setattr(cls, name, counted(name))
+    try:
+        yield calls
+    finally:
+        for name, method in originals.items():
+            setattr(cls, name, method)

@@ -7,7 +7,7 @@ import contextlib
 
 import numpy as np
 
-from tests.probes import dispatch, probes_of
+from tests.probes import counted_calls, dispatch, probes_of
 
 
 def error_and_state_round_trip(fmu: str) -> dict:
@@ -80,15 +80,6 @@ def native_law(fmu: str, model: str, without_compiled_law: bool = False) -> dict
     from orchestrator.coupling.fmi import FmuBearings, FmuError
     from orchestrator.coupling.inprocess import ModelBearings
 
-    calls = {"set_real": 0, "get_real": 0}
-    originals = {name: BearingSlave.__dict__[name] for name in calls}
-
-    def counted(name):
-        def call(self, *args):
-            calls[name] += 1
-            return originals[name](self, *args)
-        return call
-
     c = 110e-6
     params = dict(D=0.09, L=0.065, C=c, mu=0.0288, frame_angle=0.3, rotation_sign=-1)
 
@@ -98,72 +89,69 @@ def native_law(fmu: str, model: str, without_compiled_law: bool = False) -> dict
                              [LocalFrame(0.3, -1)], [54.0])
 
     ref = reference()
-    for name in calls:
-        setattr(BearingSlave, name, counted(name))
-    native = "bearing_fmu.hybrid._native"
-    was = sys.modules.get(native)
-    if without_compiled_law:
-        sys.modules[native] = None  # import raises ImportError
-    try:
-        fmu = FmuBearings([fmu], [params], [54.0])
-    finally:
+    with counted_calls(BearingSlave, ("set_real", "get_real")) as calls:
+        native = "bearing_fmu.hybrid._native"
+        was = sys.modules.get(native)
         if without_compiled_law:
-            sys.modules.pop(native)
-            if was is not None:
-                sys.modules[native] = was
-    out = {"same": [], "errors": {}}
-    calls.update(set_real=0, get_real=0)  # the evaluations' calls only
-    try:
-        states = [[0.4 * c, -0.3 * c, 1e-3, 0.0]]
-        states += [[(0.4 + 0.02 * k) * c, -0.3 * c, 1e-3, -2e-3 * k] for k in range(1, 6)]
-        # the journal outside the clearance (the state check), and a squeeze velocity at
-        # which the hybrid solver does not converge (it starts cold next time)
-        bad = {2: ("outside", [1.2 * c, 0.0, 0.0, 0.0])}
-        if model == "hybrid":
-            bad[4] = ("fast", [0.4 * c, -0.3 * c, 1e100, 0.0])
-        for k, state in enumerate(states):
-            if k in bad:
-                name, x = bad[k]
-                with contextlib.suppress(Exception):
-                    ref.evaluate(np.array([x]))
-                try:
-                    fmu.evaluate(np.array([x]))
-                    out["errors"][name] = None
-                except FmuError as exc:
-                    out["errors"][name] = exc.reason
-            x = np.array([state])
-            same = all(np.array_equal(a, b) for a, b in zip(ref.evaluate(x), fmu.evaluate(x),
-                                                             strict=True))
-            out["same"].append(bool(same))
-        out["calls"] = dict(calls)
-        s = fmu.slaves[0]
-        out["n_solves"] = int(s.fmu.getInteger([s.vr["n_solves"]])[0])
-        try:  # a state that is not finite: refused by the set, in the slave's Python
-            fmu.evaluate(np.array([[np.nan, 0.0, 0.0, 0.0]]))
-            out["nan"] = None
-        except FmuError as exc:
-            out["nan"] = exc.reason
-        # the last state again (the refused set applied its finite values, as the
-        # per-variable path does): the in-process model's law
-        x = np.array([states[-1]])
-        out["same_after_nan"] = all(np.array_equal(a, b) for a, b in zip(
-            ref.evaluate(x), fmu.evaluate(x), strict=True))
-        # fmi2Reset: a new slave, whose buffer the library asks for again
-        s.fmu.reset()
-        s.fmu.setupExperiment(startTime=0.0)
-        s.fmu.enterInitializationMode()
-        s.set({k: v for k, v in params.items() if k in s.vr} | {"omega": 54.0})
-        ref = reference()
-        calls.update(set_real=0, get_real=0)
-        out["after_reset"] = [bool(all(np.array_equal(a, b) for a, b in zip(
-            ref.evaluate(x), fmu.evaluate(x), strict=True)))
-            for x in (np.array([state]) for state in states[:3])]
-        out["calls_after_reset"] = dict(calls)
-        out["log"] = list(s.messages)
-    finally:
-        for name, f in originals.items():
-            setattr(BearingSlave, name, f)
-        fmu.close()
+            sys.modules[native] = None  # import raises ImportError
+        try:
+            fmu = FmuBearings([fmu], [params], [54.0])
+        finally:
+            if without_compiled_law:
+                sys.modules.pop(native)
+                if was is not None:
+                    sys.modules[native] = was
+        out = {"same": [], "errors": {}}
+        calls.update(set_real=0, get_real=0)  # the evaluations' calls only
+        try:
+            states = [[0.4 * c, -0.3 * c, 1e-3, 0.0]]
+            states += [[(0.4 + 0.02 * k) * c, -0.3 * c, 1e-3, -2e-3 * k] for k in range(1, 6)]
+            # the journal outside the clearance (the state check), and a squeeze velocity at
+            # which the hybrid solver does not converge (it starts cold next time)
+            bad = {2: ("outside", [1.2 * c, 0.0, 0.0, 0.0])}
+            if model == "hybrid":
+                bad[4] = ("fast", [0.4 * c, -0.3 * c, 1e100, 0.0])
+            for k, state in enumerate(states):
+                if k in bad:
+                    name, x = bad[k]
+                    with contextlib.suppress(Exception):
+                        ref.evaluate(np.array([x]))
+                    try:
+                        fmu.evaluate(np.array([x]))
+                        out["errors"][name] = None
+                    except FmuError as exc:
+                        out["errors"][name] = exc.reason
+                x = np.array([state])
+                same = all(np.array_equal(a, b) for a, b in zip(ref.evaluate(x), fmu.evaluate(x),
+                                                                 strict=True))
+                out["same"].append(bool(same))
+            out["calls"] = dict(calls)
+            s = fmu.slaves[0]
+            out["n_solves"] = int(s.fmu.getInteger([s.vr["n_solves"]])[0])
+            try:  # a state that is not finite: refused by the set, in the slave's Python
+                fmu.evaluate(np.array([[np.nan, 0.0, 0.0, 0.0]]))
+                out["nan"] = None
+            except FmuError as exc:
+                out["nan"] = exc.reason
+            # the last state again (the refused set applied its finite values, as the
+            # per-variable path does): the in-process model's law
+            x = np.array([states[-1]])
+            out["same_after_nan"] = all(np.array_equal(a, b) for a, b in zip(
+                ref.evaluate(x), fmu.evaluate(x), strict=True))
+            # fmi2Reset: a new slave, whose buffer the library asks for again
+            s.fmu.reset()
+            s.fmu.setupExperiment(startTime=0.0)
+            s.fmu.enterInitializationMode()
+            s.set({k: v for k, v in params.items() if k in s.vr} | {"omega": 54.0})
+            ref = reference()
+            calls.update(set_real=0, get_real=0)
+            out["after_reset"] = [bool(all(np.array_equal(a, b) for a, b in zip(
+                ref.evaluate(x), fmu.evaluate(x), strict=True)))
+                for x in (np.array([state]) for state in states[:3])]
+            out["calls_after_reset"] = dict(calls)
+            out["log"] = list(s.messages)
+        finally:
+            fmu.close()
     return out
 
 

@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 
-from tests.probes import dispatch, probes_of
+from tests.probes import counted_calls, dispatch, probes_of
 
 
 def laws():
@@ -216,15 +216,6 @@ def native_io(fmu: str, case: str) -> dict:
     from orchestrator.coupling.fmi import FmuError, FmuStructure
     from orchestrator.coupling.inprocess import InProcessStructure
 
-    calls = {"set_real": 0, "get_real": 0}
-    originals = {name: GearShaftSlave.__dict__[name] for name in calls}
-
-    def counted(name):
-        def call(self, *args):
-            calls[name] += 1
-            return originals[name](self, *args)
-        return call
-
     def count() -> dict:
         out = dict(calls)
         calls.update(set_real=0, get_real=0)
@@ -255,72 +246,69 @@ def native_io(fmu: str, case: str) -> dict:
             r["same"].append(bool((structure.journal_states() == ref.journal_states()).all()))
         return t
 
-    for name in calls:
-        setattr(GearShaftSlave, name, counted(name))
-    structure = FmuStructure(fmu, case=case)
-    try:
-        ref = InProcessStructure(description.structure(case))
-        dt = ref.structure.mesh_period / 32
-        count()
-        start(structure, ref)
-        r["calls"]["initialisation"] = count()
-        t = steps(structure, ref, 0.0, 12)
-        r["calls"]["steps"] = count()
-        # a restored state: its journals, then the same steps again
-        saved, rsaved = structure.get_state(), ref.get_state()
-        steps(structure, ref, t, 3)
-        structure.set_state(saved)
-        ref.set_state(rsaved)
-        r["same"].append(bool((structure.journal_states() == ref.journal_states()).all()))
-        t = steps(structure, ref, t, 3)
-        r["calls"]["restored"] = count()
-        # laws with a NaN: refused by the set, in the slave's Python, none applied
-        structure.set_bearing_laws(law_a)
-        bad = AffineLaws(law_a.f0, law_a.kb, law_a.cb.copy())
-        bad.cb[1, 1, 0] = math.nan
+    with counted_calls(GearShaftSlave, ("set_real", "get_real")) as calls:
+        structure = FmuStructure(fmu, case=case)
         try:
-            structure.set_bearing_laws(bad)
-            r["nan"] = None
-        except FmuError as exc:
-            r["nan"] = str(exc)
-        structure.do_step(t, dt)  # with the laws set before (law_a)
-        ref.set_bearing_laws(law_a)
-        ref.do_step(t, dt)
-        t += dt
-        r["same"].append(bool((structure.journal_states() == ref.journal_states()).all()))
-        r["calls"]["nan"] = count()
-        # a failed step: the journals read fmi2Error, in Python, until a state is restored
-        saved = structure.get_state()
-        structure.set_bearing_laws(AffineLaws(np.full((4, 2), 1e300), law_a.kb, law_a.cb))
-        with contextlib.suppress(FmuError):
+            ref = InProcessStructure(description.structure(case))
+            dt = ref.structure.mesh_period / 32
+            count()
+            start(structure, ref)
+            r["calls"]["initialisation"] = count()
+            t = steps(structure, ref, 0.0, 12)
+            r["calls"]["steps"] = count()
+            # a restored state: its journals, then the same steps again
+            saved, rsaved = structure.get_state(), ref.get_state()
+            steps(structure, ref, t, 3)
+            structure.set_state(saved)
+            ref.set_state(rsaved)
+            r["same"].append(bool((structure.journal_states() == ref.journal_states()).all()))
+            t = steps(structure, ref, t, 3)
+            r["calls"]["restored"] = count()
+            # laws with a NaN: refused by the set, in the slave's Python, none applied
+            structure.set_bearing_laws(law_a)
+            bad = AffineLaws(law_a.f0, law_a.kb, law_a.cb.copy())
+            bad.cb[1, 1, 0] = math.nan
+            try:
+                structure.set_bearing_laws(bad)
+                r["nan"] = None
+            except FmuError as exc:
+                r["nan"] = str(exc)
+            structure.do_step(t, dt)  # with the laws set before (law_a)
+            ref.set_bearing_laws(law_a)
+            ref.do_step(t, dt)
+            t += dt
+            r["same"].append(bool((structure.journal_states() == ref.journal_states()).all()))
+            r["calls"]["nan"] = count()
+            # a failed step: the journals read fmi2Error, in Python, until a state is restored
+            saved = structure.get_state()
+            structure.set_bearing_laws(AffineLaws(np.full((4, 2), 1e300), law_a.kb, law_a.cb))
+            with contextlib.suppress(FmuError):
+                structure.do_step(t, dt)
+            try:
+                structure.journal_states()
+                r["after_failure"] = None
+            except FmuError as exc:
+                r["after_failure"] = str(exc)
+            structure.set_state(saved)
+            ref.do_step(t, dt)
+            structure.set_bearing_laws(law_a)
             structure.do_step(t, dt)
-        try:
-            structure.journal_states()
-            r["after_failure"] = None
-        except FmuError as exc:
-            r["after_failure"] = str(exc)
-        structure.set_state(saved)
-        ref.do_step(t, dt)
-        structure.set_bearing_laws(law_a)
-        structure.do_step(t, dt)
-        r["same"].append(bool((structure.journal_states() == ref.journal_states()).all()))
-        r["calls"]["failure"] = count()
-        # fmi2Reset: a new slave, whose buffer the library asks for again
-        f = structure.slave.fmu
-        f.reset()
-        f.setupExperiment(startTime=0.0)
-        f.enterInitializationMode()
-        structure._set_case(case)  # the parameters are back at their start values
-        structure.in_init, structure.t, structure.n_steps = True, 0.0, 0
-        ref = InProcessStructure(description.structure(case))
-        count()
-        start(structure, ref)
-        steps(structure, ref, 0.0, 4)
-        r["calls"]["after_reset"] = count()
-    finally:
-        for name, f in originals.items():
-            setattr(GearShaftSlave, name, f)
-        structure.close()
+            r["same"].append(bool((structure.journal_states() == ref.journal_states()).all()))
+            r["calls"]["failure"] = count()
+            # fmi2Reset: a new slave, whose buffer the library asks for again
+            f = structure.slave.fmu
+            f.reset()
+            f.setupExperiment(startTime=0.0)
+            f.enterInitializationMode()
+            structure._set_case(case)  # the parameters are back at their start values
+            structure.in_init, structure.t, structure.n_steps = True, 0.0, 0
+            ref = InProcessStructure(description.structure(case))
+            count()
+            start(structure, ref)
+            steps(structure, ref, 0.0, 4)
+            r["calls"]["after_reset"] = count()
+        finally:
+            structure.close()
     return r
 
 
