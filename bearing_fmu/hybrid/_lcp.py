@@ -9,7 +9,6 @@ the runs of consecutive active nodes serve the Newton on t and the Jacobians too
 
 from __future__ import annotations
 
-import numpy as np
 from numba import njit
 
 from bearing_fmu.hybrid._workspace import CP, LO, NEW, PIV, A, B, D
@@ -176,27 +175,31 @@ def substitute(ws, active, order, runs, nr, rhs, out):
 
 
 @njit(cache=True)
-def substitute4(ws, active, order, runs, nr, r0, o0):
-    """Four solves at once (rows r0..r0+3 -> rows o0..o0+3), as :func:`substitute`."""
+def substitute2(ws, active, order, runs, nr, r0, o0):
+    """Two solves at once (rows r0, r0 + 1 -> rows o0, o0 + 1), as :func:`substitute`: the
+    two chains of each half side by side."""
     n = active.shape[0]
     lo = ws[LO]
     cp = ws[CP]
     piv = ws[PIV]
+    rc = ws[r0]
+    rs = ws[r0 + 1]
+    oc = ws[o0]
+    os_ = ws[o0 + 1]
     for i in range(n):
         if not active[i]:
-            for q in range(4):
-                ws[o0 + q, i] = 0.0
-    t = np.empty(4)  # top-down y, bottom-up y, solution (a few bytes: no workspace row)
-    b = np.empty(4)
+            oc[i] = 0.0
+            os_[i] = 0.0
     for r in range(nr):
         k0 = runs[r]
         k1 = runs[n + r]
         m = (k0 + k1) // 2
         nb = k1 - 1 - m
         lt = 0.0
-        for q in range(4):
-            t[q] = 0.0
-            b[q] = 0.0
+        tc = 0.0  # top-down y of each right-hand side, then the solution going up
+        ts = 0.0
+        bc = 0.0  # bottom-up y, then the solution going down
+        bs = 0.0
         for j in range(nb):
             it = order[k0 + j]
             p = piv[k0 + j]
@@ -204,41 +207,49 @@ def substitute4(ws, active, order, runs, nr, r0, o0):
             ib = order[kb]
             ub = lo[ib]
             pb = piv[kb]
-            for q in range(4):
-                t[q] = (ws[r0 + q, it] - lt * t[q]) * p
-                ws[o0 + q, it] = t[q]
-                b[q] = (ws[r0 + q, ib] - ub * b[q]) * pb
-                ws[o0 + q, ib] = b[q]
+            tc = (rc[it] - lt * tc) * p
+            ts = (rs[it] - lt * ts) * p
+            oc[it] = tc
+            os_[it] = ts
+            bc = (rc[ib] - ub * bc) * pb
+            bs = (rs[ib] - ub * bs) * pb
+            oc[ib] = bc
+            os_[ib] = bs
             lt = lo[it]
         if m - k0 > nb:
             it = order[m - 1]
             p = piv[m - 1]
-            for q in range(4):
-                t[q] = (ws[r0 + q, it] - lt * t[q]) * p
-                ws[o0 + q, it] = t[q]
+            tc = (rc[it] - lt * tc) * p
+            ts = (rs[it] - lt * ts) * p
+            oc[it] = tc
+            os_[it] = ts
             lt = lo[it]
         im = order[m]
         um = lo[im] if nb > 0 else 0.0
         p = piv[m]
-        for q in range(4):
-            x = (ws[r0 + q, im] - lt * t[q] - um * b[q]) * p
-            ws[o0 + q, im] = x
-            t[q] = x
-            b[q] = x
+        tc = (rc[im] - lt * tc - um * bc) * p
+        ts = (rs[im] - lt * ts - um * bs) * p
+        oc[im] = tc
+        os_[im] = ts
+        bc = tc
+        bs = ts
         for j in range(nb):
             it = order[m - 1 - j]
             ct = cp[m - 1 - j]
             ib = order[m + 1 + j]
             cb = cp[m + 1 + j]
-            for q in range(4):
-                t[q] = ws[o0 + q, it] - ct * t[q]
-                ws[o0 + q, it] = t[q]
-                b[q] = ws[o0 + q, ib] - cb * b[q]
-                ws[o0 + q, ib] = b[q]
+            tc = oc[it] - ct * tc
+            ts = os_[it] - ct * ts
+            oc[it] = tc
+            os_[it] = ts
+            bc = oc[ib] - cb * bc
+            bs = os_[ib] - cb * bs
+            oc[ib] = bc
+            os_[ib] = bs
         if m - k0 > nb:
             it = order[k0]
-            for q in range(4):
-                ws[o0 + q, it] = ws[o0 + q, it] - cp[k0] * t[q]
+            oc[it] = oc[it] - cp[k0] * tc
+            os_[it] = os_[it] - cp[k0] * ts
 
 
 @njit(cache=True)

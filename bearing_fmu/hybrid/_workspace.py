@@ -52,12 +52,11 @@ CV, Z = 21, 22  # c = (A_t a - b_t)_P, z = A_PP^-1 c
 CP, PIV = 23, 24  # Thomas factors
 COS, SIN = 25, 26  # cos, sin at the nodes (solution frame)
 NEW = 27  # next active set (0/1) during a PDAS pass
-RQ = 28  # rows 28-31: Jacobian right-hand sides r_q
-DA = 32  # rows 32-35: A_PP^-1 r_q
-SCR = 36  # rows 36-39: small scratch arrays (views, no allocation in the hot path), within
-#   the first 16 columns (the smallest n): rows 0-1 jx, jv (0-3) and the Jacobian's sums (4-11),
-#   row 2 the axial integrals g (0-8) and the force (9-10), row 3 s_q, c.da0, dt_q (0-11)
-WS_ROWS = 40
+W = 28  # rows 28-29: the Jacobian's adjoint vectors A_PP^-1 (cos, sin)_P
+SCR = 30  # rows 30-33: small scratch arrays (views, no allocation in the hot path), within
+#   the first 16 columns (the smallest n): rows 0-1 jx, jv (0-3), row 1 c.da0 and dt_q (4-11),
+#   row 2 the axial integrals g (0-8) and the force (9-10), row 3 s_q, cos.da0, sin.da0 (0-11)
+WS_ROWS = 34
 
 # --- the axial-integral vector g ---------------------------------------------------------------
 G0, G1, G2 = 0, 1, 2  # G0 = lambda I0, G1 = I1 / lambda, G2 = lambda I2 (bearing_fmu.hybrid.axial)
