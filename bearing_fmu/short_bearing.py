@@ -35,10 +35,17 @@ import math
 import numpy as np
 from numba import njit
 
-from bearing_fmu.base import FilmBearingModel, FilmForce
+from bearing_fmu.base import (
+    BearingError,
+    BearingModel,
+    FilmBearingModel,
+    FilmForce,
+    check_omega,
+)
+from bearing_fmu.frames import law_to_global, state_to_local
 from bearing_fmu.reynolds import film_thickness, source, source_coefficients
 
-__all__ = ["ShortBearing", "ocvirk_static_force"]
+__all__ = ["ShortBearing", "ShortSet", "ocvirk_static_force"]
 
 _GAUSS_X, _GAUSS_W = np.polynomial.legendre.leggauss(40)
 
@@ -152,6 +159,61 @@ def _short_bearing_kernel(lam, x, y, xd, yd, gx, gw, out_f, out_dx, out_dv):
         out_dv[1, 1] += w * 2.0 * sn * ih3 * sn
 
 
+#: :func:`short_global` status for an input the kernel is not called with (the caller raises
+#: the checks' own errors, :func:`bearing_fmu.base.check_state`)
+BAD_STATE = -1
+
+
+@njit(cache=True)
+def short_global(lam, gx, gw, q, s, omega, clearance, fs, out):
+    """:func:`_short_bearing_kernel` in SI units and the global frame: one call per bearing.
+
+    ``q`` (2, 2) turns global components into local ones (:class:`bearing_fmu.frames.
+    LocalFrame`), ``s`` is the global journal state [s, t, sdot, tdot] [m, m/s], ``omega`` the
+    speed [rad/s], ``fs`` the force scale of Eq. (5) at omega [N]. Writes ``out`` (5, 2): row 0
+    the film force [N], rows 1-2 Kb = -dF/dX [N/m], rows 3-4 Cb = -dF/dXdot [N s/m], global.
+    The arithmetic of :meth:`bearing_fmu.base.FilmBearingModel.evaluate` and the frame
+    conversions, as ``bearing_fmu.hybrid._kernels.hybrid_global``. Returns 0, or
+    :data:`BAD_STATE` for a non-finite state or an eccentricity ratio >= 1 (nothing evaluated).
+    """
+    x, y, xd, yd = state_to_local(q, s)
+    cw = clearance * omega
+    xb = x / clearance
+    yb = y / clearance
+    xdb = xd / cw
+    ydb = yd / cw
+    if not (math.isfinite(xb) and math.isfinite(yb) and math.isfinite(xdb)
+            and math.isfinite(ydb)) or math.hypot(xb, yb) >= 1.0:
+        return BAD_STATE
+    f = np.empty(2)
+    dx = np.empty((2, 2))
+    dv = np.empty((2, 2))
+    _short_bearing_kernel(lam, xb, yb, xdb, ydb, gx, gw, f, dx, dv)
+    loc = np.empty((5, 2))
+    sk = -(fs / clearance)
+    sc = -(fs / cw)
+    for c in range(2):
+        loc[0, c] = fs * f[c]
+        for r in range(2):
+            loc[1 + r, c] = sk * dx[r, c]
+            loc[3 + r, c] = sc * dv[r, c]
+    law_to_global(q, loc, out)
+    return 0
+
+
+@njit(cache=True)
+def short_set_global(lam, gx, gw, q, omega, clearance, fs, s, out):
+    """:func:`short_global` for a set of bearings in one call, in their order (:class:`ShortSet`):
+    the set's arrays (nb,) or (nb, 2, 2) first, then the journal states ``s`` (nb, 4) and the
+    output ``out`` (nb, 5, 2). Returns ``(-1, 0)``, or the index of the first bearing whose
+    status is not 0 and that status (the bearings after it are not evaluated)."""
+    for b in range(s.shape[0]):
+        status = short_global(lam[b], gx, gw, q[b], s[b], omega[b], clearance[b], fs[b], out[b])
+        if status != 0:
+            return b, status
+    return -1, 0
+
+
 class ShortBearing(FilmBearingModel):
     """Ocvirk's short-bearing theory with the half-Sommerfeld (pi-film) condition: Eq. (2)
     without its circumferential term, and p = 0 where f < 0 in place of Eq. (4).
@@ -182,10 +244,76 @@ class ShortBearing(FilmBearingModel):
             return FilmForce(force=f)
         return FilmForce(force=f, d_position=dx, d_velocity=dv)
 
+    def evaluate_global(self, q, state, omega, out):
+        """One compiled call (:func:`short_global`): the numbers of
+        :meth:`~bearing_fmu.base.FilmBearingModel.evaluate` and the frame conversions of the
+        base class."""
+        omega = check_omega(omega)
+        b = self.bearing
+        if short_global(b.lambda_, _GAUSS_X, _GAUSS_W, q, state, omega, b.clearance,
+                        b.force_scale(omega), out) != 0:
+            BearingModel.evaluate_global(self, q, state, omega, out)  # raises the check's error
+
     def pressure_field(self, xbar, ybar, xbar_dot=0.0, ybar_dot=0.0, n_xi=33):
         """Dimensionless pressure (theta [rad], xi [-], p[theta, xi]) of the short solution."""
         lam = self.bearing.lambda_
         return _short_pressure_field(lam, xbar, ybar, xbar_dot, ybar_dot, n_xi=n_xi)
+
+
+class ShortSet:
+    """Short bearings evaluated in one compiled call (:func:`short_set_global`): the numbers of
+    one :meth:`ShortBearing.evaluate_global` per bearing, bit for bit, for a compiled caller
+    (:mod:`orchestrator.coupling.fused`). The model has no memory: the set holds its
+    parameters only.
+
+    Parameters
+    ----------
+    models : sequence of ShortBearing
+    q : (nb, 2, 2) array
+        Global-to-local rotation of each bearing (:class:`bearing_fmu.frames.LocalFrame`).
+    omegas : (nb,) array
+        Shaft speed at each bearing [rad/s], > 0.
+    """
+
+    def __init__(self, models, q, omegas):
+        if not self.fits(models):
+            raise ValueError("ShortSet: the models must be short bearings")
+        self.models = list(models)
+        self._q = np.ascontiguousarray(q, dtype=float)
+        self._omega = np.array([check_omega(w) for w in omegas], dtype=float)
+        self._lam = np.array([m.bearing.lambda_ for m in self.models])
+        self._clearance = np.array([m.bearing.clearance for m in self.models])
+        self._fs = np.array([m.bearing.force_scale(w)
+                             for m, w in zip(self.models, self._omega, strict=True)])
+
+    @staticmethod
+    def fits(models) -> bool:
+        """Whether the models can share one call: all :class:`ShortBearing`."""
+        return len(models) > 0 and all(type(m) is ShortBearing for m in models)
+
+    def evaluate_global(self, states, out) -> None:
+        """Film force [N], Kb [N/m], Cb [N s/m] (global frame) of every bearing at its global
+        journal state ``states`` (nb, 4) [m, m/s] into ``out`` (nb, 5, 2). A failing bearing
+        raises that bearing's error, with its index in ``bearing_index`` (0-based)."""
+        b, status = short_set_global(*self.kernel_arguments(), states, out)
+        if b >= 0:
+            self.raise_status(b, status, states)
+
+    def kernel_arguments(self) -> tuple:
+        """The arguments of :func:`short_set_global` before the journal states and the output
+        (7): what a compiled caller passes on."""
+        return (self._lam, _GAUSS_X, _GAUSS_W, self._q, self._omega, self._clearance, self._fs)
+
+    def raise_status(self, b, status, states) -> None:
+        """Raise the error of bearing ``b`` (0-based) whose call returned ``status`` at the
+        global journal states ``states`` (nb, 4), with its index in ``bearing_index``."""
+        try:
+            BearingModel.evaluate_global(self.models[b], self._q[b], states[b], self._omega[b],
+                                         np.empty((5, 2)))
+        except BearingError as exc:
+            exc.bearing_index = int(b)
+            raise
+        raise RuntimeError(f"short bearing {b + 1}: status {status} at a state it accepts")
 
 
 def ocvirk_static_force(lambda_: float, eps: float) -> tuple[float, float]:

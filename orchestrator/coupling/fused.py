@@ -1,6 +1,7 @@
 """The master's coupled steps in one compiled call, for the in-process structure and a set
-of hybrid bearings (Table 4 case 2) or of affine laws (the linear bearings of case 0, the
-lumped springs of Fig. 16: :attr:`bearing_fmu.base.BearingModel.affine`).
+of hybrid bearings (Table 4 case 2), of short bearings (case 1) or of affine laws (the linear
+bearings of case 0, the lumped springs of Fig. 16: :attr:`bearing_fmu.base.BearingModel.
+affine`).
 
 :meth:`orchestrator.coupling.master.Master.step` iterates in Python: per iteration a
 structure step, the bearings at the new journal states, the test and the new laws
@@ -8,7 +9,8 @@ structure step, the bearings at the new journal states, the test and the new law
 these is already one compiled kernel, and the Python between them (objects, checks, copies,
 dispatch) cost about a third of an iteration of the paper's case. :func:`coupled_steps` runs
 the same iteration with the same kernels (:func:`gear_fmu.step.kernel.advance`,
-``bearing_fmu.hybrid._kernels.hybrid_set_global`` or ``bearing_fmu.affine.affine_set_global``,
+``bearing_fmu.hybrid._kernels.hybrid_set_global``, ``bearing_fmu.short_bearing.
+short_set_global`` or ``bearing_fmu.affine.affine_set_global``,
 ``bearing_fmu.affine._relinearise``) in the same order on the same numbers, so a step gives
 the bits of the Python loop, and of the same step through FMUs (the tests compare them). The
 structure's state is not saved and restored: every iteration starts from the same
@@ -35,6 +37,7 @@ from numba.extending import overload
 
 from bearing_fmu.affine import AffineLaws, _relinearise, affine_set_global
 from bearing_fmu.hybrid._kernels import hybrid_set_global, hybrid_set_threads
+from bearing_fmu.short_bearing import short_set_global
 from gear_fmu.mesh.element import transmission_error
 from gear_fmu.step.condensation import N_GEAR
 from gear_fmu.step.kernel import CONVERGED, advance_pieces
@@ -53,13 +56,15 @@ __all__ = ["FusedStep", "StepBlock", "coupled_steps"]
 #: the outcomes of a step of :func:`coupled_steps`
 ACCEPTED, STRUCTURE_FAILED, BEARING_FAILED, NOT_CONVERGED = 0, 1, 2, 3
 #: the lengths of the bearing set's arguments that tell its kind (:func:`evaluate_set`)
-HYBRID_ARGUMENTS, THREADED_ARGUMENTS, AFFINE_ARGUMENTS = 11, 12, 4
+HYBRID_ARGUMENTS, THREADED_ARGUMENTS, SHORT_ARGUMENTS, AFFINE_ARGUMENTS = 11, 12, 7, 4
 
 
 def evaluate_set(bearings, states, out):
     """The bearing set in compiled code: ``hybrid_set_global(*bearings, states, out)`` for the
     arrays of a hybrid set (:meth:`bearing_fmu.hybrid.model.HybridSet.kernel_arguments`, 11
     of them; ``hybrid_set_threads`` for its 12 on more than one thread),
+    ``short_set_global(*bearings, states, out)`` for a short set's 7
+    (:meth:`bearing_fmu.short_bearing.ShortSet.kernel_arguments`),
     ``affine_set_global(*bearings, states, out)`` for stacked affine laws
     (:meth:`orchestrator.coupling.inprocess.ModelBearings.affine_laws`, 4): chosen when
     :func:`coupled_steps` compiles, so each kind has its own compiled (and cached) version.
@@ -81,6 +86,11 @@ def _evaluate_set(bearings, states, out):
             return hybrid_set_threads(b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7], b[8],
                                       b[9], b[10], b[11], states, out)
         return threaded
+    if len(bearings) == SHORT_ARGUMENTS:
+        def short(bearings, states, out):
+            b = bearings
+            return short_set_global(b[0], b[1], b[2], b[3], b[4], b[5], b[6], states, out)
+        return short
     if len(bearings) == AFFINE_ARGUMENTS:
         def affine(bearings, states, out):
             b = bearings
@@ -209,15 +219,15 @@ class FusedStep:
     """:meth:`~orchestrator.coupling.master.Master.step` as one :func:`coupled_steps` for an
     in-process structure (:class:`orchestrator.coupling.inprocess.InProcessStructure`) and
     in-process bearings (:class:`orchestrator.coupling.inprocess.ModelBearings`) that are
-    hybrid bearings of one n (its
-    :attr:`~orchestrator.coupling.inprocess.ModelBearings.hybrid_set`) or affine ones (its
+    hybrid bearings of one n or short bearings (its
+    :attr:`~orchestrator.coupling.inprocess.ModelBearings.compiled_set`) or affine ones (its
     :meth:`~orchestrator.coupling.inprocess.ModelBearings.affine_laws`, once frozen at X0);
     :func:`orchestrator.coupling.system.build_master` gives it to the master when they are."""
 
     def __init__(self, structure, bearings):
         if not self.fits(structure, bearings):
-            raise ValueError("FusedStep: an in-process structure and in-process hybrid or "
-                             "affine bearings only")
+            raise ValueError("FusedStep: an in-process structure and in-process hybrid, "
+                             "short or affine bearings only")
         self.structure = structure
         self.bearings = bearings
         self._mismatches = None
@@ -227,12 +237,13 @@ class FusedStep:
         """Whether the slaves can take the compiled step (the linear bearings: once frozen,
         :attr:`bearing_fmu.base.BearingModel.affine`)."""
         return (isinstance(structure, InProcessStructure) and isinstance(bearings, ModelBearings)
-                and (bearings.hybrid_set is not None or all(m.affine for m in bearings.models)))
+                and (bearings.compiled_set is not None
+                     or all(m.affine for m in bearings.models)))
 
     def _bearing_arguments(self):
         """The set's arrays for :func:`evaluate_set`, or None (affine laws not frozen yet)."""
-        if self.bearings.hybrid_set is not None:
-            return self.bearings.hybrid_set.kernel_arguments()
+        if self.bearings.compiled_set is not None:
+            return self.bearings.compiled_set.kernel_arguments()
         return self.bearings.affine_laws()
 
     def step(self, master, t: float, dt: float) -> StepReport | None:

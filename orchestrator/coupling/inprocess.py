@@ -15,6 +15,7 @@ from bearing_fmu.affine import AffineLaws
 from bearing_fmu.base import BearingError, BearingModel
 from bearing_fmu.frames import LocalFrame
 from bearing_fmu.hybrid.model import HybridSet
+from bearing_fmu.short_bearing import ShortSet
 from fmu_src.lifecycle import StructureCycle
 from fmu_src.state_codec import StateArrays, nest
 from fmu_src.states import (
@@ -128,9 +129,10 @@ class ModelBearings(BearingSet):
         self._q = np.array([f.q for f in self.frames])
         self._states = None  # global journal states of the last evaluation
         self.evaluations = 0
-        # hybrid bearings of one n: one compiled call for the set (the same numbers)
-        self._set = (HybridSet(self.models, self._q, self.omegas)
-                     if HybridSet.fits(self.models) else None)
+        # hybrid bearings of one n, or short bearings: one compiled call for the set (the same
+        # numbers)
+        self._set = next((kind(self.models, self._q, self.omegas)
+                          for kind in (HybridSet, ShortSet) if kind.fits(self.models)), None)
         self._affine = None  # (the laws, their arrays) of affine_laws()
 
     def evaluate(self, states):
@@ -161,6 +163,13 @@ class ModelBearings(BearingSet):
     @property
     def hybrid_set(self) -> HybridSet | None:
         """The compiled call of a set of hybrid bearings of one n, else None."""
+        return self._set if isinstance(self._set, HybridSet) else None
+
+    @property
+    def compiled_set(self) -> HybridSet | ShortSet | None:
+        """The compiled call of the set (:attr:`hybrid_set`, or a :class:`ShortSet`), else
+        None: what a compiled caller evaluates the bearings with
+        (:mod:`orchestrator.coupling.fused`)."""
         return self._set
 
     def affine_laws(self):
@@ -184,7 +193,7 @@ class ModelBearings(BearingSet):
         self._states = np.array(states, dtype=float)
 
     def raise_set_failure(self, b, status, states) -> None:
-        """The error :meth:`evaluate` raises when the hybrid set's bearing ``b`` (0-based)
+        """The error :meth:`evaluate` raises when the compiled set's bearing ``b`` (0-based)
         returned ``status`` at ``states`` (nb, 4) (a compiled caller's failure)."""
         self.record_states(states)
         try:

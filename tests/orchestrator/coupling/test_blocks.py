@@ -3,7 +3,8 @@
 (:meth:`Master.step`, itself checked against the Python loop in ``test_fused``): the same
 bits, counters and errors, step for step, spur and helical, hybrid and linear bearings, with
 gear runouts, through the relaxation (on two threads: ``test_fused``, the module that compiles
-the threaded kernel); steps that the compiled loop does not take end a block and take
+the threaded kernel), hybrid, short, linear and lumped bearings; steps that the compiled loop
+does not take end a block and take
 :meth:`Master.step`. The physics of the step is asserted elsewhere (the
 monolithic Newton, the golden run, the order); runs through the runner are compared with
 runs through FMUs by the FMU suites. Slaves the compiled loop does not take (other bearing
@@ -144,7 +145,8 @@ def _compare(case, n, structure=None, threads=1, change=None, warm=0):
 @pytest.mark.parametrize("name, model, steps", [("baguet2010_spur", "hybrid", 96),
                                                 ("baguet2010_helical", "hybrid", 32),
                                                 ("baguet2010_spur", "linear", 96),
-                                                ("baguet2010_spur", "lumped", 96)])
+                                                ("baguet2010_spur", "lumped", 96),
+                                                ("baguet2010_spur", "short", 96)])
 def test_blocks_give_the_bits_of_single_steps(name, model, steps):
     """Steps cut at contact events among them (test_fused counts them)."""
     blocked, single, error, in_blocks, long_blocks = _compare(
@@ -234,19 +236,25 @@ def test_condensation_slots_that_fill_up_end_the_block_and_start_again(monkeypat
     assert len(clears) >= 2
 
 
+def _python_loop(m):
+    """The master without its compiled step, as for slaves the compiled loop does not take
+    (the FD model, FMUs): its blocks are :meth:`Master.step` in a loop."""
+    m.fused = None
+
+
 def test_blocks_of_the_python_loop_give_the_bits_of_single_steps_and_fail_alike():
-    """The short-bearing model is not compiled into the coupled step: its master's blocks are
-    :meth:`Master.step` in a loop. The same rows, counters and state as single steps; a
-    structure that fails from step 12 on (no Newton pass allowed) fails inside the second
-    block, after the eleven steps before it, with the error of a single step."""
+    """Short bearings through the Python loop: the same rows, counters and state as single
+    steps; a structure that fails from step 12 on (no Newton pass allowed) fails inside the
+    second block, after the eleven steps before it, with the error of a single step."""
     case = load_case("baguet2010_spur", {"bearings.model": "short"})
-    blocked, single, error, in_blocks, long_blocks = _compare(case, 24)
+    blocked, single, error, in_blocks, long_blocks = _compare(case, 24, change=_python_loop)
     assert blocked.fused is None and error is None
     assert in_blocks == 24 and long_blocks == -(-24 // BLOCK)
     _same_state(blocked, single)
     assert _counters(blocked) == _counters(single)
 
     def fail_from_step_12(m):
+        _python_loop(m)
         do_step = m.structure.do_step
 
         def step(t, dt):

@@ -1,7 +1,7 @@
 """The master's step as one compiled call (:mod:`orchestrator.coupling.fused`) against the
 Python loop it replaces (:meth:`Master.step` without ``fused``): the same bits, counters and
-errors, step for step, spur and helical, hybrid, linear and lumped bearings, through the
-relaxation and the steps cut at contact events; the other bearing models keep the Python loop.
+errors, step for step, spur and helical, hybrid, short, linear and lumped bearings, through
+the relaxation and the steps cut at contact events; the FD model keeps the Python loop.
 The physics of the step is asserted elsewhere (the monolithic Newton, the golden run, the
 order); through FMUs the Python loop runs, and the FMU suites compare it with in-process runs
 bit for bit."""
@@ -75,7 +75,8 @@ def _run_both(case, steps, monkeypatch, structure=None, threads=(1, 1)):
 @pytest.mark.parametrize("name, model, steps", [("baguet2010_spur", "hybrid", 64),
                                                 ("baguet2010_helical", "hybrid", 24),
                                                 ("baguet2010_spur", "linear", 64),
-                                                ("baguet2010_helical", "lumped", 24)])
+                                                ("baguet2010_helical", "lumped", 24),
+                                                ("baguet2010_spur", "short", 64)])
 def test_the_compiled_step_gives_the_bits_of_the_python_loop(name, model, steps, monkeypatch):
     """Every step compiled, those cut at contact events (sub-steps and acceleration jumps)
     among them."""
@@ -243,10 +244,12 @@ def test_a_failing_structure_step_fails_alike(monkeypatch):
     assert compiled[0] is NewmarkConvergenceError and "did not converge" in compiled[1]
 
 
-def test_hybrid_and_affine_bearings_take_the_compiled_step_the_other_models_the_python_loop():
+def test_every_bearing_model_but_fd_takes_the_compiled_step():
+    """Hybrid, short and affine bearings take the compiled step; the FD model the Python
+    loop."""
     from bearing_fmu import MODELS
 
     for model in MODELS:
         m = build_master(load_case("baguet2010_spur", {"bearings.model": model}),
                          in_process=True)
-        assert (m.fused is not None) == (model in ("hybrid", "linear", "lumped")), model
+        assert (m.fused is not None) == (model != "fd"), model
