@@ -167,21 +167,34 @@ def test_a_step_that_does_not_converge_fails_alike(monkeypatch):
     assert compiled[0] is CouplingError and "did not converge in 4 iterations" in compiled[1]
 
 
+def _push_second_shaft(m):
+    """Laws that throw the journals of the second shaft out of their clearance."""
+    laws = m.laws
+    f0 = laws.f0.copy()
+    f0[2:] += 1e7
+    m.laws = AffineLaws(f0, laws.kb, laws.cb)
+
+
 @pytest.mark.parametrize("threads", [(1, 1), (2, 1), (1, 2)], ids=["1", "2-compiled", "2-loop"])
 def test_a_failing_bearing_fails_alike(threads, monkeypatch):
     _need_threads(max(threads))
-    """Laws that throw the journals of the second shaft out of their clearance: bearing 3's
-    state check, also when the bearings share two threads (every bearing is evaluated there;
-    the first failing one is reported, as the serial loop, which stops at it)."""
-    def push(m):
-        laws = m.laws
-        f0 = laws.f0.copy()
-        f0[2:] += 1e7
-        m.laws = AffineLaws(f0, laws.kb, laws.cb)
-
-    compiled, python = _fail_both(load_case("baguet2010_spur"), push, monkeypatch, threads)
+    """Bearing 3's state check, also when the bearings share two threads (every bearing is
+    evaluated there; the first failing one is reported, as the serial loop, which stops at
+    it)."""
+    compiled, python = _fail_both(load_case("baguet2010_spur"), _push_second_shaft,
+                                  monkeypatch, threads)
     assert compiled == python
     assert issubclass(compiled[0], BearingError)
+    assert compiled[3] == 3
+
+
+def test_a_failing_short_bearing_fails_alike(monkeypatch):
+    """The short bearings' set (:class:`bearing_fmu.short_bearing.ShortSet`) reports the state
+    check of the first bearing out of its clearance, as the Python loop."""
+    case = load_case("baguet2010_spur", {"bearings.model": "short"})
+    compiled, python = _fail_both(case, _push_second_shaft, monkeypatch)
+    assert compiled == python
+    assert issubclass(compiled[0], BearingError) and "eccentricity ratio" in compiled[1]
     assert compiled[3] == 3
 
 
