@@ -166,12 +166,14 @@ BAD_STATE = -1
 
 @njit(cache=True)
 def short_global(lam, gx, gw, q, s, omega, clearance, fs, out):
-    """:func:`_short_bearing_kernel` in SI units and the global frame: one call per bearing.
+    """The short-bearing force and Jacobians (``_short_bearing_kernel``) in SI units and the
+    global frame: one call per bearing.
 
-    ``q`` (2, 2) turns global components into local ones (:class:`bearing_fmu.frames.
-    LocalFrame`), ``s`` is the global journal state [s, t, sdot, tdot] [m, m/s], ``omega`` the
-    speed [rad/s], ``fs`` the force scale of Eq. (5) at omega [N]. Writes ``out`` (5, 2): row 0
-    the film force [N], rows 1-2 Kb = -dF/dX [N/m], rows 3-4 Cb = -dF/dXdot [N s/m], global.
+    ``q`` (2, 2) turns global components into local ones
+    (:class:`bearing_fmu.frames.LocalFrame`), ``s`` is the global journal state [s, t, sdot,
+    tdot] [m, m/s], ``omega`` the speed [rad/s], ``fs`` the force scale of Eq. (5) at omega
+    [N]. Writes ``out`` (5, 2): row 0 the film force [N], rows 1-2 Kb = -dF/dX [N/m], rows 3-4
+    Cb = -dF/dXdot [N s/m], global.
     The arithmetic of :meth:`bearing_fmu.base.FilmBearingModel.evaluate` and the frame
     conversions, as ``bearing_fmu.hybrid._kernels.hybrid_global``. Returns 0, or
     :data:`BAD_STATE` for a non-finite state or an eccentricity ratio >= 1 (nothing evaluated).

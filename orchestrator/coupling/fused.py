@@ -1,7 +1,7 @@
 """The master's coupled steps in one compiled call, for the in-process structure and a set
 of hybrid bearings (Table 4 case 2), of short bearings (case 1) or of affine laws (the linear
-bearings of case 0, the lumped springs of Fig. 16: :attr:`bearing_fmu.base.BearingModel.
-affine`).
+bearings of case 0, the lumped springs of Fig. 16:
+:attr:`bearing_fmu.base.BearingModel.affine`).
 
 :meth:`orchestrator.coupling.master.Master.step` iterates in Python: per iteration a
 structure step, the bearings at the new journal states, the test and the new laws
@@ -9,8 +9,8 @@ structure step, the bearings at the new journal states, the test and the new law
 these is already one compiled kernel, and the Python between them (objects, checks, copies,
 dispatch) cost about a third of an iteration of the paper's case. :func:`coupled_steps` runs
 the same iteration with the same kernels (:func:`gear_fmu.step.kernel.advance`,
-``bearing_fmu.hybrid._kernels.hybrid_set_global``, ``bearing_fmu.short_bearing.
-short_set_global`` or ``bearing_fmu.affine.affine_set_global``,
+``bearing_fmu.hybrid._kernels.hybrid_set_global``,
+:func:`bearing_fmu.short_bearing.short_set_global` or ``bearing_fmu.affine.affine_set_global``,
 ``bearing_fmu.affine._relinearise``) in the same order on the same numbers, so a step gives
 the bits of the Python loop, and of the same step through FMUs (the tests compare them). The
 structure's state is not saved and restored: every iteration starts from the same

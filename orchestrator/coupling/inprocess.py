@@ -167,7 +167,8 @@ class ModelBearings(BearingSet):
 
     @property
     def compiled_set(self) -> HybridSet | ShortSet | None:
-        """The compiled call of the set (:attr:`hybrid_set`, or a :class:`ShortSet`), else
+        """The compiled call of the set (:attr:`hybrid_set`, or a
+        :class:`bearing_fmu.short_bearing.ShortSet`), else
         None: what a compiled caller evaluates the bearings with
         (:mod:`orchestrator.coupling.fused`)."""
         return self._set
