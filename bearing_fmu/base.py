@@ -317,6 +317,16 @@ def check_omega(omega: float) -> float:
     return omega
 
 
+def set_parameters(models, q, omegas) -> tuple:
+    """``(q, omega, clearance, fs)`` of a set of film bearings as the arrays of a compiled set
+    call: the global-to-local rotations (nb, 2, 2), the speeds [rad/s] (:func:`check_omega`),
+    the radial clearances [m] and the force scales of Eq. (5) at those speeds [N]."""
+    omega = np.array([check_omega(w) for w in omegas], dtype=float)
+    return (np.ascontiguousarray(q, dtype=float), omega,
+            np.array([m.bearing.clearance for m in models]),
+            np.array([m.bearing.force_scale(w) for m, w in zip(models, omega, strict=True)]))
+
+
 class FilmBearingModel(BearingModel):
     """A model that solves the dimensionless Reynolds problem (Eq. 2-4).
 

@@ -94,3 +94,40 @@ def law_to_global(q, loc, out):
         out[r, 1] = a00 * q[0, 1] + a01 * q[1, 1]
         out[r + 1, 0] = a10 * q[0, 0] + a11 * q[1, 0]
         out[r + 1, 1] = a10 * q[0, 1] + a11 * q[1, 1]
+
+
+@njit(cache=True)
+def film_state_local(q, s, clearance, omega):
+    """The global journal state ``s`` [m, m/s] as a film model's dimensionless local state
+    ``(x/C, y/C, xdot/(C omega), ydot/(C omega))`` (Eq. 3; the order of
+    :meth:`bearing_fmu.base.FilmBearingModel.evaluate`), and whether the model takes it: every
+    component finite and the eccentricity ratio < 1 (else
+    :func:`bearing_fmu.base.check_state` raises the error); compiled, for the film models'
+    ``evaluate_global``."""
+    x, y, xd, yd = state_to_local(q, s)
+    cw = clearance * omega
+    xb = x / clearance
+    yb = y / clearance
+    xdb = xd / cw
+    ydb = yd / cw
+    ok = (math.isfinite(xb) and math.isfinite(yb) and math.isfinite(xdb)
+          and math.isfinite(ydb) and math.hypot(xb, yb) < 1.0)
+    return xb, yb, xdb, ydb, ok
+
+
+@njit(cache=True)
+def film_law_global(q, res, fs, clearance, omega, out):
+    """A film model's dimensionless law ``res`` (5, 2: Fbar, then the rows of dFbar/d(xbar,
+    ybar) and of dFbar/d(xbar_dot, ybar_dot)) in SI units and global components into ``out``:
+    F = fs Fbar [N], Kb = -fs/C dFbar/dxbar [N/m], Cb = -fs/(C omega) dFbar/dxbar_dot
+    [N s/m] (:meth:`bearing_fmu.base.FilmBearingModel.evaluate`, ``fs`` its force scale [N]),
+    then :func:`law_to_global`; compiled."""
+    loc = np.empty((5, 2))
+    sk = -(fs / clearance)
+    sc = -(fs / (clearance * omega))
+    for c in range(2):
+        loc[0, c] = fs * res[0, c]
+        for r in (1, 2):
+            loc[r, c] = sk * res[r, c]
+            loc[r + 2, c] = sc * res[r + 2, c]
+    law_to_global(q, loc, out)

@@ -41,8 +41,9 @@ from bearing_fmu.base import (
     FilmBearingModel,
     FilmForce,
     check_omega,
+    set_parameters,
 )
-from bearing_fmu.frames import law_to_global, state_to_local
+from bearing_fmu.frames import film_law_global, film_state_local
 from bearing_fmu.reynolds import film_thickness, source, source_coefficients
 
 __all__ = ["ShortBearing", "ShortSet", "ocvirk_static_force"]
@@ -178,28 +179,12 @@ def short_global(lam, gx, gw, q, s, omega, clearance, fs, out):
     conversions, as ``bearing_fmu.hybrid._kernels.hybrid_global``. Returns 0, or
     :data:`BAD_STATE` for a non-finite state or an eccentricity ratio >= 1 (nothing evaluated).
     """
-    x, y, xd, yd = state_to_local(q, s)
-    cw = clearance * omega
-    xb = x / clearance
-    yb = y / clearance
-    xdb = xd / cw
-    ydb = yd / cw
-    if not (math.isfinite(xb) and math.isfinite(yb) and math.isfinite(xdb)
-            and math.isfinite(ydb)) or math.hypot(xb, yb) >= 1.0:
+    xb, yb, xdb, ydb, ok = film_state_local(q, s, clearance, omega)
+    if not ok:
         return BAD_STATE
-    f = np.empty(2)
-    dx = np.empty((2, 2))
-    dv = np.empty((2, 2))
-    _short_bearing_kernel(lam, xb, yb, xdb, ydb, gx, gw, f, dx, dv)
-    loc = np.empty((5, 2))
-    sk = -(fs / clearance)
-    sc = -(fs / cw)
-    for c in range(2):
-        loc[0, c] = fs * f[c]
-        for r in range(2):
-            loc[1 + r, c] = sk * dx[r, c]
-            loc[3 + r, c] = sc * dv[r, c]
-    law_to_global(q, loc, out)
+    res = np.empty((5, 2))
+    _short_bearing_kernel(lam, xb, yb, xdb, ydb, gx, gw, res[0], res[1:3], res[3:5])
+    film_law_global(q, res, fs, clearance, omega, out)
     return 0
 
 
@@ -281,12 +266,8 @@ class ShortSet:
         if not self.fits(models):
             raise ValueError("ShortSet: the models must be short bearings")
         self.models = list(models)
-        self._q = np.ascontiguousarray(q, dtype=float)
-        self._omega = np.array([check_omega(w) for w in omegas], dtype=float)
+        self._q, self._omega, self._clearance, self._fs = set_parameters(self.models, q, omegas)
         self._lam = np.array([m.bearing.lambda_ for m in self.models])
-        self._clearance = np.array([m.bearing.clearance for m in self.models])
-        self._fs = np.array([m.bearing.force_scale(w)
-                             for m, w in zip(self.models, self._omega, strict=True)])
 
     @staticmethod
     def fits(models) -> bool:

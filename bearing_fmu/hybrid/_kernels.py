@@ -14,7 +14,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from bearing_fmu.frames import law_to_global, state_to_local
+from bearing_fmu.frames import film_law_global, film_state_local
 from bearing_fmu.hybrid._jacobian import film_jacobian
 from bearing_fmu.hybrid._lcp import solve_lcp, substitute
 from bearing_fmu.hybrid._ritz import assemble, element_integrals, km_node
@@ -352,29 +352,13 @@ def hybrid_global(state, active, ws, iws, trig, coef, q, s, omega, clearance, fs
     conversions, in the same order. Returns the kernel's status, or :data:`BAD_STATE` for a
     non-finite state or an eccentricity ratio >= 1 (nothing evaluated).
     """
-    x, y, xd, yd = state_to_local(q, s)
-    cw = clearance * omega
-    xb = x / clearance
-    yb = y / clearance
-    xdb = xd / cw
-    ydb = yd / cw
-    if not (math.isfinite(xb) and math.isfinite(yb) and math.isfinite(xdb)
-            and math.isfinite(ydb)) or math.hypot(xb, yb) >= 1.0:
+    xb, yb, xdb, ydb, ok = film_state_local(q, s, clearance, omega)
+    if not ok:
         return BAD_STATE
     status = hybrid_kernel(state, xb, yb, xdb, ydb, True, active, ws, iws, trig, coef, res)
     if status != 0:
         return status
-    # SI, local frame (FilmBearingModel.evaluate): F = fs Fbar, Kb = -fs/C dFbar/dxbar,
-    # Cb = -fs/(C omega) dFbar/dxbar_dot; then back to global components
-    loc = np.empty((5, 2))
-    sk = -(fs / clearance)
-    sc = -(fs / cw)
-    for c in range(2):
-        loc[0, c] = fs * res[0, c]
-        for r in (1, 2):
-            loc[r, c] = sk * res[r, c]
-            loc[r + 2, c] = sc * res[r + 2, c]
-    law_to_global(q, loc, out)
+    film_law_global(q, res, fs, clearance, omega, out)
     return 0
 
 

@@ -28,6 +28,7 @@ from bearing_fmu.base import (
     ModelOption,
     check_omega,
     check_state,
+    set_parameters,
 )
 from bearing_fmu.hybrid import _kernels as _k
 from bearing_fmu.hybrid import _workspace as _ws
@@ -231,11 +232,7 @@ class HybridSet:
         if not self.fits(models):
             raise ValueError("HybridSet: the models must be hybrid bearings of one n")
         self.models = list(models)
-        self._q = np.ascontiguousarray(q, dtype=float)
-        self._omega = np.array([check_omega(w) for w in omegas], dtype=float)
-        self._clearance = np.array([m.bearing.clearance for m in self.models])
-        self._fs = np.array([m.bearing.force_scale(w)
-                             for m, w in zip(self.models, self._omega, strict=True)])
+        self._q, self._omega, self._clearance, self._fs = set_parameters(self.models, q, omegas)
         self._states = np.concatenate([m._state for m in self.models])
         self._active = np.stack([m._active for m in self.models])
         self._ws = np.stack([m._ws for m in self.models])
