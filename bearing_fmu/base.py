@@ -317,14 +317,50 @@ def check_omega(omega: float) -> float:
     return omega
 
 
-def set_parameters(models, q, omegas) -> tuple:
-    """``(q, omega, clearance, fs)`` of a set of film bearings as the arrays of a compiled set
-    call: the global-to-local rotations (nb, 2, 2), the speeds [rad/s] (:func:`check_omega`),
-    the radial clearances [m] and the force scales of Eq. (5) at those speeds [N]."""
-    omega = np.array([check_omega(w) for w in omegas], dtype=float)
-    return (np.ascontiguousarray(q, dtype=float), omega,
-            np.array([m.bearing.clearance for m in models]),
-            np.array([m.bearing.force_scale(w) for m, w in zip(models, omega, strict=True)]))
+class FilmBearingSet:
+    """Film bearings of one model evaluated in one compiled call, bit for bit the numbers of
+    one ``evaluate_global`` per bearing (a subclass gives the model's kernel: the hybrid set,
+    the short one). Holds the arrays every such call takes: the global-to-local rotations
+    ``_q`` (nb, 2, 2), the speeds ``_omega`` [rad/s], the radial clearances ``_clearance`` [m]
+    and the force scales of Eq. (5) at those speeds ``_fs`` [N].
+
+    Parameters
+    ----------
+    models : sequence of FilmBearingModel
+        Of the subclass's model (:meth:`fits`).
+    q : (nb, 2, 2) array
+        Global-to-local rotation of each bearing (:class:`bearing_fmu.frames.LocalFrame`).
+    omegas : (nb,) array
+        Shaft speed at each bearing [rad/s], > 0.
+    """
+
+    #: what :meth:`fits` asks of the models, for the error of a set that does not fit
+    kind = "film bearings"
+
+    def __init__(self, models, q, omegas):
+        if not self.fits(models):
+            raise ValueError(f"{type(self).__name__}: the models must be {self.kind}")
+        self.models = list(models)
+        self._q = np.ascontiguousarray(q, dtype=float)
+        self._omega = np.array([check_omega(w) for w in omegas], dtype=float)
+        self._clearance = np.array([m.bearing.clearance for m in self.models])
+        self._fs = np.array([m.bearing.force_scale(w)
+                             for m, w in zip(self.models, self._omega, strict=True)])
+
+    @staticmethod
+    def fits(models) -> bool:
+        """Whether the models can share one call."""
+        raise NotImplementedError
+
+    def raise_status(self, b, status, states) -> None:
+        """Raise the error of bearing ``b`` (0-based) whose call returned ``status`` at the
+        global journal states ``states`` (nb, 4) (its model's ``raise_status``), with its
+        index in ``bearing_index``."""
+        try:
+            self.models[b].raise_status(status, self._q[b], states[b], self._omega[b])
+        except BearingError as exc:
+            exc.bearing_index = int(b)
+            raise
 
 
 class FilmBearingModel(BearingModel):

@@ -36,12 +36,11 @@ import numpy as np
 from numba import njit
 
 from bearing_fmu.base import (
-    BearingError,
     BearingModel,
     FilmBearingModel,
+    FilmBearingSet,
     FilmForce,
     check_omega,
-    set_parameters,
 )
 from bearing_fmu.frames import film_law_global, film_state_local
 from bearing_fmu.reynolds import film_thickness, source, source_coefficients
@@ -237,9 +236,17 @@ class ShortBearing(FilmBearingModel):
         base class."""
         omega = check_omega(omega)
         b = self.bearing
-        if short_global(b.lambda_, _GAUSS_X, _GAUSS_W, q, state, omega, b.clearance,
-                        b.force_scale(omega), out) != 0:
-            BearingModel.evaluate_global(self, q, state, omega, out)  # raises the check's error
+        status = short_global(b.lambda_, _GAUSS_X, _GAUSS_W, q, state, omega, b.clearance,
+                              b.force_scale(omega), out)
+        if status != 0:
+            self.raise_status(status, q, state, omega)
+
+    def raise_status(self, status, q, state, omega):
+        """Raise the error of a failed :meth:`evaluate_global` (:func:`short_global`'s status
+        ``status`` at the global state ``state`` [m, m/s] of the frame ``q``): the state
+        check's error (:data:`BAD_STATE`, the kernel's only failure)."""
+        BearingModel.evaluate_global(self, q, state, omega, np.empty((5, 2)))
+        raise RuntimeError(f"short bearing: status {status} at a state it accepts")
 
     def pressure_field(self, xbar, ybar, xbar_dot=0.0, ybar_dot=0.0, n_xi=33):
         """Dimensionless pressure (theta [rad], xi [-], p[theta, xi]) of the short solution."""
@@ -247,26 +254,17 @@ class ShortBearing(FilmBearingModel):
         return _short_pressure_field(lam, xbar, ybar, xbar_dot, ybar_dot, n_xi=n_xi)
 
 
-class ShortSet:
+class ShortSet(FilmBearingSet):
     """Short bearings evaluated in one compiled call (:func:`short_set_global`): the numbers of
     one :meth:`ShortBearing.evaluate_global` per bearing, bit for bit, for a compiled caller
     (:mod:`orchestrator.coupling.fused`). The model has no memory: the set holds its
-    parameters only.
-
-    Parameters
-    ----------
-    models : sequence of ShortBearing
-    q : (nb, 2, 2) array
-        Global-to-local rotation of each bearing (:class:`bearing_fmu.frames.LocalFrame`).
-    omegas : (nb,) array
-        Shaft speed at each bearing [rad/s], > 0.
+    parameters only (:class:`bearing_fmu.base.FilmBearingSet`, and each bearing's L/D).
     """
 
+    kind = "short bearings"
+
     def __init__(self, models, q, omegas):
-        if not self.fits(models):
-            raise ValueError("ShortSet: the models must be short bearings")
-        self.models = list(models)
-        self._q, self._omega, self._clearance, self._fs = set_parameters(self.models, q, omegas)
+        super().__init__(models, q, omegas)
         self._lam = np.array([m.bearing.lambda_ for m in self.models])
 
     @staticmethod
@@ -286,17 +284,6 @@ class ShortSet:
         """The arguments of :func:`short_set_global` before the journal states and the output
         (7): what a compiled caller passes on."""
         return (self._lam, _GAUSS_X, _GAUSS_W, self._q, self._omega, self._clearance, self._fs)
-
-    def raise_status(self, b, status, states) -> None:
-        """Raise the error of bearing ``b`` (0-based) whose call returned ``status`` at the
-        global journal states ``states`` (nb, 4), with its index in ``bearing_index``."""
-        try:
-            BearingModel.evaluate_global(self.models[b], self._q[b], states[b], self._omega[b],
-                                         np.empty((5, 2)))
-        except BearingError as exc:
-            exc.bearing_index = int(b)
-            raise
-        raise RuntimeError(f"short bearing {b + 1}: status {status} at a state it accepts")
 
 
 def ocvirk_static_force(lambda_: float, eps: float) -> tuple[float, float]:

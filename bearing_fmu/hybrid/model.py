@@ -24,11 +24,11 @@ from bearing_fmu.base import (
     BearingError,
     BearingModel,
     FilmBearingModel,
+    FilmBearingSet,
     FilmForce,
     ModelOption,
     check_omega,
     check_state,
-    set_parameters,
 )
 from bearing_fmu.hybrid import _kernels as _k
 from bearing_fmu.hybrid import _workspace as _ws
@@ -209,30 +209,21 @@ class HybridBearing(FilmBearingModel):
         return th, xi, np.outer(a, g)
 
 
-class HybridSet:
+class HybridSet(FilmBearingSet):
     """Hybrid bearings of equal n evaluated in one compiled call
     (``bearing_fmu.hybrid._kernels.hybrid_set_global``): the numbers of one
     :meth:`HybridBearing.evaluate_global` per bearing, bit for bit, without the Python and the
     dispatch of four calls.
 
     The bearings' workspaces are moved into stacked arrays of which each bearing keeps a view,
-    so that its own methods (warm start, state, reset) act on the same memory.
-
-    Parameters
-    ----------
-    models : sequence of HybridBearing
-        Of one n (:meth:`fits`).
-    q : (nb, 2, 2) array
-        Global-to-local rotation of each bearing (:class:`bearing_fmu.frames.LocalFrame`).
-    omegas : (nb,) array
-        Shaft speed at each bearing [rad/s], > 0.
+    so that its own methods (warm start, state, reset) act on the same memory. Parameters as
+    :class:`bearing_fmu.base.FilmBearingSet`, the models hybrid bearings of one n.
     """
 
+    kind = "hybrid bearings of one n"
+
     def __init__(self, models, q, omegas):
-        if not self.fits(models):
-            raise ValueError("HybridSet: the models must be hybrid bearings of one n")
-        self.models = list(models)
-        self._q, self._omega, self._clearance, self._fs = set_parameters(self.models, q, omegas)
+        super().__init__(models, q, omegas)
         self._states = np.concatenate([m._state for m in self.models])
         self._active = np.stack([m._active for m in self.models])
         self._ws = np.stack([m._ws for m in self.models])
@@ -297,16 +288,6 @@ class HybridSet:
 
         numba.set_num_threads(self.threads)
         return (*args, self._status)
-
-    def raise_status(self, b, status, states) -> None:
-        """Raise the error of bearing ``b`` (0-based) whose call returned ``status`` at the
-        global journal states ``states`` (nb, 4), with its index in ``bearing_index``."""
-        try:
-            self.models[b].raise_status(status, self._q[b], states[b], self._omega[b])
-        except BearingError as exc:
-            exc.bearing_index = int(b)
-            raise
-
 
 def thread_count(threads, what: str) -> int:
     """``threads`` as a whole number from 1 to numba's ``NUMBA_NUM_THREADS`` (what

@@ -1,10 +1,10 @@
 """Blocks of coupled steps in one compiled call (:meth:`Master.steps`,
 :func:`orchestrator.coupling.fused.coupled_steps`) against the same steps one call each
 (:meth:`Master.step`, itself checked against the Python loop in ``test_fused``): the same
-bits, counters and errors, step for step, spur and helical, hybrid and linear bearings, with
-gear runouts, through the relaxation (on two threads: ``test_fused``, the module that compiles
-the threaded kernel), hybrid, short, linear and lumped bearings; steps that the compiled loop
-does not take end a block and take
+bits, counters and errors, step for step, spur and helical, hybrid, short, linear and lumped
+bearings, with gear runouts, through the relaxation (on two threads: ``test_fused``, the
+module that compiles the threaded kernel); steps that the compiled loop does not take end a
+block and take
 :meth:`Master.step`. The physics of the step is asserted elsewhere (the
 monolithic Newton, the golden run, the order); runs through the runner are compared with
 runs through FMUs by the FMU suites. Slaves the compiled loop does not take (other bearing
