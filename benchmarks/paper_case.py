@@ -64,6 +64,8 @@ TIMED = [
     ("master: linearise + mismatch", "bearing_fmu.affine.AffineLaws", "relinearise"),
     ("compiled coupled step", "orchestrator.coupling.fused.FusedStep", "step"),
     ("compiled coupled step", "orchestrator.coupling.fused.FusedStep", "steps"),
+    ("compiled coupled step", "orchestrator.coupling.fmi.steps.FmuSteps", "step"),
+    ("compiled coupled step", "orchestrator.coupling.fmi.steps.FmuSteps", "steps"),
     ("outputs + results writer", "orchestrator.run.results.ResultsWriter", "append"),
     ("outputs + results writer", "orchestrator.run.results.ResultsWriter", "append_rows"),
     ("outputs + results writer", "orchestrator.coupling.master.StructureSlave", "step_outputs"),
@@ -125,13 +127,16 @@ def timed_calls(targets=TIMED, counts: dict | None = None):
 
 @contextlib.contextmanager
 def python_loop():
-    """The master's Python loop instead of its compiled step (:mod:`orchestrator.coupling.
-    fused`), and the bearing FMUs' law through their Python instead of their native layer
+    """The master's Python loop instead of its compiled steps (:mod:`orchestrator.coupling.
+    fused`, :mod:`orchestrator.coupling.fmi.steps`), and the bearing FMUs' law through their
+    Python instead of their native layer
     (``fmu_src/native/patches/0011-native-bearing-law.patch``): the kernels these call
     without Python cannot be timed one by one."""
     with contextlib.ExitStack() as undo:
         for module, owner, name, value in (
                 ("orchestrator.coupling.fused", "FusedStep", "fits",
+                 staticmethod(lambda *a: False)),
+                ("orchestrator.coupling.fmi.steps", "FmuSteps", "fits",
                  staticmethod(lambda *a: False)),
                 ("fmu_src.slaves.bearing", "BearingSlave", "_fmi_native_law",
                  lambda self: None)):

@@ -46,9 +46,9 @@ from fmu_src.units import symbol
 __all__ = ["BEARINGS", "BEARING_RESOURCE", "GEAR_DEFAULT_CASE", "FmiVar", "ValueRefused",
            "bearing_fmu_name", "bearing_option_keys", "bearing_variables", "case_parameters",
            "connections", "gear_case_fields", "gear_parameters",
-           "gear_variables", "journal_output_names", "law_input_names", "pack_laws",
-           "parameter_field", "transmission_fields", "transmission_variables", "unpack_journal",
-           "unpack_law_arrays"]
+           "gear_variables", "journal_output_names", "law_input_names", "pack_law_arrays",
+           "pack_laws", "parameter_field", "transmission_fields", "transmission_variables",
+           "unpack_journal", "unpack_law_arrays"]
 
 
 class ValueRefused(ValueError):
@@ -265,13 +265,15 @@ def pack_laws(laws: AffineLaws, out: np.ndarray) -> None:
     it was linearised about; :meth:`bearing_fmu.affine.AffineLaws.expansion`)."""
     states, force, kb, cb = laws.expansion()
     c = np.ascontiguousarray
-    _pack(c(states, dtype=np.float64), c(force, dtype=np.float64), c(kb, dtype=np.float64),
-          c(cb, dtype=np.float64), out.reshape(4, 14))
+    pack_law_arrays(c(states, dtype=np.float64), c(force, dtype=np.float64),
+                    c(kb, dtype=np.float64), c(cb, dtype=np.float64), out.reshape(4, 14))
 
 
 @njit(cache=True)
-def _pack(states, force, kb, cb, out):
-    """:func:`pack_laws` on the arrays, compiled (a numpy slice per block pays a call each)."""
+def pack_law_arrays(states, force, kb, cb, out):
+    """:func:`pack_laws` on the arrays (states (4, 4), force (4, 2), kb, cb (4, 2, 2)) into
+    ``out`` (4, 14), compiled (a numpy slice per block pays a call each; the master's
+    compiled loop through the FMUs calls it too)."""
     for j in range(4):
         for r in range(2):
             out[j, r] = force[j, r]

@@ -80,8 +80,18 @@ def build_master(case: Case, in_process: bool = False, fmu_dir: Path | str | Non
         _share_bearings(bearings, threads, "the bearing FMUs" if fmus is not None or not
                         in_process else f"the {case['bearings.model']} bearings")
     announce_compilation(cold)  # after the FMUs' build: the kernels compile on first calls
-    fused = FusedStep(structure, bearings) if FusedStep.fits(structure, bearings) else None
-    return Master(structure, bearings, tol, max_it, fused=fused)
+    return Master(structure, bearings, tol, max_it, fused=_compiled_steps(structure, bearings))
+
+
+def _compiled_steps(structure, bearings):
+    """The master's steps in one compiled call for these slaves, or None (the master's
+    Python loop): in-process (:class:`orchestrator.coupling.fused.FusedStep`) or through
+    the FMUs (:class:`orchestrator.coupling.fmi.steps.FmuSteps`)."""
+    if FusedStep.fits(structure, bearings):
+        return FusedStep(structure, bearings)
+    from orchestrator.coupling.fmi.steps import FmuSteps
+
+    return FmuSteps(structure, bearings) if FmuSteps.fits(structure, bearings) else None
 
 
 def _share_bearings(bearings, threads: int, what: str) -> None:

@@ -8,7 +8,10 @@
 * :mod:`~orchestrator.coupling.fmi.structure`: the gear-shaft FMU as a StructureSlave
   (:class:`~orchestrator.coupling.fmi.structure.FmuStructure`, rollback with
   :class:`~orchestrator.coupling.fmi.structure.FmuState`);
-* :mod:`~orchestrator.coupling.fmi.cache`: built FMUs on disk and a case's system through them.
+* :mod:`~orchestrator.coupling.fmi.cache`: built FMUs on disk and a case's system through them;
+* :mod:`~orchestrator.coupling.fmi.steps`: the master's steps through them in one compiled call
+  (:class:`~orchestrator.coupling.fmi.steps.FmuSteps`), with the FMI functions called from
+  compiled code (:mod:`~orchestrator.coupling.fmi.calls`).
 """
 
 from orchestrator.coupling.fmi.bearings import FmuBearings

@@ -3,8 +3,8 @@ Python loop it replaces (:meth:`Master.step` without ``fused``): the same bits, 
 errors, step for step, spur and helical, hybrid, short, linear and lumped bearings, through
 the relaxation and the steps cut at contact events; the FD model keeps the Python loop.
 The physics of the step is asserted elsewhere (the monolithic Newton, the golden run, the
-order); through FMUs the Python loop runs, and the FMU suites compare it with in-process runs
-bit for bit."""
+order); the compiled steps through FMUs have their own comparison (``test_fmu_steps``), and the
+FMU suites compare the FMU runs with in-process runs bit for bit."""
 
 from __future__ import annotations
 
