@@ -256,6 +256,9 @@ class FmuSteps:
         return self._block(master, t, dt, t + np.arange(n) * dt)
 
     def _block(self, master, t: float, dt: float, times) -> StepBlock | None:
+        """The steps from ``times`` [s] (the block's first is t, the structure's) of dt; the
+        master's counters and laws and the structure's time and step count as the loop
+        leaves them."""
         st, bearings = self.structure, self.bearings
         if st.in_init or st.slave.fmu is None or not bearings.slaves:
             return None  # the Python loop leaves initialisation, or says what is closed
