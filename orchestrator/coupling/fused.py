@@ -22,9 +22,9 @@ It takes many steps in one call (:meth:`Master.steps
 (the step's plan, objects, counters, the results' row), about a fifth of a step, is paid per
 block; the structure plans the steps of a block ahead
 (:meth:`gear_fmu.structure.Structure.steps_plan`: the contact events are kinematic, known
-before the step is solved). :meth:`FusedStep.step` is a block of one step. What the compiled
+before the step is solved). A single step is a block of one step. What the compiled
 loop does not take (timing on, more sub-steps than :data:`gear_fmu.structure.MAX_PIECES`)
-goes through the Python loop: :meth:`FusedStep.step` returns None and the master iterates
+goes through the Python loop: the block is None and the master iterates
 itself. Failures come back as status codes and are raised in Python with the messages of the
 Python loop, after the steps of the block before the failed one are taken.
 """
@@ -45,9 +45,9 @@ from orchestrator.coupling.inprocess import InProcessStructure, ModelBearings
 from orchestrator.coupling.master import (
     RELAXATION,
     STALL,
+    CompiledSteps,
     CouplingError,
     StepBlock,
-    StepReport,
     not_converged,
 )
 
@@ -215,7 +215,7 @@ def coupled_steps(n, counts, slots, mc, g_k, g_const_k, s0_k, w_k, tables, event
             k, bad, b_status, relaxed, mismatch)
 
 
-class FusedStep:
+class FusedStep(CompiledSteps):
     """:meth:`~orchestrator.coupling.master.Master.step` as one :func:`coupled_steps` for an
     in-process structure (:class:`orchestrator.coupling.inprocess.InProcessStructure`) and
     in-process bearings (:class:`orchestrator.coupling.inprocess.ModelBearings`) that are
@@ -246,33 +246,11 @@ class FusedStep:
             return self.bearings.compiled_set.kernel_arguments()
         return self.bearings.affine_laws()
 
-    def step(self, master, t: float, dt: float) -> StepReport | None:
-        """The master's step from t to t + dt [s] (same arguments, counters and errors), or
-        None for a step the compiled loop does not take (module docstring): a block of one
-        step (:meth:`steps`)."""
-        block = self._block(master, t, dt, 1, lambda k: t)
-        if block is None:
-            return None
-        if block.error is not None:
-            raise block.error
-        return StepReport(int(block.iterations[0]), block.mismatch, block.bearing_force[0],
-                          master.laws, block.states[0])
-
-    def steps(self, master, first: int, dt: float, n: int) -> StepBlock | None:
-        """Up to ``n`` of the master's steps of dt, from step ``first`` (t = first dt [s]),
-        in one :func:`coupled_steps` call, until one fails (its error in the block, after the
-        steps before it are taken, as :meth:`step` raises it) or one would take the Python
-        loop (:meth:`gear_fmu.structure.Structure.steps_plan`). None when the next step
-        takes it."""
-        return self._block(master, first * dt, dt, n, lambda k: (first + k) * dt)
-
-    def steps_from(self, master, t: float, dt: float, n: int) -> StepBlock | None:
-        """:meth:`steps` from the time ``t`` [s] (the structure's), step k's time t + k dt."""
-        return self._block(master, t, dt, n, lambda k: t + k * dt)
-
     def _block(self, master, t: float, dt: float, n: int, time_of) -> StepBlock | None:
-        """:meth:`steps` from t [s]; ``time_of(k)``: the time [s] of the block's step k, as
-        the caller's messages give it."""
+        """Up to ``n`` steps from t [s] in one :func:`coupled_steps` call, until one fails or
+        one would take the Python loop (:meth:`gear_fmu.structure.Structure.steps_plan`);
+        ``time_of(k)``: the time [s] of the block's step k, as the caller's messages give
+        it."""
         st = self.structure.cycle.check_step(t, dt)
         arrays = self._bearing_arguments()
         plan = None if arrays is None else st.steps_plan(dt, n)

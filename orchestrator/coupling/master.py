@@ -57,6 +57,7 @@ from fmu_src.states import laws_arrays, laws_from_arrays
 __all__ = [
     "CHECKPOINT_KIND",
     "BearingSet",
+    "CompiledSteps",
     "CouplingError",
     "Master",
     "StepBlock",
@@ -235,6 +236,48 @@ class StepBlock:
     error: Exception | None = None
 
 
+class CompiledSteps(ABC):
+    """The master's steps as one compiled call per block of steps where the slaves allow it
+    (the master's ``fused``; :func:`orchestrator.coupling.system.build_master` gives it):
+    in-process (:class:`orchestrator.coupling.fused.FusedStep`) and through the FMUs
+    (:class:`orchestrator.coupling.fmi.steps.FmuSteps`). Each gives the bits, counters and
+    errors of the master's Python loop. A subclass says which slaves it takes (:meth:`fits`)
+    and takes a block (``_block``); the entry points are the master's."""
+
+    @staticmethod
+    @abstractmethod
+    def fits(structure, bearings) -> bool:
+        """Whether these slaves can take the compiled steps."""
+
+    @abstractmethod
+    def _block(self, master: Master, t: float, dt: float, n: int,
+               time_of) -> StepBlock | None:
+        """Up to ``n`` steps of dt from t [s] (the structure's time) until one fails (its
+        error in the block, after the steps before it are taken); ``time_of(k)``: the time
+        [s] of the block's step k, as the caller's messages give it. None when the next step
+        takes the Python loop."""
+
+    def step(self, master: Master, t: float, dt: float) -> StepReport | None:
+        """The master's step from t to t + dt [s] (same arguments, counters and errors), or
+        None for a step the compiled loop does not take: a block of one step."""
+        block = self._block(master, t, dt, 1, lambda k: t)
+        if block is None:
+            return None
+        if block.error is not None:
+            raise block.error
+        return StepReport(int(block.iterations[0]), block.mismatch, block.bearing_force[0],
+                          master.laws, block.states[0])
+
+    def steps(self, master: Master, first: int, dt: float, n: int) -> StepBlock | None:
+        """Up to ``n`` of the master's steps of dt from step ``first`` (t = first dt [s]) in
+        one compiled call (:meth:`Master.steps`)."""
+        return self._block(master, first * dt, dt, n, lambda k: (first + k) * dt)
+
+    def steps_from(self, master: Master, t: float, dt: float, n: int) -> StepBlock | None:
+        """:meth:`steps` from the time ``t`` [s] (the structure's), step k's time t + k dt."""
+        return self._block(master, t, dt, n, lambda k: t + k * dt)
+
+
 @dataclass
 class Master:
     """Couple a structure slave with a bearing set.
@@ -257,11 +300,11 @@ class Master:
     total_iterations: int = 0
     total_bearing_evaluations: int = 0
     relaxed_steps: int = 0  # steps that needed the relaxation (module docstring)
-    #: the same step as one compiled call where the slaves allow it
-    #: (:class:`orchestrator.coupling.fused.FusedStep`, given by
-    #: :func:`orchestrator.coupling.system.build_master`): ``fused.step(master, t, dt)``
-    #: returns the step's report, or None for a step this loop takes
-    fused: object | None = field(default=None, repr=False)
+    #: the same steps as one compiled call where the slaves allow it
+    #: (:class:`CompiledSteps`, given by :func:`orchestrator.coupling.system.build_master`):
+    #: ``fused.step(master, t, dt)`` returns the step's report, or None for a step this loop
+    #: takes
+    fused: CompiledSteps | None = field(default=None, repr=False)
 
     def _evaluate(self, states):
         self.total_bearing_evaluations += 1
@@ -381,7 +424,7 @@ class Master:
     def steps(self, first: int, dt: float, n: int) -> StepBlock | None:
         """Up to ``n`` steps of dt from step ``first`` (t = first dt [s]): the same steps as
         ``n`` calls of :meth:`step`, in one compiled call where the slaves allow it
-        (:meth:`orchestrator.coupling.fused.FusedStep.steps`), else by :meth:`step` in a loop
+        (:meth:`CompiledSteps.steps`), else by :meth:`step` in a loop
         that gathers the structure's outputs of each step for the block. A
         :class:`StepBlock` of the steps taken and the error of a step that failed (the steps
         before it taken), or None: take the next step with :meth:`step`."""

@@ -36,9 +36,9 @@ from orchestrator.coupling.fmi.structure import FmuStructure
 from orchestrator.coupling.master import (
     RELAXATION,
     STALL,
+    CompiledSteps,
     CouplingError,
     StepBlock,
-    StepReport,
     not_converged,
 )
 
@@ -193,7 +193,7 @@ def fmu_steps(n, times, dt, gear, law_vr, law_val, journal_vr, journal_val, outp
             force0)
 
 
-class FmuSteps:
+class FmuSteps(CompiledSteps):
     """:meth:`~orchestrator.coupling.master.Master.step` through the gear-shaft FMU
     (:class:`~orchestrator.coupling.fmi.structure.FmuStructure`) and bearing FMUs with the
     Jacobian outputs (:class:`~orchestrator.coupling.fmi.bearings.FmuBearings`) as one
@@ -233,36 +233,15 @@ class FmuSteps:
         return (isinstance(structure, FmuStructure) and isinstance(bearings, FmuBearings)
                 and bool(bearings.slaves) and not any(bearings.force_only))
 
-    def step(self, master, t: float, dt: float) -> StepReport | None:
-        """The master's step from t to t + dt [s] (same arguments, counters and errors), or
-        None for a step the compiled loop does not take: a block of one step."""
-        block = self._block(master, t, dt, np.array([t]))
-        if block is None:
-            return None
-        if block.error is not None:
-            raise block.error
-        return StepReport(int(block.iterations[0]), block.mismatch, block.bearing_force[0],
-                          master.laws, block.states[0])
-
-    def steps(self, master, first: int, dt: float, n: int) -> StepBlock | None:
-        """Up to ``n`` of the master's steps of dt from step ``first`` (t = first dt [s]) in
-        one :func:`fmu_steps` call, until one fails (its error in the block, after the steps
-        before it are taken, as the Python loop gives it). None when the FMUs take the
-        Python loop."""
-        return self._block(master, first * dt, dt, (first + np.arange(n)) * dt)
-
-    def steps_from(self, master, t: float, dt: float, n: int) -> StepBlock | None:
-        """:meth:`steps` from the time ``t`` [s] (the structure's), step k's time t + k dt."""
-        return self._block(master, t, dt, t + np.arange(n) * dt)
-
-    def _block(self, master, t: float, dt: float, times) -> StepBlock | None:
-        """The steps from ``times`` [s] (the block's first is t, the structure's) of dt; the
-        master's counters and laws and the structure's time and step count as the loop
-        leaves them."""
+    def _block(self, master, t: float, dt: float, n: int, time_of) -> StepBlock | None:
+        """Up to ``n`` steps from t [s] in one :func:`fmu_steps` call, step k from
+        ``time_of(k)`` [s]; the master's counters and laws and the structure's time and step
+        count as the loop leaves them."""
         st, bearings = self.structure, self.bearings
         if st.in_init or st.slave.fmu is None or not bearings.slaves:
             return None  # the Python loop leaves initialisation, or says what is closed
-        n, nb = len(times), len(bearings.slaves)
+        nb = len(bearings.slaves)
+        times = np.array([time_of(k) for k in range(n)], dtype=float)
         if self._mismatches is None or self._mismatches.size != master.max_iterations:
             self._mismatches = np.empty(master.max_iterations)
         rec = (np.empty((n, nb, 4)), np.empty((n, nb, 2)), np.empty((n, 6)),
@@ -273,7 +252,7 @@ class FmuSteps:
         n_steps = st.n_steps
         (count, relaxed_steps, outcome, it, status, bad, mismatch, kept, _, f0, kb, cb, x0,
          force0) = fmu_steps(
-            n, np.ascontiguousarray(times, dtype=float), float(dt), self._gear, self._law_vr,
+            n, times, float(dt), self._gear, self._law_vr,
             self._law_val, self._journal_vr, self._journal_val, self._output_vr,
             self._output_val, self._saved, self._bearing_calls, self._state_vr,
             self._law_out_vr, self._bearing_states, self._bearing_laws,
