@@ -57,7 +57,13 @@ def deferred_signals(signals=(signal.SIGINT, signal.SIGTERM),
 
 class Progress:
     """A one-line progress display on stderr, refreshed at most every ``every`` seconds; on a
-    stream that is not a terminal (a log file), one line every 10 s instead."""
+    stream that is not a terminal (a log file), one line every 10 s instead.
+
+    The time left is the work left at the rate since the first line that showed work done
+    ("?" before a second such line): the first block of a run carries its one-off costs (the
+    numba kernels compiled on a first run, the FMUs' first calls), which the average since the
+    start would spread over the whole run (12.6 s for the first 128 steps of a first run
+    through the FMUs, then 9 s for the other 65,408)."""
 
     def __init__(self, total: int, label: str = "", every: float = 0.5, stream=None,
                  enabled: bool = True):
@@ -69,6 +75,7 @@ class Progress:
         self.enabled = enabled
         self.start = time.perf_counter()
         self._last = -math.inf
+        self._first: tuple[float, int] | None = None  # (time [s], done) of the first work shown
 
     def update(self, done: int, extra: str = "") -> None:
         if not self.enabled:
@@ -79,12 +86,27 @@ class Progress:
         self._last = now
         elapsed = now - self.start
         frac = done / self.total if self.total else 1.0
-        eta = elapsed / frac - elapsed if frac > 0 else math.inf
+        eta = self._time_left(now, done)
+        left = f"{eta:6.1f}" if math.isfinite(eta) else f"{'?':>6}"
         bar = "#" * int(30 * frac)
         line = (f"{self.label} [{bar:<30}] {done}/{self.total} {100 * frac:5.1f} % "
-                f"{elapsed:6.1f} s, {eta:6.1f} s left {extra}")
+                f"{elapsed:6.1f} s, {left} s left {extra}")
         if self.tty:
             self.stream.write(f"\r{line}   " + ("\n" if done >= self.total else ""))
         else:
             self.stream.write(line + "\n")
         self.stream.flush()
+
+    def _time_left(self, now: float, done: int) -> float:
+        """Seconds left at the rate since the first line that showed work (class docstring);
+        inf while there is no such rate yet."""
+        if done >= self.total:
+            return 0.0
+        if self._first is None:
+            if done > 0:
+                self._first = (now, done)
+            return math.inf
+        t0, d0 = self._first
+        if done <= d0 or now <= t0:
+            return math.inf
+        return (self.total - done) * (now - t0) / (done - d0)
