@@ -289,6 +289,7 @@ class HybridSet(FilmBearingSet):
         numba.set_num_threads(self.threads)
         return (*args, self._status)
 
+
 def thread_count(threads, what: str) -> int:
     """``threads`` as a whole number from 1 to numba's ``NUMBA_NUM_THREADS`` (what
     :meth:`HybridSet.use_threads` takes); ValueError naming the value after ``what`` (such as

@@ -49,6 +49,7 @@ from orchestrator.coupling.master import (
     CouplingError,
     StepBlock,
     not_converged,
+    relaxed_law,
 )
 
 __all__ = ["FusedStep", "StepBlock", "coupled_steps"]
@@ -175,16 +176,9 @@ def coupled_steps(n, counts, slots, mc, g_k, g_const_k, s0_k, w_k, tables, event
                 outcome = ACCEPTED
                 f0, kb, cb = f0_new, kb_new, cb_new
                 break
-            mismatches[it - 1] = mismatch
-            if not relaxed and it >= 3 and mismatch > stall * mismatches[it - 3]:
-                relaxed = True
-            if relaxed:  # AffineLaws.blend, in its order
-                r = 1.0 - relaxation
-                law_f0 = relaxation * f0_new + r * law_f0
-                law_kb = relaxation * kb_new + r * law_kb
-                law_cb = relaxation * cb_new + r * law_cb
-            else:
-                law_f0, law_kb, law_cb = f0_new, kb_new, cb_new
+            relaxed, law_f0, law_kb, law_cb = relaxed_law(
+                it, mismatch, mismatches, relaxed, stall, relaxation, f0_new, kb_new, cb_new,
+                law_f0, law_kb, law_cb)
         if outcome != ACCEPTED:
             return (i, relaxed_steps, total_kept, length_kept, f0, kb, cb, outcome, it,
                     status, piece, k, bad, b_status, relaxed, mismatch)

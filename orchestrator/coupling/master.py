@@ -47,6 +47,7 @@ from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 
 import numpy as np
+from numba import njit
 
 from bearing_fmu.affine import AffineLaws
 from bearing_fmu.blas_threads import one_blas_thread
@@ -64,6 +65,7 @@ __all__ = [
     "StepReport",
     "StructureSlave",
     "decode_checkpoint",
+    "relaxed_law",
 ]
 
 #: weight of the new linearisation in a relaxed iteration (module docstring): the law used next
@@ -74,6 +76,25 @@ RELAXATION = 0.5
 STALL = 0.5
 #: the kind tag of :meth:`Master.checkpoint` states (:mod:`fmu_src.state_codec`)
 CHECKPOINT_KIND = "gsb.master_checkpoint"
+
+
+@njit(cache=True)
+def relaxed_law(it, mismatch, mismatches, relaxed, stall, relaxation, f0_new, kb_new, cb_new,
+                f0, kb, cb):
+    """:meth:`Master.step`'s rule after iteration ``it`` (1-based) of a step, for the compiled
+    steps (:class:`CompiledSteps`): its ``mismatch`` goes into ``mismatches[it - 1]``; the step
+    is relaxed from the iteration whose mismatch exceeds ``stall`` times the one two iterations
+    earlier (or stays so); the next law is the new linearisation ``f0_new, kb_new, cb_new``,
+    or once relaxed :meth:`bearing_fmu.affine.AffineLaws.blend` of it with the law used
+    ``f0, kb, cb`` (weight ``relaxation``), in its order. Returns ``(relaxed, f0, kb, cb)``."""
+    mismatches[it - 1] = mismatch
+    if not relaxed and it >= 3 and mismatch > stall * mismatches[it - 3]:
+        relaxed = True
+    if not relaxed:
+        return relaxed, f0_new, kb_new, cb_new
+    r = 1.0 - relaxation
+    return (relaxed, relaxation * f0_new + r * f0, relaxation * kb_new + r * kb,
+            relaxation * cb_new + r * cb)
 
 
 class CouplingError(RuntimeError):

@@ -40,6 +40,7 @@ from orchestrator.coupling.master import (
     CouplingError,
     StepBlock,
     not_converged,
+    relaxed_law,
 )
 
 __all__ = ["FmuSteps", "fmu_steps"]
@@ -157,18 +158,14 @@ def fmu_steps(n, times, dt, gear, law_vr, law_val, journal_vr, journal_val, outp
                 f0, kb, cb, x0, force0, expanded = (f0_new, kb_new, cb_new, states.copy(),
                                                     force.copy(), True)
                 break
-            mismatches[it - 1] = mismatch
-            if not relaxed and it >= 3 and mismatch > stall * mismatches[it - 3]:
-                relaxed = True
-                relaxed_steps += 1
-            if relaxed:  # AffineLaws.blend, in its order: a law given by f0 alone
-                r = 1.0 - relaxation
-                law_f0 = relaxation * f0_new + r * law_f0
-                law_kb = relaxation * kb_new + r * law_kb
-                law_cb = relaxation * cb_new + r * law_cb
+            was_relaxed = relaxed
+            relaxed, law_f0, law_kb, law_cb = relaxed_law(
+                it, mismatch, mismatches, relaxed, stall, relaxation, f0_new, kb_new, cb_new,
+                law_f0, law_kb, law_cb)
+            relaxed_steps += relaxed and not was_relaxed
+            if relaxed:  # a blended law is given by f0 alone
                 law_expanded = False
             else:
-                law_f0, law_kb, law_cb = f0_new, kb_new, cb_new
                 law_x, law_force, law_expanded = states.copy(), force.copy(), True
             status = fmi_state(gear[SET_STATE], comp, saved[0])
             if status > 1:
