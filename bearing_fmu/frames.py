@@ -121,13 +121,14 @@ def film_law_global(q, res, fs, clearance, omega, out):
     ybar) and of dFbar/d(xbar_dot, ybar_dot)) in SI units and global components into ``out``:
     F = fs Fbar [N], Kb = -fs/C dFbar/dxbar [N/m], Cb = -fs/(C omega) dFbar/dxbar_dot
     [N s/m] (:meth:`bearing_fmu.base.FilmBearingModel.evaluate`, ``fs`` its force scale [N]),
-    then :func:`law_to_global`; compiled."""
-    loc = np.empty((5, 2))
+    then :func:`law_to_global`; compiled. ``res`` is scratch: it is scaled in place to the
+    local law in SI units (no allocation, so the kernels that call this need no memory
+    management, ``bearing_fmu.hybrid._workspace.kernel``)."""
     sk = -(fs / clearance)
     sc = -(fs / (clearance * omega))
     for c in range(2):
-        loc[0, c] = fs * res[0, c]
+        res[0, c] = fs * res[0, c]
         for r in (1, 2):
-            loc[r, c] = sk * res[r, c]
-            loc[r + 2, c] = sc * res[r + 2, c]
-    law_to_global(q, loc, out)
+            res[r, c] = sk * res[r, c]
+            res[r + 2, c] = sc * res[r + 2, c]
+    law_to_global(q, res, out)

@@ -14,8 +14,6 @@ from Eq. (5) on the nodes (:func:`bearing_fmu.reynolds.nodal_force`): ``dFbar = 
 
 from __future__ import annotations
 
-from numba import njit
-
 from bearing_fmu.hybrid._lcp import substitute2
 from bearing_fmu.hybrid._ritz import km_node
 from bearing_fmu.hybrid._workspace import (
@@ -33,10 +31,11 @@ from bearing_fmu.hybrid._workspace import (
     A,
     W,
     Z,
+    kernel,
 )
 
 
-@njit(cache=True)
+@kernel
 def film_jacobian(ws, active, order, runs, nr, g, jss, dsig, sc, ss, jx, jv, st):
     """dFbar/d(x, y, xdot, ydot) into jx, jv (row = force component) with P frozen, through
     t (section 6); dt/dq into the state record ``st`` (the predictor of the next call)."""

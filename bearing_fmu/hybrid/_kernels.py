@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
 from numba import njit, prange
 
 from bearing_fmu.frames import film_law_global, film_state_local
@@ -34,6 +33,7 @@ from bearing_fmu.hybrid._workspace import (
     SIN,
     A,
     Z,
+    kernel,
 )
 from bearing_fmu.hybrid.axial import T_MAX, axial_integrals
 from bearing_fmu.reynolds import nodal_force, source, source_coefficients
@@ -45,7 +45,7 @@ from bearing_fmu.reynolds import nodal_force, source, source_coefficients
 CORRECTOR_ERROR = 0.02
 
 
-@njit(cache=True)
+@kernel
 def _stationarity(ws, active, g):
     """a.K a, a.M a, a.F and c = (A_t a - b_t)_P into ws[CV] (section 5), in one sweep."""
     n = active.shape[0]
@@ -76,7 +76,7 @@ def _stationarity(ws, active, g):
     return qk, qm, af
 
 
-@njit(cache=True)
+@kernel
 def solve_t(ws, active, order, runs, g, coef, lam, t, tol, maxit, pinned):
     """LCP (section 4) and Newton on J*(t) (section 5) for the source in ws[FB].
 
@@ -139,7 +139,7 @@ def solve_t(ws, active, order, runs, g, coef, lam, t, tol, maxit, pinned):
     return t, nt, lcp_total, status, jss, nr, dt
 
 
-@njit(cache=True)
+@kernel
 def _cold_set(ws, active, pinned):
     """The pressurised set of a cold start: the nodes where the source f is positive."""
     for i in range(active.shape[0]):
@@ -148,7 +148,7 @@ def _cold_set(ws, active, pinned):
         active[0] = False
 
 
-@njit(cache=True)
+@kernel
 def _degenerate(st, active, ws, iws, coef, g, dsig, lam, tol, maxit, pinned, jx, jv):
     """f = 0 identically (e.g. centred journal at rest, or the half-speed whirl x = 2 ydot,
     y = -2 xdot): p = 0, F = 0. The force is positively homogeneous in the source f, so its
@@ -157,7 +157,7 @@ def _degenerate(st, active, ws, iws, coef, g, dsig, lam, tol, maxit, pinned, jx,
     n = active.shape[0]
     order = iws[0]
     runs = iws[1]
-    fpm = np.empty((2, 2, 2))  # [source cos/sin, sign +/-, component]
+    fpm = ws[SCR, 4:12]  # F of source s (cos, sin), sign (+, -): components at 4 s + 2 sign
     tot_nt = 0
     tot_lcp = 0
     status = 0
@@ -173,10 +173,11 @@ def _degenerate(st, active, ws, iws, coef, g, dsig, lam, tol, maxit, pinned, jx,
             tot_lcp += nlcp
             if stat != 0:
                 status = stat
-            nodal_force(ws[A], ws[COS], ws[SIN], g[G0] * dsig, fpm[s, sg])
+            f = 4 * s + 2 * sg
+            nodal_force(ws[A], ws[COS], ws[SIN], g[G0] * dsig, fpm[f:f + 2])
     for r in range(2):
-        dcos = 0.5 * (fpm[0, 0, r] - fpm[0, 1, r])  # dF/d(source amplitude of cos)
-        dsin = 0.5 * (fpm[1, 0, r] - fpm[1, 1, r])
+        dcos = 0.5 * (fpm[r] - fpm[2 + r])  # dF/d(source amplitude of cos)
+        dsin = 0.5 * (fpm[4 + r] - fpm[6 + r])
         # f = (y + 2 xdot) cos + (2 ydot - x) sin
         jx[r, 0] = -dsin
         jx[r, 1] = dcos
@@ -191,7 +192,7 @@ def _degenerate(st, active, ws, iws, coef, g, dsig, lam, tol, maxit, pinned, jx,
         ws[A, i] = 0.0
 
 
-@njit(cache=True)
+@kernel
 def _rotate(m, ca, sa):
     """m <- R m R^T, R = [[ca, -sa], [sa, ca]]."""
     a00 = m[0, 0]
@@ -210,7 +211,7 @@ def _rotate(m, ca, sa):
     m[1, 1] = b10 * sa + b11 * ca
 
 
-@njit(cache=True)
+@kernel
 def hybrid_kernel(state, x0, y0, xd0, yd0, want_jac, active, ws, iws, trig, coef, res):
     """Force and Jacobians of the hybrid method at the dimensionless state (x0, y0, xd0, yd0).
 
@@ -339,7 +340,7 @@ def hybrid_kernel(state, x0, y0, xd0, yd0, want_jac, active, ws, iws, trig, coef
 BAD_STATE = -1
 
 
-@njit(cache=True)
+@kernel
 def hybrid_global(state, active, ws, iws, trig, coef, q, s, omega, clearance, fs, res, out):
     """:func:`hybrid_kernel` in SI units and the global frame: one call per bearing.
 
@@ -347,9 +348,10 @@ def hybrid_global(state, active, ws, iws, trig, coef, q, s, omega, clearance, fs
     LocalFrame`), ``s`` is the global journal state [s, t, sdot, tdot] [m, m/s], ``omega`` the
     speed [rad/s], ``fs`` the force scale of Eq. (5) at omega [N]. Writes ``out`` (5, 2): row 0
     the film force [N], rows 1-2 Kb = -dF/dX [N/m], rows 3-4 Cb = -dF/dXdot [N s/m], global
-    (F = Q^T F_loc, K = Q^T K_loc Q); ``res`` (5, 2) receives the dimensionless result. The
-    arithmetic is that of :meth:`bearing_fmu.base.FilmBearingModel.evaluate` and the frame
-    conversions, in the same order. Returns the kernel's status, or :data:`BAD_STATE` for a
+    (F = Q^T F_loc, K = Q^T K_loc Q); ``res`` (5, 2) is scratch (the dimensionless law, then
+    the local one in SI units). The arithmetic is that of
+    :meth:`bearing_fmu.base.FilmBearingModel.evaluate` and the frame conversions, in the same
+    order. Returns the kernel's status, or :data:`BAD_STATE` for a
     non-finite state or an eccentricity ratio >= 1 (nothing evaluated).
     """
     xb, yb, xdb, ydb, ok = film_state_local(q, s, clearance, omega)
@@ -362,7 +364,7 @@ def hybrid_global(state, active, ws, iws, trig, coef, q, s, omega, clearance, fs
     return 0
 
 
-@njit(cache=True)
+@kernel
 def hybrid_set_global(states, active, ws, iws, trig, coef, q, omega, clearance, fs, res, s,
                       out):
     """:func:`hybrid_global` for a set of bearings in one call, in their order, with their

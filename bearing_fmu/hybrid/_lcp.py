@@ -9,15 +9,13 @@ the runs of consecutive active nodes serve the Newton on t and the Jacobians too
 
 from __future__ import annotations
 
-from numba import njit
-
-from bearing_fmu.hybrid._workspace import CP, LO, NEW, PIV, A, B, D
+from bearing_fmu.hybrid._workspace import CP, LO, NEW, PIV, A, B, D, kernel
 
 #: extrapolating active-set passes before falling back to the plain primal-dual active set
 EXTRAP_PASSES = 12
 
 
-@njit(cache=True)
+@kernel
 def factor_solve(ws, active, order, runs, rhs, out):
     """Twisted Thomas factors of A_PP over the runs of consecutive active nodes, and the
     solution of A_PP out_P = rhs_P (out = 0 off P), in one walk of the ring.
@@ -60,7 +58,7 @@ def factor_solve(ws, active, order, runs, rhs, out):
     return nr
 
 
-@njit(cache=True)
+@kernel
 def _twisted_run(ws, order, k0, k1, rhs, out):
     """Factors and solution on the run of positions k0 <= k < k1 (:func:`factor_solve`).
 
@@ -116,7 +114,7 @@ def _twisted_run(ws, order, k0, k1, rhs, out):
     _back_substitute(order, cp, k0, m, nb, x, out)
 
 
-@njit(cache=True)
+@kernel
 def _back_substitute(order, cp, k0, m, nb, x, out):
     """The two halves of a run of :func:`_twisted_run` (positions from k0, middle m, nb
     bottom-up steps) substituted back outwards from the middle's solution x: ``out`` holds
@@ -135,7 +133,7 @@ def _back_substitute(order, cp, k0, m, nb, x, out):
         out[it] = out[it] - cp[k0] * xt
 
 
-@njit(cache=True)
+@kernel
 def substitute(ws, active, order, runs, nr, rhs, out):
     """Solve A_PP out_P = rhs_P with the factors of :func:`factor_solve`; out = 0 off P."""
     n = out.shape[0]
@@ -174,7 +172,7 @@ def substitute(ws, active, order, runs, nr, rhs, out):
         _back_substitute(order, cp, k0, m, nb, x, out)
 
 
-@njit(cache=True)
+@kernel
 def substitute2(ws, active, order, runs, nr, r0, o0):
     """Two solves at once (rows r0, r0 + 1 -> rows o0, o0 + 1), as :func:`substitute`: the
     two chains of each half side by side."""
@@ -252,7 +250,7 @@ def substitute2(ws, active, order, runs, nr, r0, o0):
             os_[it] = os_[it] - cp[k0] * ts
 
 
-@njit(cache=True)
+@kernel
 def solve_lcp(ws, active, order, runs, pinned, maxpass):
     """Primal-dual active set for a >= 0, w = A a - b >= 0, a.w = 0 (section 4).
 

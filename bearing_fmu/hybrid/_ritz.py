@@ -10,8 +10,6 @@ rule per element and assembles ``A = G2 K + G1 M``, ``b = G0 F``.
 
 from __future__ import annotations
 
-from numba import njit
-
 from bearing_fmu.hybrid._workspace import (
     FB,
     G0,
@@ -33,11 +31,12 @@ from bearing_fmu.hybrid._workspace import (
     X0,
     B,
     D,
+    kernel,
 )
 from bearing_fmu.reynolds import film_thickness
 
 
-@njit(cache=True)
+@kernel
 def element_integrals(x, y, trig, ws, delta, jac):
     """Element stiffness k_e = int w l'^2 and mass moments int w l_a l_b, 3-point Gauss, for
     w = h^3 (Eq. 3) and (with ``jac``) w = dh^3/dx = -3h^2 cos, dh^3/dy = -3h^2 sin; then the
@@ -104,7 +103,7 @@ def element_integrals(x, y, trig, ws, delta, jac):
         im = i
 
 
-@njit(cache=True, inline="always")
+@kernel(inline="always")
 def km_node(ke, m11, m12, m22, a, im, i, ip):
     """``((K a)_i, (M a)_i)`` for the element integrals ``ke, m11, m12, m22`` (one weight of
     :func:`element_integrals`) at node i of the ring, ``im, ip`` its neighbours i - 1, i + 1:
@@ -113,7 +112,7 @@ def km_node(ke, m11, m12, m22, a, im, i, ip):
             (m22[im] + m11[i]) * a[i] + m12[i] * a[ip] + m12[im] * a[im])
 
 
-@njit(cache=True)
+@kernel
 def assemble(g, ws):
     """A = G2 K + G1 M (diagonal and couplings), b = G0 F; returns max of the couplings
     (A is a Stieltjes matrix, as the active-set method needs, when it is < 0)."""

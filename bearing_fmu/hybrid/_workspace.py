@@ -15,9 +15,18 @@ The axial integrals of Eq. (6) and their t-derivatives travel in a 9-vector ``g`
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
+from numba import njit
+
+#: the decorator of the kernels (``@kernel``, ``@kernel(inline="always")``): numba's
+#: ``njit``, cached, and without numba's reference counting (NRT). The kernels work only in
+#: the memory laid out here and never allocate, so counting references buys nothing, while it
+#: cost an atomic increment and decrement for every row view such as ``ws[A]``: a quarter of
+#: a hybrid call's time in the paper's case. A kernel that allocates does not compile under it.
+kernel = functools.partial(njit, cache=True, _nrt=False)
 
 # --- the state record --------------------------------------------------------------------------
 STATE = np.dtype([
@@ -54,8 +63,9 @@ COS, SIN = 25, 26  # cos, sin at the nodes (solution frame)
 NEW = 27  # next active set (0/1) during a PDAS pass
 W = 28  # rows 28-29: the Jacobian's adjoint vectors A_PP^-1 (cos, sin)_P
 SCR = 30  # rows 30-33: small scratch arrays (views, no allocation in the hot path), within
-#   the first 16 columns (the smallest n): rows 0-1 jx, jv (0-3), row 1 c.da0 and dt_q (4-11),
-#   row 2 the axial integrals g (0-8) and the force (9-10), row 3 s_q, cos.da0, sin.da0 (0-11)
+#   the first 16 columns (the smallest n): rows 0-1 jx, jv (0-3), row 0 the degenerate case's
+#   four forces (4-11), row 1 c.da0 and dt_q (4-11), row 2 the axial integrals g (0-8) and the
+#   force (9-10), row 3 s_q, cos.da0, sin.da0 (0-11)
 WS_ROWS = 34
 
 # --- the axial-integral vector g ---------------------------------------------------------------

@@ -29,7 +29,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+
+from bearing_fmu.hybrid._workspace import kernel
 
 __all__ = ["AXIAL_COEF", "axial_coefficients", "axial_integrals", "axial_shape"]
 
@@ -66,7 +67,7 @@ def axial_coefficients(nt: int = N_TERMS) -> np.ndarray:
 AXIAL_COEF = axial_coefficients()
 
 
-@njit(cache=True, error_model="numpy")
+@kernel(error_model="numpy")
 def _series(c, row, t):
     """Value, first and second t-derivative of sum_k c[row, k] t^k (Horner)."""
     at = abs(t)
@@ -81,7 +82,7 @@ def _series(c, row, t):
     return v, d1, d2
 
 
-@njit(cache=True, error_model="numpy")
+@kernel(error_model="numpy")
 def axial_integrals(t, lam, coef, out):
     """G0, G1, G2 and their first and second t-derivatives.
 

@@ -107,7 +107,7 @@ class HybridBearing(FilmBearingModel):
         (self._state, self._active, self._ws, self._iws,
          self._trig) = _ws.new_workspace(self.n, bearing.lambda_, self.tol, self.maxit,
                                           self.pinned_start)
-        self._res = np.empty((5, 2))  # the dimensionless result of evaluate_global
+        self._res = np.empty((5, 2))  # evaluate_global's scratch (the law)
         self._scale = (math.nan, math.nan)  # (omega, force scale of Eq. 5) of the last call
 
     def reset(self) -> None:
