@@ -25,7 +25,7 @@ from numba import njit
 #: ``njit``, cached, and without numba's reference counting (NRT). The kernels work only in
 #: the memory laid out here and never allocate, so counting references buys nothing, while it
 #: cost an atomic increment and decrement for every row view such as ``ws[A]``: a quarter of
-#: a profile of the paper's bearing calls (the calls ran 1.17-1.21 x faster without it). A
+#: a profile of the paper's bearing calls (the calls ran 1.12-1.20 x faster without it). A
 #: kernel that allocates does not compile under it.
 kernel = functools.partial(njit, cache=True, _nrt=False)
 
