@@ -351,8 +351,8 @@ def hybrid_global(state, active, ws, iws, trig, coef, q, s, omega, clearance, fs
     (F = Q^T F_loc, K = Q^T K_loc Q); ``res`` (5, 2) is scratch (the dimensionless law, then
     the local one in SI units). The arithmetic is that of
     :meth:`bearing_fmu.base.FilmBearingModel.evaluate` and the frame conversions, in the same
-    order. Returns the kernel's status, or :data:`BAD_STATE` for a
-    non-finite state or an eccentricity ratio >= 1 (nothing evaluated).
+    order. Returns the kernel's status, or :data:`BAD_STATE` for a non-finite state or an
+    eccentricity ratio >= 1 (nothing evaluated).
     """
     xb, yb, xdb, ydb, ok = film_state_local(q, s, clearance, omega)
     if not ok:
