@@ -158,11 +158,7 @@ def _turn_set(active, ws, dpsi, delta):
     solution is unique (A is a Stieltjes matrix), and every Newton pass on t ends on it
     whatever the set it starts from."""
     n = active.shape[0]
-    if dpsi > math.pi:
-        dpsi -= 2.0 * math.pi
-    elif dpsi < -math.pi:
-        dpsi += 2.0 * math.pi
-    shift = round(dpsi / delta) % n
+    shift = round(dpsi / delta) % n  # a turn of 2 pi is n nodes: the modulo wraps dpsi
     if shift == 0:
         return
     old = ws[NEW]  # free until the active-set method fills it
