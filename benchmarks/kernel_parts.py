@@ -11,7 +11,8 @@ solution, then times, each in a compiled loop of ``--calls`` calls (best of 3):
   active-set pass (Thomas factors and solve, then the test of the set), the factors and solve
   alone, one more solve with the factors;
 * the structure's step pieces at the state of the last step: the right-hand side and tangent
-  (:func:`gear_fmu.step.assembly.prepare_step`), its history product alone, one mesh
+  (:func:`gear_fmu.step.assembly.prepare_step`) at a step's first iteration and at a later one
+  (the history products memoised), its history product alone, one mesh
   evaluation (all slices, tangent assembled), one Newton solve of the condensed system.
 
 The mean cost of a call in the run (more Newton and active-set passes) is in
@@ -35,7 +36,7 @@ from fmu_src.case import load_case
 from fmu_src.description import time_step
 from gear_fmu.loads import unbalance_into
 from gear_fmu.mesh.element import _mesh_kernel
-from gear_fmu.step.assembly import prepare_step
+from gear_fmu.step.assembly import history_memo, prepare_step
 from gear_fmu.step.condensation import N_GEAR, NC
 from gear_fmu.step.contact_loop import _newton_solve
 from gear_fmu.step.newmark import newmark_history
@@ -93,9 +94,9 @@ def _substitute(n, ws, active, iws, nr, out):
 
 
 @njit
-def _prepare(n, mc, g, g_const, x, v, a, f_c, unb, f0, kb, cb, s0, dt):
+def _prepare(n, mc, g, g_const, x, v, a, f_c, unb, f0, kb, cb, s0, dt, memo):
     for _ in range(n):
-        prepare_step(mc, g, g_const, x, v, a, f_c, unb, f0, kb, cb, s0, dt, N_GEAR)
+        prepare_step(mc, g, g_const, x, v, a, f_c, unb, f0, kb, cb, s0, dt, N_GEAR, memo)
 
 
 @njit
@@ -186,7 +187,9 @@ def main() -> None:
     laws = master.laws
     step_args = (st._mc, cond.g, g_const, st.x, st.v, st.a, st._f_c, unb, laws.f0, laws.kb, laws.cb,
                  cond.s0, dt)
-    s_lin, z0, _ = prepare_step(*step_args, N_GEAR)
+    s_lin, z0, _ = prepare_step(*step_args, N_GEAR, np.empty(0))
+    memo = history_memo(st.x.size)
+    prepare_step(*step_args, N_GEAR, memo)  # the products kept, as after a first iteration
     print(f"structure step ({st._mc.shape[0]} x {st._mc.shape[1]} history product and its "
           f"{cond.g.shape[0]} x {cond.g.shape[1]} condensation, {NC} condensed "
           f"DOFs, {st.mesh.n_lines} x {st.mesh.n_slices} mesh slices)")
@@ -194,7 +197,9 @@ def main() -> None:
     q = np.ascontiguousarray(st.x[:N_GEAR])
     force, stiff = _mesh(1, True, angle, q, *st._mesh_arrays)
     xc = np.ascontiguousarray(st.x[:NC])
-    rows = [("right-hand side and tangent (prepare_step)", timed(n, _prepare, *step_args)),
+    rows = [("right-hand side and tangent (prepare_step)",
+             timed(n, _prepare, *step_args, np.empty(0))),
+            ("... at a later iteration of the step (memo)", timed(n, _prepare, *step_args, memo)),
             ("... its history product alone",
              timed(n, _history, st._mc, cond.g, st.x, st.v, st.a, dt)),
             ("one mesh evaluation, tangent assembled",

@@ -59,7 +59,13 @@ from gear_fmu.loads import (
 from gear_fmu.mesh.element import MeshElement, MeshState, transmission_error
 from gear_fmu.modal.analyses import reference_damping
 from gear_fmu.modal.damping import DampingModel
-from gear_fmu.step.assembly import check_laws, check_laws_fast, finish_step, prepare_step
+from gear_fmu.step.assembly import (
+    check_laws,
+    check_laws_fast,
+    finish_step,
+    history_memo,
+    prepare_step,
+)
 from gear_fmu.step.condensation import (
     N_BEARING,
     N_GEAR,
@@ -80,6 +86,7 @@ __all__ = ["StepInfo", "StepsPlan", "Structure", "StructureLoads", "StructureSta
 INITIAL_APPROACH_ROTATION = 1e-3
 _NO_ERROR = np.zeros(12)  # no runout or mounting error
 _NO_SET = np.zeros(0, dtype=np.bool_)  # no contact set known
+_NO_MEMO = np.zeros(0)  # no memo of the history products (a sub-step after the first)
 #: sub-steps of one step that :meth:`Structure.steps_plan` takes (a spur step of the paper's
 #: case has at most 2, a helical one 3); a step with more takes the Python path
 MAX_PIECES = 4
@@ -211,6 +218,9 @@ class Structure:
         self.active = None
         self.mesh_state = None
         self._dyn_cache: dict[float, tuple] = {}
+        #: the history products of the last step's start (gear_fmu.step.assembly), reused
+        #: when the master takes that step again; emptied with C (set_damping)
+        self._memo = history_memo(self._m.shape[0])
         # the compiled steps' condensations, by sub-step length
         self._condensations = CondensationSlots()
         self.damping_model = zeta if isinstance(zeta, DampingModel) else DampingModel(
@@ -240,6 +250,7 @@ class Structure:
         self._damping_full = damping_full
         self._c = self._permute(damping_full)
         self._mc = np.hstack([self._m, self._c])  # b = [M C] @ [p; q] (prepare_step)
+        self._memo = history_memo(self._m.shape[0])
         self._dyn_cache.clear()
         self._condensations.clear()
 
@@ -433,11 +444,13 @@ class Structure:
         what = f"Newmark step {self.n_steps + 1}"
         pieces = self._pieces(dt)
         if len(pieces) == 1 and pieces[0][3] is None:
-            info = self._advance(dt, t1, pieces[0][2], f0, kb, cb, what)
+            info = self._advance(dt, t1, pieces[0][2], f0, kb, cb, what, self._memo)
         else:
             info = StepInfo(t1, 0, 0.0)
-            for h, te, before, after in pieces:
-                sub = self._advance(h, te, before, f0, kb, cb, what)
+            for p, (h, te, before, after) in enumerate(pieces):
+                # only the first starts from the step's state (advance_pieces)
+                memo = self._memo if p == 0 else _NO_MEMO
+                sub = self._advance(h, te, before, f0, kb, cb, what, memo)
                 info.iterations += sub.iterations
                 info.residual = max(info.residual, sub.residual)
                 info.residuals += sub.residuals
@@ -487,18 +500,19 @@ class Structure:
         if not (dt > 0.0 and math.isfinite(dt)):
             raise ValueError(f"time step dt = {dt!r} s must be finite and > 0")
 
-    def _advance(self, h, t1, angle, f0, kb, cb, what) -> StepInfo:
+    def _advance(self, h, t1, angle, f0, kb, cb, what, memo) -> StepInfo:
         """One Newmark step of length h to t1 (mesh at ``angle``); updates X, Xd, Xdd and the
-        contact state, not the time."""
+        contact state, not the time. ``memo``: of the history products
+        (:func:`gear_fmu.step.assembly.history_products`), or empty."""
         timing = self.timing
         if self._mesh_arrays is not None and timing is None:
-            return self._advance_compiled(h, t1, angle, f0, kb, cb, what)
+            return self._advance_compiled(h, t1, angle, f0, kb, cb, what, memo)
         t0 = time.perf_counter() if timing is not None else 0.0
         cond, g_const = self._dynamic(h)
         x, v, a = self.x, self.v, self.a
         unb = unbalance_force(self._unb, self._omega, t1)  # Eq. (10)
         s_lin, z0, y = prepare_step(self._mc, cond.g, g_const, x, v, a, self._f_c, unb, f0, kb,
-                                     cb, cond.s0, h, N_GEAR)
+                                     cb, cond.s0, h, N_GEAR, memo)
         f_scale = max(self._f_scale, math.sqrt(float(np.sum(f0 * f0))))
         if timing is not None:
             timing["assembly"] += time.perf_counter() - t0
@@ -513,11 +527,11 @@ class Structure:
             timing["assembly"] += time.perf_counter() - t0
         return info
 
-    def _advance_compiled(self, h, t1, angle, f0, kb, cb, what) -> StepInfo:
+    def _advance_compiled(self, h, t1, angle, f0, kb, cb, what, memo) -> StepInfo:
         """:meth:`_advance` in one compiled call (:func:`gear_fmu.step.kernel.advance`, the
         same arithmetic as the Python loop)."""
         head, tail, outputs = self._advance_inputs(h, t1, angle)
-        status, k, total, length = advance(*head, f0, kb, cb, *tail, *outputs)
+        status, k, total, length = advance(*head, f0, kb, cb, *tail, *outputs, memo)
         return self._advance_result(status, k, total, length, outputs, t1, what)
 
     def _advance_inputs(self, h, t1, angle):
@@ -625,7 +639,7 @@ class Structure:
             (counts, index, self._mc, *slots.arrays(), tables, events, err, err_after),
             (self.x.copy(), self.v.copy(), self.a.copy()),
             (self._f_c, self._unb_coef, mesh.has_errors, *self._mesh_arrays, self._f_scale,
-             self.tol, self.max_iter, self._gear_compliance()),
+             self.tol, self.max_iter, self._gear_compliance(), self._memo),
             self._advance_outputs(), kept, [[te for _, te, _, _ in p] for p in steps])
 
     def end_steps(self, plan: StepsPlan, count: int, total: float, length: float) -> None:

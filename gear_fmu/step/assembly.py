@@ -10,29 +10,82 @@ and updates velocities and accelerations (Eq. 12). :func:`check_laws` validates 
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 
 from gear_fmu.step.newmark import newmark_coefficients, newmark_history, newmark_kinematics
 
-__all__ = ["check_laws", "check_laws_fast", "finish_step", "prepare_step"]
+__all__ = ["check_laws", "check_laws_fast", "finish_step", "history_memo", "history_products",
+           "prepare_step"]
+
+
+def history_memo(n: int) -> np.ndarray:
+    """An empty memo of :func:`history_products` for n DOFs."""
+    memo = np.zeros(5 * n + 1)
+    memo[0] = np.nan  # no dt equals NaN: the first call computes
+    return memo
 
 
 @njit(cache=True)
-def prepare_step(mc, g, g_const, x, v, a, f_c, unb, f0, kb, cb, s0, dt, ng):
+def _same_bits(u, w):
+    """u and w have the same bits (NaN never does: the memo then computes)."""
+    return u == w and (u != 0.0 or math.copysign(1.0, u) == math.copysign(1.0, w))
+
+
+@njit(cache=True)
+def history_products(mc, g, x, v, a, dt, nc, memo):
+    """``b = [M C] [p; q]``, the history terms of Eq. (12)
+    (:func:`gear_fmu.step.newmark.newmark_history`), and ``out = g b_r`` (the condensation
+    of its r part), memoised.
+
+    The master computes a step again at each of its iterations from the same (X, Xd, Xdd)
+    and dt, and these two products (107 x 214 and 107 x 87 in the paper's case) do not
+    depend on the bearing laws: they were a fifth of the structure's step. ``memo``
+    (:func:`history_memo`, 5n + 1) keeps the bits of the last inputs ``[dt, X, Xd, Xdd]``
+    and both products; when the inputs have the same bits, the products are the memo's,
+    otherwise they are computed and kept. The memo belongs to one [M C] and one
+    condensation per dt (:class:`gear_fmu.structure.Structure` empties it when C changes).
+    An empty memo (size 0) computes without keeping. Returns ``(b, out)``, each (n,).
+    """
+    n = x.shape[0]
+    if memo.shape[0] == 5 * n + 1:
+        hit = _same_bits(memo[0], dt)
+        i = 0
+        while hit and i < n:
+            hit = (_same_bits(memo[1 + i], x[i]) and _same_bits(memo[1 + n + i], v[i])
+                   and _same_bits(memo[1 + 2 * n + i], a[i]))
+            i += 1
+        if hit:
+            return memo[1 + 3 * n:1 + 4 * n], memo[1 + 4 * n:]
+    pq = newmark_history(x, v, a, dt)
+    b = mc @ pq
+    out = g @ b[nc:]  # -W^T b_r, then A_rr^-1 b_r
+    if memo.shape[0] == 5 * n + 1:
+        memo[0] = dt
+        memo[1:1 + n] = x
+        memo[1 + n:1 + 2 * n] = v
+        memo[1 + 2 * n:1 + 3 * n] = a
+        memo[1 + 3 * n:1 + 4 * n] = b
+        memo[1 + 4 * n:] = out
+    return b, out
+
+
+@njit(cache=True)
+def prepare_step(mc, g, g_const, x, v, a, f_c, unb, f0, kb, cb, s0, dt, ng, memo):
     """Right-hand side and condensed tangent of one Newmark step (Eq. 12, 14, 16).
 
     ``mc`` = [M C] (n, 2n) turns the Newmark history [p; q] into b = M p + C q; ``g``
-    (:class:`gear_fmu.step.condensation.Condensation`) condenses its r part. Only ``g``
-    depends on the step's length: a new length costs its condensation, not a product with
-    [M C] (what a step that does not recur with the mesh period asks at most cut steps).
+    (:class:`gear_fmu.step.condensation.Condensation`) condenses its r part
+    (:func:`history_products`, with its ``memo``). Only ``g`` depends on the step's length:
+    a new length costs its condensation, not a product with [M C] (what a step that does
+    not recur with the mesh period asks at most cut steps).
     Returns ``s_lin`` (nc, nc) = S0 + Kb + c1 Cb, ``z0`` (nc,) and ``y`` = A_rr^-1 b_r.
     """
     nc = s0.shape[0]
     _, c1, _ = newmark_coefficients(dt)
-    pq = newmark_history(x, v, a, dt)
-    b = mc @ pq
-    out = g @ b[nc:]  # -W^T b_r, then A_rr^-1 b_r
+    b, out = history_products(mc, g, x, v, a, dt, nc, memo)
     z0 = np.empty(nc)
     for i in range(nc):
         z0[i] = b[i] + out[i] + g_const[i] + f_c[i]

@@ -52,13 +52,14 @@ def advance(mc, g, g_const, s0, w, x, v, a, f_c, unb_coef, t1, f0, kb, cb, h,  #
             angle, err, has_err, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1, pitch2,
             cache, tangent, used0, has_used, f_scale, tol, max_iter,  # contact loop (Fig. 4)
             force, stiff, active, inside, delta, load, xis, zout, residuals,  # mesh state out
-            x1, v1, a1):  # state out
+            x1, v1, a1, memo):  # state out; the history products' memo
     """One Newmark step of length ``h`` with the mesh element at pinion ``angle`` [rad]:
     Eq. (12), (14), (16) assembled, Newton-Raphson with the contact loop, Eq. (13), (15).
 
     Inputs as :func:`gear_fmu.step.assembly.prepare_step` (``g``, ``g_const``, ``s0``, ``w``
-    from the condensation at h; the unbalance of Eq. (10) at the step's end ``t1`` [s] from
-    ``unb_coef``, :func:`gear_fmu.loads.unbalance_into`) and
+    from the condensation at h, ``memo`` that of its history products; the unbalance of
+    Eq. (10) at the step's end ``t1`` [s] from ``unb_coef``,
+    :func:`gear_fmu.loads.unbalance_into`) and
     :func:`gear_fmu.step.contact_loop.solve_condensed`
     (``used0`` / ``has_used``: the contact set the first iterate is consistent with); ``err``
     the error displacement of the gear nodes added to the mesh's input (runout, mounting) when
@@ -71,7 +72,8 @@ def advance(mc, g, g_const, s0, w, x, v, a, f_c, unb_coef, t1, f0, kb, cb, h,  #
     """
     unb = np.empty(4)
     unbalance_into(unb_coef, t1, unb)
-    s_lin, z0, y = prepare_step(mc, g, g_const, x, v, a, f_c, unb, f0, kb, cb, s0, h, N_GEAR)
+    s_lin, z0, y = prepare_step(mc, g, g_const, x, v, a, f_c, unb, f0, kb, cb, s0, h, N_GEAR,
+                                 memo)
     f_scale = max(f_scale, math.sqrt(sum_squares(f0)))
     xc = x[:NC] + h * v[:NC]
     used = used0.copy()
@@ -150,14 +152,16 @@ def advance_pieces(n_pieces, mc, g, g_const, s0, w, table, event, err, err_after
                    f_c, unb_coef, f0, kb, cb, has_err, geo, xi_tab, k_tab, zs, dl, n_lines, dev,
                    pitch1, pitch2, cache, tangent, used0, has_used, f_scale, tol, max_iter,
                    m_gear, force, stiff, active, inside, delta, load, xis, zout, residuals, x1,
-                   v1, a1):
+                   v1, a1, memo):
     """A step cut at its contact events (:meth:`gear_fmu.structure.Structure.step`) in one
     call: sub-step ``p < n_pieces`` is :func:`advance` of length ``table[p, 0]`` [s] to
     ``table[p, 1]`` [s] with the mesh at pinion angle ``table[p, 2]`` [rad] (``g[p]`` ...
     ``w[p]`` its condensation, ``err[p]`` its error displacement), from the state the sub-step
     before left, then :func:`contact_event` at ``table[p, 3]`` (error displacement
     ``err_after[p]``) where ``event[p]``; the arithmetic of the Python loop over the
-    sub-steps.
+    sub-steps. Only the first sub-step starts from the step's state, the same at each of the
+    master's iterations: it alone uses ``memo``
+    (:func:`gear_fmu.step.assembly.history_products`).
 
     Returns ``(status, sub-step, passes, total mesh load [N], contact length [m])``: the
     status of the last :func:`advance` and which sub-step it was; the final state in ``x1,
@@ -167,12 +171,13 @@ def advance_pieces(n_pieces, mc, g, g_const, s0, w, table, event, err, err_after
     used = used0
     status, k, total, length = CONVERGED, 0, 0.0, 0.0
     for p in range(n_pieces):
+        memo_p = memo if p == 0 else memo[:0]
         status, k, total, length = advance(
             mc, g[p], g_const[p], s0[p], w[p], xs, vs, as_, f_c, unb_coef, table[p, 1], f0, kb,
             cb, table[p, 0], table[p, 2], err[p], has_err, geo, xi_tab, k_tab, zs, dl,
             n_lines, dev, pitch1, pitch2, cache, tangent, used, has_used, f_scale, tol,
             max_iter, force, stiff, active, inside, delta, load, xis, zout, residuals, x1, v1,
-            a1)
+            a1, memo_p)
         if status != CONVERGED:
             return status, p, k, total, length
         if event[p]:

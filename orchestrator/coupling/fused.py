@@ -104,7 +104,7 @@ def _evaluate_set(bearings, states, out):
 def coupled_steps(n, counts, slots, mc, g_k, g_const_k, s0_k, w_k, tables, events, errs,
                   errs_after, x, v, a, f_c, unb_coef, has_err, geo, xi_tab, k_tab, zs, dl,
                   n_lines, dev, pitch1, pitch2, cache, tangent, f_scale, s_tol, s_max_iter,
-                  m_gear,  # the structure (Structure.steps_plan)
+                  m_gear, memo,  # the structure (Structure.steps_plan)
                   force, stiff, active, inside, delta, load, xis, zout, residuals, x1, v1, a1,
                   k_force, k_stiff, k_active, k_inside, k_delta, k_load, k_xis, k_zout,
                   bearings, states, out,  # the bearing set (evaluate_set)
@@ -119,7 +119,9 @@ def coupled_steps(n, counts, slots, mc, g_k, g_const_k, s0_k, w_k, tables, event
     (:class:`gear_fmu.step.condensation.CondensationSlots`; four slots,
     :data:`gear_fmu.structure.MAX_PIECES`) and row p of ``tables[i]``, ``events[i]``,
     ``errs[i]`` and ``errs_after[i]`` (row 0 of these for every step without gear errors):
-    :func:`gear_fmu.step.kernel.advance_pieces`'s arguments. ``x, v, a`` (the state) and
+    :func:`gear_fmu.step.kernel.advance_pieces`'s arguments, with ``memo`` the structure's
+    memo of its history products (:func:`gear_fmu.step.assembly.history_products`: an
+    iteration after the first reuses them). ``x, v, a`` (the state) and
     ``k_force`` ... ``k_zout`` (the mesh evaluation the last accepted step ended on;
     ``k_active`` its contact set, the next step's) are updated after each accepted step;
     ``force`` ... ``a1`` are the iterations' buffers. ``bearings`` the set's arrays
@@ -157,7 +159,7 @@ def coupled_steps(n, counts, slots, mc, g_k, g_const_k, s0_k, w_k, tables, event
                 errs_after[row], x, v, a, f_c, unb_coef, law_f0, law_kb, law_cb, has_err, geo,
                 xi_tab, k_tab, zs, dl, n_lines, dev, pitch1, pitch2, cache, tangent, k_active,
                 True, f_scale, s_tol, s_max_iter, m_gear, force, stiff, active, inside, delta,
-                load, xis, zout, residuals, x1, v1, a1)
+                load, xis, zout, residuals, x1, v1, a1, memo)
             if status != CONVERGED:
                 outcome = STRUCTURE_FAILED
                 break

@@ -24,6 +24,8 @@ import scipy.linalg
 from fmu_src import description
 from fmu_src.case import load_case
 from fmu_src.examples import paper_system
+from gear_fmu.step.assembly import history_memo, history_products
+from gear_fmu.step.condensation import NC
 from gear_fmu.step.newmark import NewmarkConvergenceError
 from gear_fmu.structure import Structure, StructureLoads, StructureState
 from tests.helpers import T_IN, LineMesh
@@ -247,6 +249,95 @@ def test_the_compiled_step_equals_the_python_loop_bit_for_bit():
     for a, b in zip(compiled[:6], loop[:6], strict=True):
         np.testing.assert_array_equal(a, b)
     assert compiled[6:] == loop[6:]
+
+
+def _spur_structure(steps):
+    """The paper's spur structure (mesh element) after its static solution and ``steps``
+    steps with the module's laws; and its time step [s]."""
+    case = load_case("baguet2010_spur")
+    dt = description.time_step(case)
+    st = description.structure(case)
+    st.static(F0, KB, CB)
+    for _ in range(steps):
+        st.step(dt, F0, KB, CB)
+    return st, dt
+
+
+def _same_state(a, b):
+    for name in ("x", "v", "a", "active"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+    np.testing.assert_array_equal(a.mesh_state.force, b.mesh_state.force)
+
+
+def test_a_step_taken_again_with_other_laws_is_the_step_of_a_fresh_structure():
+    """The master takes a step again from the same state at each iteration, with other
+    bearing laws; the structure keeps the step's history products, which do not depend on
+    them (:func:`gear_fmu.step.assembly.history_products`). Taken again, and taken from
+    there on, the steps give what a structure that never took the first one gives, to the
+    bit, and so does a step taken again after the damping matrix changed."""
+    st, dt = _spur_structure(3)
+    saved = st.get_state()
+    st.step(dt, F0, KB, CB)  # the master's first iteration
+    st.set_state(saved)
+    laws = (1.5 * F0, 0.7 * KB, 1.3 * CB)
+    st.step(dt, *laws)
+    fresh, _ = _spur_structure(3)
+    fresh.step(dt, *laws)
+    _same_state(st, fresh)
+    for _ in range(2):
+        st.step(dt, *laws)
+        fresh.step(dt, *laws)
+    _same_state(st, fresh)
+    # the damping changed between two iterations of one step (a run replaces it before its
+    # first step): the products of the old C must not serve
+    saved = st.get_state()
+    st.step(dt, *laws)
+    st.set_state(saved)
+    damping = 1.2 * st._damping_full
+    st.set_damping(damping)
+    st.step(dt, *laws)
+    fresh.set_damping(damping)
+    fresh.step(dt, *laws)
+    _same_state(st, fresh)
+
+
+def test_the_history_memo_answers_only_inputs_of_the_same_bits():
+    """The memo of the history products (:func:`gear_fmu.step.assembly.history_products`)
+    serves a call only when dt, X, Xd and Xdd have the bits of the call that filled it: a
+    relative change of 1e-9 in one entry of any of them, or of dt, gives the products of a
+    call without the memo, and a zero of the other sign is another input."""
+    st, dt = _spur_structure(2)
+    cond, _ = st._dynamic(dt)
+    n = st.x.size
+    base = [st.x.copy(), st.v.copy(), st.a.copy(), dt]
+    no_memo = np.empty(0)
+
+    def products(inputs, memo):
+        x, v, a, h = inputs
+        return [p.copy() for p in history_products(st._mc, cond.g, x, v, a, h, NC, memo)]
+
+    plain = products(base, no_memo)
+    for which in range(4):
+        other = [u.copy() if isinstance(u, np.ndarray) else u for u in base]
+        if which == 3:
+            other[3] = dt * (1.0 + 1e-9)
+        else:
+            other[which][7] *= 1.0 + 1e-9
+        memo = history_memo(n)
+        for _ in range(2):  # filled, then served from the memo
+            for p, q in zip(products(base, memo), plain, strict=True):
+                np.testing.assert_array_equal(p, q)
+        changed = products(other, memo)
+        expected = products(other, no_memo)
+        assert not np.array_equal(expected[0], plain[0])  # the change reaches the products
+        for p, q in zip(changed, expected, strict=True):
+            np.testing.assert_array_equal(p, q)
+    zero = [np.zeros(n), np.zeros(n), np.zeros(n), dt]
+    memo = history_memo(n)
+    products(zero, memo)
+    zero[1][5] = -0.0
+    products(zero, memo)
+    assert math.copysign(1.0, memo[1 + n + 5]) == -1.0  # the memo took the new input
 
 
 @pytest.mark.parametrize("mesh", ["stand-in", "mesh element"])
