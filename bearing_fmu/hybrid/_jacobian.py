@@ -7,14 +7,14 @@ b_q)_P``, ``J*'' dt_q = -(s_q + c.da0)`` and ``da_q = da0 - z dt_q``. The force 
 needs da_q only through ``e.da0`` for e = cos, sin (at the nodes of P) and c, and A_PP is
 symmetric: ``e.da0 = -(A_PP^-1 e).r_q``, ``c.da0 = -z.r_q``. So two solves with the Thomas
 factors of the LCP (the adjoint vectors ``w = A_PP^-1 (cos, sin)_P``) serve the four
-derivatives, and ``z = A_PP^-1 c`` is the Newton on t's own. The force derivative then follows
+derivatives, and ``z = A_PP^-1 c`` is the Newton on t's own; the three are solved together
+(:func:`bearing_fmu.hybrid._lcp.substitute3`). The force derivative then follows
 from Eq. (5) on the nodes (:func:`bearing_fmu.reynolds.nodal_force`): ``dFbar = -Delta sigma
 (G0 sum da_i (cos, sin)_i + G0' dt sum a_i (cos, sin)_i)``.
 """
 
 from __future__ import annotations
 
-from bearing_fmu.hybrid._lcp import substitute2
 from bearing_fmu.hybrid._ritz import km_node
 from bearing_fmu.hybrid._workspace import (
     COS,
@@ -36,15 +36,16 @@ from bearing_fmu.hybrid._workspace import (
 
 
 @kernel
-def film_jacobian(ws, active, order, runs, nr, g, jss, dsig, sc, ss, jx, jv, st):
+def film_jacobian(ws, active, g, jss, dsig, sc, ss, jx, jv, st):
     """dFbar/d(x, y, xdot, ydot) into jx, jv (row = force component) with P frozen, through
-    t (section 6); dt/dq into the state record ``st`` (the predictor of the next call)."""
+    t (section 6); dt/dq into the state record ``st`` (the predictor of the next call). The
+    adjoint vectors w (ws[W]) and z (ws[Z]) come solved with the last pass's factors
+    (:func:`bearing_fmu.hybrid._kernels.solve_t`)."""
     n = active.shape[0]
     a = ws[A]
     z = ws[Z]
     cs = ws[COS]
     sn = ws[SIN]
-    substitute2(ws, active, order, runs, nr, COS, W)  # the adjoint w = A_PP^-1 (cos, sin)_P
     wc = ws[W]
     wsn = ws[W + 1]
     # r_q = (A_q a - b_q)_P,  s_q = 1/2 a.(G2' K_q + G1' M_q) a - G0' F_q.a, with

@@ -15,7 +15,7 @@ from numba import njit, prange
 
 from bearing_fmu.frames import film_law_global, film_state_local
 from bearing_fmu.hybrid._jacobian import film_jacobian
-from bearing_fmu.hybrid._lcp import solve_lcp, substitute
+from bearing_fmu.hybrid._lcp import solve_lcp, substitute, substitute3
 from bearing_fmu.hybrid._ritz import assemble, element_integrals, km_node
 from bearing_fmu.hybrid._workspace import (
     COS,
@@ -78,11 +78,15 @@ def _stationarity(ws, active, g):
 
 
 @kernel
-def solve_t(ws, active, order, runs, g, coef, lam, t, tol, maxit, pinned):
+def solve_t(ws, active, order, runs, g, coef, lam, t, tol, maxit, pinned, adjoint):
     """LCP (section 4) and Newton on J*(t) (section 5) for the source in ws[FB].
 
-    Leaves a (ws[A]), the factors of A_PP, c, z at the converged t. Returns
-    ``(t, Newton passes, active-set passes, status, J*'', runs, last step)``.
+    Leaves a (ws[A]), the factors of A_PP, c, z at the converged t; with ``adjoint``, also
+    the Jacobian's adjoint vectors w (ws[W]; :func:`bearing_fmu.hybrid._jacobian.film_jacobian`),
+    solved at each pass with z (:func:`bearing_fmu.hybrid._lcp.substitute3`): the pass that
+    converges needs them, and the others (0.2 per call) waste less than a separate solve
+    costs. Returns
+    ``(t, Newton passes, active-set passes, status, J*'', last step)``.
     """
     n = active.shape[0]
     a = ws[A]
@@ -109,7 +113,10 @@ def solve_t(ws, active, order, runs, g, coef, lam, t, tol, maxit, pinned):
         qk, qm, af = _stationarity(ws, active, g)
         js = 0.5 * (g[G2_T] * qk + g[G1_T] * qm) - g[G0_T] * af
         jss = 0.5 * (g[G2_TT] * qk + g[G1_TT] * qm) - g[G0_TT] * af
-        substitute(ws, active, order, runs, nr, cv, z)
+        if adjoint:
+            substitute3(ws, active, order, runs, nr)
+        else:
+            substitute(ws, active, order, runs, nr, cv, z)
         for i in range(n):
             jss -= cv[i] * z[i]
         if jss > 0.0:
@@ -137,7 +144,7 @@ def solve_t(ws, active, order, runs, g, coef, lam, t, tol, maxit, pinned):
         lim = max(2.0, 0.5 * abs(t))
         dt = min(max(dt, -lim), lim)
         t = min(max(t + dt, -9.0), T_MAX)
-    return t, nt, lcp_total, status, jss, nr, dt
+    return t, nt, lcp_total, status, jss, dt
 
 
 @kernel
@@ -189,8 +196,8 @@ def _degenerate(st, active, ws, iws, coef, g, dsig, lam, tol, maxit, pinned, jx,
             for i in range(n):
                 ws[FB, i] = sign * dsig * (ws[COS, i] if s == 0 else ws[SIN, i])
             _cold_set(ws, active, pinned)
-            _, nt, nlcp, stat, _, _, _ = solve_t(ws, active, order, runs, g, coef, lam, 1.0,
-                                                 tol, maxit, pinned)
+            _, nt, nlcp, stat, _, _ = solve_t(ws, active, order, runs, g, coef, lam, 1.0,
+                                              tol, maxit, pinned, False)
             tot_nt += nt
             tot_lcp += nlcp
             if stat != 0:
@@ -308,8 +315,8 @@ def hybrid_kernel(state, x0, y0, xd0, yd0, want_jac, active, ws, iws, trig, coef
         st.predict = False
         order = iws[0]
         runs = iws[1]
-        t, nt, nlcp, status, jss, nr, dt = solve_t(ws, active, order, runs, g, coef, lam, t,
-                                                   tol, maxit, pinned)
+        t, nt, nlcp, status, jss, dt = solve_t(ws, active, order, runs, g, coef, lam, t,
+                                               tol, maxit, pinned, want_jac)
         st.t = t
         st.t_iterations = nt
         st.lcp_iterations = nlcp
@@ -320,7 +327,7 @@ def hybrid_kernel(state, x0, y0, xd0, yd0, want_jac, active, ws, iws, trig, coef
             return status
         sc, ss = nodal_force(ws[A], ws[COS], ws[SIN], g[G0] * dsig, fr)  # Eq. (5)
         if want_jac:
-            film_jacobian(ws, active, order, runs, nr, g, jss, dsig, sc, ss, jx, jv, st)
+            film_jacobian(ws, active, g, jss, dsig, sc, ss, jx, jv, st)
             if not pinned:
                 qp = st.q_prev
                 qp[0] = x0

@@ -9,7 +9,7 @@ the runs of consecutive active nodes serve the Newton on t and the Jacobians too
 
 from __future__ import annotations
 
-from bearing_fmu.hybrid._workspace import CP, LO, NEW, PIV, A, B, D, kernel
+from bearing_fmu.hybrid._workspace import COS, CP, CV, LO, NEW, PIV, A, B, D, W, Z, kernel
 
 #: extrapolating active-set passes before falling back to the plain primal-dual active set
 EXTRAP_PASSES = 12
@@ -173,19 +173,25 @@ def substitute(ws, active, order, runs, nr, rhs, out):
 
 
 @kernel
-def substitute2(ws, active, order, runs, nr, r0, o0):
-    """Two solves at once (rows r0, r0 + 1 -> rows o0, o0 + 1), as :func:`substitute`: the
-    two chains of each half side by side."""
+def substitute3(ws, active, order, runs, nr):
+    """Three solves with the factors of :func:`factor_solve`, each the arithmetic of
+    :func:`substitute`: the Newton on t's z = A_PP^-1 c (row CV -> Z) and the Jacobian's
+    adjoint w = A_PP^-1 (cos, sin)_P (rows COS, SIN -> W, W + 1; docs/hybrid-method.md,
+    section 6). The three chains of each half run side by side: the factors are loaded once
+    and the processor overlaps the chains."""
     n = active.shape[0]
     lo = ws[LO]
     cp = ws[CP]
     piv = ws[PIV]
-    rc = ws[r0]
-    rs = ws[r0 + 1]
-    oc = ws[o0]
-    os_ = ws[o0 + 1]
+    r0 = ws[CV]
+    rc = ws[COS]
+    rs = ws[COS + 1]
+    o0 = ws[Z]
+    oc = ws[W]
+    os_ = ws[W + 1]
     for i in range(n):
         if not active[i]:
+            o0[i] = 0.0
             oc[i] = 0.0
             os_[i] = 0.0
     for r in range(nr):
@@ -194,9 +200,11 @@ def substitute2(ws, active, order, runs, nr, r0, o0):
         m = (k0 + k1) // 2
         nb = k1 - 1 - m
         lt = 0.0
-        tc = 0.0  # top-down y of each right-hand side, then the solution going up
+        t0 = 0.0
+        tc = 0.0
         ts = 0.0
-        bc = 0.0  # bottom-up y, then the solution going down
+        b0 = 0.0
+        bc = 0.0
         bs = 0.0
         for j in range(nb):
             it = order[k0 + j]
@@ -205,30 +213,39 @@ def substitute2(ws, active, order, runs, nr, r0, o0):
             ib = order[kb]
             ub = lo[ib]
             pb = piv[kb]
+            t0 = (r0[it] - lt * t0) * p
             tc = (rc[it] - lt * tc) * p
             ts = (rs[it] - lt * ts) * p
+            o0[it] = t0
             oc[it] = tc
             os_[it] = ts
+            b0 = (r0[ib] - ub * b0) * pb
             bc = (rc[ib] - ub * bc) * pb
             bs = (rs[ib] - ub * bs) * pb
+            o0[ib] = b0
             oc[ib] = bc
             os_[ib] = bs
             lt = lo[it]
         if m - k0 > nb:
             it = order[m - 1]
             p = piv[m - 1]
+            t0 = (r0[it] - lt * t0) * p
             tc = (rc[it] - lt * tc) * p
             ts = (rs[it] - lt * ts) * p
+            o0[it] = t0
             oc[it] = tc
             os_[it] = ts
             lt = lo[it]
         im = order[m]
         um = lo[im] if nb > 0 else 0.0
         p = piv[m]
+        t0 = (r0[im] - lt * t0 - um * b0) * p
         tc = (rc[im] - lt * tc - um * bc) * p
         ts = (rs[im] - lt * ts - um * bs) * p
+        o0[im] = t0
         oc[im] = tc
         os_[im] = ts
+        b0 = t0
         bc = tc
         bs = ts
         for j in range(nb):
@@ -236,16 +253,21 @@ def substitute2(ws, active, order, runs, nr, r0, o0):
             ct = cp[m - 1 - j]
             ib = order[m + 1 + j]
             cb = cp[m + 1 + j]
+            t0 = o0[it] - ct * t0
             tc = oc[it] - ct * tc
             ts = os_[it] - ct * ts
+            o0[it] = t0
             oc[it] = tc
             os_[it] = ts
+            b0 = o0[ib] - cb * b0
             bc = oc[ib] - cb * bc
             bs = os_[ib] - cb * bs
+            o0[ib] = b0
             oc[ib] = bc
             os_[ib] = bs
         if m - k0 > nb:
             it = order[k0]
+            o0[it] = o0[it] - cp[k0] * t0
             oc[it] = oc[it] - cp[k0] * tc
             os_[it] = os_[it] - cp[k0] * ts
 

@@ -178,9 +178,10 @@ def test_degenerate_state_has_zero_force_and_finite_jacobian():
 @pytest.mark.parametrize("seed", range(6))
 def test_factors_solve_a_pp_as_a_dense_solve(seed):
     """The twisted Thomas factors (both ends of each run towards its middle) against numpy's
-    dense solve of A_PP: one right-hand side (factor_solve), one more (substitute) and two at
-    once (substitute2), on a cyclic Stieltjes matrix with runs of 1 to 40 nodes, the last one
-    ending at the ring's end (measured: within 4.3e-16 of the largest entry)."""
+    dense solve of A_PP: one right-hand side (factor_solve), one more (substitute) and three at
+    once (substitute3: the rows of c, cos and sin), on a cyclic Stieltjes matrix with runs of 1
+    to 40 nodes, the last one ending at the ring's end (measured: within 4.3e-16 of the largest
+    entry)."""
     from bearing_fmu.hybrid import _lcp
     from bearing_fmu.hybrid import _workspace as w
 
@@ -198,20 +199,22 @@ def test_factors_solve_a_pp_as_a_dense_solve(seed):
     active[-7:] = [False, True, False, False, True, True, True]  # a run of 1, a run to n - 1
     active[0] = False
     iws = np.zeros((2, 2 * n), dtype=np.int64)
-    rhs = rng.standard_normal((4, n))
-    ws[w.COS:w.COS + 2] = rhs[2:]  # the rows the Jacobian's adjoint solves
+    rhs = rng.standard_normal((5, n))
+    ws[w.COS:w.COS + 2] = rhs[2:4]  # the rows the Jacobian's adjoint solves
+    ws[w.CV] = rhs[4]  # and the Newton on t's
     out = np.empty(n)
     nr = _lcp.factor_solve(ws, active, iws[0], iws[1], rhs[0], out)
     one = np.empty(n)
     _lcp.substitute(ws, active, iws[0], iws[1], nr, rhs[1], one)
-    _lcp.substitute2(ws, active, iws[0], iws[1], nr, w.COS, w.W)
+    _lcp.substitute3(ws, active, iws[0], iws[1], nr)
     a = np.diag(ws[w.D]) + np.diag(ws[w.LO][:-1], 1) + np.diag(ws[w.LO][:-1], -1)
     a[0, -1] = a[-1, 0] = ws[w.LO][-1]
     p = np.flatnonzero(active)
     edges = np.flatnonzero(np.diff(np.r_[0, active.astype(int), 0]))
     assert nr == len(edges) // 2  # the run through node n - 1 is one run
     worst = 0.0
-    for got, b in ((out, rhs[0]), (one, rhs[1]), *zip(ws[w.W:w.W + 2], rhs[2:], strict=True)):
+    for got, b in ((out, rhs[0]), (one, rhs[1]), (ws[w.W], rhs[2]), (ws[w.W + 1], rhs[3]),
+                   (ws[w.Z], rhs[4])):
         ref = np.zeros(n)
         ref[p] = np.linalg.solve(a[np.ix_(p, p)], b[p])
         worst = max(worst, np.abs(got - ref).max() / np.abs(ref).max())
