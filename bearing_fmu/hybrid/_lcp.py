@@ -34,12 +34,12 @@ def factor_solve(ws, active, order, runs, rhs, out):
         if not active[i]:
             inact0 = i
             break
-    idx = inact0
-    for k in range(n):
-        idx += 1
-        if idx == n:
-            idx = 0
-        order[k] = idx
+    start = inact0 + 1 if inact0 < n - 1 else 0
+    m1 = n - start
+    for k in range(m1):  # the ring from start in two plain ranges: no test per node
+        order[k] = start + k
+    for k in range(m1, n):
+        order[k] = k - m1
     nr = 0
     k = 0
     while k < n:
