@@ -85,8 +85,7 @@ def solve_t(ws, active, order, runs, g, coef, lam, t, tol, maxit, pinned, adjoin
     the Jacobian's adjoint vectors w (ws[W]; :func:`bearing_fmu.hybrid._jacobian.film_jacobian`),
     solved at each pass with z (:func:`bearing_fmu.hybrid._lcp.substitute3`): the pass that
     converges needs them, and the others (0.2 per call) waste less than a separate solve
-    costs. Returns
-    ``(t, Newton passes, active-set passes, status, J*'', last step)``.
+    costs. Returns ``(t, Newton passes, active-set passes, status, J*'', last step)``.
     """
     n = active.shape[0]
     a = ws[A]
