@@ -149,9 +149,10 @@ _SNAP = 1e-9
 
 
 @njit(cache=True, inline="always")
-def _structure_vector(xi, z, geo, nvec, v):
+def _structure_vector(xi, z, geo, nvec, v, m):
     """V = [n; O1M x n; -n; -(O2M x n)] (12,) of the contact point at abscissa ``xi`` on the
-    line of action and axial position ``z`` [m]: the mesh's coupling of the gear-node DOFs."""
+    line of action and axial position ``z`` [m], into ``v[m, :12]``: the mesh's coupling of
+    the gear-node DOFs."""
     t1s, t1t = geo[5], geo[6]
     us, ut = geo[7], geo[8]
     a = geo[11]
@@ -161,14 +162,14 @@ def _structure_vector(xi, z, geo, nvec, v):
     r1 = (ms_, mt_, z - zg1)
     r2 = (ms_ - a, mt_, z - zg2)
     for c in range(3):
-        v[c] = nvec[c]
-        v[6 + c] = -nvec[c]
-    v[3] = r1[1] * nvec[2] - r1[2] * nvec[1]
-    v[4] = r1[2] * nvec[0] - r1[0] * nvec[2]
-    v[5] = r1[0] * nvec[1] - r1[1] * nvec[0]
-    v[9] = -(r2[1] * nvec[2] - r2[2] * nvec[1])
-    v[10] = -(r2[2] * nvec[0] - r2[0] * nvec[2])
-    v[11] = -(r2[0] * nvec[1] - r2[1] * nvec[0])
+        v[m, c] = nvec[c]
+        v[m, 6 + c] = -nvec[c]
+    v[m, 3] = r1[1] * nvec[2] - r1[2] * nvec[1]
+    v[m, 4] = r1[2] * nvec[0] - r1[0] * nvec[2]
+    v[m, 5] = r1[0] * nvec[1] - r1[1] * nvec[0]
+    v[m, 9] = -(r2[1] * nvec[2] - r2[2] * nvec[1])
+    v[m, 10] = -(r2[2] * nvec[0] - r2[0] * nvec[2])
+    v[m, 11] = -(r2[0] * nvec[1] - r2[1] * nvec[0])
 
 
 @njit(cache=True, inline="always")
@@ -219,14 +220,14 @@ def _slice_geometry(angle, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1, pit
         fl = math.floor(w + _SNAP)  # a line within _SNAP pitch of xi_A has entered
         fr = max(w - fl, 0.0)
         for j in range(n_lines):
-            row = cache[j * ns + s]
+            m = j * ns + s  # (cache[m, c], not a row view: a view per slice costs its refcount)
             xi = xi_a + pbt * (fr + j)
-            row[_XI] = xi
+            cache[m, _XI] = xi
             ins = (xi >= xi_a) and (xi < xi_e)
-            row[_INSIDE] = 1.0 if ins else 0.0
+            cache[m, _INSIDE] = 1.0 if ins else 0.0
             if ins:
-                row[_KDL] = _slice_stiffness(xi, xi_tab, k_tab, dl)
-                _structure_vector(xi, z, geo, nvec, row)
+                cache[m, _KDL] = _slice_stiffness(xi, xi_tab, k_tab, dl)
+                _structure_vector(xi, z, geo, nvec, cache, m)
                 # deviations (open the gap when > 0)
                 e = 0.0
                 if ca1 > 0.0 and xi > xi_e - l1:
@@ -240,7 +241,7 @@ def _slice_geometry(angle, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1, pit
                     e += pitch1[pair % z1n]
                 if z2n > 0:
                     e += pitch2[pair % z2n]
-                row[_E] = e
+                cache[m, _E] = e
     last = cache[n_lines * ns]
     last[_ANGLE] = angle
     last[_HAS_TANGENT] = 0.0
@@ -271,28 +272,27 @@ def _mesh_kernel(angle, q, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1, pit
     for s in range(ns):
         for j in range(n_lines):
             m = j * ns + s
-            row = cache[m]
-            xis[m] = row[_XI]
+            xis[m] = cache[m, _XI]
             zout[m] = zs[s]
-            ins = row[_INSIDE] > 0.0
+            ins = cache[m, _INSIDE] > 0.0
             inside[m] = ins
             active[m] = False
             load[m] = 0.0
             delta[m] = 0.0
             if ins:
-                d = -row[_E]
+                d = -cache[m, _E]
                 for c in range(12):
-                    d += row[c] * q[c]
+                    d += cache[m, c] * q[c]
                 delta[m] = d
                 if d > 0.0:
                     active[m] = True
-                    fm = row[_KDL] * d
+                    fm = cache[m, _KDL] * d
                     load[m] = fm
                     total += fm
                     length += dl
                     for c in range(12):
-                        force[c] -= row[c] * fm
-            if active[m] != (row[_IN_TANGENT] > 0.0):
+                        force[c] -= cache[m, c] * fm
+            if active[m] != (cache[m, _IN_TANGENT] > 0.0):
                 same_set = False
     if same_set:
         for i in range(12):
@@ -305,13 +305,12 @@ def _mesh_kernel(angle, q, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1, pit
     for s in range(ns):
         for j in range(n_lines):
             m = j * ns + s
-            row = cache[m]
-            row[_IN_TANGENT] = 1.0 if active[m] else 0.0
+            cache[m, _IN_TANGENT] = 1.0 if active[m] else 0.0
             if active[m]:
-                kdl = row[_KDL]
+                kdl = cache[m, _KDL]
                 for c in range(12):
                     for c2 in range(12):
-                        stiff[c, c2] += kdl * row[c] * row[c2]
+                        stiff[c, c2] += kdl * cache[m, c] * cache[m, c2]
     for i in range(12):
         for j in range(12):
             tangent[i, j] = stiff[i, j]
