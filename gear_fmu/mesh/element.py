@@ -173,6 +173,43 @@ def _structure_vector(xi, z, geo, nvec, v, m):
 
 
 @njit(cache=True, inline="always")
+def _structure_matrix(geo, p):
+    """P (12, 3) with ``V = P (1, xi, z)``: the structure vector of :func:`_structure_vector`
+    is affine in the contact point's abscissa ``xi`` and axial position ``z`` [m], since
+    ``O1M = T1 + xi u + z e_z`` (and O2M shifted by the centre distance), so the tangent
+    ``sum k dl V V^T`` is ``P (sum k dl u u^T) P^T`` with ``u = (1, xi, z)`` (module
+    docstring, Eq. 9)."""
+    t1s, t1t = geo[5], geo[6]
+    us, ut = geo[7], geo[8]
+    ns_u, nz = geo[9], geo[10]
+    a = geo[11]
+    zg1, zg2 = geo[12], geo[13]
+    nx, ny = ns_u * us, ns_u * ut
+    # O1M x n = a1 x n + xi (u x n) + z (e_z x n), a1 = (t1s, t1t, -zg1); O2M: a2 = a1 - a e_s
+    a1 = (t1s, t1t, -zg1)
+    a2 = (t1s - a, t1t, -zg2)
+    for r in range(12):
+        for c in range(3):
+            p[r, c] = 0.0
+    for c, nc in enumerate((nx, ny, nz)):
+        p[c, 0] = nc
+        p[6 + c, 0] = -nc
+    p[3, 0] = a1[1] * nz - a1[2] * ny
+    p[4, 0] = a1[2] * nx - a1[0] * nz
+    p[5, 0] = a1[0] * ny - a1[1] * nx
+    p[9, 0] = -(a2[1] * nz - a2[2] * ny)
+    p[10, 0] = -(a2[2] * nx - a2[0] * nz)
+    p[11, 0] = -(a2[0] * ny - a2[1] * nx)
+    ux = (ut * nz, -us * nz, us * ny - ut * nx)  # u x n
+    zx = (-ny, nx, 0.0)  # e_z x n
+    for c in range(3):
+        p[3 + c, 1] = ux[c]
+        p[9 + c, 1] = -ux[c]
+        p[3 + c, 2] = zx[c]
+        p[9 + c, 2] = -zx[c]
+
+
+@njit(cache=True, inline="always")
 def _slice_stiffness(xi, xi_tab, k_tab, dl):
     """Stiffness of a slice [N/m]: the table's stiffness per unit contact length at ``xi``
     (linear interpolation) times the slice width ``dl``."""
@@ -299,18 +336,34 @@ def _mesh_kernel(angle, q, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1, pit
             for j in range(12):
                 stiff[i, j] = tangent[i, j]
         return total, length
-    for i in range(12):
-        for j in range(12):
-            stiff[i, j] = 0.0
+    # K_gear = P (sum k dl u u^T) P^T, u = (1, xi, z) (_structure_matrix): six moments
+    # of the slices in contact instead of a 12 x 12 product per slice
+    mom = np.zeros((3, 3))
     for s in range(ns):
+        z = zs[s]
         for j in range(n_lines):
             m = j * ns + s
             cache[m, _IN_TANGENT] = 1.0 if active[m] else 0.0
             if active[m]:
                 kdl = cache[m, _KDL]
-                for c in range(12):
-                    for c2 in range(12):
-                        stiff[c, c2] += kdl * cache[m, c] * cache[m, c2]
+                xi = cache[m, _XI]
+                mom[0, 0] += kdl
+                mom[0, 1] += kdl * xi
+                mom[0, 2] += kdl * z
+                mom[1, 1] += kdl * xi * xi
+                mom[1, 2] += kdl * xi * z
+                mom[2, 2] += kdl * z * z
+    mom[1, 0], mom[2, 0], mom[2, 1] = mom[0, 1], mom[0, 2], mom[1, 2]
+    p = np.empty((12, 3))
+    _structure_matrix(geo, p)
+    pm = np.zeros((12, 3))
+    for i in range(12):
+        for k in range(3):
+            for j in range(3):
+                pm[i, j] += p[i, k] * mom[k, j]
+    for i in range(12):
+        for j in range(12):
+            stiff[i, j] = pm[i, 0] * p[j, 0] + pm[i, 1] * p[j, 1] + pm[i, 2] * p[j, 2]
     for i in range(12):
         for j in range(12):
             tangent[i, j] = stiff[i, j]
