@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from fmu_src.examples import paper_gear_pair, paper_system
-from gear_fmu.mesh.element import MeshElement, ToothDeviations
+from gear_fmu.mesh.element import MeshElement, ToothDeviations, _structure_matrix
 from gear_fmu.mesh.tooth_stiffness import ToothPairCompliance
 from gear_fmu.modal.analyses import quasi_static
 from gear_fmu.structure import Structure, StructureLoads
@@ -145,6 +145,36 @@ def test_tangent_is_minus_the_derivative_of_the_force(pair):
         num[:, j] = -(fp - fm) / (2 * dq[j])
     np.testing.assert_allclose(st.stiffness, num, atol=1e-8 * np.abs(st.stiffness).max())
     np.testing.assert_allclose(st.stiffness, st.stiffness.T, atol=0)
+
+
+@pytest.mark.parametrize("pair", [SPUR, HELICAL], ids=["spur", "helical"])
+def test_the_structure_vector_is_affine_in_the_contact_point(pair):
+    """V = [n; O1M x n; -n; -(O2M x n)] (module docstring) built from the pair's geometry with
+    numpy's cross products, at points along the path of contact and across the face, equals
+    P (1, xi, z), the form through which the kernel computes the approach, the force and the
+    tangent; its rotation entries are the lever arms r_b cos(beta_b) of both wheels, and the
+    line of action is tangent to both base circles. The gear nodes sit off the face centre."""
+    zg = (0.004, -0.003)  # m
+    mesh = mesh_for(pair, gear_node_z=zg)
+    p = np.empty((12, 3))
+    _structure_matrix.py_func(mesh._geo, p)
+    rb1, rb2 = pair.base_radius
+    ap, bb, a = pair.operating_pressure_angle, pair.base_helix_angle, pair.centre_distance
+    t1 = np.array([rb1 * math.cos(ap), -rb1 * math.sin(ap), 0.0])  # on the pinion base circle
+    u = np.array([math.sin(ap), math.cos(ap), 0.0])  # along the line of action
+    o1, o2 = np.array([0.0, 0.0, zg[0]]), np.array([a, 0.0, zg[1]])
+    assert np.dot(t1, u) == pytest.approx(0.0, abs=1e-15)
+    assert abs(np.cross(o2 - t1, u)[2]) == pytest.approx(rb2, rel=1e-12)
+    n = math.cos(bb) * u + math.sin(bb) * np.array([0.0, 0.0, 1.0])
+    xi_a, xi_e = pair.path_of_contact
+    for xi in np.linspace(xi_a, xi_e, 5):
+        for z in (-0.01, 0.0, 0.012):
+            m = t1 + xi * u + np.array([0.0, 0.0, z])
+            v = np.concatenate([n, np.cross(m - o1, n), -n, -np.cross(m - o2, n)])
+            # measured within 1.2e-16 (one ulp of the largest entries, 0.92)
+            np.testing.assert_allclose(p @ [1.0, xi, z], v, rtol=0, atol=5e-16)
+            assert v[5] == pytest.approx(rb1 * math.cos(bb), rel=1e-12)
+            assert v[11] == pytest.approx(rb2 * math.cos(bb), rel=1e-12)
 
 
 @pytest.mark.parametrize("pair", [SPUR, HELICAL], ids=["spur", "helical"])
