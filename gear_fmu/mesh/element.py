@@ -39,6 +39,12 @@ A slice carries ``k(xi) dl delta`` when ``delta > 0`` and nothing otherwise (uni
 with ``F_dev = sum k dl e V`` the forcing of the deviations. :meth:`MeshElement.evaluate` returns
 the force, its tangent ``-d force / d q = K_gear`` and the contact set; the structure's contact
 loop (:class:`gear_fmu.structure.Structure`) iterates until the set is stable.
+
+V is affine in the contact point: ``V = P u`` with ``u = (1, xi, z)`` and P (12, 3) fixed by
+the geometry (``_structure_matrix``), since ``O1M = T1 + xi u_s + z e_z``. The kernel
+computes through it: ``delta = (P^T (q + q_err)) . u - e``, the force ``-P sum k dl delta u``
+and ``K_gear = P (sum k dl u u^T) P^T``, three sums per slice for the force and six moments
+per contact set for the tangent instead of 12 and 144 products per slice.
 """
 
 from __future__ import annotations
@@ -153,7 +159,7 @@ def _structure_matrix(geo, p):
     """P (12, 3) with ``V = P u``, ``u = (1, xi, z)``: the structure vector
     ``V = [n; O1M x n; -n; -(O2M x n)]`` (module docstring) of the contact point at abscissa
     ``xi`` on the line of action and axial position ``z`` [m] is affine in them, since
-    ``O1M = T1 + xi u_s + z e_z`` and O2M is O1M shifted by the centre distance."""
+    ``O1M = T1 + xi u_s + z e_z`` and O2M is O1M shifted by the centre distance (Eq. 9)."""
     t1s, t1t = geo[5], geo[6]
     us, ut = geo[7], geo[8]
     ns_u, nz = geo[9], geo[10]
