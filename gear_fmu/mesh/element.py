@@ -166,7 +166,8 @@ def _structure_matrix(geo, p):
     a = geo[11]
     zg1, zg2 = geo[12], geo[13]
     nx, ny = ns_u * us, ns_u * ut
-    # O1M x n = a1 x n + xi (u_s x n) + z (e_z x n), a1 = (t1s, t1t, -zg1); O2M: a2 = a1 - a e_s
+    # O1M x n = a1 x n + xi (u_s x n) + z (e_z x n) with a1 = (t1s, t1t, -zg1), and O2M x n
+    # the same with a2 = (t1s - a, t1t, -zg2)
     a1 = (t1s, t1t, -zg1)
     a2 = (t1s - a, t1t, -zg2)
     for r in range(12):
