@@ -27,6 +27,7 @@ Conventions
 
 from __future__ import annotations
 
+import itertools
 import math
 import re
 from collections import deque
@@ -188,8 +189,9 @@ class GearSpec:
         if self.hand not in HANDS:
             raise LayoutError(f"{where}.hand = {self.hand!r}: one of right, left")
         if self.helix_angle > 0.0 and not self.hand:
-            raise LayoutError(f"{where}: a helical gear (helix_angle {math.degrees(self.helix_angle):g}"
-                              " deg) needs its hand: right or left")
+            raise LayoutError(f"{where}: a helical gear (helix_angle "
+                              f"{math.degrees(self.helix_angle):g} deg) needs its hand: right or "
+                              "left")
         if self.unbalance_mass not in UNBALANCE_MASSES:
             raise LayoutError(f"{where}.unbalance_mass = {self.unbalance_mass!r}: one of "
                               f"{', '.join(UNBALANCE_MASSES)}")
@@ -406,7 +408,7 @@ class Layout:
                                              item.position))
         for shaft, items in on_shaft.items():
             items.sort(key=lambda it: it[0])
-            for (ext_a, name_a, pos_a), (ext_b, name_b, pos_b) in zip(items, items[1:]):
+            for (ext_a, name_a, pos_a), (ext_b, name_b, pos_b) in itertools.pairwise(items):
                 if ext_b[0] < ext_a[1] - _SAME or abs(pos_a - pos_b) <= _SAME:
                     raise LayoutError(
                         f"{name_a} ({ext_a[0] * 1e3:.6g} to {ext_a[1] * 1e3:.6g} mm) and "

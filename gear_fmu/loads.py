@@ -1,12 +1,14 @@
 """External loads on the gear-shaft structure (paper Sec. 3.1 and 4.1, Eq. 10).
 
-* The input torque T acts on the torsion DOF of the pinion shaft's input end (or on the motor
-  behind a coupling); the resisting torque is the reaction of the clamped output torsion DOF
-  or, with a load at the output (:mod:`gear_fmu.drivetrain`), ``T z2 / z1`` on the load,
-  the torque that balances T through the mesh (``T r_b2 / r_b1``).
-* Mass unbalance, Eq. (10): a force of magnitude ``M e_mu omega^2`` turning with each shaft,
-  applied at its gear node, with M the shaft plus gear mass. The pinion shaft turns about +z
-  at omega, the gear shaft about -z at ``omega z1 / z2`` (:mod:`gear_fmu.mesh.geometry`).
+* The input torque T acts on the torsion DOF of the input position (or on the motor behind a
+  coupling); the resisting torque is the reaction of the clamped output torsion DOF or, with a
+  load at the output (:mod:`gear_fmu.drivetrain`), ``T omega_in / omega_out`` on the load, the
+  torque that balances T through the meshes (for one stage ``T z2 / z1 = T r_b2 / r_b1``).
+* Mass unbalance, Eq. (10): a force of magnitude ``M e_mu omega^2`` turning with its shaft,
+  applied at the body's node (:class:`gear_fmu.system.Unbalances`: a gear or disc, M its own
+  mass or that of its shaft with all it carries). A shaft turns about +z or -z as the gear graph
+  says (:attr:`gear_fmu.layout.Layout.directions`): the input shaft about +z at omega, the gear
+  of the paper's pair about -z at ``omega z1 / z2``.
 * Gravity (optional): ``M g`` on every translational DOF.
 """
 
@@ -20,7 +22,7 @@ from numba import njit
 
 from gear_fmu.dofs import DOF_PER_NODE, U, V
 
-__all__ = ["StructureLoads", "constant_loads", "shaft_speeds", "unbalance_amplitudes",
+__all__ = ["StructureLoads", "constant_loads", "shaft_speeds", "unbalance_coefficients",
            "unbalance_force", "unbalance_into"]
 
 
@@ -31,79 +33,73 @@ class StructureLoads:
     Parameters
     ----------
     torque : float
-        Input torque T on the pinion shaft [N m] (> 0 drives the pinion about +z).
+        Input torque T [N m] (> 0 drives the input shaft about +z).
     input_speed : float
-        Pinion speed omega [rad/s] (>= 0); the gear turns at omega z1/z2 about -z.
-    unbalance : (float, float)
-        e_mu of the pinion shaft and of the gear shaft [m] (Eq. 10), applied at the gear nodes
-        with M = shaft + gear mass.
+        Speed omega of the input shaft [rad/s] (>= 0); the other shafts turn at omega times
+        their ratio (:attr:`gear_fmu.layout.Layout.ratios`).
     gravity : (float, float) or None
         Gravity acceleration components (g_s, g_t) [m/s^2]; None = no gravity.
-    pinion_angle0 : float
-        Rigid-body pinion angle at t = 0 [rad].
+    input_angle0 : float
+        Rigid-body angle of the input shaft at t = 0 [rad].
     """
 
     torque: float = 220.0
     input_speed: float = 325.0
-    unbalance: tuple[float, float] = (0.0, 0.0)
     gravity: tuple[float, float] | None = None
-    pinion_angle0: float = 0.0
+    input_angle0: float = 0.0
 
     def __post_init__(self) -> None:
         if not math.isfinite(self.torque):
             raise ValueError(f"torque = {self.torque!r} N m is not finite")
         if not (math.isfinite(self.input_speed) and self.input_speed >= 0.0):
             raise ValueError(f"input_speed = {self.input_speed!r} rad/s must be finite and >= 0")
-        if len(self.unbalance) != 2 or not all(
-            math.isfinite(e) and e >= 0.0 for e in self.unbalance
-        ):
-            raise ValueError(f"unbalance = {self.unbalance!r} m: two finite values >= 0")
 
 
-def shaft_speeds(loads: StructureLoads, teeth) -> tuple[float, float]:
-    """Speed magnitudes of the pinion and gear shafts [rad/s]: omega and omega z1 / z2."""
-    z1, z2 = teeth
-    return loads.input_speed, loads.input_speed * z1 / z2
+def shaft_speeds(layout, input_speed: float) -> np.ndarray:
+    """Signed speed of every shaft about +z [rad/s] at the input speed ``input_speed``
+    (:attr:`gear_fmu.layout.Layout.ratios` and ``directions``)."""
+    return input_speed * layout.ratios * layout.directions
 
 
-def unbalance_amplitudes(shaft_masses, unbalance, speeds) -> list[float]:
-    """``M e_mu omega^2`` of each shaft [N] (Eq. 10)."""
-    return [shaft_masses[i] * unbalance[i] * speeds[i] ** 2 for i in range(2)]
+def unbalance_coefficients(unbalances, speeds) -> np.ndarray:
+    """(nu, 3) ``[M e_mu omega^2 [N], signed omega [rad/s], phase [rad]]`` of each unbalance
+    (:class:`gear_fmu.system.Unbalances`) with the shafts' signed ``speeds`` (Eq. 10): what
+    :func:`unbalance_into` turns into forces."""
+    w = np.asarray(speeds, dtype=float)[unbalances.shaft]
+    return np.ascontiguousarray(np.column_stack([unbalances.me * w * w, w, unbalances.phase]))
 
 
-def unbalance_force(amplitudes, speeds, t: float) -> np.ndarray:
-    """Eq. (10) at time t [s]: ``[F_s, F_t]`` at the pinion node then at the gear node [N].
-
-    The pinion shaft turns about +z (``omega t``), the gear shaft about -z (``-omega_2 t``).
-    """
-    out = np.empty(4)
-    unbalance_into(np.array([*amplitudes, *speeds], dtype=float), t, out)
+def unbalance_force(coef, t: float) -> np.ndarray:
+    """Eq. (10) at time t [s]: ``[F_s, F_t]`` of each unbalance (nu, 2) [N]
+    (:func:`unbalance_coefficients`)."""
+    out = np.empty((len(coef), 2))
+    unbalance_into(np.asarray(coef, dtype=float), t, out)
     return out
 
 
 @njit(cache=True)
 def unbalance_into(coef, t, out):
-    """:func:`unbalance_force` into ``out`` (4,), from ``coef`` = [M1 e1 omega^2, M2 e2
-    omega_2^2, omega, omega_2] (amplitudes [N], speeds [rad/s]): the compiled step's form."""
-    a1 = coef[0]
-    a2 = coef[1]
-    w1 = coef[2]
-    w2 = coef[3]
-    out[0] = a1 * math.cos(w1 * t)
-    out[1] = a1 * math.sin(w1 * t)
-    out[2] = a2 * math.cos(w2 * t)
-    out[3] = -a2 * math.sin(w2 * t)
+    """:func:`unbalance_force` into ``out`` (nu, 2): the force of amplitude ``coef[i, 0]``
+    turning at the signed speed ``coef[i, 1]`` from the angle ``coef[i, 2]``,
+    ``A (cos(omega t + phase), sin(omega t + phase))``: the compiled step's form."""
+    for i in range(coef.shape[0]):
+        angle = coef[i, 1] * t + coef[i, 2]
+        out[i, 0] = coef[i, 0] * math.cos(angle)
+        out[i, 1] = coef[i, 0] * math.sin(angle)
 
 
 def constant_loads(system, loads: StructureLoads) -> np.ndarray:
     """The time-invariant part of F(t) on the full DOF numbering [N, N m]: the input torque on
-    the pinion shaft's input torsion DOF (or the motor), the resisting torque ``T z2 / z1`` on
-    the load when the output is not clamped and, if set, gravity ``M g``."""
+    the input torsion DOF (or the motor), the resisting torque on the load when the output is
+    not clamped and, if set, gravity ``M g``."""
     f = np.zeros(system.n_dof)
     f[system.torque_dof] += loads.torque
     if system.load_dof is not None:
-        # the gear turns about -z: the mesh drives its torsion DOF negative, the load resists
-        f[system.load_dof] += loads.torque * system.teeth[1] / system.teeth[0]
+        # the output shaft turns as its direction says: the meshes drive its torsion DOF that
+        # way, the load resists with the torque that balances T through the ratio
+        lay = system.layout
+        out = lay.shaft_index[lay.drive.output_shaft]
+        f[system.load_dof] -= lay.directions[out] * loads.torque / lay.ratios[out]
     if loads.gravity is not None:
         g = np.zeros(system.n_dof)
         nodes = np.arange(system.n_nodes)  # the drivetrain DOFs are rotations: no weight

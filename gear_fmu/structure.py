@@ -1,136 +1,121 @@
 """The gear-shaft structure as a time stepper: Eq. (9) with Newmark, Newton and contact (Sec. 3).
 
-``Structure`` owns the structural state (t, X, Xdot, Xddot, mesh contact set). One call of
-:meth:`Structure.step` is a full Newmark step (Eq. 11-16) of
+``Structure`` owns the structural state (t, X, Xdot, Xddot, the meshes' contact sets) of a gear
+train (:class:`gear_fmu.system.GearShaftSystem`, built from a :class:`gear_fmu.layout.Layout`).
+One call of :meth:`Structure.step` is a full Newmark step (Eq. 11-16) of
 
-    M Xdd + C Xd + K_shaft X = F0(t) + F_mesh(t, X) + sum_j B_j^T (F0_j - Kb_j X_j - Cb_j Xd_j)
+    M Xdd + C Xd + K_shaft X
+        = F0(t) + sum_m F_mesh,m(t, X) + sum_j B_j^T (F0_j - Kb_j X_j - Cb_j Xd_j)
 
 where the bearings enter as affine laws (Eq. 17, :class:`bearing_fmu.affine.AffineLaws`) given
-by the caller in the global (s, t) frame at the four bearing nodes (X_j = (u, v) of bearing node
-j), re-set by the master at every iteration: the Newton tangent is
-``c0 M + c1 C + K + K_mesh + Kb + c1 Cb`` (Eq. 14, 16; c0 = 4/dt^2, c1 = 2/dt). External loads
-``F0(t)`` (:mod:`gear_fmu.loads`): input torque, mass unbalance of Eq. (10), optional gravity.
+by the caller in the global (s, t) frame at the bearing nodes (X_j = (u, v) of bearing j's node,
+the layout's order), re-set by the master at every iteration: the Newton tangent is
+``c0 M + c1 C + K + sum K_mesh + Kb + c1 Cb`` (Eq. 14, 16; c0 = 4/dt^2, c1 = 2/dt). External
+loads ``F0(t)`` (:mod:`gear_fmu.loads`): input torque, mass unbalances of Eq. (10), optional
+gravity. Each mesh element works in its pair's own frame (:func:`gear_fmu.mesh.element
+.pair_frame`) and is driven by the rigid-body angle of its driver's shaft, the input angle
+times that shaft's speed ratio.
 
 Time integration refinements (switched on by the case file, :mod:`fmu_src.description`):
 
 * ``consistent_start``: the static solution X0 balances the constant loads only, so at t = 0
-  the unbalance of Eq. (10) is the one force not in equilibrium; the transient starts from
+  the unbalances of Eq. (10) are the forces not in equilibrium; the transient starts from
   ``Xdd_0 = M^-1 F_unb(0)`` instead of zero (Newmark's update carries Xdd_n forward, and a
   wrong Xdd_0 leaves a first-order error).
-* ``locate_contact``: the mesh stiffness jumps when a contact line enters or leaves the path
-  of contact (:meth:`gear_fmu.mesh.element.MeshElement.event_angles`, known from the rigid-body
-  kinematics). A step containing such angles is cut into sub-steps ending on them; a sub-step
-  ending on an event is solved with the contact set before it (mesh evaluated
-  ``EVENT_SIDE`` base pitch earlier, :mod:`gear_fmu.step.events`), then the acceleration is
-  reset to the one after it, ``Xdd+ = Xdd- + M^-1 (F_mesh+ - F_mesh-)`` at the same X and Xd.
-  Each sub-step then integrates a smooth problem and the scheme keeps its order 2. The bearing
-  laws of the step serve every sub-step (they are affine in X and Xd). No sub-step is shorter
-  than ``EVENT_SNAP`` dt: an event that close to the step's end is taken at the end, and events
-  that close to each other as one (a step slightly off the mesh period's divisor brings the
-  events back towards the step's end a little every step). Contact changes that are not
-  kinematic (a tooth pair separating under dynamic load) are not located.
+* ``locate_contact``: a mesh's stiffness jumps when a contact line enters or leaves the path
+  of contact (:meth:`gear_fmu.mesh.element.MeshElement.event_angles`, known from the
+  rigid-body kinematics). A step containing such angles of any mesh is cut into sub-steps
+  ending on them (:func:`gear_fmu.step.events.train_pieces`); a sub-step ending on an event is
+  solved with the contact set before it (the mesh evaluated ``EVENT_SIDE`` base pitch
+  earlier), then the acceleration is reset to the one after it,
+  ``Xdd+ = Xdd- + M^-1 (F_mesh+ - F_mesh-)`` at the same X and Xd. Each sub-step then
+  integrates a smooth problem and the scheme keeps its order 2. The bearing laws of the step
+  serve every sub-step (they are affine in X and Xd). Contact changes that are not kinematic
+  (a tooth pair separating under dynamic load) are not located.
 
-Solution method: the constant part of the tangent is condensed onto the 20 gear and bearing DOFs
-once per dt (:mod:`gear_fmu.step.condensation`); each step costs one matrix-vector product for the
-right-hand side and, per Newton/contact iteration, a mesh evaluation and a 20 x 20 solve
-(:mod:`gear_fmu.step.contact_loop`), then ``X_r = A_rr^-1 b_r - W X_c`` and the Newmark update
-(Eq. 12, :mod:`gear_fmu.step.newmark`). Analyses without dynamics (modes, quasi-static transmission
-error, support loads) are in :mod:`gear_fmu.modal.analyses`.
+Solution method: the constant part of the tangent is condensed onto the gear-node, bearing and
+unbalanced-disc DOFs once per sub-step length (:mod:`gear_fmu.step.condensation`); each step
+costs one matrix-vector product for the right-hand side and, per Newton/contact iteration, an
+evaluation of every mesh and an nc x nc solve (:mod:`gear_fmu.step.contact_loop`), then
+``X_r = A_rr^-1 b_r - W X_c`` and the Newmark update (Eq. 12, :mod:`gear_fmu.step.newmark`),
+all in one compiled call (:func:`gear_fmu.step.kernel.advance_pieces`). Analyses without
+dynamics (modes, quasi-static transmission error, support loads) are in
+:mod:`gear_fmu.modal.analyses`.
 """
 
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass, replace
 
 import numpy as np
 import scipy.linalg
 
 from bearing_fmu.blas_threads import one_blas_thread
-from gear_fmu.dofs import THETA
+from gear_fmu.dofs import DOF_PER_NODE, THETA, U, V, dof
 from gear_fmu.loads import (
     StructureLoads,
     constant_loads,
     shaft_speeds,
-    unbalance_amplitudes,
+    unbalance_coefficients,
     unbalance_force,
 )
-from gear_fmu.mesh.element import MeshElement, MeshState, transmission_error
+from gear_fmu.mesh.element import MeshElement, MeshState
 from gear_fmu.modal.analyses import reference_damping
 from gear_fmu.modal.damping import DampingModel
-from gear_fmu.step.assembly import (
-    check_laws,
-    check_laws_fast,
-    finish_step,
-    history_memo,
-    prepare_step,
+from gear_fmu.step.assembly import check_laws, check_laws_fast, history_memo
+from gear_fmu.step.condensation import Condensation, CondensationSlots
+from gear_fmu.step.contact_loop import (
+    CONVERGED,
+    SINGULAR,
+    MeshWork,
+    StepInfo,
+    contact_newton,
 )
-from gear_fmu.step.condensation import (
-    N_BEARING,
-    N_GEAR,
-    NC,
-    Condensation,
-    CondensationSlots,
-)
-from gear_fmu.step.contact_loop import StepInfo, solve_condensed
-from gear_fmu.step.events import ContactEvents
-from gear_fmu.step.kernel import CONVERGED, SINGULAR, advance, contact_event
-from gear_fmu.step.newmark import NewmarkConvergenceError, newmark_coefficients
+from gear_fmu.step.events import ContactEvents, train_pieces
+from gear_fmu.step.kernel import advance_pieces, keep_evaluation
+from gear_fmu.step.newmark import NewmarkConvergenceError
 from gear_fmu.system import GearShaftSystem
 
 __all__ = ["StepInfo", "StepsPlan", "Structure", "StructureLoads", "StructureState",
            "check_laws"]
 
-#: first static iterate: pinion torsion [rad] that closes every potential contact
+#: first static iterate: rotation [rad] of every mesh's driver node that closes every potential
+#: contact of the mesh
 INITIAL_APPROACH_ROTATION = 1e-3
-_NO_ERROR = np.zeros(12)  # no runout or mounting error
-_NO_SET = np.zeros(0, dtype=np.bool_)  # no contact set known
-_NO_MEMO = np.zeros(0)  # no memo of the history products (a sub-step after the first)
-#: sub-steps of one step that :meth:`Structure.steps_plan` takes (a spur step of the paper's
-#: case has at most 2, a helical one 3); a step with more takes the Python path
-MAX_PIECES = 4
-_SLOTS = 4  # the sub-step slots of the compiled call (orchestrator.coupling.fused)
-_NO_ERRORS = np.zeros((_SLOTS, 12))
-#: where :meth:`Structure.state_outputs` takes its values in ``[x[:NC], v[:NC]]``: at each
-#: bearing node 1-4 u, v, udot, vdot (global s, t), then u, v of the pinion and gear nodes
-_STATE_OUTPUTS = np.array([*(k for j in range(4) for k in (N_GEAR + 2 * j, N_GEAR + 2 * j + 1,
-                                                          NC + N_GEAR + 2 * j,
-                                                          NC + N_GEAR + 2 * j + 1)),
-                           0, 1, 6, 7])
 
 
 @dataclass(frozen=True)
 class StepsPlan:
-    """The structure's arguments of the compiled loop over steps
-    (:func:`orchestrator.coupling.fused.coupled_steps`) for m steps planned ahead
-    (:meth:`Structure.steps_plan`), in the kernel's order: ``head``, per step its sub-step
-    count, the condensation slot of each sub-step, the condensations
-    (:class:`gear_fmu.step.condensation.CondensationSlots`), piece tables, events and error
-    displacements (one row of these for a mesh without errors); ``state``, copies of X, Xd,
-    Xdd the kernel advances; ``tail``, the mesh and the solver's settings; ``work``, the
-    iterations' buffers; ``kept``, the mesh evaluation the last accepted step ended on (its
-    contact set the next step's); ``ends``, the end times [s] of each step's sub-steps."""
+    """The structure's arguments of the compiled loop over steps (:meth:`Structure.steps_plan`,
+    :func:`orchestrator.coupling.step.coupled_steps`) for m steps planned ahead, in the
+    kernel's order: ``head``, per step its sub-step count, the condensation slot of each
+    sub-step, [M C] and the condensations
+    (:class:`gear_fmu.step.condensation.CondensationSlots`), the sub-steps' lengths and end
+    times, the meshes' angles before and after their events, their error displacements (one
+    row of these for meshes without errors); ``state``, copies of X, Xd, Xdd the kernel
+    advances; ``tail``, the loads, the meshes and the solver's settings; ``work``, the
+    iterations' buffers; ``ends``, the end times [s] of each step's sub-steps."""
 
     head: tuple
     state: tuple
     tail: tuple
     work: tuple
-    kept: tuple
     ends: list
 
 
 @dataclass(frozen=True)
 class StructureState:
-    """Everything needed to roll a step back exactly (copies)."""
+    """Everything needed to roll a step back exactly (copies): the time and step count, X,
+    Xd, Xdd (internal order), and each mesh's evaluation at that state (None before a
+    solution)."""
 
     t: float
     n_steps: int
     x: np.ndarray
     v: np.ndarray
     a: np.ndarray
-    active: object
-    mesh_state: object
+    mesh_states: tuple | None
 
 
 class Structure:
@@ -139,14 +124,15 @@ class Structure:
     Parameters
     ----------
     system : GearShaftSystem
-        Assembled shafts and discs.
-    mesh : object
-        Mesh element with ``evaluate(pinion_angle, q12)`` (:mod:`gear_fmu.step.contact_loop`).
+        Assembled shafts and discs of a layout.
+    meshes : sequence of MeshElement
+        One per mesh of the layout (its order), each in its pair's own frame
+        (:func:`fmu_src.description.mesh_elements`).
     loads : StructureLoads
     zeta : float or DampingModel
         The damping model (:mod:`gear_fmu.modal.damping`); a float is the modal damping factor on
         the ``"bearings"`` basis (paper 0.03).
-    damping_bearing_stiffness : float or (4, 2, 2)
+    damping_bearing_stiffness : float or (nb, 2, 2)
         Bearing stiffness of the reference configuration of the modal damping
         (:mod:`gear_fmu.modal.modes`) [N/m]; :meth:`set_damping_reference` replaces it.
     damping : (n_dof, n_dof) array, optional
@@ -158,21 +144,13 @@ class Structure:
     consistent_start, locate_contact : bool
         Time integration refinements (module docstring); off by default here, on by default
         in case files.
-
-    Attributes
-    ----------
-    timing : dict or None
-        Set to ``{"mesh": 0.0, "assembly": 0.0, "solve": 0.0}`` to accumulate seconds per part
-        of a step (benchmarks); None (default) for no timers.
     """
-
-    n_bearings = N_BEARING
 
     @one_blas_thread
     def __init__(
         self,
         system: GearShaftSystem,
-        mesh,
+        meshes,
         loads: StructureLoads | None = None,
         zeta: float | DampingModel = 0.03,
         damping_bearing_stiffness=1e8,
@@ -185,11 +163,18 @@ class Structure:
         if not (tol > 0.0 and math.isfinite(tol)):
             raise ValueError(f"tol = {tol!r} must be finite and > 0")
         self.system = system
-        self.mesh = mesh
+        self.layout = system.layout
+        if isinstance(meshes, MeshElement):
+            meshes = (meshes,)
+        self.meshes = tuple(meshes)
+        if len(self.meshes) != len(self.layout.meshes) or not all(
+                isinstance(m, MeshElement) for m in self.meshes):
+            raise ValueError(f"meshes: one MeshElement per mesh of the layout "
+                             f"({len(self.layout.meshes)}), got {len(self.meshes)}")
+        self.nb = len(self.layout.bearings)
         self.loads = StructureLoads() if loads is None else loads
         self.tol = tol
         self.max_iter = int(max_iter)
-        self.timing: dict | None = None
         self._ordering()
         self._m = self._permute(system.mass)
         self._k = self._permute(system.stiffness)
@@ -198,30 +183,31 @@ class Structure:
             k_static = k_static.copy()
             i = int(np.flatnonzero(self._full_of_internal == system.load_dof)[0])
             k_static[i, i] += system.static_ground
-        self._static = Condensation(k_static)
+        self._static = Condensation(k_static, self.nc)
         self.consistent_start = bool(consistent_start)
-        self.locate_contact = bool(locate_contact) and hasattr(mesh, "event_angles")
-        self._m_gear = None  # M^-1 restricted to the gear-node columns, when first needed
-        self._events = None  # the contact events (gear_fmu.step.events), when first needed
-        self._last_pieces = None  # (t, dt, pieces) of the last step (_pieces)
-        #: the mesh's constant arrays for the compiled step (gear_fmu.step.kernel), or None:
-        #: the Python loop of gear_fmu.step.contact_loop serves any other mesh object
-        self._mesh_arrays = mesh.kernel_arrays() if isinstance(mesh, MeshElement) else None
+        self.locate_contact = bool(locate_contact)
+        self._m_inv = None  # M^-1 restricted to the condensed columns, when first needed
+        self._events = None  # the contact events of each mesh, when first needed
+        self._work = [MeshWork(m, idx) for m, idx in zip(self.meshes, self._mesh_idx,
+                                                          strict=True)]
+        self._mesh_tuple = tuple(w.arrays() for w in self._work)
+        self._has_err = any(m.has_errors for m in self.meshes)
         self._forces()
-        # the state: at rest at t = 0, no contact known yet
+        # the state: at rest at t = 0, no solution yet
         n = self._perm.size
         self.t = 0.0
         self.n_steps = 0
         self.x = np.zeros(n)
         self.v = np.zeros(n)
         self.a = np.zeros(n)
-        self.active = None
-        self.mesh_state = None
+        self.solved = False  # a static solution or a step has set the meshes' evaluations
+        self._totals = np.zeros(len(self.meshes))
+        self._lengths = np.zeros(len(self.meshes))
         self._dyn_cache: dict[float, tuple] = {}
         #: the history products of the last step's start (gear_fmu.step.assembly), reused
         #: when the master takes that step again; emptied with C (set_damping)
-        self._memo = history_memo(self._m.shape[0])
-        # the compiled steps' condensations, by sub-step length
+        self._memo = history_memo(n)
+        # the condensations of the sub-step lengths of the run
         self._condensations = CondensationSlots()
         self.damping_model = zeta if isinstance(zeta, DampingModel) else DampingModel(
             ratio=float(zeta))
@@ -278,7 +264,8 @@ class Structure:
 
     @property
     def reference_mesh_stiffness(self):
-        """Mean mesh stiffness (12, 12) of the damping's reference configuration, or None."""
+        """Mean stiffness (n_meshes, 12, 12) of each mesh in the damping's reference
+        configuration, or None."""
         self._require_damping()
         return self._reference_mesh_stiffness
 
@@ -286,10 +273,10 @@ class Structure:
     def set_damping_reference(self, bearing_stiffness) -> None:
         """(Re)build the modal damping C on the modes of the reference configuration.
 
-        ``bearing_stiffness``: isotropic [N/m] or (4, 2, 2) bearing stiffness (symmetric part
-        used) of the reference configuration (:func:`gear_fmu.modal.analyses.reference_damping`).
-        The master calls this with the bearings' stiffness at the static solution X0 before
-        the transient.
+        ``bearing_stiffness``: isotropic [N/m] or (nb, 2, 2) bearing stiffness (symmetric
+        part used) of the reference configuration
+        (:func:`gear_fmu.modal.analyses.reference_damping`). The master calls this with the
+        bearings' stiffness at the static solution X0 before the transient.
         """
         self._pending_reference = None
         c, modes, k_mesh = reference_damping(self, self.damping_model, bearing_stiffness)
@@ -298,15 +285,50 @@ class Structure:
 
     # ------------------------------------------------------------------ set-up
     def _ordering(self) -> None:
+        """The condensed DOFs ``c`` (gear nodes' six DOFs, the bearings' u, v, the u, v of
+        unbalanced discs) first, then the rest; each mesh's and unbalance's condensed
+        indices."""
         sys_ = self.system
+        gear_nodes: list[int] = []
+        for pair in sys_.mesh_nodes:
+            for node in pair:
+                if int(node) not in gear_nodes:
+                    gear_nodes.append(int(node))
+        c_full = [DOF_PER_NODE * n + i for n in gear_nodes for i in range(DOF_PER_NODE)]
+        self.ng = len(c_full)
+        c_full += [int(d) for d in sys_.bearing_dofs.ravel()]
+        for node in sys_.unbalances.node:
+            if int(node) not in gear_nodes and dof(int(node), U) not in c_full:
+                c_full += [dof(int(node), U), dof(int(node), V)]
         red = sys_.reduced_index
-        c_full = np.concatenate([sys_.gear_dofs, sys_.bearing_dofs.ravel()])
-        c = red[c_full]
+        c = red[np.array(c_full, dtype=int)]
         if np.any(c < 0):
-            raise ValueError("a gear or bearing DOF is clamped")
+            raise ValueError("a gear, bearing or unbalance DOF is clamped")
+        self.nc = c.size
         r = np.setdiff1d(np.arange(sys_.free.size), c)
         self._perm = np.concatenate([c, r])  # position in reduced vector of internal index i
         self._full_of_internal = sys_.free[self._perm]
+        where = {int(f): i for i, f in enumerate(c_full)}
+        self._mesh_idx = [np.array([where[DOF_PER_NODE * int(n) + i] for n in pair
+                                    for i in range(DOF_PER_NODE)], dtype=np.int64)
+                          for pair in sys_.mesh_nodes]
+        self._unb_idx = np.array([[where[dof(int(n), U)], where[dof(int(n), V)]]
+                                  for n in sys_.unbalances.node], dtype=np.int64).reshape(-1, 2)
+        self._gear_uv = np.array([[where[dof(int(n), U)], where[dof(int(n), V)]]
+                                  for n in sys_.gear_nodes], dtype=np.int64).reshape(-1, 2)
+        # per bearing u, v, udot, vdot in [x[:nc], v[:nc]], then u, v of every gear node
+        ng, nc = self.ng, self.nc
+        journals = [k for j in range(self.nb) for k in (ng + 2 * j, ng + 2 * j + 1,
+                                                         nc + ng + 2 * j, nc + ng + 2 * j + 1)]
+        self._state_outputs = np.array([*journals, *self._gear_uv.ravel()], dtype=np.int64)
+        # the driver node's torsion of each mesh, turned to close its contacts (static_at)
+        lay = self.layout
+        self._approach = np.zeros(self.nc)
+        for m, (driver, _) in enumerate(lay.drivers):
+            sign = lay.directions[lay.shaft_index[lay.gear(driver).shaft]]
+            self._approach[self._mesh_idx[m][THETA]] = sign * INITIAL_APPROACH_ROTATION
+        self._driver_ratio = np.array([lay.ratios[lay.shaft_index[lay.gear(d).shaft]]
+                                       for d, _ in lay.drivers])
 
     def _permute(self, a: np.ndarray) -> np.ndarray:
         idx = self._full_of_internal
@@ -316,43 +338,55 @@ class Structure:
         sys_, ld = self.system, self.loads
         f = self._permute(constant_loads(sys_, ld))
         self._f_const = f  # static part of F0(t)
-        self._f_c = np.ascontiguousarray(f[:NC])
-        self._omega = shaft_speeds(ld, sys_.teeth)
-        self._last_pieces = None  # the mesh angles move with the speeds
-        self._unb = unbalance_amplitudes(sys_.shaft_masses, ld.unbalance, self._omega)
-        # [M1 e1 omega^2, M2 e2 omega_2^2, omega, omega_2]: Eq. (10) inside the compiled step
-        self._unb_coef = np.array([*self._unb, *self._omega], dtype=float)
+        self._f_c = np.ascontiguousarray(f[:self.nc])
+        self._speeds = shaft_speeds(self.layout, ld.input_speed)
+        self._events = None  # the mesh angles move with the speeds
+        # [M e omega^2, signed omega, phase] per unbalance: Eq. (10) inside the compiled step
+        self._unb_coef = unbalance_coefficients(sys_.unbalances, self._speeds)
         # residual scale: the largest external load (torque, gravity, unbalance)
-        self._f_scale = max(float(np.linalg.norm(f)), *self._unb)
+        self._f_scale = max(float(np.linalg.norm(f)), *np.abs(self._unb_coef[:, 0]), 0.0)
 
     @one_blas_thread
     def set_torque(self, torque: float) -> None:
         """Input torque T [N m] from the next static solution or step on.
 
         The constant part of F0(t) (:func:`gear_fmu.loads.constant_loads`: T on the input
-        torsion DOF, ``T z2 / z1`` on a free load) and what is derived from it are recomputed
-        exactly as if the structure had been built with ``loads.torque = torque``; the
-        factorisations, which do not depend on the loads, are kept. The mesh element's contact
-        compliance stays linearised at the torque it was built for.
+        torsion DOF, the balancing torque on a free load) and what is derived from it are
+        recomputed exactly as if the structure had been built with ``loads.torque = torque``;
+        the factorisations, which do not depend on the loads, are kept. The mesh elements'
+        contact compliance stays linearised at the torque they were built for.
         """
         torque = float(torque)
         if torque == self.loads.torque:
             return
         self.loads = replace(self.loads, torque=torque)  # checked: finite
         self._forces()
-        f = self._f_const[NC:]
+        f = self._f_const[self.nc:]
         self._dyn_cache = {dt: (cond, cond.g @ f) for dt, (cond, _) in self._dyn_cache.items()}
         self._condensations.clear()
 
-    def pinion_angle(self, t: float) -> float:
-        """Rigid-body pinion angle at t [rad]."""
-        return self.loads.pinion_angle0 + self._omega[0] * t
+    def input_angle(self, t: float) -> float:
+        """Rigid-body angle of the input shaft at t [rad]."""
+        return self.loads.input_angle0 + self.loads.input_speed * t
+
+    def mesh_angles(self, input_angle: float) -> np.ndarray:
+        """Each mesh's pinion (driver) angle [rad] at the input shaft's angle
+        ``input_angle`` [rad]: the angle of the driver's shaft, turned into the pair's own
+        frame (where the driver turns about +z)."""
+        return self._driver_ratio * input_angle
+
+    @property
+    def mesh_periods(self) -> np.ndarray:
+        """Each mesh's period ``2 pi / (omega_driver z_driver)`` [s] (inf at zero speed)."""
+        w = self.loads.input_speed * self._driver_ratio
+        z = np.array([m.pair.teeth[0] for m in self.meshes], dtype=float)
+        with np.errstate(divide="ignore"):
+            return np.where(w > 0.0, 2.0 * math.pi / (w * z), math.inf)
 
     @property
     def mesh_period(self) -> float:
-        """Mesh period 2 pi / (omega z1) [s] (inf at zero speed)."""
-        w = self._omega[0]
-        return math.inf if w == 0.0 else 2.0 * math.pi / (w * self.system.teeth[0])
+        """The shortest mesh period [s]: the case's time step is a fraction of it."""
+        return float(np.min(self.mesh_periods))
 
     def _dynamic(self, dt: float):
         hit = self._dyn_cache.get(dt)
@@ -361,15 +395,35 @@ class Structure:
         if not (dt > 0.0 and math.isfinite(dt)):
             raise ValueError(f"time step dt = {dt!r} s must be finite and > 0")
         self._require_damping()
-        c0, c1, _ = newmark_coefficients(dt)
-        cond = Condensation(c0 * self._m + c1 * self._c + self._k)
-        entry = (cond, cond.g @ self._f_const[NC:])
+        c0, c1 = 4.0 / dt**2, 2.0 / dt
+        cond = Condensation(c0 * self._m + c1 * self._c + self._k, self.nc)
+        entry = (cond, cond.g @ self._f_const[self.nc:])
         if len(self._dyn_cache) > 256:
             self._dyn_cache.clear()
         self._dyn_cache[dt] = entry
         return entry
 
-    check_laws = staticmethod(check_laws)
+    def check_laws(self, f0, kb, cb):
+        """The laws as checked arrays of this structure's bearings
+        (:func:`gear_fmu.step.assembly.check_laws`)."""
+        return check_laws(f0, kb, cb, self.nb)
+
+    def _m_inv_columns(self) -> np.ndarray:
+        """``M^-1`` restricted to the condensed columns, (n, nc) (internal order)."""
+        if self._m_inv is None:
+            cho = scipy.linalg.cho_factor(self._m)
+            self._m_inv = np.ascontiguousarray(
+                scipy.linalg.cho_solve(cho, np.eye(self._m.shape[0])[:, :self.nc]))
+        return self._m_inv
+
+    def _errors(self, angles) -> np.ndarray:
+        """(n_meshes, 12) error displacements at the meshes' ``angles`` [rad]."""
+        out = np.zeros((len(self.meshes), 12))
+        if self._has_err:
+            for m, (mesh, angle) in enumerate(zip(self.meshes, angles, strict=True)):
+                if mesh.has_errors:
+                    out[m] = mesh.error_displacement(float(angle))
+        return out
 
     # ------------------------------------------------------------------ solves
     @one_blas_thread
@@ -379,46 +433,64 @@ class Structure:
         Velocities and accelerations are set to zero (paper Sec. 3.2); the loads are the constant
         ones (torque, gravity) without the rotating unbalance. ``Cb`` is ignored (zero velocity).
         """
-        f0, kb, _ = check_laws(F0, Kb, np.zeros((4, 2, 2)) if Cb is None else Cb)
-        info = self.static_at(f0, kb, self.pinion_angle(self.t))
-        if self.consistent_start:
-            f = np.zeros(N_GEAR)
-            f[[0, 1, 6, 7]] = unbalance_force(self._unb, self._omega, self.t)  # Eq. (10)
-            self.a = self._gear_compliance() @ f
+        zeros = np.zeros((self.nb, 2, 2))
+        f0, kb, _ = self.check_laws(F0, Kb, zeros if Cb is None else Cb)
+        info = self.static_at(f0, kb, self.input_angle(self.t))
+        if self.consistent_start and self._unb_idx.size:
+            f = np.zeros(self.nc)
+            unb = unbalance_force(self._unb_coef, self.t)  # Eq. (10)
+            for (iu, iv), (fu, fv) in zip(self._unb_idx, unb, strict=True):
+                f[iu] += fu
+                f[iv] += fv
+            self.a = self._m_inv_columns() @ f
         return info
 
-    def _gear_compliance(self) -> np.ndarray:
-        """``M^-1`` restricted to the gear-node columns, (n, 12) (internal order)."""
-        if self._m_gear is None:
-            cho = scipy.linalg.cho_factor(self._m)
-            self._m_gear = np.ascontiguousarray(
-                scipy.linalg.cho_solve(cho, np.eye(self._m.shape[0])[:, :N_GEAR]))
-        return self._m_gear
-
     @one_blas_thread
-    def static_at(self, f0, kb, angle) -> StepInfo:
-        """Static solution at a given rigid-body pinion angle [rad] (checked laws)."""
-        cond = self._static
+    def static_at(self, f0, kb, input_angle: float) -> StepInfo:
+        """Static solution with the input shaft at the rigid-body angle ``input_angle`` [rad]
+        (checked laws ``f0`` (nb, 2) [N], ``kb`` (nb, 2, 2) [N/m])."""
+        cond, nc, ng = self._static, self.nc, self.ng
         b = self._f_const
-        out = cond.g @ b[NC:]
-        z0 = b[:NC] + out[:NC]
-        z0[N_GEAR:] += f0.ravel()
-        y = out[NC:]
+        out = cond.g @ b[nc:]
+        z0 = b[:nc] + out[:nc]
+        z0[ng:ng + 2 * self.nb] += f0.ravel()
+        y = out[nc:]
         s_lin = cond.s0.copy()
-        for j in range(4):
-            sl = slice(N_GEAR + 2 * j, N_GEAR + 2 * j + 2)
+        for j in range(self.nb):
+            sl = slice(ng + 2 * j, ng + 2 * j + 2)
             s_lin[sl, sl] += kb[j]
-        xc = np.zeros(NC)
-        xc[THETA] = INITIAL_APPROACH_ROTATION  # close every potential contact first
+        angles = self.mesh_angles(input_angle)
         f_scale = max(float(np.linalg.norm(b)), float(np.linalg.norm(f0)))
-        xc, ms, info = solve_condensed(self.mesh, s_lin, z0, xc, angle, None, f_scale, self.t,
-                                       "static solution", self.tol, self.max_iter)
+        residuals = np.empty(self.max_iter + 1)
+        fc, kc = np.empty(ng), np.empty((ng, ng))
+        status, k, xc = contact_newton(
+            s_lin, z0, self._approach.copy(), angles, self._errors(angles), self._has_err,
+            self._mesh_tuple, fc, kc, self._totals, self._lengths, False, f_scale, self.tol,
+            self.max_iter, residuals)
+        self._raise(status, k, residuals, self.t, "static solution")
+        keep_evaluation(self._mesh_tuple)
         self.x = np.concatenate([xc, y - cond.w @ xc])
         self.v = np.zeros_like(self.x)
         self.a = np.zeros_like(self.x)
-        self.active = np.array(ms.active, copy=True)
-        self.mesh_state = ms
-        return info
+        self.solved = True
+        return StepInfo(self.t, k, float(residuals[k]), residuals[:k + 1].tolist())
+
+    def _raise(self, status, k, residuals, t, what) -> None:
+        """The error of a structural solve that returned ``status`` after ``k`` passes."""
+        if status == CONVERGED:
+            return
+        history = residuals[:k + 1].tolist()
+        if status == SINGULAR:
+            slices = ", ".join(f"{m.name} {int(np.count_nonzero(w.out[2]))}"
+                               for m, w in zip(self.layout.meshes, self._work, strict=True))
+            raise NewmarkConvergenceError(
+                f"{what} at t = {t:.9g} s: singular tangent at iteration {k} (mesh slices in "
+                f"contact: {slices}; a mesh without tooth contact leaves its shafts free in "
+                "torsion - check the torque sign)")
+        raise NewmarkConvergenceError(
+            f"{what} at t = {t:.9g} s did not converge: relative residual "
+            f"{history[-1]:.3e} (tol {self.tol:.1e}) after {self.max_iter} iterations; "
+            f"last residuals {', '.join(f'{v:.2e}' for v in history[-5:])}")
 
     @one_blas_thread
     def step(self, dt: float, F0, Kb, Cb) -> StepInfo:
@@ -428,9 +500,9 @@ class Structure:
         ----------
         dt : float
             Time step [s].
-        F0 : (4, 2) array
+        F0 : (nb, 2) array
             Bearing force at X = 0, Xdot = 0 [N] (global s, t).
-        Kb, Cb : (4, 2, 2) arrays
+        Kb, Cb : (nb, 2, 2) arrays
             Bearing stiffness [N/m] and damping [N s/m] (global s, t).
 
         Raises
@@ -438,269 +510,160 @@ class Structure:
         NewmarkConvergenceError
             With the step number, the time and the residual.
         """
-        f0, kb, cb = check_laws_fast(F0, Kb, Cb)
-        self._check_step(dt)
-        t1 = self.t + dt
-        what = f"Newmark step {self.n_steps + 1}"
-        pieces = self._pieces(dt)
-        if len(pieces) == 1 and pieces[0][3] is None:
-            info = self._advance(dt, t1, pieces[0][2], f0, kb, cb, what, self._memo)
-        else:
-            info = StepInfo(t1, 0, 0.0)
-            for p, (h, te, before, after) in enumerate(pieces):
-                # only the first starts from the step's state (advance_pieces)
-                memo = self._memo if p == 0 else _NO_MEMO
-                sub = self._advance(h, te, before, f0, kb, cb, what, memo)
-                info.iterations += sub.iterations
-                info.residual = max(info.residual, sub.residual)
-                info.residuals += sub.residuals
-                if after is not None:
-                    self._contact_event(after)
-        self.t = t1
+        f0, kb, cb = check_laws_fast(F0, Kb, Cb, self.nb)
+        plan = self.steps_plan(dt, 1)
+        counts, slots, mc, g_k, gc_k, s0_k, w_k, table, angles, after, errs, errs_a = plan.head
+        x, v, a = plan.state
+        unb_coef, unb_idx, f_c, has_err, meshes, f_scale, tol, max_iter, m_inv_g, memo = \
+            plan.tail
+        fc, kc, totals, lengths, residuals, x1, v1, a1 = plan.work
+        status, piece, k = advance_pieces(
+            counts[0], slots[0], mc, g_k, gc_k, s0_k, w_k, table[0], angles[0], after[0],
+            errs[0], errs_a[0], x, v, a, f_c, unb_coef, unb_idx, f0, kb, cb, has_err, meshes,
+            fc, kc, totals, lengths, f_scale, tol, max_iter, m_inv_g, residuals, x1, v1, a1,
+            memo)
+        t1 = float(table[0, piece, 1])
+        self._raise(status, k, residuals, t1, f"Newmark step {self.n_steps + 1}")
+        keep_evaluation(meshes)
+        self.x, self.v, self.a = x1, v1, a1
+        self._totals[:], self._lengths[:] = totals, lengths
+        self.t = plan.ends[0][-1]
         self.n_steps += 1
-        return info
+        return StepInfo(self.t, k, float(residuals[k]), residuals[:k + 1].tolist())
 
-    def _pieces(self, dt: float, t: float | None = None) -> list:
-        """``[(h [s], end time [s], mesh angle of the sub-step [rad], angle after its event
-        [rad] or None)]`` of a step of dt from ``t`` [s] (default: the structure's time)
-        (:meth:`gear_fmu.step.events.ContactEvents.pieces`; one piece without contact
-        location). The last step's are kept: a coupled step is computed again from the same
-        t at each iteration of the master."""
-        t = self.t if t is None else t
-        last = self._last_pieces
-        if last is not None and last[0] == t and last[1] == dt:
-            return last[2]
+    def _pieces(self, dt: float, t: float) -> list:
+        """``[(h [s], end time [s], angles before, angles after or NaN)]`` of a step of dt
+        from ``t`` [s] (:func:`gear_fmu.step.events.train_pieces`; one piece without contact
+        location)."""
         if not self.locate_contact:
             t1 = t + dt
-            pieces = [(dt, t1, self.pinion_angle(t1), None)]
-        else:
-            if self._events is None:
-                self._events = ContactEvents(self.mesh, self.pinion_angle)
-            pieces = self._events.pieces(t, dt)
-        self._last_pieces = (t, dt, pieces)
-        return pieces
-
-    def _contact_event(self, angle: float) -> None:
-        """Xdd, contact set and mesh state after a contact event: the mesh evaluated at pinion
-        ``angle`` [rad] after it, ``Xdd+ = Xdd- + M^-1 (F_mesh+ - F_mesh-)`` at the same X and
-        Xd (module docstring; :func:`gear_fmu.step.kernel.contact_event`)."""
-        mesh = self.mesh
-        buffers = self._mesh_buffers()
-        a = self.a.copy()
-        err = mesh.error_displacement(angle) if mesh.has_errors else _NO_ERROR
-        total, length = contact_event(angle, self.x, err, mesh.has_errors, *self._mesh_arrays,
-                                      self._gear_compliance(), self.mesh_state.force, a,
-                                      *buffers)
-        self.a = a
-        self._take_mesh_state(buffers, total, length, self.x)
+            return [(dt, t1, self.mesh_angles(self.input_angle(t1)),
+                     np.full(len(self.meshes), math.nan))]
+        if self._events is None:
+            self._events = [ContactEvents(mesh, lambda t, r=r: r * self.input_angle(t))
+                            for mesh, r in zip(self.meshes, self._driver_ratio, strict=True)]
+        return train_pieces(self._events, t, dt)
 
     def _check_step(self, dt: float) -> None:
-        if self.active is None:
+        if not self.solved:
             raise RuntimeError("call static() before the first step (initial state X0)")
         if not (dt > 0.0 and math.isfinite(dt)):
             raise ValueError(f"time step dt = {dt!r} s must be finite and > 0")
 
-    def _advance(self, h, t1, angle, f0, kb, cb, what, memo) -> StepInfo:
-        """One Newmark step of length h to t1 (mesh at ``angle``); updates X, Xd, Xdd and the
-        contact state, not the time. ``memo``: of the history products
-        (:func:`gear_fmu.step.assembly.history_products`), or empty."""
-        timing = self.timing
-        if self._mesh_arrays is not None and timing is None:
-            return self._advance_compiled(h, t1, angle, f0, kb, cb, what, memo)
-        t0 = time.perf_counter() if timing is not None else 0.0
-        cond, g_const = self._dynamic(h)
-        x, v, a = self.x, self.v, self.a
-        unb = unbalance_force(self._unb, self._omega, t1)  # Eq. (10)
-        s_lin, z0, y = prepare_step(self._mc, cond.g, g_const, x, v, a, self._f_c, unb, f0, kb,
-                                     cb, cond.s0, h, N_GEAR, memo)
-        f_scale = max(self._f_scale, math.sqrt(float(np.sum(f0 * f0))))
-        if timing is not None:
-            timing["assembly"] += time.perf_counter() - t0
-        xc0 = x[:NC] + h * v[:NC]
-        xc, ms, info = solve_condensed(self.mesh, s_lin, z0, xc0, angle, self.active, f_scale,
-                                       t1, what, self.tol, self.max_iter, timing)
-        t0 = time.perf_counter() if timing is not None else 0.0
-        self.x, self.v, self.a = finish_step(x, v, a, xc, y, cond.w, h)
-        self.active = ms.active
-        self.mesh_state = ms
-        if timing is not None:
-            timing["assembly"] += time.perf_counter() - t0
-        return info
-
-    def _advance_compiled(self, h, t1, angle, f0, kb, cb, what, memo) -> StepInfo:
-        """:meth:`_advance` in one compiled call (:func:`gear_fmu.step.kernel.advance`, the
-        same arithmetic as the Python loop)."""
-        head, tail, outputs = self._advance_inputs(h, t1, angle)
-        status, k, total, length = advance(*head, f0, kb, cb, *tail, *outputs, memo)
-        return self._advance_result(status, k, total, length, outputs, t1, what)
-
-    def _advance_inputs(self, h, t1, angle):
-        """The arguments of :func:`gear_fmu.step.kernel.advance` for a step of length h to t1
-        (mesh at ``angle``): those before the bearing laws, those after them, and the output
-        buffers it writes (:meth:`_advance_result` reads them)."""
-        cond, g_const = self._dynamic(h)
-        mesh = self.mesh
-        outputs = self._advance_outputs()
-        err = mesh.error_displacement(angle) if mesh.has_errors else _NO_ERROR
-        used = _NO_SET if self.active is None else self.active
-        head = (self._mc, cond.g, g_const, cond.s0, cond.w, self.x, self.v, self.a, self._f_c,
-                self._unb_coef, t1)
-        tail = (h, angle, err, mesh.has_errors, *self._mesh_arrays, used,
-                self.active is not None, self._f_scale, self.tol, self.max_iter)
-        return head, tail, outputs
-
-    def _mesh_buffers(self) -> tuple:
-        """New buffers for a mesh evaluation of the compiled kernels: force, tangent, contact
-        set, slices inside the path of contact, approach, load, abscissa, axial position."""
-        n = self.mesh.n_lines * self.mesh.n_slices
-        return (np.empty(12), np.empty((12, 12)), np.empty(n, dtype=np.bool_),
-                np.empty(n, dtype=np.bool_), np.empty(n), np.empty(n), np.empty(n),
-                np.empty(n))
-
-    def _take_mesh_state(self, buffers, total, length, x) -> None:
-        """The mesh evaluation in ``buffers`` (:meth:`_mesh_buffers`), of total load
-        ``total`` [N] and contact length ``length`` [m] at the state ``x``, as the current
-        mesh state and contact set."""
-        force, stiff, active, inside, delta, load, xi, z = buffers
-        te = transmission_error(self.mesh.pair.base_radius, x[:N_GEAR])
-        self.mesh_state = MeshState(force, stiff, active, delta, load, inside, xi, z, total, te,
-                                    {"contact_length": length})
-        self.active = active
-
-    def _advance_outputs(self) -> tuple:
-        """New buffers for what :func:`gear_fmu.step.kernel.advance` writes: the mesh
-        evaluation (:meth:`_mesh_buffers`), the residuals and the new X, Xd, Xdd."""
-        size = self.x.size
-        return (*self._mesh_buffers(), np.empty(self.max_iter + 1), np.empty(size),
-                np.empty(size), np.empty(size))
-
-    def _advance_result(self, status, k, total, length, outputs, t1, what) -> StepInfo:
-        """Raise the error of a failed :func:`gear_fmu.step.kernel.advance`, or take its new
-        state and mesh evaluation from ``outputs`` (:meth:`_advance_inputs`)."""
-        mesh_buffers, (residuals, x1, v1, a1) = outputs[:-4], outputs[-4:]
-        history = residuals[:k + 1].tolist()
-        if status == SINGULAR:
-            raise NewmarkConvergenceError(
-                f"{what} at t = {t1:.9g} s: singular tangent at iteration {k} "
-                f"({int(np.count_nonzero(mesh_buffers[2]))} mesh slices in contact; with no tooth "
-                "contact the pinion is free in torsion - check the torque sign)")
-        if status != CONVERGED:
-            raise NewmarkConvergenceError(
-                f"{what} at t = {t1:.9g} s did not converge: relative residual "
-                f"{history[-1]:.3e} (tol {self.tol:.1e}) after {self.max_iter} iterations; "
-                f"last residuals {', '.join(f'{v:.2e}' for v in history[-5:])}")
-        self._take_mesh_state(mesh_buffers, total, length, x1)
-        self.x, self.v, self.a = x1, v1, a1
-        return StepInfo(t1, k, history[-1], history)
-
-    def steps_plan(self, dt: float, n: int):
-        """The next steps of dt, at most ``n``, as the inputs of the compiled loop over steps
-        (:func:`orchestrator.coupling.fused.coupled_steps`), a :class:`StepsPlan`; it stops
-        before a step of more than :data:`MAX_PIECES` sub-steps. None when the next step takes
-        the Python path (timing on, more than :data:`MAX_PIECES` sub-steps). Finish it with
-        :meth:`end_steps`."""
+    def steps_plan(self, dt: float, n: int) -> StepsPlan:
+        """The next steps of dt, at most ``n`` (fewer when the condensations of their
+        sub-steps would not fit the slots together), as the inputs of the compiled loop over
+        steps (:func:`gear_fmu.step.kernel.advance_pieces` per step), a :class:`StepsPlan`.
+        Finish it with :meth:`end_steps`."""
         self._check_step(dt)
-        if self._mesh_arrays is None or self.timing is not None:
-            return None
         t, steps, slotted = self.t, [], []
         slots = self._condensations
         while len(steps) < n:
             pieces = self._pieces(dt, t)
             lengths = [h for h, _, _, _ in pieces]
-            if len(pieces) > MAX_PIECES or not slots.make_room(lengths, first=not steps):
+            if not slots.make_room(lengths, first=not steps):
                 break
             steps.append(pieces)
             slotted.append([slots.slot(h, self._dynamic) for h in lengths])
             t = pieces[-1][1]
-        if not steps:
-            return None
-        m, mesh = len(steps), self.mesh
-        counts = np.empty(m, dtype=np.int64)
-        index = np.empty((m, _SLOTS), dtype=np.int64)
-        tables = np.zeros((m, _SLOTS, 4))
-        events = np.zeros((m, _SLOTS), dtype=np.bool_)
-        err = err_after = _NO_ERRORS[None]
-        if mesh.has_errors:
-            err, err_after = np.zeros((m, _SLOTS, 12)), np.zeros((m, _SLOTS, 12))
+        m, n_meshes = len(steps), len(self.meshes)
+        width = max(len(p) for p in steps)
+        counts = np.array([len(p) for p in steps], dtype=np.int64)
+        index = np.zeros((m, width), dtype=np.int64)
+        table = np.zeros((m, width, 2))
+        angles = np.zeros((m, width, n_meshes))
+        after = np.full((m, width, n_meshes), math.nan)
+        rows = m if self._has_err else 1
+        errs, errs_after = np.zeros((rows, width, n_meshes, 12)), np.zeros(
+            (rows, width, n_meshes, 12))
         for i, pieces in enumerate(steps):
-            counts[i] = len(pieces)
-            index[i] = slotted[i][0]  # the unused slots: the first's
             index[i, :len(pieces)] = slotted[i]
-            for p, (h, te, before, after) in enumerate(pieces):
-                tables[i, p] = h, te, before, math.nan if after is None else after
-                events[i, p] = after is not None
-                if mesh.has_errors:
-                    err[i, p] = mesh.error_displacement(before)
-                    if after is not None:
-                        err_after[i, p] = mesh.error_displacement(after)
-        kept = self._mesh_buffers()
-        kept[2][:] = self.active  # the contact set the first step starts from
+            for p, (h, te, before, aft) in enumerate(pieces):
+                table[i, p] = h, te
+                angles[i, p] = before
+                after[i, p] = aft
+                if self._has_err:
+                    errs[i, p] = self._errors(before)
+                    errs_after[i, p] = self._errors(np.where(np.isnan(aft), before, aft))
+        ng, size = self.ng, self.x.size
         return StepsPlan(
-            (counts, index, self._mc, *slots.arrays(), tables, events, err, err_after),
+            (counts, index, self._mc, *slots.arrays(), table, angles, after, errs, errs_after),
             (self.x.copy(), self.v.copy(), self.a.copy()),
-            (self._f_c, self._unb_coef, mesh.has_errors, *self._mesh_arrays, self._f_scale,
-             self.tol, self.max_iter, self._gear_compliance(), self._memo),
-            self._advance_outputs(), kept, [[te for _, te, _, _ in p] for p in steps])
+            (self._unb_coef, self._unb_idx, self._f_c, self._has_err, self._mesh_tuple,
+             self._f_scale, self.tol, self.max_iter,
+             np.ascontiguousarray(self._m_inv_columns()[:, :ng]), self._memo),
+            (np.empty(ng), np.empty((ng, ng)), self._totals.copy(), self._lengths.copy(),
+             np.empty(self.max_iter + 1), np.empty(size), np.empty(size), np.empty(size)),
+            [[te for _, te, _, _ in p] for p in steps])
 
-    def end_steps(self, plan: StepsPlan, count: int, total: float, length: float) -> None:
+    def end_steps(self, plan: StepsPlan, count: int, totals, lengths) -> None:
         """Take the state after the first ``count`` steps of ``plan`` (:meth:`steps_plan`):
-        X, Xd, Xdd, and the mesh evaluation the last of them ended on, of total load
-        ``total`` [N] and contact length ``length`` [m]; the time and step count advance as
-        ``count`` calls of :meth:`step` would."""
+        X, Xd, Xdd from its ``state`` and the meshes' kept evaluations (the kernel keeps
+        them), of total loads ``totals`` [N] and contact lengths ``lengths`` [m]; the time
+        and step count advance as ``count`` calls of :meth:`step` would."""
         if count:
-            x, v, a = plan.state
-            self._take_mesh_state(plan.kept, total, length, x)
-            self.x, self.v, self.a = x, v, a
+            self.x, self.v, self.a = (s.copy() for s in plan.state)
+            self._totals[:], self._lengths[:] = totals, lengths
             self.t = plan.ends[count - 1][-1]
             self.n_steps += count
 
-    def raise_failed_step(self, status, k, outputs, t1) -> None:
-        """Raise the error of the sub-step to ``t1`` [s] of a compiled step
-        (:func:`orchestrator.coupling.fused.coupled_steps`) that returned ``status`` after
-        ``k`` passes, its residuals and mesh evaluation in ``outputs``
-        (``_advance_outputs``): the error of the Python path."""
+    def raise_failed_step(self, status, k, residuals, t1) -> None:
+        """Raise the error of the sub-step to ``t1`` [s] of a compiled step that returned
+        ``status`` after ``k`` passes with these ``residuals``: the error of :meth:`step`."""
         if status == CONVERGED:
             raise ValueError("raise_failed_step: the step converged")
-        self._advance_result(status, k, 0.0, 0.0, outputs, t1, f"Newmark step {self.n_steps + 1}")
+        self._raise(status, k, residuals, t1, f"Newmark step {self.n_steps + 1}")
 
     # ------------------------------------------------------------------ state
+    @property
+    def mesh_states(self) -> tuple[MeshState, ...] | None:
+        """Each mesh's evaluation at the current state (copies; None before a solution)."""
+        if not self.solved:
+            return None
+        return tuple(w.state(w.kept, total, length, self.x[w.idx]) for w, total, length in
+                     zip(self._work, self._totals, self._lengths, strict=True))
+
     def get_state(self) -> StructureState:
         """A copy of everything a step changes (for the master's rollback)."""
         return StructureState(self.t, self.n_steps, self.x.copy(), self.v.copy(), self.a.copy(),
-                              None if self.active is None else np.array(self.active, copy=True),
-                              self.mesh_state)
+                              self.mesh_states)
 
     def set_state(self, state: StructureState) -> None:
         """Restore a state from :meth:`get_state` exactly."""
         self.t, self.n_steps = state.t, state.n_steps
         self.x, self.v, self.a = state.x.copy(), state.v.copy(), state.a.copy()
-        self.active = None if state.active is None else np.array(state.active, copy=True)
-        self.mesh_state = state.mesh_state
+        self.solved = state.mesh_states is not None
+        if self.solved:
+            for m, (w, ms) in enumerate(zip(self._work, state.mesh_states, strict=True)):
+                w.put(w.kept, ms)
+                self._totals[m] = ms.total_load
+                self._lengths[m] = ms.contact_length
 
     # ------------------------------------------------------------------ outputs
     def journal_states(self) -> np.ndarray:
-        """(4, 4) [u, v, udot, vdot] at bearing nodes 1-4, global (s, t) frame [m, m/s]."""
-        xv = np.concatenate((self.x[:NC], self.v[:NC]))
-        return xv.take(_STATE_OUTPUTS[:16]).reshape(4, 4)
+        """(nb, 4) [u, v, udot, vdot] at the bearing nodes, global (s, t) frame [m, m/s]."""
+        xv = np.concatenate((self.x[:self.nc], self.v[:self.nc]))
+        return xv.take(self._state_outputs[:4 * self.nb]).reshape(self.nb, 4)
 
     def gear_displacements(self) -> np.ndarray:
-        """(2, 6) DOFs (u, v, w, phi, psi, theta) of the pinion and gear nodes."""
-        return self.x[:N_GEAR].reshape(2, 6).copy()
+        """(n_gears, 6) DOFs (u, v, w, phi, psi, theta) of each gear's node (layout order)."""
+        return np.array([self.x[self._gear_uv[g, 0]:self._gear_uv[g, 0] + DOF_PER_NODE]
+                         for g in range(len(self.layout.gears))]).reshape(-1, DOF_PER_NODE)
 
     def state_outputs(self) -> list[float]:
-        """:meth:`journal_states` (16, row by row) then u, v of the pinion and gear nodes (4,
-        :meth:`gear_displacements`) as a list: what an FMU outputs at every step, in one
-        gather [m, m/s]."""
-        return np.concatenate((self.x[:NC], self.v[:NC])).take(_STATE_OUTPUTS).tolist()
+        """:meth:`journal_states` (row by row) then u, v of each gear's node as a list: what
+        an FMU outputs at every step, in one gather [m, m/s]."""
+        xv = np.concatenate((self.x[:self.nc], self.v[:self.nc]))
+        return xv.take(self._state_outputs).tolist()
 
-    def mesh_force(self) -> float:
-        """Total normal mesh force of the current state [N]."""
-        return float(self.mesh_state.total_load)
+    def mesh_forces(self) -> np.ndarray:
+        """Total normal force of each mesh in the current state [N]."""
+        return self._totals.copy()
 
-    def transmission_error(self) -> float:
-        """r_b1 theta1 + r_b2 theta2 of the current state [m]
-        (:class:`gear_fmu.mesh.element.MeshState`)."""
-        return float(self.mesh_state.transmission_error)
+    def transmission_errors(self) -> np.ndarray:
+        """Each mesh's ``r_b1 theta1 + r_b2 theta2`` in the current state [m]
+        (:meth:`gear_fmu.mesh.element.MeshElement.transmission_error`)."""
+        return np.array([w.mesh.transmission_error(self.x[w.idx]) for w in self._work])
 
     def full_vector(self, which: str = "x") -> np.ndarray:
         """Displacement / velocity / acceleration in the full numbering of the system."""

@@ -1,51 +1,48 @@
-"""The two-shaft gear system of the paper (Fig. 1, Tables 1-2): layout, DOF maps, assembly.
+"""The structure of a gear train (paper Eq. 9, K_shaft and M): nodes, DOF maps, assembly.
 
-Layout
-------
-Two parallel shafts along z, both spanning ``z in [-L/2, L/2]``; the pinion shaft's axis passes
-through O1 = (0, 0), the gear shaft's through O2 = (a, 0) (a = centre distance, s from O1 to O2).
-Each shaft has ``n_elements`` (even) equal Timoshenko elements; the pinion and the gear sit on the
-mid node (z = 0, symmetric system), the bearings at the end nodes:
+Built from a :class:`gear_fmu.layout.Layout`, the one source of the topology: nothing here
+counts shafts, gears, meshes or bearings.
 
-=========  ===========  =========
-bearing    shaft        z
-=========  ===========  =========
-1          pinion       -L/2
-2          pinion       +L/2
-3          gear         -L/2
-4          gear         +L/2
-=========  ===========  =========
-
-Node numbering: pinion shaft nodes ``0..n``, gear shaft nodes ``n+1..2n+1`` (both from z = -L/2).
+Nodes
+-----
+Each shaft gets nodes at its ends, at its segment ends, at every gear, bearing and disc on it
+and where the drive's torques act; each interval between two such places is cut into equal
+Timoshenko elements no longer than the shaft's ``element_length``. Nodes are numbered shaft by
+shaft (the layout's order), from each shaft's start; every node carries the six DOFs of
+:mod:`gear_fmu.dofs`, the drivetrain's motor and load DOFs follow (:mod:`gear_fmu.drivetrain`).
+A node's global position is its shaft's axis (:attr:`gear_fmu.layout.Layout.shaft_centres`)
+at ``z = offset + position``.
 
 Boundary conditions (choices, documented)
 -----------------------------------------
-* Torsion (default, :class:`gear_fmu.drivetrain.Drivetrain` ``()``): the torsion DOF at the
-  gear shaft's output end (z = +L/2) is clamped, i.e. the output drives a load of infinite
-  inertia; the resisting torque is the reaction there. The rigid-body rotation of both shafts
-  is imposed kinematics (pinion angle ``omega t``) and the ``theta`` DOFs are the small elastic
-  rotations on top of it. The input torque acts on the pinion shaft's torsion DOF at its input
-  end (z = -L/2). A motor inertia at the input and a load inertia at the output (rigid or
-  behind couplings, extra DOFs after the node DOFs) are set by ``drivetrain``
-  (:mod:`gear_fmu.drivetrain`).
-* Axial: one axial spring (thrust bearing) of stiffness ``axial_stiffness`` (default 1e9 N/m, not
-  given in the paper) on ``w`` at the z = -L/2 node of each shaft.
-* Radial (u, v): no support in the structural matrices; the four bearings enter from outside
-  (affine laws ``F0 - Kb X - Cb Xdot``). Bending rotations are free at the bearings.
+* Torsion (:class:`gear_fmu.drivetrain.Drivetrain` ``()``): the torsion DOF at the output
+  position (``drive.output_position`` of ``drive.output_shaft``, default its end) is clamped,
+  i.e. the output drives a load of infinite inertia; the resisting torque is the reaction
+  there. The rigid-body rotations of the shafts are imposed kinematics (the input shaft at
+  ``omega t``, the others through the gear ratios) and the ``theta`` DOFs are the small
+  elastic rotations on top of them. The input torque acts on the input shaft's torsion DOF at
+  ``drive.input_position`` (default its start). A motor inertia at the input and a load
+  inertia at the output (rigid or behind couplings, extra DOFs after the node DOFs) are set by
+  the drivetrain.
+* Axial: one axial spring (thrust bearing) of stiffness ``axial_stiffness`` (default 1e9 N/m,
+  not given in the paper) on ``w`` at the first bearing (lowest position) of each shaft.
+* Radial (u, v): no support in the structural matrices; the bearings enter from outside
+  (affine laws ``F0 - Kb X - Cb Xdot`` at their nodes). Bending rotations are free there.
 
-Gear bodies (choice, documented)
---------------------------------
-Rigid discs on the mid nodes with the Table 1 masses (pinion 2 kg, gear 74 kg). Unless given
-(``GearBody.polar_inertia``, ``diametral_inertia``), their inertias are those of a steel
-annulus (rho = 7800 kg/m^3) of face width b and outer radius equal to the transverse pitch
-radius r = m z / (2 cos beta), the bore radius r_i chosen so that the annulus has the given
-mass: ``r_i^2 = r^2 - M / (rho pi b)``. Spur case: pinion r = 52 mm, r_i = 32.7 mm (close to
-the 35 mm shaft radius), Ip = 3.77e-3 kg m^2, Id = 2.30e-3 kg m^2; gear r = 314 mm, r_i =
-152 mm, Ip = 4.50 kg m^2, Id = 2.26 kg m^2 (see :func:`annulus_inertias`).
+Gear bodies and discs (choice, documented)
+------------------------------------------
+Rigid discs on their nodes. Unless given (``polar_inertia``, ``diametral_inertia`` > 0), a
+gear's inertias are those of an annulus of its shaft's density, of face width b and outer
+radius equal to the transverse pitch radius r = m z / (2 cos beta), the bore radius r_i chosen
+so that the annulus has the given mass: ``r_i^2 = r^2 - M / (rho pi b)``. Paper's spur case:
+pinion r = 52 mm, r_i = 32.7 mm (close to the 35 mm shaft radius), Ip = 3.77e-3 kg m^2,
+Id = 2.30e-3 kg m^2; gear r = 314 mm, r_i = 152 mm, Ip = 4.50 kg m^2, Id = 2.26 kg m^2 (see
+:func:`annulus_inertias`). A disc's inertias are as given.
 """
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass, field
 
@@ -54,42 +51,10 @@ import numpy as np
 from bearing_fmu.blas_threads import one_blas_thread
 from gear_fmu.dofs import DOF_PER_NODE, THETA, U, V, W, dof
 from gear_fmu.drivetrain import Drivetrain
-from gear_fmu.timoshenko import HollowSection, disc_matrices, timoshenko_element
+from gear_fmu.layout import GearSpec, Layout, ShaftSpec
+from gear_fmu.timoshenko import disc_matrices, timoshenko_element
 
-__all__ = [
-    "GearBody",
-    "GearShaftSystem",
-    "Shaft",
-    "annulus_inertias",
-]
-
-
-@dataclass(frozen=True)
-class Shaft:
-    """One shaft: hollow section, length, number of equal elements (even)."""
-
-    section: HollowSection
-    length: float
-    n_elements: int = 8
-
-    def __post_init__(self) -> None:
-        if not (math.isfinite(self.length) and self.length > 0.0):
-            raise ValueError(f"shaft length = {self.length!r} m must be finite and > 0")
-        if self.n_elements < 2 or self.n_elements % 2:
-            raise ValueError(
-                f"n_elements = {self.n_elements!r}: must be even and >= 2 (a mid node carries "
-                "the gear)"
-            )
-
-    @property
-    def mass(self) -> float:
-        """Shaft mass rho A L [kg]."""
-        return self.section.mass_per_length * self.length
-
-    @property
-    def node_z(self) -> np.ndarray:
-        """Axial node positions [m], from -L/2 to +L/2."""
-        return np.linspace(-0.5 * self.length, 0.5 * self.length, self.n_elements + 1)
+__all__ = ["GearShaftSystem", "Unbalances", "annulus_inertias", "gear_inertias"]
 
 
 def annulus_inertias(
@@ -130,155 +95,209 @@ def annulus_inertias(
 
 
 @dataclass(frozen=True)
-class GearBody:
-    """Rigid gear body on the mid node of its shaft.
+class Unbalances:
+    """The mass unbalances of a train (Eq. 10), one entry per unbalanced gear or disc.
 
-    Inertias [kg m^2]: ``polar_inertia`` and ``diametral_inertia`` when given (> 0), else those
-    of :func:`annulus_inertias` (0 = derived).
-    """
+    ``node`` (nu,) the body's node; ``me`` (nu,) mass times eccentricity [kg m]; ``shaft``
+    (nu,) the index of its shaft; ``phase`` (nu,) its angle at t = 0 [rad]."""
 
-    mass: float
-    pitch_radius: float
-    face_width: float
-    density: float = 7800.0
-    polar_inertia: float = 0.0
-    diametral_inertia: float = 0.0
-
-    def __post_init__(self) -> None:
-        for name in ("polar_inertia", "diametral_inertia"):
-            v = getattr(self, name)
-            if not (math.isfinite(v) and v >= 0.0):
-                raise ValueError(f"gear {name} = {v!r} kg.m^2 must be finite and >= 0 "
-                                 "(0 = derived from the mass)")
+    node: np.ndarray
+    me: np.ndarray
+    shaft: np.ndarray
+    phase: np.ndarray
 
     @property
-    def inertias(self) -> tuple[float, float, float]:
-        """(bore radius [m], diametral inertia [kg m^2], polar inertia [kg m^2])."""
-        ri, idiam, ip = annulus_inertias(self.mass, self.pitch_radius, self.face_width,
-                                         self.density) if not (
-            self.polar_inertia and self.diametral_inertia) else (math.nan, 0.0, 0.0)
-        return (ri, self.diametral_inertia or idiam, self.polar_inertia or ip)
+    def count(self) -> int:
+        return int(self.node.size)
+
+
+def _breakpoints(layout: Layout, shaft: ShaftSpec) -> list[float]:
+    """Where a shaft must have nodes [m from its start], sorted, merged within 1e-9 m."""
+    places = [*shaft.breaks]
+    for items in (layout.gears, layout.bearings, layout.discs):
+        places += [it.position for it in items if it.shaft == shaft.name]
+    if layout.drive.input_shaft == shaft.name:
+        places.append(layout.input_position)
+    if layout.drive.output_shaft == shaft.name:
+        places.append(layout.output_position)
+    out: list[float] = []
+    for p in sorted(min(max(p, 0.0), shaft.length) for p in places):
+        if not out or p - out[-1] > 1e-9:
+            out.append(p)
+    return out
+
+
+def gear_inertias(gear: GearSpec, density: float) -> tuple[float, float]:
+    """``(diametral, polar)`` inertia of a gear body [kg m^2]: as given, or those of
+    :func:`annulus_inertias` with the transverse pitch radius (module docstring)."""
+    if gear.polar_inertia and gear.diametral_inertia:
+        return gear.diametral_inertia, gear.polar_inertia
+    radius = gear.module * gear.teeth / (2.0 * math.cos(gear.helix_angle))
+    _, idiam, ip = annulus_inertias(gear.mass, radius, gear.face_width, density)
+    return gear.diametral_inertia or idiam, gear.polar_inertia or ip
 
 
 @dataclass
 class GearShaftSystem:
-    """Assembled structural model of the two-shaft gear system (paper Eq. 9, K_shaft and M).
+    """Assembled structural model of a gear train (paper Eq. 9, K_shaft and M).
 
-    The attributes below are all built by :meth:`build`.
+    The attributes below are all built from ``layout`` on construction.
 
     Attributes
     ----------
     n_dof : int
-        Total DOFs (6 per node, including the clamped one, then the drivetrain's motor and
-        load DOFs, :mod:`gear_fmu.drivetrain`).
+        Total DOFs (6 per node, including a clamped one, then the drivetrain's motor and load
+        DOFs, :mod:`gear_fmu.drivetrain`).
     mass, stiffness : (n_dof, n_dof) arrays
-        Global M and K_shaft (shafts, discs, axial springs, motor and load inertias and
-        couplings) [SI].
+        Global M and K_shaft (shafts, gear bodies, discs, axial springs, motor and load
+        inertias and couplings) [SI].
     coupling_damping : (n_dof, n_dof) array
         Viscous damping of the drivetrain couplings [N m s/rad].
     free : int array
         DOFs kept (all but the clamped output torsion DOF, if clamped).
-    bearing_nodes : (4,) int
-        Nodes of bearings 1..4.
-    bearing_dofs : (4, 2) int
-        Global (u, v) DOFs of bearings 1..4.
-    gear_nodes : (2,) int
-        Pinion and gear nodes.
-    gear_dofs : (12,) int
-        Pinion node 6 DOFs then gear node 6 DOFs (the mesh element's q12).
+    shaft_nodes : list of int arrays
+        The nodes of each shaft, from its start.
+    node_shaft, node_position : (n_nodes,) arrays
+        Each node's shaft (index) and its position from the shaft's start [m].
+    gear_nodes, bearing_nodes, disc_nodes : int arrays
+        The node of each gear, bearing and disc (layout order).
+    mesh_nodes : (n_meshes, 2) int
+        The driver's and the driven gear's node of each mesh
+        (:attr:`gear_fmu.layout.Layout.drivers`).
+    bearing_dofs : (nb, 2) int
+        Global (u, v) DOFs of each bearing.
     input_dof, output_dof : int
-        Pinion shaft torsion at z = -L/2; gear shaft torsion at z = +L/2 (clamped by default).
+        Torsion DOF of the input position; of the output position (clamped by default).
     torque_dof, load_dof : int, int or None
         Where the input torque acts (the motor DOF behind a coupling, else ``input_dof``);
         where the resisting torque acts (None when the output is clamped).
     static_ground : float
         Stiffness [N m/rad] of the spring on ``load_dof`` that fixes the free torsional
         rotation in static solutions (0 when the output is clamped).
-    shaft_masses : (2,) float
-        Shaft + gear mass per shaft [kg] (the M of Eq. 10).
+    shaft_masses : (n_shafts,) float
+        Mass of each shaft with everything on it [kg].
+    unbalances : Unbalances
+        The unbalanced bodies (Eq. 10).
 
     Examples
     --------
-    Two solid steel shafts of 8 elements (the paper's system:
-    :func:`fmu_src.examples.paper_system`):
+    The paper's system (:func:`fmu_src.examples.paper_system`): two shafts of 8 elements,
+    the gears on their mid nodes, the bearings at the ends:
 
-    >>> steel = dict(young=210e9, poisson=0.3, density=7800.0)
-    >>> shaft = Shaft(HollowSection(0.05, 0.0, **steel), 0.2, 8)
-    >>> gears = (GearBody(1.0, 0.04, 0.03), GearBody(4.0, 0.08, 0.03))
-    >>> sys_ = GearShaftSystem((shaft, shaft), gears, centre_distance=0.12, teeth=(20, 40))
-    >>> sys_.n_dof, sys_.free.size, sys_.gear_nodes.tolist()
-    (108, 107, [4, 13])
+    >>> from fmu_src.examples import paper_system
+    >>> sys_ = paper_system()
+    >>> sys_.n_dof, sys_.free.size, sys_.gear_nodes.tolist(), sys_.bearing_nodes.tolist()
+    (108, 107, [4, 13], [0, 8, 9, 17])
     """
 
-    shafts: tuple[Shaft, Shaft]
-    gears: tuple[GearBody, GearBody]
-    centre_distance: float
-    teeth: tuple[int, int]
-    axial_stiffness: float = 1e9
-    helix_angle_deg: float = 0.0
-    drivetrain: Drivetrain = field(default_factory=Drivetrain)
+    layout: Layout
     n_dof: int = field(init=False)
     mass: np.ndarray = field(init=False, repr=False)
     stiffness: np.ndarray = field(init=False, repr=False)
     free: np.ndarray = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
-        if not (math.isfinite(self.axial_stiffness) and self.axial_stiffness > 0.0):
-            raise ValueError(f"axial_stiffness = {self.axial_stiffness!r} N/m must be > 0")
-        if not (math.isfinite(self.centre_distance) and self.centre_distance > 0.0):
-            raise ValueError(f"centre_distance = {self.centre_distance!r} m must be > 0")
         self.build()
 
     # ------------------------------------------------------------------ layout
     @property
-    def shaft_first_node(self) -> tuple[int, int]:
-        """First node of each shaft."""
-        return 0, self.shafts[0].n_elements + 1
+    def drivetrain(self) -> Drivetrain:
+        return self.layout.drive.drivetrain
 
     @property
     def n_nodes(self) -> int:
-        return sum(s.n_elements + 1 for s in self.shafts)
+        return int(self.node_shaft.size)
+
+    def _node_at(self, shaft: str, position: float) -> int:
+        i = self.layout.shaft_index[shaft]
+        nodes = self.shaft_nodes[i]
+        k = int(np.argmin(np.abs(self.node_position[nodes] - position)))
+        return int(nodes[k])
 
     @one_blas_thread
     def build(self) -> None:
-        """Assemble M and K_shaft of Eq. (9) (shaft elements, gear discs, thrust springs) and
-        the DOF maps."""
-        n_nodes = self.n_nodes
-        self.n_dof = DOF_PER_NODE * n_nodes
-        m = np.zeros((self.n_dof, self.n_dof))
-        k = np.zeros((self.n_dof, self.n_dof))
-        firsts = self.shaft_first_node
-        bearing_nodes, gear_nodes = [], []
-        for shaft, first, gear in zip(self.shafts, firsts, self.gears, strict=True):
-            le = shaft.length / shaft.n_elements
-            ke, me = timoshenko_element(shaft.section, le)
-            for e in range(shaft.n_elements):
-                idx = np.arange(DOF_PER_NODE * (first + e), DOF_PER_NODE * (first + e + 2))
-                k[np.ix_(idx, idx)] += ke
-                m[np.ix_(idx, idx)] += me
-            mid = first + shaft.n_elements // 2
-            gear_nodes.append(mid)
-            _, idiam, ip = gear.inertias
-            idx = np.arange(DOF_PER_NODE * mid, DOF_PER_NODE * (mid + 1))
-            m[np.ix_(idx, idx)] += disc_matrices(gear.mass, idiam, ip)
-            bearing_nodes += [first, first + shaft.n_elements]
-            k[dof(first, W), dof(first, W)] += self.axial_stiffness
+        """Assemble M and K_shaft of Eq. (9) (shaft elements, gear bodies, discs, thrust
+        springs) and the DOF maps."""
+        lay = self.layout
+        shaft_nodes, node_shaft, node_pos, elements = [], [], [], []
+        for i, shaft in enumerate(lay.shafts):
+            first = len(node_shaft)
+            points = _breakpoints(lay, shaft)
+            pos = [points[0]]
+            for a, b in itertools.pairwise(points):
+                n = max(1, math.ceil((b - a) / shaft.element_length - 1e-9))
+                le = (b - a) / n
+                seg = shaft.segment_at(a, b)
+                for k in range(n):
+                    elements.append((len(pos) - 1 + first, le, i, seg))
+                    pos.append(a + (b - a) * (k + 1) / n)
+            shaft_nodes.append(np.arange(first, first + len(pos)))
+            node_shaft += [i] * len(pos)
+            node_pos += pos
+        self.shaft_nodes = shaft_nodes
+        self.node_shaft = np.array(node_shaft, dtype=int)
+        self.node_position = np.array(node_pos)
+        n_dof = DOF_PER_NODE * len(node_shaft)
+        m = np.zeros((n_dof, n_dof))
+        k = np.zeros((n_dof, n_dof))
+        cache: dict = {}
+        for node, le, i, seg in elements:
+            key = (i, seg, le)
+            if key not in cache:
+                cache[key] = timoshenko_element(lay.shafts[i].section(seg), le)
+            ke, me = cache[key]
+            idx = np.arange(DOF_PER_NODE * node, DOF_PER_NODE * (node + 2))
+            k[np.ix_(idx, idx)] += ke
+            m[np.ix_(idx, idx)] += me
+        self.gear_nodes = np.array([self._node_at(g.shaft, g.position) for g in lay.gears],
+                                   dtype=int)
+        for g, node in zip(lay.gears, self.gear_nodes, strict=True):
+            idiam, ip = gear_inertias(g, lay.shaft(g.shaft).density)
+            idx = np.arange(DOF_PER_NODE * node, DOF_PER_NODE * (node + 1))
+            m[np.ix_(idx, idx)] += disc_matrices(g.mass, idiam, ip)
+        self.disc_nodes = np.array([self._node_at(d.shaft, d.position) for d in lay.discs],
+                                   dtype=int)
+        for d, node in zip(lay.discs, self.disc_nodes, strict=True):
+            idx = np.arange(DOF_PER_NODE * node, DOF_PER_NODE * (node + 1))
+            m[np.ix_(idx, idx)] += disc_matrices(d.mass, d.diametral_inertia, d.polar_inertia)
+        self.bearing_nodes = np.array([self._node_at(b.shaft, b.position)
+                                       for b in lay.bearings], dtype=int)
+        self.bearing_dofs = np.array([[dof(n, U), dof(n, V)] for n in self.bearing_nodes],
+                                     dtype=int).reshape(-1, 2)
+        for shaft in lay.shafts:  # the thrust spring at each shaft's first bearing
+            first = min((b for b in lay.bearings if b.shaft == shaft.name),
+                        key=lambda b: b.position)
+            node = self._node_at(shaft.name, first.position)
+            k[dof(node, W), dof(node, W)] += shaft.axial_stiffness
+        gear_node = dict(zip((g.name for g in lay.gears), self.gear_nodes, strict=True))
+        self.mesh_nodes = np.array([[gear_node[d], gear_node[n]] for d, n in lay.drivers],
+                                   dtype=int).reshape(-1, 2)
+        self.n_dof = n_dof
         self.mass = m
         self.stiffness = k
-        self.bearing_nodes = np.array(bearing_nodes)
-        self.bearing_dofs = np.array([[dof(n, U), dof(n, V)] for n in bearing_nodes])
-        self.gear_nodes = np.array(gear_nodes)
-        self.gear_dofs = np.concatenate(
-            [np.arange(DOF_PER_NODE * n, DOF_PER_NODE * (n + 1)) for n in gear_nodes]
-        )
-        self.input_dof = dof(firsts[0], THETA)
-        self.output_dof = dof(firsts[1] + self.shafts[1].n_elements, THETA)
+        self.input_dof = dof(self._node_at(lay.drive.input_shaft, lay.input_position), THETA)
+        self.output_dof = dof(self._node_at(lay.drive.output_shaft, lay.output_position),
+                              THETA)
         self._drivetrain()
         clamped = [self.output_dof] if self.drivetrain.clamped else []
         self.free = np.setdiff1d(np.arange(self.n_dof), clamped)
-        self.shaft_masses = np.array(
-            [s.mass + g.mass for s, g in zip(self.shafts, self.gears, strict=True)]
-        )
+        self.shaft_masses = np.array([lay.carried_mass(s.name) for s in lay.shafts])
+        self.unbalances = self._unbalances()
+
+    def _unbalances(self) -> Unbalances:
+        lay = self.layout
+        rows = []
+        bodies = [*zip(lay.gears, self.gear_nodes, strict=True),
+                  *zip(lay.discs, self.disc_nodes, strict=True)]
+        for body, node in bodies:
+            if body.unbalance > 0.0:
+                mass = body.mass if body.unbalance_mass == "body" else lay.carried_mass(
+                    body.shaft)
+                rows.append((node, mass * body.unbalance, lay.shaft_index[body.shaft],
+                             body.unbalance_phase))
+        cols = list(zip(*rows, strict=True)) if rows else [(), (), (), ()]
+        return Unbalances(np.array(cols[0], dtype=int), np.array(cols[1], dtype=float),
+                          np.array(cols[2], dtype=int), np.array(cols[3], dtype=float))
 
     def _drivetrain(self) -> None:
         """Motor and load inertias and couplings (:mod:`gear_fmu.drivetrain`)."""
@@ -317,7 +336,7 @@ class GearShaftSystem:
         self.mass = m
         self.stiffness = k
         self.coupling_damping = c
-        # static ground on the load: the torsional stiffness scale of the gear shaft
+        # static ground on the load: the torsional stiffness scale of the shafts
         self.static_ground = 0.0 if dt.clamped else float(
             np.max(np.diag(k)[self.dof_kind() == 1]))
 
@@ -354,9 +373,8 @@ class GearShaftSystem:
         return kind
 
     def node_positions(self) -> np.ndarray:
-        """(n_nodes, 3) node coordinates (s, t, z) [m]."""
-        out = []
-        for shaft, s0 in zip(self.shafts, (0.0, self.centre_distance), strict=True):
-            for z in shaft.node_z:
-                out.append((s0, 0.0, z))
-        return np.array(out)
+        """(n_nodes, 3) node coordinates (s, t, z) [m] (module docstring)."""
+        lay = self.layout
+        centres = lay.shaft_centres[self.node_shaft]
+        offsets = np.array([s.offset for s in lay.shafts])[self.node_shaft]
+        return np.column_stack([centres, offsets + self.node_position])

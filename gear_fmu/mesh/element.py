@@ -58,7 +58,7 @@ from numba import njit
 from gear_fmu.mesh.geometry import GearPair
 from gear_fmu.mesh.tooth_stiffness import mesh_stiffness_table
 
-__all__ = ["MeshElement", "MeshState", "ToothDeviations", "transmission_error"]
+__all__ = ["MeshElement", "MeshState", "ToothDeviations", "pair_frame", "transmission_error"]
 
 
 @dataclass(frozen=True)
@@ -124,6 +124,42 @@ def transmission_error(base_radius, q):
     if q.ndim == 1:  # one state: numbers, not 0-d arrays (the same arithmetic, faster)
         return float(rb1 * q[5] + rb2 * q[11])
     return rb1 * q[..., 5] + rb2 * q[..., 11]
+
+
+def pair_frame(direction: float, turn_sign: int = 1, flip_hand: bool = False) -> np.ndarray:
+    """``T`` (12, 12): a pair's own frame (module docstring: pinion at the origin turning about
+    +z, gear at (a, 0), the pinion's contact line ``xi(z) = xi_0 - z tan(beta_b)``, a left-hand
+    pinion) from the structure's frame, ``q_own = T q`` for the 12 DOFs (u, v, w, phi, psi,
+    theta) of the pinion and gear nodes.
+
+    ``direction`` [rad]: the line of centres from the pinion's axis to the gear's in the
+    structure's s-t plane (its s' axis); ``turn_sign``: the pinion's turning direction there
+    (-1: the frame is mirrored across the line of centres, ``t' -> -t'``, so that the pinion
+    turns about +z' in its own frame); ``flip_hand``: mirror z (``z' -> -z'``), which turns a
+    right-hand pinion into the left-hand one of the element. A mirror maps the translations as
+    a vector and the rotations as a pseudo-vector (the opposite sign on the mirrored axes'
+    complements): t-mirror ``diag(1, -1, 1, -1, 1, -1)``, z-mirror
+    ``diag(1, 1, -1, -1, -1, 1)`` on (u, v, w, phi, psi, theta).
+
+    >>> t = pair_frame(0.5, -1, True)
+    >>> bool(np.allclose(t @ t.T, np.eye(12)))
+    True
+    """
+    c, s = math.cos(direction), math.sin(direction)
+    rot = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
+    node = np.zeros((6, 6))
+    node[:3, :3] = rot
+    node[3:, 3:] = rot
+    mirror = np.ones(6)
+    if turn_sign < 0:
+        mirror *= (1.0, -1.0, 1.0, -1.0, 1.0, -1.0)
+    if flip_hand:
+        mirror *= (1.0, 1.0, -1.0, -1.0, -1.0, 1.0)
+    node = mirror[:, None] * node
+    out = np.zeros((12, 12))
+    out[:6, :6] = node
+    out[6:, 6:] = node
+    return out
 
 
 @dataclass
@@ -260,9 +296,11 @@ def _slice_geometry(angle, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1, pit
 
 
 @njit(cache=True)
-def _mesh_kernel(angle, q, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1, pitch2, cache,
+def _mesh_kernel(angle, q, p, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1, pitch2, cache,
                  tangent, force, stiff, active, inside, delta, load, xis, zout):
-    """Slices of all contact lines at pinion angle ``angle`` (module docstring).
+    """Slices of all contact lines at pinion angle ``angle`` (module docstring), ``q`` the 12
+    gear-node DOFs in the structure's frame and ``p`` the structure matrix P in that frame
+    (:meth:`MeshElement.kernel_arrays`).
 
     ``cache`` and ``tangent`` are the mesh's (:meth:`MeshElement.kernel_arrays`): what depends
     on the angle only (:func:`_slice_geometry`) is computed once per angle, and the tangent
@@ -278,8 +316,6 @@ def _mesh_kernel(angle, q, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1, pit
         _slice_geometry(angle, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1, pitch2, cache)
     # V = P u (_structure_matrix): the approach V.q - e = (P^T q).u - e, and the force
     # -sum k dl delta V = -P sum (k dl delta) u, through three sums instead of twelve
-    p = np.empty((12, 3))
-    _structure_matrix(geo, p)
     pq0, pq1, pq2 = 0.0, 0.0, 0.0
     for c in range(12):
         pq0 += p[c, 0] * q[c]
@@ -368,9 +404,16 @@ class MeshElement:
         Slices across the face width (per contact line).
     deviations : ToothDeviations, optional
     gear_node_z : (float, float)
-        Axial positions of the pinion and gear nodes relative to the face-width centre [m].
+        Axial positions of the pinion and gear nodes relative to the face-width centre [m],
+        in the element's own frame.
     n_table : int
         Samples of the stiffness per unit length along the path of contact.
+    frame : (12, 12) array, optional
+        ``T``: the pair's own frame (pinion at the origin turning about +z, gear at (a, 0),
+        the contact-line convention of the module docstring) from the structure's frame of the
+        12 gear-node DOFs, ``q_own = T q`` (:func:`pair_frame`). The element takes and gives
+        DOFs, forces and stiffnesses in the structure's frame: ``P`` becomes ``T^T P``. None:
+        the two frames are one (the paper's pair).
 
     Examples
     --------
@@ -386,7 +429,7 @@ class MeshElement:
 
     def __init__(self, pair: GearPair, line_load: float, n_slices: int = 20,
                  deviations: ToothDeviations | None = None, gear_node_z=(0.0, 0.0),
-                 n_table: int = 129):
+                 n_table: int = 129, frame=None):
         if int(n_slices) != n_slices or n_slices < 1:
             raise ValueError(f"n_slices = {n_slices!r}: need an integer >= 1")
         self.pair = pair
@@ -429,6 +472,21 @@ class MeshElement:
         self._cache = np.zeros((n + 1, CACHE_COLUMNS))
         self._cache[n, _ANGLE] = math.nan
         self._tangent = np.zeros((12, 12))
+        # P of V = P u in the structure's frame (constant: the kernel takes it as it is)
+        own = np.empty((12, 3))
+        _structure_matrix(self._geo, own)
+        te = np.zeros(12)
+        te[5], te[11] = pair.base_radius
+        if frame is None:
+            self._frame = None
+            self._p, self._te = own, te
+        else:
+            t = np.asarray(frame, dtype=float)
+            if t.shape != (12, 12) or not np.allclose(t @ t.T, np.eye(12), atol=1e-12):
+                raise ValueError("frame: an orthogonal (12, 12) matrix, q_own = T q")
+            self._frame = t
+            self._p = np.ascontiguousarray(t.T @ own)
+            self._te = t.T @ te
 
     @property
     def mesh_stiffness_per_width(self) -> float:
@@ -490,7 +548,8 @@ class MeshElement:
         return angles
 
     def error_displacement(self, pinion_angle: float) -> np.ndarray:
-        """q_err: mounting errors and runouts as rigid gear-node displacements (12,)."""
+        """q_err: mounting errors and runouts as rigid gear-node displacements (12,), in the
+        structure's frame (``mounting``, ``runout_phase``: in the pair's own frame)."""
         q = self._mounting.copy()
         if self._runout:
             d = self.deviations
@@ -499,7 +558,17 @@ class MeshElement:
             q[1] += d.runout[0] * math.sin(pinion_angle + d.runout_phase[0])
             q[6] += d.runout[1] * math.cos(-th2 + d.runout_phase[1])
             q[7] += d.runout[1] * math.sin(-th2 + d.runout_phase[1])
-        return q
+        return q if self._frame is None else self._frame.T @ q
+
+    def transmission_error(self, q) -> float | np.ndarray:
+        """``r_b1 theta1 + r_b2 theta2`` [m] of the gear-node DOFs ``q`` (..., 12) in the
+        structure's frame, the rotations taken in the pair's own frame (the pinion turning
+        about +z): :func:`transmission_error` there."""
+        q = np.asarray(q, dtype=float)
+        if self._frame is None:
+            return transmission_error(self.pair.base_radius, q)
+        out = q @ self._te
+        return float(out) if q.ndim == 1 else out
 
     @property
     def has_errors(self) -> bool:
@@ -512,8 +581,9 @@ class MeshElement:
         caller (:mod:`gear_fmu.step.kernel`) passes on. The last two are the mesh's cache of
         what depends on the angle and the contact set only (``_mesh_kernel``), which the
         kernel updates; the others are constant."""
-        return (self._geo, self.xi_table, self.k_table, self.z_slices, self.dl, self.n_lines,
-                self._dev, self._pitch[0], self._pitch[1], self._cache, self._tangent)
+        return (self._p, self._geo, self.xi_table, self.k_table, self.z_slices, self.dl,
+                self.n_lines, self._dev, self._pitch[0], self._pitch[1], self._cache,
+                self._tangent)
 
     def evaluate(self, pinion_angle: float, q12) -> MeshState:
         """Mesh force, tangent and contact set at a pinion angle [rad] and gear-node DOFs (12,)."""
@@ -530,10 +600,8 @@ class MeshElement:
         load = np.empty(n)
         xi = np.empty(n)
         z = np.empty(n)
-        total, length = _mesh_kernel(
-            float(pinion_angle), qe, self._geo, self.xi_table, self.k_table, self.z_slices,
-            self.dl, self.n_lines, self._dev, self._pitch[0], self._pitch[1], self._cache,
-            self._tangent, force, stiff, active, inside, delta, load, xi, z)
-        te = transmission_error(self.pair.base_radius, q)
+        total, length = _mesh_kernel(float(pinion_angle), qe, *self.kernel_arrays(), force,
+                                     stiff, active, inside, delta, load, xi, z)
+        te = self.transmission_error(q)
         return MeshState(force, stiff, active, delta, load, inside, xi, z, total, te,
                          {"contact_length": length})

@@ -174,7 +174,7 @@ def damped_eigen(m, c, k, k_mesh=None, dof_kind=None, zero_tol: float = 1e-6) ->
 
 
 @one_blas_thread
-def damped_modes(system: GearShaftSystem, damping_full, mesh_stiffness12, kb, cb
+def damped_modes(system: GearShaftSystem, damping_full, mesh_stiffness, kb, cb
                  ) -> DampedModes:
     """Damped modes of the gear-shaft system linearised about X0 (Eq. 20, module docstring).
 
@@ -183,11 +183,12 @@ def damped_modes(system: GearShaftSystem, damping_full, mesh_stiffness12, kb, cb
     system : GearShaftSystem
     damping_full : (n_dof, n_dof) array
         Structure's damping C (full numbering) [N s/m, ...], e.g. ``Structure.damping_full``.
-    mesh_stiffness12 : (12, 12) array
-        Mean mesh stiffness on the gear-node DOFs (symmetric part used).
-    kb : float or (4, 2, 2)
+    mesh_stiffness : (n_meshes, 12, 12) array
+        Each mesh's mean stiffness on its gear nodes' DOFs (symmetric parts used,
+        :func:`gear_fmu.modal.modes.mesh_stiffness_matrix`).
+    kb : float or (nb, 2, 2)
         Bearings' stiffness at X0 [N/m], global frame, full 2x2.
-    cb : float or (4, 2, 2)
+    cb : float or (nb, 2, 2)
         Bearings' damping at X0 [N s/m], global frame, full 2x2.
 
     Returns
@@ -198,7 +199,7 @@ def damped_modes(system: GearShaftSystem, damping_full, mesh_stiffness12, kb, cb
     n = system.n_dof
     c_full = _square(damping_full, n, "damping matrix") + bearing_block_matrix(
         system, cb, "bearing damping")
-    k_mesh = mesh_stiffness_matrix(system, mesh_stiffness12)
+    k_mesh = mesh_stiffness_matrix(system, mesh_stiffness)
     k_full = system.stiffness + k_mesh + bearing_block_matrix(system, kb, "bearing stiffness")
     found = damped_eigen(system.reduce(system.mass), system.reduce(c_full),
                          system.reduce(k_full), system.reduce(k_mesh),

@@ -21,8 +21,8 @@ Structural damping C_s (``DampingModel.kind``)
       zeta at w1 and w2 and less in between.
 
 Mesh damping C_m
-    A viscous damper along the contact lines with the geometry of the mean mesh stiffness:
-    ``C_m = (c_m / k_m) K_mesh,mean`` (12 x 12 on the gear-node DOFs), with
+    For each mesh, a viscous damper along the contact lines with the geometry of its mean
+    stiffness: ``C_m = (c_m / k_m) K_mesh,mean`` (12 x 12 on its gear nodes' DOFs), with
     ``k_m = K_mesh,mean[theta1, theta1] / r_b1^2`` the mesh stiffness seen along the transverse
     line of action [N/m] and ``c_m`` [N s/m] given (``mesh_coefficient``) or from a ratio of
     the two-inertia mesh mode (``mesh_ratio``): ``c_m = 2 zeta_m sqrt(k_m m_e)``,
@@ -31,7 +31,7 @@ Mesh damping C_m
 Drivetrain couplings C_d
     The coupling dampers of the motor and the load (:mod:`gear_fmu.drivetrain`).
 
-K_mesh,mean is the mesh tangent averaged over one mesh period at the static load
+K_mesh,mean is a mesh's tangent averaged over one of its periods at the static load
 (:func:`gear_fmu.modal.analyses.mean_mesh_stiffness`).
 """
 
@@ -45,6 +45,7 @@ import numpy as np
 from bearing_fmu.blas_threads import one_blas_thread
 from gear_fmu.dofs import THETA
 from gear_fmu.modal.modes import Modes, mesh_stiffness_matrix, modal_damping_matrix, natural_modes
+from gear_fmu.system import gear_inertias
 
 __all__ = ["BASES", "DAMPING_KINDS", "DampingModel", "damping_matrix", "mesh_damping_coefficient",
            "rayleigh_coefficients", "transverse_mesh_stiffness"]
@@ -138,7 +139,7 @@ def transverse_mesh_stiffness(k_mesh12, rb1: float) -> float:
 
 
 def mesh_damping_coefficient(model: DampingModel, k_mesh12, base_radii, polar_inertias) -> float:
-    """``c_m`` [N s/m] (module docstring) for the mean mesh stiffness (12, 12)."""
+    """``c_m`` [N s/m] (module docstring) for one mesh's mean stiffness (12, 12)."""
     if model.mesh_coefficient > 0.0:
         return model.mesh_coefficient
     if model.mesh_ratio == 0.0:
@@ -149,8 +150,21 @@ def mesh_damping_coefficient(model: DampingModel, k_mesh12, base_radii, polar_in
     return 2.0 * model.mesh_ratio * math.sqrt(k_m * m_e)
 
 
+def _mesh_polar_inertias(system) -> list[tuple[float, float]]:
+    """The driver's and the driven gear's polar inertia of each mesh [kg m^2]."""
+    lay = system.layout
+    out = []
+    for driver, driven in lay.drivers:
+        pair = []
+        for name in (driver, driven):
+            g = lay.gear(name)
+            pair.append(gear_inertias(g, lay.shaft(g.shaft).density)[1])
+        out.append(tuple(pair))
+    return out
+
+
 @one_blas_thread
-def damping_matrix(system, model: DampingModel, k_mesh12, bearing_stiffness, base_radii
+def damping_matrix(system, model: DampingModel, k_meshes, bearing_stiffness, base_radii
                    ) -> tuple[np.ndarray, Modes | None]:
     """``C = C_s + C_m + C_d`` [SI] (full numbering) and the modes C_s was built on (None for
     Rayleigh damping).
@@ -159,29 +173,33 @@ def damping_matrix(system, model: DampingModel, k_mesh12, bearing_stiffness, bas
     ----------
     system : GearShaftSystem
     model : DampingModel
-    k_mesh12 : (12, 12) array or None
-        Mean mesh stiffness (None only when no term needs it).
-    bearing_stiffness : float or (4, 2, 2)
+    k_meshes : (n_meshes, 12, 12) array or None
+        Each mesh's mean stiffness (None only when no term needs it).
+    bearing_stiffness : float or (nb, 2, 2)
         Kb of the ``"bearings"`` basis [N/m] (symmetric part used).
-    base_radii : (float, float)
-        r_b1, r_b2 [m].
+    base_radii : (n_meshes, 2) array or None
+        r_b1, r_b2 of each mesh (driver first) [m] (None without mesh damping).
     """
     c = np.array(system.coupling_damping, copy=True)
     ref = None
     k_struct = system.stiffness
-    if k_mesh12 is not None:
-        k_struct = k_struct + mesh_stiffness_matrix(system, k_mesh12)
+    if k_meshes is not None:
+        k_meshes = np.asarray(k_meshes, dtype=float).reshape(-1, 12, 12)
+        k_struct = k_struct + mesh_stiffness_matrix(system, k_meshes)
     if model.kind == "modal" and model.ratio > 0.0:
         kb = bearing_stiffness if model.basis == "bearings" else 0.0
-        ref = natural_modes(system, kb, k_mesh12)
+        ref = natural_modes(system, kb, k_meshes)
         c += modal_damping_matrix(system, ref, model.ratio)
     elif model.kind == "rayleigh":
         alpha, beta = rayleigh_coefficients(model)
         c += alpha * system.mass + beta * k_struct
-    cm = mesh_damping_coefficient(model, k_mesh12, base_radii,
-                                  [g.inertias[2] for g in system.gears]) if (
-        model.mesh_ratio or model.mesh_coefficient) else 0.0
-    if cm > 0.0:
-        k_m = transverse_mesh_stiffness(k_mesh12, base_radii[0])
-        c += (cm / k_m) * mesh_stiffness_matrix(system, k_mesh12)
+    if model.mesh_ratio or model.mesh_coefficient:
+        inertias = _mesh_polar_inertias(system)
+        for m, (k12, radii) in enumerate(zip(k_meshes, base_radii, strict=True)):
+            cm = mesh_damping_coefficient(model, k12, radii, inertias[m])
+            if cm > 0.0:
+                k_m = transverse_mesh_stiffness(k12, radii[0])
+                one = np.zeros_like(k_meshes)
+                one[m] = k12
+                c += (cm / k_m) * mesh_stiffness_matrix(system, one)
     return 0.5 * (c + c.T), ref

@@ -28,6 +28,7 @@ __all__ = [
     "Modes",
     "bearing_block_matrix",
     "bearing_stiffness_matrix",
+    "mesh_dofs",
     "mesh_stiffness_matrix",
     "modal_damping_matrix",
     "mode_table",
@@ -45,21 +46,22 @@ def bearing_block_matrix(system: GearShaftSystem, blocks, name: str = "bearing s
     Parameters
     ----------
     system : GearShaftSystem
-    blocks : float or array_like (4, 2, 2)
-        Isotropic value for every bearing, or one 2x2 block per bearing (global s, t):
-        Kb [N/m] or Cb [N s/m].
+    blocks : float or array_like (nb, 2, 2)
+        Isotropic value for every bearing, or one 2x2 block per bearing (global s, t; the
+        layout's order): Kb [N/m] or Cb [N s/m].
     name : str
         For error messages.
     """
+    nb = len(system.bearing_dofs)
     b = np.asarray(blocks, dtype=float)
     if b.ndim == 0:
-        b = np.broadcast_to(b * np.eye(2), (4, 2, 2))
-    if b.shape != (4, 2, 2):
-        raise ValueError(f"{name} shape {b.shape} must be () or (4, 2, 2)")
+        b = np.broadcast_to(b * np.eye(2), (nb, 2, 2))
+    if b.shape != (nb, 2, 2):
+        raise ValueError(f"{name} shape {b.shape} must be () or ({nb}, 2, 2) for {nb} bearings")
     if not np.all(np.isfinite(b)):
         raise ValueError(f"{name} has non-finite entries")
     out = np.zeros((system.n_dof, system.n_dof))
-    for j in range(4):
+    for j in range(nb):
         idx = system.bearing_dofs[j]
         out[np.ix_(idx, idx)] += b[j]
     return out
@@ -72,20 +74,33 @@ def bearing_stiffness_matrix(system: GearShaftSystem, kb) -> np.ndarray:
     Parameters
     ----------
     system : GearShaftSystem
-    kb : float or array_like (4, 2, 2)
+    kb : float or array_like (nb, 2, 2)
         Isotropic stiffness [N/m] for every bearing, or one 2x2 Kb per bearing (global s, t).
     """
     b = bearing_block_matrix(system, kb)
     return 0.5 * (b + b.T)
 
 
-def mesh_stiffness_matrix(system: GearShaftSystem, k12) -> np.ndarray:
-    """Full (n_dof, n_dof) matrix of a (12, 12) mesh stiffness on the gear-node DOFs."""
-    k12 = np.asarray(k12, dtype=float)
-    if k12.shape != (12, 12):
-        raise ValueError(f"mesh stiffness shape {k12.shape} must be (12, 12)")
+def mesh_dofs(system: GearShaftSystem, m: int) -> np.ndarray:
+    """The 12 full DOFs of mesh m: the driver's node's six, then the driven gear's node's."""
+    return np.concatenate([np.arange(6 * n, 6 * n + 6) for n in system.mesh_nodes[m]])
+
+
+def mesh_stiffness_matrix(system: GearShaftSystem, k_meshes) -> np.ndarray:
+    """Full (n_dof, n_dof) matrix of the meshes' stiffnesses, one (12, 12) per mesh on its
+    gear nodes' DOFs (:func:`mesh_dofs`; the structure's frame), symmetric parts summed.
+    ``k_meshes``: (n_meshes, 12, 12), or (12, 12) for a train of one mesh."""
+    k = np.asarray(k_meshes, dtype=float)
+    n_meshes = len(system.mesh_nodes)
+    if k.ndim == 2:
+        k = k[None]
+    if k.shape != (n_meshes, 12, 12):
+        raise ValueError(f"mesh stiffness shape {np.shape(k_meshes)} must be "
+                         f"({n_meshes}, 12, 12) for {n_meshes} mesh(es)")
     out = np.zeros((system.n_dof, system.n_dof))
-    out[np.ix_(system.gear_dofs, system.gear_dofs)] = 0.5 * (k12 + k12.T)
+    for m in range(n_meshes):
+        idx = mesh_dofs(system, m)
+        out[np.ix_(idx, idx)] += 0.5 * (k[m] + k[m].T)
     return out
 
 
@@ -136,10 +151,11 @@ def natural_modes(
     Parameters
     ----------
     system : GearShaftSystem
-    bearing_stiffness : float or (4, 2, 2)
+    bearing_stiffness : float or (nb, 2, 2)
         See :func:`bearing_stiffness_matrix` (symmetric part used).
-    mesh_stiffness : (12, 12) array, optional
-        Mesh stiffness on the gear-node DOFs (e.g. the mean mesh stiffness); symmetric part used.
+    mesh_stiffness : (n_meshes, 12, 12) array, optional
+        Each mesh's stiffness on its gear nodes' DOFs (e.g. the mean mesh stiffness,
+        :func:`mesh_stiffness_matrix`); symmetric parts used.
     stiffness_extra : (n_dof, n_dof) array, optional
         Any further stiffness (full DOF numbering).
     """

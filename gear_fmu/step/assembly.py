@@ -2,10 +2,11 @@
 
 With the history terms of Eq. (12) (:func:`gear_fmu.step.newmark.newmark_history`) and the constant
 part of the tangent condensed onto the gear and bearing DOFs (:mod:`gear_fmu.step.condensation`),
-:func:`prepare_step` adds the external loads (Eq. 10 at the gear nodes) and the affine bearing
-laws F0 - Kb X - Cb Xdot (Eq. 17) to the right-hand side and ``Kb + c1 Cb`` to the tangent
-(Eq. 14, 16); after the Newton/contact loop :func:`finish_step` recovers the eliminated DOFs
-and updates velocities and accelerations (Eq. 12). :func:`check_laws` validates the laws.
+:func:`prepare_step` adds the external loads (the unbalances of Eq. 10) and the affine bearing
+laws F0 - Kb X - Cb Xdot (Eq. 17) of every bearing to the right-hand side and ``Kb + c1 Cb``
+to the tangent (Eq. 14, 16); after the Newton/contact loop :func:`finish_step` recovers the
+eliminated DOFs and updates velocities and accelerations (Eq. 12). :func:`check_laws` validates
+the laws.
 """
 
 from __future__ import annotations
@@ -73,14 +74,16 @@ def history_products(mc, g, x, v, a, dt, nc, memo):
 
 
 @njit(cache=True)
-def prepare_step(mc, g, g_const, x, v, a, f_c, unb, f0, kb, cb, s0, dt, ng, memo):
+def prepare_step(mc, g, g_const, x, v, a, f_c, unb, unb_idx, f0, kb, cb, s0, dt, ng, memo):
     """Right-hand side and condensed tangent of one Newmark step (Eq. 12, 14, 16).
 
     ``mc`` = [M C] (n, 2n) turns the Newmark history [p; q] into b = M p + C q; ``g``
     (:class:`gear_fmu.step.condensation.Condensation`) condenses its r part
     (:func:`history_products`, with its ``memo``). Only ``g`` depends on the step's length:
     a new length costs its condensation, not a product with [M C] (what a step that does
-    not recur with the mesh period asks at most cut steps).
+    not recur with the mesh period asks at most cut steps). ``unb`` (nu, 2): the unbalance
+    forces of Eq. (10) [N] on the condensed DOFs ``unb_idx`` (nu, 2); bearing j's law (Eq. 17)
+    acts on the condensed DOFs ``ng + 2 j``, ``ng + 2 j + 1``.
     Returns ``s_lin`` (nc, nc) = S0 + Kb + c1 Cb, ``z0`` (nc,) and ``y`` = A_rr^-1 b_r.
     """
     nc = s0.shape[0]
@@ -89,13 +92,12 @@ def prepare_step(mc, g, g_const, x, v, a, f_c, unb, f0, kb, cb, s0, dt, ng, memo
     z0 = np.empty(nc)
     for i in range(nc):
         z0[i] = b[i] + out[i] + g_const[i] + f_c[i]
-    z0[0] += unb[0]  # pinion node (u, v)
-    z0[1] += unb[1]
-    z0[6] += unb[2]  # gear node (u, v)
-    z0[7] += unb[3]
+    for i in range(unb.shape[0]):
+        z0[unb_idx[i, 0]] += unb[i, 0]
+        z0[unb_idx[i, 1]] += unb[i, 1]
     y = out[nc:] + g_const[nc:]
     s_lin = s0.copy()
-    for j in range(4):
+    for j in range(f0.shape[0]):
         o = ng + 2 * j
         for r in range(2):
             acc = f0[j, r]
@@ -124,27 +126,27 @@ def finish_step(x, v, a, xc, y, w, dt):
     return x1, v1, a1
 
 
-def check_laws(f0, kb, cb):
-    """Bearing laws as float arrays of shapes (4, 2), (4, 2, 2), (4, 2, 2), all finite."""
+def check_laws(f0, kb, cb, nb: int):
+    """Bearing laws as float arrays of shapes (nb, 2), (nb, 2, 2), (nb, 2, 2), all finite."""
     f0 = np.asarray(f0, dtype=float)
     kb = np.asarray(kb, dtype=float)
     cb = np.asarray(cb, dtype=float)
-    if f0.shape != (4, 2) or kb.shape != (4, 2, 2) or cb.shape != (4, 2, 2):
+    if f0.shape != (nb, 2) or kb.shape != (nb, 2, 2) or cb.shape != (nb, 2, 2):
         raise ValueError(
             f"bearing laws shapes F0 {f0.shape}, Kb {kb.shape}, Cb {cb.shape}: expected "
-            "(4, 2), (4, 2, 2), (4, 2, 2)"
+            f"({nb}, 2), ({nb}, 2, 2), ({nb}, 2, 2) for {nb} bearings"
         )
     if not (np.all(np.isfinite(f0)) and np.all(np.isfinite(kb)) and np.all(np.isfinite(cb))):
         raise ValueError("bearing laws contain non-finite values")
     return f0, kb, cb
 
 
-def check_laws_fast(f0, kb, cb):
+def check_laws_fast(f0, kb, cb, nb: int):
     """Shape and finiteness check of the laws at the cost of one compiled test (hot path)."""
     nd = np.ndarray
     if (type(f0) is nd and type(kb) is nd and type(cb) is nd
-            and f0.shape == (4, 2) and kb.shape == (4, 2, 2) and cb.shape == (4, 2, 2)
+            and f0.shape == (nb, 2) and kb.shape == (nb, 2, 2) and cb.shape == (nb, 2, 2)
             and f0.dtype == np.float64 and kb.dtype == np.float64 and cb.dtype == np.float64
             and _all_finite(f0, kb, cb)):
         return f0, kb, cb
-    return check_laws(f0, kb, cb)
+    return check_laws(f0, kb, cb, nb)

@@ -1,10 +1,12 @@
 """Static condensation of the structure's constant matrices onto the nonlinear DOFs.
 
-Within a Newmark step only the mesh (12 gear-node DOFs) and the bearing laws (8 bearing DOFs)
-change the tangent of Eq. (14); the rest, ``A = c0 M + c1 C + K_shaft`` (Eq. 12, 14), is
-constant at fixed dt. With the free DOFs ordered ``[c; r]`` the r block is eliminated once per
-dt (:class:`Condensation`: ``W = A_rr^-1 A_rc``, Schur complement ``S0 = A_cc - A_cr W``), and
-each Newton/contact iteration solves a dense 20 x 20 system (:func:`gauss_solve`).
+Within a Newmark step only the meshes (the six DOFs of every gear node) and the bearing laws
+(u, v of every bearing node) change the tangent of Eq. (14); the rest,
+``A = c0 M + c1 C + K_shaft`` (Eq. 12, 14), is constant at fixed dt. With the free DOFs
+ordered ``[c; r]`` the r block is eliminated once per dt (:class:`Condensation`:
+``W = A_rr^-1 A_rc``, Schur complement ``S0 = A_cc - A_cr W``), and each Newton/contact
+iteration solves a dense nc x nc system (:func:`gauss_solve`; 20 x 20 in the paper's case: two
+gear nodes, four bearings).
 """
 
 from __future__ import annotations
@@ -13,11 +15,7 @@ import numpy as np
 import scipy.linalg
 from numba import njit
 
-__all__ = ["NC", "N_BEARING", "N_GEAR", "Condensation", "CondensationSlots", "gauss_solve"]
-
-N_GEAR = 12  # gear-node DOFs in the condensed block (pinion node, gear node)
-N_BEARING = 4  # bearings, 2 DOFs (u, v) each
-NC = N_GEAR + 2 * N_BEARING  # condensed DOFs
+__all__ = ["Condensation", "CondensationSlots", "gauss_solve"]
 
 
 class Condensation:
@@ -34,7 +32,7 @@ class Condensation:
         right-hand side and ``A_rr^-1 b_r``.
     """
 
-    def __init__(self, a: np.ndarray, nc: int = NC):
+    def __init__(self, a: np.ndarray, nc: int):
         acc, acr, arr = a[:nc, :nc], a[:nc, nc:], a[nc:, nc:]
         cho = scipy.linalg.cho_factor(arr)
         arr_inv = scipy.linalg.cho_solve(cho, np.eye(arr.shape[0]))

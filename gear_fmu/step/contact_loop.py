@@ -1,39 +1,50 @@
-"""The Newton-Raphson / normal-contact loop of one structural solve (paper Sec. 3.2, Fig. 4).
+"""The Newton-Raphson / normal-contact loop of one structural solve (paper Sec. 3.2, Fig. 4),
+for any number of meshes.
 
-On the condensed DOFs (:mod:`gear_fmu.step.condensation`) the residual of Eq. (11) is
-``G_c = S X_c - z0 - F_mesh(X_c)`` with S the condensed tangent of the linear part and the
-bearing laws. The mesh force is piecewise linear in X (fixed active set), so Newton (Eq. 13-15)
-converges in one solve once the contact set is right; the loop ends when the contact set used by
-the last solve equals the one at the iterate and the relative residual
-``||G_c|| / max(f_scale, ||F_mesh||)`` is below the limit l, or below the round-off floor of
-its evaluation when that is larger: ``64 eps (||z0|| + ||F_mesh||)`` over the same scale (at
-the solution ``S X_c`` balances ``z0 + F_mesh``, so these are the sizes of the terms that
-cancel). At small time steps the inertia terms in S and z0 (``4/dt^2 M``) are many
-orders above the external loads, and a limit such as 1e-10 of the loads lies below what
-double precision can resolve; the floor only accepts where the limit could never be met, so
-it changes no step that converged before.
+On the condensed DOFs (:mod:`gear_fmu.step.condensation`; the gear-node DOFs first) the
+residual of Eq. (11) is ``G_c = S X_c - z0 - F_mesh(X_c)`` with S the condensed tangent of the
+linear part and the bearing laws, ``F_mesh`` the sum of every mesh element's force on its two
+gear nodes (:func:`evaluate_train`). The mesh force is piecewise linear in X (fixed contact
+sets), so Newton (Eq. 13-15) converges in one solve once the contact sets are right; the loop
+ends when the contact set each mesh used in the last solve equals the one at the iterate and
+the relative residual ``||G_c|| / max(f_scale, ||F_mesh||)`` is below the limit l, or below
+the round-off floor of its evaluation when that is larger: ``64 eps (||z0|| + ||F_mesh||)``
+over the same scale (at the solution ``S X_c`` balances ``z0 + F_mesh``, so these are the
+sizes of the terms that cancel). At small time steps the inertia terms in S and z0
+(``4/dt^2 M``) are many orders above the external loads, and a limit such as 1e-10 of the
+loads lies below what double precision can resolve; the floor only accepts where the limit
+could never be met.
 
-Mesh element API consumed: ``mesh.evaluate(pinion_angle, q12) -> state`` with ``state.force``
-(12,) the generalised mesh force on the gear-node DOFs, ``state.stiffness`` (12, 12) its tangent
-``-dforce/dq`` for the current active set, ``state.active`` the contact set.
+A mesh's workspace (:class:`MeshWork`) is one tuple of arrays, the same types for every mesh,
+so that a train's meshes are one homogeneous tuple the compiled loop indexes.
 """
 
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass, field
 
 import numpy as np
 from numba import njit
 
-from gear_fmu.step.condensation import N_GEAR, gauss_solve
-from gear_fmu.step.newmark import NewmarkConvergenceError
+from gear_fmu.mesh.element import MeshState, _mesh_kernel
+from gear_fmu.step.condensation import gauss_solve
 
-__all__ = ["ROUNDOFF", "StepInfo", "solve_condensed"]
+__all__ = ["CONVERGED", "NOT_CONVERGED", "ROUNDOFF", "SINGULAR", "MeshWork", "StepInfo",
+           "contact_newton", "evaluate_train"]
 
 #: the round-off floor of the residual, in units of machine epsilon times the norms of its terms
 ROUNDOFF = 64.0 * np.finfo(float).eps
+#: outcomes of :func:`contact_newton`
+CONVERGED, NOT_CONVERGED, SINGULAR = 0, 1, 2
+#: entries of a mesh's workspace tuple (:meth:`MeshWork.arrays`): the kernel's arrays
+#: (:meth:`gear_fmu.mesh.element.MeshElement.kernel_arrays`, 12), then
+_IDX, _TE = 12, 13  # its 12 DOFs in the condensed vector, its transmission-error vector
+#: the last evaluation: force, stiffness, contact set, inside, approach, load, abscissa, z
+_OUT, _STIFF, _ACTIVE, _INSIDE, _DELTA, _LOAD, _XI, _Z = 14, 15, 16, 17, 18, 19, 20, 21
+_USED = 22  # the contact set the current iterate is consistent with
+#: the evaluation the last accepted step ended on, as the last evaluation's entries
+_KEPT, _KEPT_ACTIVE = 23, 25
 
 
 @dataclass
@@ -46,9 +57,97 @@ class StepInfo:
     residuals: list = field(default_factory=list)
 
 
+class MeshWork:
+    """A mesh element in a structure: its kernel's arrays, where its 12 DOFs sit in the
+    condensed vector (``idx``) and the buffers its evaluations fill (module docstring).
+
+    Parameters
+    ----------
+    mesh : gear_fmu.mesh.element.MeshElement
+    idx : (12,) int
+        Condensed indices of the driver's then the driven gear node's six DOFs.
+    """
+
+    def __init__(self, mesh, idx):
+        self.mesh = mesh
+        self.idx = np.ascontiguousarray(idx, dtype=np.int64)
+        self.out = self._buffers()
+        self.used = np.zeros(self.n, dtype=np.bool_)
+        self.kept = self._buffers()
+
+    @property
+    def n(self) -> int:
+        """Slices of all contact lines."""
+        return self.mesh.n_lines * self.mesh.n_slices
+
+    def _buffers(self) -> tuple:
+        n = self.n
+        return (np.zeros(12), np.zeros((12, 12)), np.zeros(n, dtype=np.bool_),
+                np.zeros(n, dtype=np.bool_), np.zeros(n), np.zeros(n), np.zeros(n),
+                np.zeros(n))
+
+    def arrays(self) -> tuple:
+        """The workspace tuple of the compiled loop (module docstring)."""
+        return (*self.mesh.kernel_arrays(), self.idx, self.mesh._te, *self.out, self.used,
+                *self.kept)
+
+    def state(self, buffers, total: float, length: float, q) -> MeshState:
+        """A :class:`~gear_fmu.mesh.element.MeshState` (copies) of the evaluation in
+        ``buffers`` (``out`` or ``kept``) at the gear-node DOFs ``q`` (12,)."""
+        force, stiff, active, inside, delta, load, xi, z = (b.copy() for b in buffers)
+        return MeshState(force, stiff, active, delta, load, inside, xi, z, float(total),
+                         self.mesh.transmission_error(q), {"contact_length": float(length)})
+
+    def put(self, buffers, state: MeshState) -> None:
+        """Write a mesh state into ``buffers`` (``out`` or ``kept``)."""
+        for b, v in zip(buffers, (state.force, state.stiffness, state.active, state.inside,
+                                  state.delta, state.load, state.xi, state.z), strict=True):
+            b[...] = v
+
+
+@njit(cache=True)
+def evaluate_train(meshes, xc, angles, errs, has_err, fc, kc, totals, lengths):
+    """Every mesh of ``meshes`` (workspace tuples) at its pinion angle ``angles[m]`` [rad] and
+    the condensed DOFs ``xc`` (plus ``errs[m]``, the error displacement, when ``has_err``):
+    each mesh's evaluation into its workspace, their forces summed into ``fc`` (ng,) and
+    their tangents into ``kc`` (ng, ng) on the condensed gear-node DOFs, each mesh's total
+    load [N] and contact length [m] into ``totals[m]``, ``lengths[m]``."""
+    ng = fc.size
+    for i in range(ng):
+        fc[i] = 0.0
+        for j in range(ng):
+            kc[i, j] = 0.0
+    q = np.empty(12)
+    for m in range(len(meshes)):
+        w = meshes[m]
+        idx = w[_IDX]
+        for i in range(12):
+            q[i] = xc[idx[i]] + errs[m, i] if has_err else xc[idx[i]]
+        totals[m], lengths[m] = _mesh_kernel(
+            angles[m], q, w[0], w[1], w[2], w[3], w[4], w[5], w[6], w[7], w[8], w[9], w[10],
+            w[11], w[_OUT], w[_STIFF], w[_ACTIVE], w[_INSIDE], w[_DELTA], w[_LOAD], w[_XI],
+            w[_Z])
+        force, stiff = w[_OUT], w[_STIFF]
+        for i in range(12):
+            fc[idx[i]] += force[i]
+            for j in range(12):
+                kc[idx[i], idx[j]] += stiff[i, j]
+
+
+@njit(cache=True)
+def _same_sets(meshes):
+    """Every mesh's contact set equals the one its iterate is consistent with."""
+    for m in range(len(meshes)):
+        a, b = meshes[m][_ACTIVE], meshes[m][_USED]
+        for i in range(a.size):
+            if a[i] != b[i]:
+                return False
+    return True
+
+
 @njit(cache=True)
 def _residual_norm(s_lin, z0, xc, mesh_force):
-    """2-norm of the condensed residual G_c = S X_c - z0 - F_mesh (mesh rows first)."""
+    """2-norm of the condensed residual G_c = S X_c - z0 - F_mesh (gear-node rows first)."""
     nc = z0.size
     ng = mesh_force.size
     acc = 0.0
@@ -64,7 +163,7 @@ def _residual_norm(s_lin, z0, xc, mesh_force):
 
 @njit(cache=True)
 def _newton_solve(s_lin, z0, xc, mesh_force, mesh_stiffness):
-    """Solve (S + K_mesh) X_c = z0 + F_mesh + K_mesh X_c (fixed active set), Eq. (13)."""
+    """Solve (S + K_mesh) X_c = z0 + F_mesh + K_mesh X_c (fixed contact sets), Eq. (13)."""
     ng = mesh_force.size
     s = s_lin.copy()
     rhs = z0.copy()
@@ -78,92 +177,39 @@ def _newton_solve(s_lin, z0, xc, mesh_force, mesh_stiffness):
 
 
 @njit(cache=True)
-def _same_set(a, b):
-    """Equality of two boolean contact sets (False if the sizes differ)."""
-    if a.shape != b.shape:
-        return False
-    for i in range(a.size):
-        if a.flat[i] != b.flat[i]:
-            return False
-    return True
+def contact_newton(s_lin, z0, xc, angles, errs, has_err, meshes, fc, kc, totals, lengths,
+                   has_used, f_scale, tol, max_iter, residuals):
+    """The Newton/contact loop (module docstring) from the iterate ``xc`` (nc,), each mesh's
+    first iterate consistent with its ``used`` set when ``has_used``; ``f_scale`` [N] the
+    largest external load, ``residuals`` (max_iter + 1,) receives each pass's relative
+    residual, ``fc``, ``kc``, ``totals``, ``lengths`` the last evaluation
+    (:func:`evaluate_train`).
 
-
-def same_contact_set(a, b) -> bool:
-    """Contact sets equal (numba for boolean arrays, numpy otherwise)."""
-    if (isinstance(a, np.ndarray) and isinstance(b, np.ndarray) and a.dtype == np.bool_
-            and b.dtype == np.bool_):
-        return _same_set(a, b)
-    return np.array_equal(a, b)
-
-
-def solve_condensed(mesh, s_lin, z0, xc, angle, active_used, f_scale, t, what, tol, max_iter,
-                    timing=None):
-    """Newton/contact loop on the condensed block; returns (X_c, mesh state, StepInfo).
-
-    Parameters
-    ----------
-    mesh : mesh element (module docstring)
-    s_lin, z0 : (nc, nc), (nc,) arrays
-        Condensed tangent without the mesh and right-hand side.
-    xc : (nc,) array
-        First iterate.
-    angle : float
-        Rigid-body pinion angle of the solve [rad].
-    active_used : array or None
-        Contact set the first iterate is consistent with (None: none, iterate at least once).
-    f_scale : float
-        Force scale of the relative residual [N] (largest external load or bearing force).
-    t : float
-        Time of the solve [s] (messages).
-    what : str
-        "static solution" or "Newmark step N" (messages).
-    tol, max_iter
-        Limit l on the relative residual; Newton/contact iterations allowed.
-    timing : dict, optional
-        Accumulates seconds under "mesh" and "solve" when given (benchmarks).
-
-    Raises
-    ------
-    NewmarkConvergenceError
-        With the time, the residual history and the contact count.
+    Returns ``(status, passes, X_c)``: :data:`CONVERGED`, :data:`NOT_CONVERGED` after
+    ``max_iter`` solves or :data:`SINGULAR` (a zero pivot: no contact in a mesh leaves a shaft
+    free in torsion).
     """
-    residuals = []
-    z_norm = -1.0  # ||z0||, computed when first needed
+    z_norm = -1.0
     for k in range(max_iter + 1):
-        t0 = time.perf_counter() if timing is not None else 0.0
-        ms = mesh.evaluate(angle, xc[:N_GEAR])
-        if timing is not None:
-            t1_ = time.perf_counter()
-            timing["mesh"] += t1_ - t0
-            t0 = t1_
-        force = ms.force
-        scale = max(f_scale, math.sqrt(float(force @ force)))
+        evaluate_train(meshes, xc, angles, errs, has_err, fc, kc, totals, lengths)
+        ff = np.dot(fc, fc)
+        scale = max(f_scale, math.sqrt(ff))
         scale = scale if scale > 0.0 else 1.0
-        r = _residual_norm(s_lin, z0, xc, force) / scale
-        residuals.append(r)
+        r = _residual_norm(s_lin, z0, xc, fc) / scale
+        residuals[k] = r
         limit = tol
         if r > tol:  # the round-off floor at this iterate (module docstring)
             if z_norm < 0.0:
-                z_norm = math.sqrt(float(z0 @ z0))
-            limit = max(tol, ROUNDOFF * (z_norm + math.sqrt(float(force @ force))) / scale)
-        if r <= limit and active_used is not None and same_contact_set(ms.active, active_used):
-            if timing is not None:
-                timing["solve"] += time.perf_counter() - t0
-            return xc, ms, StepInfo(t, k, r, residuals)
+                z_norm = math.sqrt(np.dot(z0, z0))
+            limit = max(tol, ROUNDOFF * (z_norm + math.sqrt(ff)) / scale)
+        if r <= limit and has_used and _same_sets(meshes):
+            return CONVERGED, k, xc
         if k == max_iter:
             break
-        xc, ok = _newton_solve(s_lin, z0, xc, force, ms.stiffness)
+        xc, ok = _newton_solve(s_lin, z0, xc, fc, kc)
         if not ok:
-            raise NewmarkConvergenceError(
-                f"{what} at t = {t:.9g} s: singular tangent at iteration {k} "
-                f"({int(np.count_nonzero(ms.active))} mesh slices in contact; with no tooth "
-                "contact the pinion is free in torsion - check the torque sign)"
-            )
-        active_used = ms.active
-        if timing is not None:
-            timing["solve"] += time.perf_counter() - t0
-    raise NewmarkConvergenceError(
-        f"{what} at t = {t:.9g} s did not converge: relative residual {residuals[-1]:.3e} "
-        f"(tol {tol:.1e}) after {max_iter} iterations; last residuals "
-        f"{', '.join(f'{v:.2e}' for v in residuals[-5:])}"
-    )
+            return SINGULAR, k, xc
+        for m in range(len(meshes)):
+            meshes[m][_USED][:] = meshes[m][_ACTIVE]
+        has_used = True
+    return NOT_CONVERGED, max_iter, xc

@@ -3,10 +3,11 @@ kinematic contact events that fall inside a step, and the step cut at them.
 
 A contact line enters or leaves the path of contact at pinion angles known from the
 rigid-body kinematics (:meth:`gear_fmu.mesh.element.MeshElement.event_angles`), which recur
-with the mesh period. :meth:`ContactEvents.pieces` cuts a step at them into sub-steps, each
-ending on its events; the structure solves a sub-step with the contact set before its events
-(mesh evaluated :data:`EVENT_SIDE` base pitch before them) and then resets the acceleration to
-the one after them (:func:`gear_fmu.step.kernel.contact_event`).
+with the mesh period. :meth:`ContactEvents.cuts` cuts a step at the events of one mesh, and
+:func:`train_pieces` at those of every mesh of a train into sub-steps, each ending on its
+events; the structure solves a sub-step with the contact set before its events (each mesh
+evaluated :data:`EVENT_SIDE` base pitch before its own) and then resets the acceleration to
+the one after them (:func:`gear_fmu.step.kernel.contact_events`).
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ from __future__ import annotations
 import bisect
 import math
 
-__all__ = ["EVENT_SIDE", "EVENT_SNAP", "ContactEvents"]
+__all__ = ["EVENT_SIDE", "EVENT_SNAP", "ContactEvents", "train_pieces"]
 
 #: the side of an event the mesh is evaluated on, in base pitches (above the mesh kernel's snap
 #: of 1e-9 pitch, :mod:`gear_fmu.mesh.element`)
@@ -59,28 +60,16 @@ class ContactEvents:
         self.pinion_angle = pinion_angle
         self._phases = None  # (mesh period [rad], event angles in it), when first needed
 
-    def pieces(self, t: float, dt: float) -> list:
-        """``[(h [s], end time [s], mesh angle of the sub-step [rad], angle after its event
-        [rad] or None)]`` of the step from t to t + dt [s]: one piece without contact events,
-        else the sub-steps of :meth:`cuts`, each ending on its events evaluated on their
-        outer sides (:data:`EVENT_SIDE`)."""
-        t1 = t + dt
-        cuts = self.cuts(t, dt)
-        if not cuts:
-            return [(dt, t1, self.pinion_angle(t1), None)]
-        out = []
+    def sides(self, angle: float, events) -> tuple[float, float]:
+        """The angles [rad] at which the mesh is evaluated before and after ``events``
+        ``(first, last)`` that a sub-step ending at pinion ``angle`` ends on: their outer
+        sides (:data:`EVENT_SIDE`), wherever they were snapped."""
         pair = self.mesh.pair
         side = EVENT_SIDE * pair.base_pitch / pair.base_radius[0]
-        for h, frac, events in cuts:
-            te = t1 if frac == 1.0 else t + frac * dt
-            angle = self.pinion_angle(te)
-            before, after = angle, None
-            if events is not None:  # the sides of the events, wherever they were snapped
-                first, last = events
-                before = angle - side if angle <= first + side else first - side
-                after = angle + side if angle >= last - side else last + side
-            out.append((h, te, before, after))
-        return out
+        first, last = events
+        before = angle - side if angle <= first + side else first - side
+        after = angle + side if angle >= last - side else last + side
+        return before, after
 
     def cuts(self, t: float, dt: float) -> list | None:
         """``[(h, end fraction of dt, (first, last) event angle it ends on, or None)]`` of the
@@ -148,3 +137,44 @@ class ContactEvents:
                     return out
                 out.append(base + e)
             k += 1
+
+
+def train_pieces(events: list, t: float, dt: float) -> list:
+    """``[(h [s], end time [s], before, after)]`` of the step from t to t + dt [s] of a train
+    whose meshes have the contact events ``events`` (one :class:`ContactEvents` each):
+    ``before[m]`` the angle [rad] mesh m is evaluated at during the sub-step, ``after[m]``
+    the one after its events at the sub-step's end (NaN: none there). The step is cut at the
+    events of every mesh (:meth:`ContactEvents.cuts`); cuts of different meshes closer than
+    :data:`EVENT_SNAP` dt are one, at the later of them. One piece without events."""
+    t1 = t + dt
+    ends: list[list] = []  # [end fraction, {mesh: (first, last)}]
+    for m, ev in enumerate(events):
+        for _, frac, where in ev.cuts(t, dt) or ():
+            if where is None:
+                continue
+            for end in ends:
+                if abs(end[0] - frac) <= EVENT_SNAP:
+                    end[0] = max(end[0], frac)
+                    first, last = end[1].get(m, where)
+                    end[1][m] = (min(first, where[0]), max(last, where[1]))
+                    break
+            else:
+                ends.append([frac, {m: where}])
+    ends.sort(key=lambda e: e[0])
+    if not ends or ends[-1][0] != 1.0:
+        ends.append([1.0, {}])
+    out, prev = [], 0.0
+    for frac, where in ends:
+        te = t1 if frac == 1.0 else t + frac * dt
+        before, after = [], []
+        for m, ev in enumerate(events):
+            angle = ev.pinion_angle(te)
+            if m in where:
+                b, a = ev.sides(angle, where[m])
+            else:
+                b, a = angle, math.nan
+            before.append(b)
+            after.append(a)
+        out.append(((frac - prev) * dt, te, before, after))
+        prev = frac
+    return out
