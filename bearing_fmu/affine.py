@@ -32,7 +32,7 @@ from numba import njit
 
 from bearing_fmu.frames import law_to_global, state_to_local
 
-__all__ = ["AffineLaws"]
+__all__ = ["AffineLaws", "pairwise_sum"]
 
 
 @dataclass
@@ -109,8 +109,8 @@ class AffineLaws:
 def _relinearise(states, force, kb, cb, f0_old, kb_old, cb_old):
     """:meth:`AffineLaws.relinearise` on (nb, ...) arrays: the sums of two products in the
     order of :meth:`AffineLaws.force` and :meth:`AffineLaws.linearise`; the squares of the
-    two norms added as ``np.sum`` adds them (:func:`_sum`). Returns (mismatch, f0, copies of
-    kb and cb)."""
+    two norms added in numpy's pairwise order (:func:`pairwise_sum`). Returns (mismatch, f0,
+    copies of kb and cb)."""
     nb = states.shape[0]
     f0 = np.empty((nb, 2))
     d2 = np.empty(2 * nb)
@@ -129,22 +129,39 @@ def _relinearise(states, force, kb, cb, f0_old, kb_old, cb_old):
             f2[2 * b + r] = f * f
             f0[b, r] = f + (kb[b, r, 0] * x0 + kb[b, r, 1] * x1) + (cb[b, r, 0] * v0
                                                                    + cb[b, r, 1] * v1)
-    mismatch = math.sqrt(_sum(d2)) / max(math.sqrt(_sum(f2)), 1e-300)
+    mismatch = math.sqrt(pairwise_sum(d2)) / max(math.sqrt(pairwise_sum(f2)), 1e-300)
     return mismatch, f0, kb.copy(), cb.copy()
 
 
 @njit(cache=True)
-def _sum(a):
-    """``np.sum`` of a short contiguous vector in numpy's order: pairwise for 8 values
-    (``((a0 + a1) + (a2 + a3)) + ((a4 + a5) + (a6 + a7))``, the four bearings of the gear
-    system), left to right below 8 (numpy adds the first value to the sum of the rest)."""
+def pairwise_sum(a):
+    """The sum of a contiguous vector in numpy's pairwise order (``np.sum`` of numpy 2,
+    ``pairwise_sum`` of its umath loops): left to right below 8 values; up to 128, eight
+    running sums over the blocks of 8, added as ``((r0 + r1) + (r2 + r3)) + ((r4 + r5) +
+    (r6 + r7))``, then the rest left to right; above, the halves (cut at a multiple of 8)
+    summed so and added. Any length: the sums of the master and the structure over the
+    bearings of any train."""
     n = a.size
-    if n == 8:
-        return ((a[0] + a[1]) + (a[2] + a[3])) + ((a[4] + a[5]) + (a[6] + a[7]))
-    acc = 0.0
-    for i in range(1, n):
-        acc += a[i]
-    return a[0] + acc if n > 0 else 0.0
+    if n < 8:
+        res = -0.0
+        for i in range(n):
+            res += a[i]
+        return res
+    if n <= 128:
+        r = a[:8].copy()
+        i = 8
+        while i < n - n % 8:
+            for j in range(8):
+                r[j] += a[i + j]
+            i += 8
+        res = ((r[0] + r[1]) + (r[2] + r[3])) + ((r[4] + r[5]) + (r[6] + r[7]))
+        while i < n:
+            res += a[i]
+            i += 1
+        return res
+    half = n // 2
+    half -= half % 8
+    return pairwise_sum(a[:half]) + pairwise_sum(a[half:])
 
 
 @njit(cache=True)

@@ -629,3 +629,40 @@ def document() -> str:
 
 if __name__ == "__main__":
     print(document(), end="")
+
+
+def layout(case):
+    """PROVISIONAL (until the train schema lands): the single-stage case's layout."""
+    from gear_fmu.layout import BearingSpec, Drive, GearSpec, Layout, MeshSpec, ShaftSpec
+
+    v = case.values if isinstance(case, Case) else case
+    length = v["shafts.length"]
+    mat = dict(young=v["shafts.young_modulus"], poisson=v["shafts.poisson_ratio"],
+               density=v["shafts.density"], element_length=length / v["shafts.elements"])
+    names = ("pinion_shaft", "gear_shaft")
+    shafts = tuple(ShaftSpec(n, (length,), (v["shafts.outer_diameter"][i],),
+                             (v["shafts.inner_diameter"][i],), **mat)
+                   for i, n in enumerate(names))
+    beta = v["gear_pair.helix_angle"]
+    hands = ("left", "right") if beta > 0.0 else ("", "")
+    gears = tuple(GearSpec(
+        g, names[i], 0.5 * length, v["gear_pair.teeth"][i], v["gear_pair.module"],
+        v["gear_pair.pressure_angle"], v["gear_pair.face_width"][i], v["gear_pair.mass"][i],
+        helix_angle=beta, hand=hands[i], profile_shift=v["gear_pair.profile_shift"][i],
+        addendum_coefficient=v["gear_pair.addendum_coefficient"],
+        dedendum_coefficient=v["gear_pair.dedendum_coefficient"],
+        polar_inertia=v["gear_pair.polar_inertia"][i],
+        diametral_inertia=v["gear_pair.diametral_inertia"][i],
+        unbalance=v["operation.unbalance"][i], unbalance_mass="shaft")
+        for i, g in enumerate(("pinion", "gear")))
+    meshes = (MeshSpec("mesh", ("pinion", "gear"), v["gear_pair.centre_distance"]),)
+    model = v["bearings.model"]
+    opts = tuple((o.key, v[f"bearings.{o.key}"]) for o in model_class(model).options)
+    bearings = tuple(BearingSpec(
+        str(j + 1), names[j // 2], 0.0 if j % 2 == 0 else length, model,
+        v["bearings.diameter"][j], v["bearings.length"][j], v["bearings.clearance"][j],
+        v["bearings.viscosity"][j], opts) for j in range(4))
+    drive = Drive("pinion_shaft", "gear_shaft", v["operation.speed"], v["operation.torque"],
+                  drivetrain=drivetrain(v),
+                  gravity=(0.0, -9.81) if v["operation.gravity"] else (0.0, 0.0))
+    return Layout(shafts, gears, meshes, bearings, drive)

@@ -40,7 +40,7 @@ from numba import njit
 from bearing_fmu import MODELS, model_class
 from bearing_fmu.affine import AffineLaws
 from fmu_src.case import FIELDS, bound_violation, model_option_fields, shipped_case
-from fmu_src.description import BEARING_FRAMES
+from fmu_src.description import bearing_frames
 from fmu_src.units import symbol
 
 __all__ = ["BEARINGS", "BEARING_RESOURCE", "GEAR_DEFAULT_CASE", "FmiVar", "ValueRefused",
@@ -260,21 +260,23 @@ def support_load_names() -> list[str]:
 
 
 def pack_laws(laws: AffineLaws, out: np.ndarray) -> None:
-    """Write four affine laws (Eq. 17, global frame) into ``out``, the 56 law inputs in the
-    order of :func:`law_input_names`: each law's expansion (force, Kb, Cb and the journal state
-    it was linearised about; :meth:`bearing_fmu.affine.AffineLaws.expansion`)."""
+    """Write the affine laws of every bearing (Eq. 17, global frame) into ``out``, the law
+    inputs in the order of :func:`law_input_names` (14 per bearing): each law's expansion
+    (force, Kb, Cb and the journal state it was linearised about;
+    :meth:`bearing_fmu.affine.AffineLaws.expansion`)."""
     states, force, kb, cb = laws.expansion()
     c = np.ascontiguousarray
     pack_law_arrays(c(states, dtype=np.float64), c(force, dtype=np.float64),
-                    c(kb, dtype=np.float64), c(cb, dtype=np.float64), out.reshape(4, 14))
+                    c(kb, dtype=np.float64), c(cb, dtype=np.float64),
+                    out.reshape(len(states), 14))
 
 
 @njit(cache=True)
 def pack_law_arrays(states, force, kb, cb, out):
-    """:func:`pack_laws` on the arrays (states (4, 4), force (4, 2), kb, cb (4, 2, 2)) into
-    ``out`` (4, 14), compiled (a numpy slice per block pays a call each; the master's
+    """:func:`pack_laws` on the arrays (states (nb, 4), force (nb, 2), kb, cb (nb, 2, 2)) into
+    ``out`` (nb, 14), compiled (a numpy slice per block pays a call each; the master's
     compiled loop through the FMUs calls it too)."""
-    for j in range(4):
+    for j in range(states.shape[0]):
         for r in range(2):
             out[j, r] = force[j, r]
             for c in range(2):
@@ -285,21 +287,22 @@ def pack_law_arrays(states, force, kb, cb, out):
 
 
 def unpack_law_arrays(values):
-    """``(f0, kb, cb)`` of the four affine laws in the 56 law inputs (order of
-    :func:`law_input_names`): Eq. (17) about the states ``s_eval_j`` ..., with the arithmetic
-    of :meth:`bearing_fmu.affine.AffineLaws.linearise` (``F + (Kb X) + (Cb Xdot)``, each
-    product summed in order), so the laws are the master's bit for bit. Compiled: the gear FMU
-    unpacks at every doStep."""
-    return _unpack(np.asarray(values, dtype=np.float64).reshape(4, 14))
+    """``(f0, kb, cb)`` of the affine laws in the law inputs (14 per bearing, order of
+    :func:`law_input_names`): Eq. (17) about the states ``s_eval_<bearing>`` ..., with the
+    arithmetic of :meth:`bearing_fmu.affine.AffineLaws.linearise` (``F + (Kb X) + (Cb Xdot)``,
+    each product summed in order), so the laws are the master's bit for bit. Compiled: the
+    gear FMU unpacks at every doStep."""
+    return _unpack(np.asarray(values, dtype=np.float64).reshape(-1, 14))
 
 
 @njit(cache=True)
 def _unpack(v):
-    """:func:`unpack_law_arrays` on the (4, 14) inputs."""
-    f0 = np.empty((4, 2))
-    kb = np.empty((4, 2, 2))
-    cb = np.empty((4, 2, 2))
-    for j in range(4):
+    """:func:`unpack_law_arrays` on the (nb, 14) inputs."""
+    nb = v.shape[0]
+    f0 = np.empty((nb, 2))
+    kb = np.empty((nb, 2, 2))
+    cb = np.empty((nb, 2, 2))
+    for j in range(nb):
         x = v[j, 10]
         y = v[j, 11]
         u = v[j, 12]
@@ -318,9 +321,9 @@ def _unpack(v):
 
 
 def unpack_journal(values) -> np.ndarray:
-    """(4, 4) journal states [s, t, s_dot, t_dot] of bearings 1-4 from the 16 journal outputs
+    """(nb, 4) journal states [s, t, s_dot, t_dot] of the bearings from the journal outputs
     (order of :func:`journal_output_names`)."""
-    return np.asarray(values, dtype=float).reshape(4, 4)
+    return np.asarray(values, dtype=float).reshape(-1, 4)
 
 
 def gear_case_fields():
@@ -392,10 +395,10 @@ def gear_variables(case=None) -> tuple[FmiVar, ...]:
           for j in BEARINGS for a in ("s", "t")),
         *(FmiVar(f"rotation_sign_{j}", _CP, "Integer", "", fr.rotation_sign,
                  f"bearing {j}: the rotation_sign its bearing FMU needs (+1: shaft turning "
-                 "about +z)") for j, fr in zip(BEARINGS, BEARING_FRAMES, strict=True)),
+                 "about +z)") for j, fr in zip(BEARINGS, bearing_frames(case), strict=True)),
         *(FmiVar(f"frame_angle_{j}", _CP, "Real", "angle", fr.angle,
                  f"bearing {j}: the frame_angle its bearing FMU needs")
-          for j, fr in zip(BEARINGS, BEARING_FRAMES, strict=True)),
+          for j, fr in zip(BEARINGS, bearing_frames(case), strict=True)),
     )
 
 

@@ -1,16 +1,16 @@
 """The system description: a checked case (:mod:`fmu_src.case`) -> physics objects.
 
-One place turns case fields (SI values) into the gear pair, the two-shaft structure, the mesh
-element, the loads and the bearing models; the in-process master, ``gsb modal``, ``gsb run``
+One place turns a case into the train's layout (:func:`layout`, :class:`gear_fmu.layout
+.Layout`, the single source of its topology) and the layout into the structure, its mesh
+elements, the loads and the bearing models; the in-process master, ``gsb modal``, ``gsb run``
 and the gear-shaft FMU all build their system here, so that they simulate the same thing. The
-bearing FMUs' parameters of a case come from here too (:func:`bearing_parameters`). The gear
-pair, the drivetrain and the damping model are built by :func:`fmu_src.case.gear_pair`,
-:func:`~fmu_src.case.drivetrain` and :func:`~fmu_src.case.damping` (re-exported here), with
-which the case loader checks those fields: a case that loads is a case that builds.
+bearing FMUs' parameters of a case come from here too (:func:`bearing_parameters`). The
+drivetrain and the damping model are built by :func:`fmu_src.case.drivetrain` and
+:func:`~fmu_src.case.damping` (re-exported here), with which the case loader checks those
+fields: a case that loads is a case that builds.
 
-Bearings: 1, 2 on the pinion shaft (turning about +z), 3, 4 on the gear shaft (turning about -z,
-mirrored local frame, :mod:`bearing_fmu.frames`); local x along s. Shaft speeds: omega and
-omega z1 / z2 (:func:`gear_fmu.loads.shaft_speeds`).
+Bearings: each in the frame of its shaft (local x along s, mirrored when the shaft turns about
+-z, :mod:`bearing_fmu.frames`), at its shaft's speed (:attr:`gear_fmu.layout.Layout.speeds`).
 """
 
 from __future__ import annotations
@@ -19,133 +19,138 @@ import math
 
 from bearing_fmu import BearingData, BearingModel, model_class
 from bearing_fmu.frames import LocalFrame
-from fmu_src.case import Case, damping, drivetrain, gear_pair, model_option_fields
-from gear_fmu.loads import StructureLoads, shaft_speeds
+from fmu_src.case import Case, damping, drivetrain, layout
+from gear_fmu.layout import Layout
+from gear_fmu.loads import StructureLoads
 from gear_fmu.mesh.element import MeshElement
 from gear_fmu.mesh.geometry import GearPair
+from gear_fmu.mesh.train import gear_pair, mesh_elements
 from gear_fmu.structure import Structure
-from gear_fmu.system import GearBody, GearShaftSystem, Shaft
-from gear_fmu.timoshenko import HollowSection
+from gear_fmu.system import GearShaftSystem
 
 __all__ = [
-    "BEARING_FRAMES",
     "bearing_data",
+    "bearing_frames",
     "bearing_models",
     "bearing_options",
     "bearing_parameters",
     "bearing_speeds",
     "damping",
     "drivetrain",
-    "gear_pair",
+    "gear_pairs",
     "gear_shaft_system",
-    "mesh_element",
+    "layout",
+    "mesh_elements_of",
     "mesh_period",
     "structure",
     "structure_loads",
     "time_step",
 ]
 
-#: local frame of bearings 1-4 in the global (s, t) plane
-BEARING_FRAMES = (LocalFrame(0.0, 1), LocalFrame(0.0, 1), LocalFrame(0.0, -1),
-                  LocalFrame(0.0, -1))
+
+def gear_pairs(case: Case | Layout) -> list[GearPair]:
+    """One gear pair per mesh of the case (:func:`gear_fmu.mesh.train.gear_pair`)."""
+    lay = case if isinstance(case, Layout) else layout(case)
+    return [gear_pair(lay, m) for m in range(len(lay.meshes))]
 
 
-def gear_shaft_system(case: Case, pair: GearPair | None = None) -> GearShaftSystem:
-    """Table 2 shafts and Table 1 gear bodies -> :class:`gear_fmu.system.GearShaftSystem`."""
-    pair = gear_pair(case) if pair is None else pair
-    material = dict(young=case["shafts.young_modulus"], poisson=case["shafts.poisson_ratio"],
-                    density=case["shafts.density"])
-    shafts = tuple(
-        Shaft(HollowSection(do, di, **material), case["shafts.length"], case["shafts.elements"])
-        for do, di in zip(case["shafts.outer_diameter"], case["shafts.inner_diameter"],
-                          strict=True))
-    gears = tuple(GearBody(m, r, b, case["shafts.density"], ip, idiam)
-                  for m, r, b, ip, idiam in zip(
-                      case["gear_pair.mass"], pair.pitch_radius, pair.face_width,
-                      case["gear_pair.polar_inertia"], case["gear_pair.diametral_inertia"],
-                      strict=True))
-    return GearShaftSystem(shafts=shafts, gears=gears,  # type: ignore[arg-type]
-                           centre_distance=pair.centre_distance, teeth=pair.teeth,
-                           helix_angle_deg=math.degrees(pair.helix_angle),
-                           drivetrain=drivetrain(case))
+def gear_shaft_system(case: Case) -> GearShaftSystem:
+    """The shafts, gear bodies and discs of the case -> :class:`gear_fmu.system
+    .GearShaftSystem`."""
+    return GearShaftSystem(layout(case))
 
 
 def structure_loads(case: Case) -> StructureLoads:
-    """Operating point (Sec. 4.1) -> :class:`gear_fmu.loads.StructureLoads`."""
-    return StructureLoads(
-        torque=case["operation.torque"], input_speed=case["operation.speed"],
-        unbalance=tuple(case["operation.unbalance"]),
-        gravity=(0.0, -9.81) if case["operation.gravity"] else None)
+    """The drive (Sec. 4.1) -> :class:`gear_fmu.loads.StructureLoads`."""
+    d = layout(case).drive
+    gravity = tuple(d.gravity) if any(d.gravity) else None
+    return StructureLoads(torque=d.torque, input_speed=d.speed, gravity=gravity)
 
 
-def mesh_element(case: Case, pair: GearPair | None = None) -> MeshElement:
-    """The distributed mesh element, contact term linearised at the nominal line load."""
-    pair = gear_pair(case) if pair is None else pair
-    return MeshElement(pair, pair.nominal_line_load(max(case["operation.torque"], 1.0)))
+def mesh_elements_of(case: Case) -> tuple[MeshElement, ...]:
+    """The distributed mesh element of every mesh, each in its pair's own frame
+    (:func:`gear_fmu.mesh.train.mesh_elements`)."""
+    return mesh_elements(layout(case))
 
 
 def structure(case: Case, damping_bearing_stiffness=1e8) -> Structure:
     """The gear-shaft structure of the case (Newmark step, static solve, modes).
 
     ``damping_bearing_stiffness``: reference bearing stiffness of the modal damping
-    [N/m] or (4, 2, 2); :meth:`gear_fmu.structure.Structure.set_damping_reference` replaces it
-    once the static bearing stiffness is known.
+    [N/m] or (nb, 2, 2); :meth:`gear_fmu.structure.Structure.set_damping_reference` replaces
+    it once the static bearing stiffness is known.
     """
-    pair = gear_pair(case)
-    return Structure(gear_shaft_system(case, pair), mesh_element(case, pair),
-                     structure_loads(case), zeta=damping(case),
-                     damping_bearing_stiffness=damping_bearing_stiffness,
+    lay = layout(case)
+    return Structure(GearShaftSystem(lay), mesh_elements(lay), structure_loads(case),
+                     zeta=damping(case), damping_bearing_stiffness=damping_bearing_stiffness,
                      tol=case["simulation.tolerance"],
                      consistent_start=case["simulation.consistent_start"],
                      locate_contact=case["simulation.locate_contact"])
 
 
 def mesh_period(case: Case) -> float:
-    """Mesh period 2 pi / (omega z1) of the case [s]."""
-    return 2.0 * math.pi / (case["operation.speed"] * case["gear_pair.teeth"][0])
+    """The shortest mesh period of the case, ``2 pi / (omega_driver z_driver)`` [s]."""
+    lay = layout(case)
+    periods = []
+    for driver, _ in lay.drivers:
+        g = lay.gear(driver)
+        w = abs(float(lay.speeds[lay.shaft_index[g.shaft]]))
+        periods.append(2.0 * math.pi / (w * g.teeth) if w > 0.0 else math.inf)
+    return min(periods)
 
 
 def time_step(case: Case) -> float:
-    """Time step of the case: the mesh period / ``simulation.steps_per_mesh_period`` [s]."""
+    """Time step of the case: the shortest mesh period / ``simulation.steps_per_mesh_period``
+    [s]."""
     return mesh_period(case) / case["simulation.steps_per_mesh_period"]
 
 
 def bearing_data(case: Case) -> list[BearingData]:
-    """Table 3 -> one :class:`bearing_fmu.base.BearingData` per bearing."""
-    return [BearingData(case["bearings.diameter"][i], case["bearings.length"][i],
-                        case["bearings.clearance"][i], case["bearings.viscosity"][i])
-            for i in range(4)]
+    """Each bearing's geometry and lubricant (Table 3), the layout's order."""
+    return [BearingData(b.diameter, b.length, b.clearance, b.viscosity)
+            for b in layout(case).bearings]
+
+
+def bearing_frames(case: Case | Layout) -> list[LocalFrame]:
+    """Each bearing's local frame in the global (s, t) plane: x along s, mirrored when its
+    shaft turns about -z."""
+    lay = case if isinstance(case, Layout) else layout(case)
+    return [LocalFrame(0.0, int(lay.directions[lay.shaft_index[b.shaft]]))
+            for b in lay.bearings]
 
 
 def bearing_speeds(case: Case) -> list[float]:
-    """Shaft speed magnitude at bearings 1-4 [rad/s]."""
-    w1, w2 = shaft_speeds(structure_loads(case), case["gear_pair.teeth"])
-    return [w1, w1, w2, w2]
+    """Shaft speed magnitude at each bearing [rad/s]."""
+    lay = layout(case)
+    return [abs(float(lay.speeds[lay.shaft_index[b.shaft]])) for b in lay.bearings]
 
 
-def bearing_options(case: Case) -> dict:
-    """The case's settings of its bearing model (``bearings.model``): ``{option key: value}``
-    (the model's declared :attr:`~bearing_fmu.base.BearingModel.options`)."""
-    return {o.key: case[f"bearings.{o.key}"]
-            for o in model_class(case["bearings.model"]).options}
+def bearing_options(case: Case, bearing: int = 0) -> dict:
+    """The settings of a bearing's model: ``{option key: value}`` (the model's declared
+    :attr:`~bearing_fmu.base.BearingModel.options`)."""
+    b = layout(case).bearings[bearing]
+    options = b.option_dict
+    return {o.key: options[o.key] for o in model_class(b.model).options}
 
 
 def bearing_models(case: Case) -> list[BearingModel]:
-    """In-process bearing models of the case (``bearings.model``), each built by the
-    registry's ``from_parameters`` with the case's options."""
-    cls = model_class(case["bearings.model"])
-    options = bearing_options(case)
-    return [cls.from_parameters(data, **options) for data in bearing_data(case)]
+    """In-process bearing models of the case, each bearing its own model, built by the
+    registry's ``from_parameters`` with its options."""
+    lay = layout(case)
+    out = []
+    for i, (b, data) in enumerate(zip(lay.bearings, bearing_data(case), strict=True)):
+        out.append(model_class(b.model).from_parameters(data, **bearing_options(case, i)))
+    return out
 
 
 def bearing_parameters(case: Case) -> list[dict]:
-    """Parameters of the four bearing FMUs of a case (:func:`fmu_src.contract.bearing_variables`:
-    geometry, lubricant, frame, and every model option, so one list serves every model)."""
-    option_keys = [f.key.split(".", 1)[1] for f in model_option_fields()]
+    """Parameters of the bearing FMUs of a case (:func:`fmu_src.contract.bearing_variables`:
+    geometry, lubricant, frame, and every option of its model)."""
+    lay = layout(case)
     out = []
-    for data, frame in zip(bearing_data(case), BEARING_FRAMES, strict=True):
-        params = dict(D=data.diameter, L=data.length, C=data.clearance, mu=data.viscosity,
+    for b, frame in zip(lay.bearings, bearing_frames(lay), strict=True):
+        params = dict(D=b.diameter, L=b.length, C=b.clearance, mu=b.viscosity,
                       frame_angle=frame.angle, rotation_sign=frame.rotation_sign)
-        params.update({k: case[f"bearings.{k}"] for k in option_keys})
+        params.update(b.option_dict)
         out.append(params)
     return out

@@ -21,6 +21,7 @@ import math
 import numpy as np
 from numba import njit
 
+from bearing_fmu.affine import pairwise_sum
 from gear_fmu.loads import unbalance_into
 from gear_fmu.mesh.element import _mesh_kernel
 from gear_fmu.step.assembly import prepare_step
@@ -46,12 +47,14 @@ __all__ = ["advance", "advance_pieces", "contact_events", "keep_evaluation", "su
 
 @njit(cache=True)
 def sum_squares(f0):
-    """Sum of the squares of the bearing forces (nb, 2), in their order."""
-    acc = 0.0
-    for b in range(f0.shape[0]):
+    """Sum of the squares of the bearing forces (nb, 2), added in numpy's pairwise order
+    (:func:`bearing_fmu.affine.pairwise_sum`)."""
+    nb = f0.shape[0]
+    s = np.empty(2 * nb)
+    for b in range(nb):
         for r in range(2):
-            acc += f0[b, r] * f0[b, r]
-    return acc
+            s[2 * b + r] = f0[b, r] * f0[b, r]
+    return pairwise_sum(s)
 
 
 @njit(cache=True)

@@ -2,9 +2,11 @@
 
 * :class:`InProcessStructure`: a :class:`gear_fmu.structure.Structure` as a
   :class:`~orchestrator.coupling.master.StructureSlave`.
-* :class:`ModelBearings`: bearing models (:mod:`bearing_fmu`) as a
-  :class:`~orchestrator.coupling.master.BearingSet`, converting between their local frames and the
-  global (s, t) frame.
+* :class:`ModelBearings`: bearing models (:mod:`bearing_fmu`), each bearing its own, as a
+  :class:`~orchestrator.coupling.master.BearingSet`, converting between their local frames and
+  the global (s, t) frame; grouped by kind for the compiled coupled step (hybrid bearings of
+  one n share one call, short bearings another, affine laws a third, any other model is
+  called back in Python).
 """
 
 from __future__ import annotations
@@ -14,8 +16,8 @@ import numpy as np
 from bearing_fmu.affine import AffineLaws
 from bearing_fmu.base import BearingError, BearingModel
 from bearing_fmu.frames import LocalFrame
-from bearing_fmu.hybrid.model import HybridSet
-from bearing_fmu.short_bearing import ShortSet
+from bearing_fmu.hybrid.model import HybridBearing, HybridSet
+from bearing_fmu.short_bearing import ShortBearing, ShortSet
 from fmu_src.lifecycle import StructureCycle
 from fmu_src.state_codec import StateArrays, nest
 from fmu_src.states import (
@@ -26,7 +28,7 @@ from fmu_src.states import (
 )
 from gear_fmu.modal.analyses import support_loads
 from gear_fmu.structure import Structure
-from orchestrator.coupling.master import BearingSet, StructureSlave
+from orchestrator.coupling.master import BearingSet, PythonGroup, StructureSlave
 
 __all__ = ["InProcessStructure", "ModelBearings"]
 
@@ -40,12 +42,14 @@ class InProcessStructure(StructureSlave):
     structure : gear_fmu.structure.Structure
     """
 
-    n_bearings = Structure.n_bearings
-
     def __init__(self, structure: Structure):
         self.structure = structure
         self.cycle = StructureCycle(lambda: structure)
         self._laws: AffineLaws | None = None
+        self.n_bearings = structure.nb
+        self.n_meshes = len(structure.meshes)
+        self.n_gears = len(structure.layout.gears)
+        self._plan = None  # the plan of the last compiled block (its failure's details)
 
     @property
     def physics(self) -> Structure:
@@ -70,6 +74,30 @@ class InProcessStructure(StructureSlave):
         laws = self._require_laws()
         self.cycle.step(t, dt, laws.f0, laws.kb, laws.cb)
 
+    def compiled_block(self, t: float, dt: float, n: int, time_of):
+        """The structure's planned steps (:meth:`gear_fmu.structure.Structure.steps_plan`) as
+        :func:`orchestrator.coupling.step.coupled_steps` takes them: ``(head, state, tail,
+        work, (gear_uv, totals, lengths))``, ``gear_uv`` (n_gears, 2) the condensed indices of
+        each gear node's u, v, ``totals``, ``lengths`` (n_meshes,) receiving the meshes' total
+        loads [N] and contact lengths [m] of each accepted step."""
+        st = self.cycle.check_step(t, dt)
+        plan = st.steps_plan(dt, n)
+        self._plan = plan
+        totals, lengths = st.mesh_forces(), np.zeros(self.n_meshes)
+        args = (plan.head, plan.state, plan.tail, plan.work, (st._gear_uv, totals, lengths))
+
+        def finish(count: int) -> None:
+            st.end_steps(plan, count, totals, lengths)
+
+        return args, len(plan.ends), finish
+
+    def raise_compiled_failure(self, k, code, d1, d2, d3, t, dt) -> None:
+        """The structure's error of the block's step ``k``: the step kernel's status ``d1``
+        at sub-step ``d2`` after ``d3`` passes."""
+        plan = self._plan
+        residuals = plan.work[4]
+        self.structure.raise_failed_step(d1, d3, residuals, plan.ends[k][d2])
+
     def solve_static(self) -> None:
         laws = self._require_laws()
         self.cycle.solve_static(laws.f0, laws.kb, laws.cb)
@@ -90,14 +118,19 @@ class InProcessStructure(StructureSlave):
     def support_loads(self) -> np.ndarray:
         return support_loads(self.structure)
 
-    def mesh_force(self) -> float:
-        return self.structure.mesh_force()
+    def step_outputs(self):
+        st = self.structure
+        return st.mesh_forces(), st.transmission_errors(), st.gear_displacements()[:, :2]
 
-    def transmission_error(self) -> float:
-        return self.structure.transmission_error()
 
-    def gear_displacements(self) -> np.ndarray:
-        return self.structure.gear_displacements()[:, :2]
+def _kind(model) -> tuple:
+    """The group a model's bearing joins (module docstring): hybrid bearings of one n, short
+    bearings, or the others (affine once their law is, else called back in Python)."""
+    if type(model) is HybridBearing:
+        return ("hybrid", model.n)
+    if type(model) is ShortBearing:
+        return ("short",)
+    return ("other",)
 
 
 class ModelBearings(BearingSet):
@@ -106,14 +139,16 @@ class ModelBearings(BearingSet):
     Parameters
     ----------
     models : sequence of BearingModel
-        One per bearing node.
+        One per bearing (the layout's order), of any registered model each.
     frames : sequence of LocalFrame
         Local frame of each bearing in the global (s, t) plane.
     omegas : sequence of float
         Shaft speed magnitude at each bearing [rad/s].
+    names : sequence of str, optional
+        The bearings' names (messages); default "1", "2", ...
     """
 
-    def __init__(self, models, frames, omegas):
+    def __init__(self, models, frames, omegas, names=None):
         if not (len(models) == len(frames) == len(omegas)):
             raise ValueError("models, frames and omegas must have one entry per bearing")
         self.frames = [f if isinstance(f, LocalFrame) else LocalFrame(*f) for f in frames]
@@ -125,83 +160,125 @@ class ModelBearings(BearingSet):
             if not isinstance(m, BearingModel):
                 raise TypeError(f"{m!r} is not a BearingModel")
         self.models = list(models)
+        self.names = [str(i + 1) for i in range(len(self.models))] if names is None else [
+            str(n) for n in names]
         self.clearances = np.array([m.bearing.clearance for m in self.models])
-        self._q = np.array([f.q for f in self.frames])
+        self._q = np.array([f.q for f in self.frames]).reshape(-1, 2, 2)
         self._states = None  # global journal states of the last evaluation
         self.evaluations = 0
-        # hybrid bearings of one n, or short bearings: one compiled call for the set (the same
-        # numbers)
-        self._set = next((kind(self.models, self._q, self.omegas)
-                          for kind in (HybridSet, ShortSet) if kind.fits(self.models)), None)
-        self._affine = None  # (the laws, their arrays) of affine_laws()
+        kinds: dict[tuple, list[int]] = {}
+        for b, m in enumerate(self.models):
+            kinds.setdefault(_kind(m), []).append(b)
+        #: (kind, bearing indices, the compiled set or None) in the order kinds first appear
+        self._groups = []
+        for kind, index in kinds.items():
+            idx = np.array(index, dtype=np.int64)
+            sub = [self.models[b] for b in index]
+            args = (sub, self._q[idx], [self.omegas[b] for b in index])
+            compiled = HybridSet(*args) if kind[0] == "hybrid" else (
+                ShortSet(*args) if kind[0] == "short" else None)
+            self._groups.append((kind, idx, compiled))
+        self._python = None  # the PythonGroup of the models without a compiled form
+        self._affine = None  # (the laws, their group) of the affine models
+
+    @property
+    def count(self) -> int:
+        return len(self.models)
+
+    @property
+    def hybrid_sets(self) -> list[HybridSet]:
+        """The compiled calls of the hybrid bearings (one per n)."""
+        return [c for _, _, c in self._groups if isinstance(c, HybridSet)]
+
+    def _evaluate_models(self, index, states, out) -> None:
+        """Bearings ``index`` one by one at their global states (k, 4) into ``out`` (k, 5, 2);
+        a failure carries the set's index in ``bearing_index``."""
+        for g, b in enumerate(index):
+            try:
+                self.models[b].evaluate_global(self._q[b], states[g], self.omegas[b], out[g])
+            except BearingError as exc:
+                exc.bearing_index = int(b)
+                raise
 
     def evaluate(self, states):
-        nb = len(self.models)
-        states = np.ascontiguousarray(states, dtype=float)  # as the set's compiled call takes it
+        states = np.ascontiguousarray(states, dtype=float)  # as the compiled calls take it
         self._states = states.copy()
-        out = np.empty((nb, 5, 2))
-        b = 0
-        try:
-            if self._set is not None:
-                self._set.evaluate_global(states, out)
-            else:
-                for b in range(nb):
-                    self.models[b].evaluate_global(self._q[b], states[b], self.omegas[b],
-                                                   out[b])
-        except BearingError as exc:
-            self._annotate(exc, b, states)
-            raise
-        self.evaluations += nb
+        out = np.empty((self.count, 5, 2))
+        for _, idx, compiled in self._groups:
+            sub, rows = states[idx], np.empty((idx.size, 5, 2))
+            try:
+                if compiled is not None:
+                    try:
+                        compiled.evaluate_global(sub, rows)
+                    except BearingError as exc:
+                        exc.bearing_index = int(idx[getattr(exc, "bearing_index", 0)])
+                        raise
+                else:
+                    self._evaluate_models(idx, sub, rows)
+            except BearingError as exc:
+                self._annotate(exc, exc.bearing_index, states)
+                raise
+            out[idx] = rows
+        self.evaluations += self.count
         return out[:, 0], out[:, 1:3], out[:, 3:5]
 
-    @staticmethod
-    def _annotate(exc, b, states) -> None:
+    def _annotate(self, exc, b, states) -> None:
         """Which bearing failed, at which state [m, m/s]: what the run reports."""
-        b = getattr(exc, "bearing_index", b)
-        exc.bearing, exc.state, exc.reason = b + 1, states[b].copy(), str(exc)
+        exc.bearing_index = int(b)
+        exc.bearing, exc.state, exc.reason = self.names[b], states[b].copy(), str(exc)
 
-    @property
-    def hybrid_set(self) -> HybridSet | None:
-        """The compiled call of a set of hybrid bearings of one n, else None."""
-        return self._set if isinstance(self._set, HybridSet) else None
+    def compiled_groups(self) -> tuple:
+        groups = []
+        others = []
+        for kind, idx, compiled in self._groups:
+            if compiled is not None:
+                groups.append((compiled.kernel_arguments(), idx))
+            else:
+                others.extend(int(b) for b in idx)
+        affine = [b for b in others
+                  if self.models[b].affine_law(self.omegas[b]) is not None]
+        if affine:
+            groups.append((self._affine_arguments(affine), np.array(affine, dtype=np.int64)))
+        python = [b for b in others if b not in affine]
+        if python:
+            if self._python is None or self._python.indices.tolist() != python:
+                if self._python is not None:
+                    self._python.close()
+                self._python = PythonGroup(self._evaluate_models, python)
+            groups.append(self._python.arguments())
+        return tuple(groups)
 
-    @property
-    def compiled_set(self) -> HybridSet | ShortSet | None:
-        """The compiled call of the set (:attr:`hybrid_set`, or a
-        :class:`bearing_fmu.short_bearing.ShortSet`), else
-        None: what a compiled caller evaluates the bearings with
-        (:mod:`orchestrator.coupling.fused`)."""
-        return self._set
-
-    def affine_laws(self):
-        """``(q, f0, kb, cb)`` stacked over the bearings ((nb, 2, 2), (nb, 2), (nb, 2, 2) x 2:
-        the global-to-local rotations and the local laws) when every bearing's law is affine
-        now (:meth:`bearing_fmu.base.BearingModel.affine_law`: the ``linear`` model after its
-        freeze at X0, the ``lumped`` one), for a compiled caller
-        (``bearing_fmu.affine.affine_set_global``); else None."""
-        laws = tuple(m.affine_law(w) for m, w in zip(self.models, self.omegas, strict=True))
-        if any(law is None for law in laws):
-            return None
+    def _affine_arguments(self, index) -> tuple:
+        """``(q, f0, kb, cb)`` of the affine laws of bearings ``index``, stacked (local frame,
+        :meth:`bearing_fmu.base.BearingModel.affine_law`), kept while the laws are the
+        same objects."""
+        laws = tuple(self.models[b].affine_law(self.omegas[b]) for b in index)
         if self._affine is None or any(a is not b for a, b in zip(self._affine[0], laws,
-                                                                    strict=True)):
-            self._affine = (laws, (self._q, np.array([law.f0 for law in laws]),
+                                                                    strict=False)):
+            self._affine = (laws, (np.ascontiguousarray(self._q[index]),
+                                   np.array([law.f0 for law in laws]),
                                    np.array([law.kb for law in laws]),
                                    np.array([law.cb for law in laws])))
         return self._affine[1]
 
-    def record_states(self, states) -> None:
-        """The journal states (nb, 4) [m, m/s] a compiled caller evaluated the set at last."""
-        self._states = np.array(states, dtype=float)
-
-    def raise_set_failure(self, b, status, states) -> None:
-        """The error :meth:`evaluate` raises when the compiled set's bearing ``b`` (0-based)
-        returned ``status`` at ``states`` (nb, 4) (a compiled caller's failure)."""
+    def raise_failure(self, b, status, states) -> None:
         self.record_states(states)
-        try:
-            self._set.raise_status(b, status, states)
-        except BearingError as exc:
+        for _, idx, compiled in self._groups:
+            where = np.flatnonzero(idx == b)
+            if compiled is not None and where.size:
+                try:
+                    compiled.raise_status(int(where[0]), status, states[idx])
+                except BearingError as exc:
+                    self._annotate(exc, b, states)
+                    raise
+        if self._python is not None and self._python.error is not None:
+            exc, self._python.error = self._python.error, None
             self._annotate(exc, b, states)
-            raise
+            raise exc
+        raise RuntimeError(f"bearing {self.names[b]}: status {status} without an error")
+
+    def record_states(self, states) -> None:
+        self._states = np.array(states, dtype=float)
 
     def checkpoint(self) -> dict:
         """Each model's state (:func:`fmu_src.states.bearing_state_arrays`) under its index."""
@@ -224,3 +301,8 @@ class ModelBearings(BearingSet):
                                            strict=True):
             x, y = frame.to_local(state[:2])
             model.end_initialization(float(x), float(y), om)
+
+    def close(self) -> None:
+        if self._python is not None:
+            self._python.close()
+            self._python = None

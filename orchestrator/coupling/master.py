@@ -2,52 +2,34 @@
 
 The structure slave owns (X, Xdot, Xddot) and advances one Newmark step for given affine
 bearing laws ``F = F0 - Kb X - Cb Xdot`` (global frame, one per bearing). The bearing slaves
-are algebraic: journal state -> film force, Kb, Cb. One coupled step (docs/design.md section 4):
-
-1. save the structure state;
-2. set the affine laws linearised at the last iterate; ``do_step``;
-3. read the journal states, evaluate the bearings there;
-4. if the film forces differ from the affine laws by more than ``tol`` (relative to the force
-   norm), re-linearise at the new iterate, restore the saved state and repeat; else accept.
-
-The structure's own Newton/contact loop converges the rest of the system exactly for each law,
-and the law is the exact linearisation of the bearings at the current iterate (Eq. 14, 16), so
-the outer loop is Newton-Raphson on the bearing nonlinearity: a converged co-simulated step is
-the monolithic step to ``tol``, and an affine bearing (linear, lumped) converges in one pass.
-
-A bearing force can be continuous with a slope that jumps: the hybrid model's is where a node
-of its film enters or leaves the pressurised zone. Near such a kink Newton can fall into a
-two-cycle between iterates on either side (the paper's case at 300, 400, 800 and 900 rad/s:
-the mismatch alternating between two values above ``tol`` until the step fails). When the
-mismatch has not halved over two iterations, the rest of the step is relaxed: each new law is
-the mean of the linearisation at the new iterate and the law just used
-(:data:`RELAXATION`). The acceptance test is unchanged (the law used against the bearings at
-the new iterate), so a relaxed step is still the monolithic step to ``tol``.
+are algebraic: journal state -> film force, Kb, Cb. A coupled step is defined once, compiled,
+for every transport (:mod:`orchestrator.coupling.step`; docs/design.md section 4): the
+structure steps with the laws linearised at the last iterate, the bearings are evaluated at
+its journal states, and the step is accepted when their forces match the laws to ``tol``,
+else taken again from the same state with the laws linearised there. :class:`Master` holds
+the laws and the counters and hands its steps, a block at a time, to its ``stepper``
+(:class:`orchestrator.coupling.step.CoupledSteps`, which
+:func:`orchestrator.coupling.system.build_master` gives it).
 
 The static solution X0 is the same iteration with the structure's static solve and the
-velocities zero. Its first linearisation point comes from a per-bearing static equilibrium
-under the loads a stiff support would carry (so no iterate starts outside the clearance),
-solved by :meth:`BearingSet.static_position` through the bearings' own ``evaluate``, the same
-calls whatever the transport.
+velocities zero (:meth:`Master.solve_static`). Its first linearisation point comes from a
+per-bearing static equilibrium under the loads a stiff support would carry (so no iterate
+starts outside the clearance), solved by :meth:`BearingSet.static_position` through the
+bearings' own ``evaluate``, the same calls whatever the transport.
 
 The slaves are reached only through :class:`StructureSlave` and :class:`BearingSet`, which
 declare everything the master and the runner use; :mod:`orchestrator.coupling.inprocess` (the
 physics objects directly) and :mod:`orchestrator.coupling.fmi` (the FMUs through fmpy)
-implement them. In-process, with hybrid or linear bearings, :meth:`Master.step` hands the
-whole iteration to one compiled call (:mod:`orchestrator.coupling.fused`, the ``fused``
-attribute that :func:`orchestrator.coupling.system.build_master` sets): the same kernels in
-the same order, so the same bits as the loop below, which stays the reference and serves the
-FMUs and the other bearing models.
+implement them.
 """
 
 from __future__ import annotations
 
-import math
+import itertools
 from abc import ABC, abstractmethod
 from dataclasses import dataclass, field
 
 import numpy as np
-from numba import njit
 
 from bearing_fmu.affine import AffineLaws
 from bearing_fmu.blas_threads import one_blas_thread
@@ -58,43 +40,58 @@ from fmu_src.states import laws_arrays, laws_from_arrays
 __all__ = [
     "CHECKPOINT_KIND",
     "BearingSet",
-    "CompiledSteps",
     "CouplingError",
     "Master",
-    "StepBlock",
+    "PythonGroup",
     "StepReport",
     "StructureSlave",
     "decode_checkpoint",
-    "relaxed_law",
 ]
 
-#: weight of the new linearisation in a relaxed iteration (module docstring): the law used next
-#: is ``RELAXATION * new + (1 - RELAXATION) * last used``
-RELAXATION = 0.5
-#: a step is relaxed from the iteration whose mismatch exceeds STALL times the one two
-#: iterations earlier (Newton's mismatch falls quadratically; a two-cycle's repeats)
-STALL = 0.5
 #: the kind tag of :meth:`Master.checkpoint` states (:mod:`fmu_src.state_codec`)
 CHECKPOINT_KIND = "gsb.master_checkpoint"
 
 
-@njit(cache=True)
-def relaxed_law(it, mismatch, mismatches, relaxed, stall, relaxation, f0_new, kb_new, cb_new,
-                f0, kb, cb):
-    """:meth:`Master.step`'s rule after iteration ``it`` (1-based) of a step, for the compiled
-    steps (:class:`CompiledSteps`): its ``mismatch`` goes into ``mismatches[it - 1]``; the step
-    is relaxed from the iteration whose mismatch exceeds ``stall`` times the one two iterations
-    earlier (or stays so); the next law is the new linearisation ``f0_new, kb_new, cb_new``,
-    or once relaxed :meth:`bearing_fmu.affine.AffineLaws.blend` of it with the law used
-    ``f0, kb, cb`` (weight ``relaxation``), in its order. Returns ``(relaxed, f0, kb, cb)``."""
-    mismatches[it - 1] = mismatch
-    if not relaxed and it >= 3 and mismatch > stall * mismatches[it - 3]:
-        relaxed = True
-    if not relaxed:
-        return relaxed, f0_new, kb_new, cb_new
-    r = 1.0 - relaxation
-    return (relaxed, relaxation * f0_new + r * f0, relaxation * kb_new + r * kb,
-            relaxation * cb_new + r * cb)
+#: the Python evaluations of the bearing groups without a compiled form, by key
+_PYTHON_GROUPS: dict = {}
+_KEYS = itertools.count(1)
+
+
+class PythonGroup:
+    """Bearings evaluated in Python from the compiled coupled step (numba's object mode,
+    :func:`orchestrator.coupling.step.evaluate_set`), a few microseconds per call:
+    ``evaluate(indices, states, out)`` evaluates the set's bearings ``indices`` at their
+    states (k, 4) into their rows (k, 5, 2). An exception is kept in :attr:`error` (the
+    compiled loop returns the group's failed bearing, ``bearing_index`` on the exception, for
+    the set to raise it). Registered while the set lives (:meth:`close`)."""
+
+    def __init__(self, evaluate, indices):
+        self._evaluate = evaluate
+        self.indices = np.ascontiguousarray(indices, dtype=np.int64)
+        self.error: BaseException | None = None
+        self.key = next(_KEYS)
+        _PYTHON_GROUPS[self.key] = self
+
+    def arguments(self) -> tuple:
+        """The group of :func:`orchestrator.coupling.step.evaluate_set`."""
+        return ((np.int64(self.key),), self.indices)
+
+    def close(self) -> None:
+        _PYTHON_GROUPS.pop(self.key, None)
+
+
+def python_evaluate(key, states, out) -> int:
+    """The compiled loop's call back into a :class:`PythonGroup`: -1, or the group's failed
+    bearing (its error kept)."""
+    group = _PYTHON_GROUPS[int(key)]
+    group.error = None
+    try:
+        group._evaluate(group.indices, states, out)
+    except Exception as exc:  # raised by the set with the block's rows (BearingSet.raise_failure)
+        group.error = exc
+        at = getattr(exc, "bearing_index", None)
+        return int(np.flatnonzero(group.indices == at)[0]) if at in group.indices else 0
+    return -1
 
 
 class CouplingError(RuntimeError):
@@ -105,14 +102,23 @@ class StructureSlave(ABC):
     """What the master and the runner need from the gear-shaft slave (in-process or FMU).
 
     Life cycle: laws + :meth:`solve_static` (repeated: the static iteration), then
-    :meth:`exit_initialization` once, then :meth:`do_step` with :meth:`get_state` /
-    :meth:`set_state` around it (rollback), then :meth:`close`.
+    :meth:`exit_initialization` once, then blocks of coupled steps (:meth:`compiled_block`),
+    then :meth:`close`.
     """
 
+    #: bearings, meshes and gears of the train (the layout's)
     n_bearings: int
+    n_meshes: int
+    n_gears: int
     #: the in-process physics object (:class:`gear_fmu.structure.Structure`) where there is
     #: one, so that checks reuse its damping instead of building it again; None through FMUs
     physics = None
+
+    @property
+    def output_width(self) -> int:
+        """What a step outputs (:meth:`step_outputs`): the mesh forces, the transmission
+        errors, u and v of every gear's node."""
+        return 2 * self.n_meshes + 2 * self.n_gears
 
     @abstractmethod
     def get_state(self):
@@ -128,7 +134,21 @@ class StructureSlave(ABC):
 
     @abstractmethod
     def do_step(self, t: float, dt: float) -> None:
-        """One Newmark step from t to t + dt; raises on non-convergence."""
+        """One Newmark step from t to t + dt with the current laws (no coupling iteration:
+        a non-iterative master's step); raises on non-convergence."""
+
+    @abstractmethod
+    def compiled_block(self, t: float, dt: float, n: int, time_of):
+        """The structure's arguments of up to ``n`` coupled steps of dt from t [s]
+        (:func:`orchestrator.coupling.step.coupled_steps`; step k from ``time_of(k)`` [s]):
+        ``(arguments, m, finish)``, m <= n the steps they plan, ``finish(count)`` to call
+        after the call with the number of accepted steps (the slave takes their state)."""
+
+    @abstractmethod
+    def raise_compiled_failure(self, k: int, code: int, d1: int, d2: int, d3: int, t: float,
+                               dt: float) -> None:
+        """Raise the error of the block's step ``k`` from t [s] whose structure operation
+        returned ``code`` with details ``d1, d2, d3`` (the transport's)."""
 
     @abstractmethod
     def solve_static(self) -> None:
@@ -148,22 +168,10 @@ class StructureSlave(ABC):
         """(nb, 2) static loads on the journals with a stiff support [N] (first guess)."""
 
     @abstractmethod
-    def mesh_force(self) -> float:
-        """Total normal mesh force of the current state [N]."""
-
-    @abstractmethod
-    def transmission_error(self) -> float:
-        """Transmission error r_b1 theta_1 + r_b2 theta_2 of the current state [m]."""
-
-    @abstractmethod
-    def gear_displacements(self) -> np.ndarray:
-        """(2, 2) [u, v] of the pinion and gear nodes [m], global frame."""
-
-    def step_outputs(self) -> tuple[float, float, np.ndarray]:
-        """What the runner records after each step: :meth:`mesh_force`,
-        :meth:`transmission_error` and :meth:`gear_displacements` (one FMI call through the
-        FMU)."""
-        return self.mesh_force(), self.transmission_error(), self.gear_displacements()
+    def step_outputs(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """What the runner records of the current state: each mesh's total normal force [N],
+        each mesh's transmission error r_b1 theta_1 + r_b2 theta_2 [m], and (n_gears, 2)
+        u, v of each gear's node [m] (global frame)."""
 
     def checkpoint(self) -> dict:
         """The state after the last accepted step as flat arrays (name -> numpy array,
@@ -183,9 +191,30 @@ class StructureSlave(ABC):
 class BearingSet(ABC):
     """What the master and the runner need from the bearing slaves (in-process or FMUs)."""
 
+    #: film-force evaluations of single bearings so far
+    evaluations: int = 0
+
     @abstractmethod
     def evaluate(self, states: np.ndarray):
         """Film force (nb, 2), Kb (nb, 2, 2), Cb (nb, 2, 2) at journal states (nb, 4)."""
+
+    @property
+    @abstractmethod
+    def count(self) -> int:
+        """The number of bearings."""
+
+    @abstractmethod
+    def compiled_groups(self) -> tuple:
+        """The bearings as groups of one kind each for the compiled loop
+        (:func:`orchestrator.coupling.step.evaluate_set`): ``((arguments, indices), ...)``."""
+
+    @abstractmethod
+    def raise_failure(self, b: int, status: int, states: np.ndarray) -> None:
+        """Raise the error of bearing ``b`` (0-based) whose group returned ``status`` at the
+        journal states ``states`` (nb, 4) in the compiled loop."""
+
+    def record_states(self, states) -> None:  # noqa: B027 - optional
+        """The journal states (nb, 4) [m, m/s] the compiled loop evaluated the set at last."""
 
     #: (nb,) radial clearance of each bearing [m] (bounds the first guess of X0)
     clearances: np.ndarray
@@ -241,65 +270,6 @@ class StepReport:
 
 
 @dataclass
-class StepBlock:
-    """Steps taken by one call of :meth:`Master.steps`: what the runner records of each
-    accepted step, rows in step order, and the error of the step that ended the block early
-    (None when all were accepted)."""
-
-    count: int
-    states: np.ndarray  # (count, nb, 4) accepted journal states [m, m/s]
-    bearing_force: np.ndarray  # (count, nb, 2) [N]
-    mesh_force: np.ndarray  # (count,) [N]
-    transmission_error: np.ndarray  # (count,) [m]
-    gear_nodes: np.ndarray  # (count, 2, 2) u, v of the pinion and gear nodes [m]
-    iterations: np.ndarray  # (count,)
-    mismatch: float  # the last step's relative mismatch (at its acceptance, or failure)
-    error: Exception | None = None
-
-
-class CompiledSteps(ABC):
-    """The master's steps as one compiled call per block of steps where the slaves allow it
-    (the master's ``fused``; :func:`orchestrator.coupling.system.build_master` gives it):
-    in-process (:class:`orchestrator.coupling.fused.FusedStep`) and through the FMUs
-    (:class:`orchestrator.coupling.fmi.steps.FmuSteps`). Each gives the bits, counters and
-    errors of the master's Python loop. A subclass says which slaves it takes (:meth:`fits`)
-    and takes a block (``_block``); the entry points are the master's."""
-
-    @staticmethod
-    @abstractmethod
-    def fits(structure, bearings) -> bool:
-        """Whether these slaves can take the compiled steps."""
-
-    @abstractmethod
-    def _block(self, master: Master, t: float, dt: float, n: int,
-               time_of) -> StepBlock | None:
-        """Up to ``n`` steps of dt from t [s] (the structure's time) until one fails (its
-        error in the block, after the steps before it are taken); ``time_of(k)``: the time
-        [s] of the block's step k, as the caller's messages give it. None when the next step
-        takes the Python loop."""
-
-    def step(self, master: Master, t: float, dt: float) -> StepReport | None:
-        """The master's step from t to t + dt [s] (same arguments, counters and errors), or
-        None for a step the compiled loop does not take: a block of one step."""
-        block = self._block(master, t, dt, 1, lambda k: t)
-        if block is None:
-            return None
-        if block.error is not None:
-            raise block.error
-        return StepReport(int(block.iterations[0]), block.mismatch, block.bearing_force[0],
-                          master.laws, block.states[0])
-
-    def steps(self, master: Master, first: int, dt: float, n: int) -> StepBlock | None:
-        """Up to ``n`` of the master's steps of dt from step ``first`` (t = first dt [s]) in
-        one compiled call (:meth:`Master.steps`)."""
-        return self._block(master, first * dt, dt, n, lambda k: (first + k) * dt)
-
-    def steps_from(self, master: Master, t: float, dt: float, n: int) -> StepBlock | None:
-        """:meth:`steps` from the time ``t`` [s] (the structure's), step k's time t + k dt."""
-        return self._block(master, t, dt, n, lambda k: t + k * dt)
-
-
-@dataclass
 class Master:
     """Couple a structure slave with a bearing set.
 
@@ -320,12 +290,11 @@ class Master:
     laws: AffineLaws | None = None
     total_iterations: int = 0
     total_bearing_evaluations: int = 0
-    relaxed_steps: int = 0  # steps that needed the relaxation (module docstring)
-    #: the same steps as one compiled call where the slaves allow it
-    #: (:class:`CompiledSteps`, given by :func:`orchestrator.coupling.system.build_master`):
-    #: ``fused.step(master, t, dt)`` returns the step's report, or None for a step this loop
-    #: takes
-    fused: CompiledSteps | None = field(default=None, repr=False)
+    relaxed_steps: int = 0  # steps that needed the relaxation (orchestrator.coupling.step)
+    #: takes blocks of coupled steps: ``stepper.block(master, t, dt, n, time_of)``
+    #: (:class:`orchestrator.coupling.step.CoupledSteps`, given by
+    #: :func:`orchestrator.coupling.system.build_master`)
+    stepper: object = field(default=None, repr=False)
 
     def _evaluate(self, states):
         self.total_bearing_evaluations += 1
@@ -408,94 +377,38 @@ class Master:
         finally:
             self.structure.close()
 
+    def _block(self, t: float, dt: float, n: int, time_of):
+        if self.laws is None:
+            raise CouplingError("call solve_static() (or set laws) before the first step")
+        if self.stepper is None:
+            raise CouplingError("the master has no stepper (build it with "
+                                "orchestrator.coupling.system.build_master)")
+        return self.stepper.block(self, t, dt, n, time_of)
+
     @one_blas_thread
     def step(self, t: float, dt: float) -> StepReport:
-        """One coupled Newmark step from t to t + dt: Newton on the bearings' forces through
-        their affine laws (Eq. 17), linearised at each iterate (module docstring)."""
-        if self.laws is None:
-            raise CouplingError("call solve_static() (or set laws) before the first step")
-        if self.fused is not None:
-            report = self.fused.step(self, t, dt)
-            if report is not None:
-                return report
-        saved = self.structure.get_state()
-        laws = self.laws
-        mismatch = math.inf
-        history = []
-        relaxed = False
-        for it in range(1, self.max_iterations + 1):
-            self.structure.set_bearing_laws(laws)
-            self.structure.do_step(t, dt)
-            states = self.structure.journal_states()
-            force, kb, cb = self._evaluate(states)
-            mismatch, new = laws.relinearise(states, force, kb, cb)
-            self.total_iterations += 1
-            if mismatch <= self.tol:
-                self.laws = new
-                return StepReport(it, mismatch, force, new, states)
-            history.append(mismatch)
-            if not relaxed and it >= 3 and mismatch > STALL * history[-3]:
-                relaxed = True
-                self.relaxed_steps += 1
-            laws = laws.blend(new, RELAXATION) if relaxed else new
-            self.structure.set_state(saved)
-        raise CouplingError(not_converged(t, dt, self.max_iterations, mismatch, self.tol))
+        """One coupled Newmark step from t to t + dt (:mod:`orchestrator.coupling.step`):
+        its report, or the error of a step that failed."""
+        block = self._block(t, dt, 1, lambda k: t)
+        if block.error is not None:
+            raise block.error
+        return StepReport(int(block.iterations[0]), block.mismatch, block.bearing_force[0],
+                          self.laws, block.states[0])
 
     @one_blas_thread
-    def steps(self, first: int, dt: float, n: int) -> StepBlock | None:
-        """Up to ``n`` steps of dt from step ``first`` (t = first dt [s]): the same steps as
-        ``n`` calls of :meth:`step`, in one compiled call where the slaves allow it
-        (:meth:`CompiledSteps.steps`), else by :meth:`step` in a loop
-        that gathers the structure's outputs of each step for the block. A
-        :class:`StepBlock` of the steps taken and the error of a step that failed (the steps
-        before it taken), or None: take the next step with :meth:`step`."""
-        if self.laws is None:
-            raise CouplingError("call solve_static() (or set laws) before the first step")
-        if n < 1:
-            return None
-        if self.fused is None:
-            return self._loop_steps(dt, n, lambda k: (first + k) * dt)
-        return self.fused.steps(self, first, dt, n)
+    def steps(self, first: int, dt: float, n: int):
+        """Up to ``n`` steps of dt from step ``first`` (t = first dt [s]) in one compiled call:
+        a :class:`orchestrator.coupling.step.StepBlock` of the steps taken (fewer than ``n``
+        when the structure plans fewer at once) and the error of a step that failed (the
+        steps before it taken)."""
+        return self._block(first * dt, dt, n, lambda k: (first + k) * dt)
 
     @one_blas_thread
-    def steps_from(self, t: float, dt: float, n: int) -> StepBlock | None:
+    def steps_from(self, t: float, dt: float, n: int):
         """:meth:`steps` from the time ``t`` [s] (the structure's) for a caller whose times
         are not whole multiples of dt (an FMU's communication steps cut into equal steps):
         the messages of a failed step k give t + k dt."""
-        if self.laws is None:
-            raise CouplingError("call solve_static() (or set laws) before the first step")
-        if n < 1:
-            return None
-        if self.fused is None:
-            return self._loop_steps(dt, n, lambda k: t + k * dt)
-        return self.fused.steps_from(self, t, dt, n)
-
-    def _loop_steps(self, dt: float, n: int, time_of) -> StepBlock:
-        """``n`` steps of :meth:`step` (step k from ``time_of(k)`` [s]) with the structure's
-        outputs after each (:meth:`StructureSlave.step_outputs`), as a block: the caller's
-        work between steps (recording a row, checking for signals) is paid once per block.
-        The first step that fails ends the block, its error in it."""
-        states, forces, mesh, te, gear, its = [], [], [], [], [], []
-        mismatch, error = math.nan, None
-        for k in range(n):
-            try:
-                report = self.step(time_of(k), dt)
-            except Exception as exc:  # handed to the caller with the rows (as FusedStep)
-                error = exc
-                break
-            mesh_force, transmission_error, gear_nodes = self.structure.step_outputs()
-            states.append(report.states.copy())  # a slave may reuse its buffers
-            forces.append(report.bearing_force.copy())
-            mesh.append(mesh_force)
-            te.append(transmission_error)
-            gear.append(gear_nodes)
-            its.append(report.iterations)
-            mismatch = report.mismatch
-        count, nb = len(its), self.structure.n_bearings
-        return StepBlock(count, np.array(states).reshape(count, nb, 4),
-                         np.array(forces).reshape(count, nb, 2), np.array(mesh, dtype=float),
-                         np.array(te, dtype=float), np.array(gear).reshape(count, 2, 2),
-                         np.array(its, dtype=np.int64), mismatch, error)
+        return self._block(t, dt, n, lambda k: t + k * dt)
 
 
 def not_converged(t, dt, max_iterations, mismatch, tol) -> str:

@@ -18,9 +18,9 @@ from bearing_fmu.hybrid.model import thread_count
 from fmu_src import description
 from fmu_src.case import Case
 from gear_fmu.structure import Structure
-from orchestrator.coupling.fused import FusedStep
 from orchestrator.coupling.inprocess import InProcessStructure, ModelBearings
 from orchestrator.coupling.master import Master
+from orchestrator.coupling.step import CoupledSteps
 
 __all__ = ["announce_compilation", "build_master"]
 
@@ -65,8 +65,9 @@ def build_master(case: Case, in_process: bool = False, fmu_dir: Path | str | Non
                                        description.bearing_speeds(case))
         else:
             bearings = ModelBearings(description.bearing_models(case),
-                                     description.BEARING_FRAMES,
-                                     description.bearing_speeds(case))
+                                     description.bearing_frames(case),
+                                     description.bearing_speeds(case),
+                                     description.layout(case).bearing_names)
     elif fmus is not None:
         from orchestrator.coupling import fmi
 
@@ -80,18 +81,8 @@ def build_master(case: Case, in_process: bool = False, fmu_dir: Path | str | Non
         _share_bearings(bearings, threads, "the bearing FMUs" if fmus is not None or not
                         in_process else f"the {case['bearings.model']} bearings")
     announce_compilation(cold)  # after the FMUs' build: the kernels compile on first calls
-    return Master(structure, bearings, tol, max_it, fused=_compiled_steps(structure, bearings))
-
-
-def _compiled_steps(structure, bearings):
-    """The master's steps in one compiled call for these slaves, or None (the master's
-    Python loop): in-process (:class:`orchestrator.coupling.fused.FusedStep`) or through
-    the FMUs (:class:`orchestrator.coupling.fmi.steps.FmuSteps`)."""
-    if FusedStep.fits(structure, bearings):
-        return FusedStep(structure, bearings)
-    from orchestrator.coupling.fmi.steps import FmuSteps
-
-    return FmuSteps(structure, bearings) if FmuSteps.fits(structure, bearings) else None
+    return Master(structure, bearings, tol, max_it,
+                  stepper=CoupledSteps(structure, bearings))
 
 
 def _share_bearings(bearings, threads: int, what: str) -> None:
@@ -99,9 +90,10 @@ def _share_bearings(bearings, threads: int, what: str) -> None:
     (:meth:`bearing_fmu.hybrid.model.HybridSet.use_threads`); say once that any other bearings
     (``what``: other models, bearing FMUs) run on one thread, after the same check of the
     count."""
-    hybrid = getattr(bearings, "hybrid_set", None)
-    if hybrid is not None:
-        hybrid.use_threads(threads)
+    hybrid = getattr(bearings, "hybrid_sets", None)
+    if hybrid:
+        for one in hybrid:
+            one.use_threads(threads)
         return
     thread_count(threads, "threads = ")
     warnings.warn(f"threads = {threads}: {what} run on one thread (threads share hybrid "

@@ -28,7 +28,7 @@ from fmu_src.contract import (
 )
 from fmu_src.state_codec import StateArrays
 from orchestrator.coupling.fmi.instance import FmuError, FmuInstance, all_finite, status_name
-from orchestrator.coupling.master import BearingSet
+from orchestrator.coupling.master import BearingSet, PythonGroup
 
 __all__ = ["MINIMAL_INPUTS", "MINIMAL_OUTPUTS", "FmuBearings"]
 
@@ -177,6 +177,59 @@ class FmuBearings(BearingSet):
         out = laws.copy()
         return out[:, 0], out[:, 1:3], out[:, 3:5]
 
+    @property
+    def count(self) -> int:
+        return len(self.slaves)
+
+    def compiled_groups(self) -> tuple:
+        """The bearing FMUs with the Jacobian outputs as one group called from compiled code
+        (:func:`orchestrator.coupling.fmi.steps.fmu_bearing_group`), the force-only ones
+        (finite differences) as a group called back in Python."""
+        if not self.slaves:
+            raise FmuError("the bearing FMUs are closed")
+        from orchestrator.coupling.fmi.calls import address
+
+        groups = []
+        full = [b for b, fo in enumerate(self.force_only) if not fo]
+        if full:
+            calls = np.array([[address(f) for f in self._calls[b]] for b in full],
+                             dtype=np.int64)
+            groups.append(((calls, np.array([list(self._in_vr[b]) for b in full],
+                                            dtype=np.uint32),
+                            np.array([list(self._out_vr[b]) for b in full], dtype=np.uint32),
+                            np.empty((len(full), 4)), np.empty((len(full), 10))),
+                           np.array(full, dtype=np.int64)))
+        partial = [b for b, fo in enumerate(self.force_only) if fo]
+        if partial:
+            if getattr(self, "_python", None) is None:
+                self._python = PythonGroup(self._evaluate_force_only, partial)
+            groups.append(self._python.arguments())
+        return tuple(groups)
+
+    def _evaluate_force_only(self, index, states, out) -> None:
+        for g, b in enumerate(index):
+            try:
+                out[g, 0], out[g, 1:3], out[g, 3:5] = self._fd_jacobian(b, self.slaves[b],
+                                                                         states[g])
+            except FmuError as exc:
+                exc.bearing_index = int(b)
+                raise
+
+    def raise_failure(self, b, status, states) -> None:
+        """The error of bearing FMU ``b`` whose call (``status // 8``: fmi2SetReal,
+        fmi2GetReal, non-finite outputs) failed with the fmi2Status ``status % 8``."""
+        python = getattr(self, "_python", None)
+        if python is not None and python.error is not None:
+            exc, python.error = python.error, None
+            raise exc
+        s = self.slaves[b]
+        which, fmi_status = divmod(int(status), 8)
+        if which == 3:
+            raise _failed(b, s, states[b], f"non-finite outputs; FMU log: {s.log_tail()}")
+        what = "fmi2SetReal" if which == 1 else "fmi2GetReal"
+        raise _failed(b, s, states[b], f"{what} returned {status_name(fmi_status)}; FMU log: "
+                                       f"{s.log_tail()}")
+
     def exit_initialization(self) -> None:
         """Leave initialisation mode (the linear FMU freezes its coefficients here)."""
         for b, s in enumerate(self.slaves):
@@ -208,6 +261,10 @@ class FmuBearings(BearingSet):
         for s in self.slaves:
             s.close()
         self.slaves = []
+        python = getattr(self, "_python", None)
+        if python is not None:
+            python.close()
+            self._python = None
 
 
 def _failed(b: int, s: FmuInstance, state, reason: str) -> FmuError:

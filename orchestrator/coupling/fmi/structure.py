@@ -76,8 +76,6 @@ class FmuStructure(StructureSlave):
     FMU's log message, the time and the step.
     """
 
-    n_bearings = 4
-
     def __init__(self, fmu, case=None, start_time: float = 0.0,
                  instance_name: str = "gear_shaft"):
         self.slave = FmuInstance(fmu, instance_name)
@@ -105,21 +103,24 @@ class FmuStructure(StructureSlave):
         journal = journal_output_names()
         extra = [name for name, _, _ in GEAR_OUTPUTS]
         support = support_load_names()
+        self.n_bearings = len(journal) // 4
+        self.n_meshes, self.n_gears = 1, 2  # TODO(train): from the FMU's step outputs
+        nb = self.n_bearings
         n_laws = len(laws)
         self._n_laws = n_laws
         self._law_vr = (ctypes.c_uint * n_laws)(*[vr[n] for n in laws])
         self._law_val = (ctypes.c_double * n_laws)()
         self._law_np = np.frombuffer(self._law_val, dtype=np.float64)
-        self._jr_vr = (ctypes.c_uint * 16)(*[vr[n] for n in journal])
-        self._jr_val = (ctypes.c_double * 16)()
+        self._jr_vr = (ctypes.c_uint * (4 * nb))(*[vr[n] for n in journal])
+        self._jr_val = (ctypes.c_double * (4 * nb))()
         self._jr_np = np.frombuffer(self._jr_val, dtype=np.float64)
         self._ex_vr = (ctypes.c_uint * len(extra))(*[vr[n] for n in extra])
         self._ex_val = (ctypes.c_double * len(extra))()
         self._ex_index = {n: i for i, n in enumerate(extra)}
         self._one_vr = {n: (ctypes.c_uint * 1)(vr[n]) for n in extra}
         self._one_val = (ctypes.c_double * 1)()
-        self._sup_vr = (ctypes.c_uint * 8)(*[vr[n] for n in support])
-        self._sup_val = (ctypes.c_double * 8)()
+        self._sup_vr = (ctypes.c_uint * (2 * nb))(*[vr[n] for n in support])
+        self._sup_val = (ctypes.c_double * (2 * nb))()
         self._it_vr = (ctypes.c_uint * 1)(vr["iterations"])
         self._it_val = (ctypes.c_int * 1)()
 
@@ -185,16 +186,64 @@ class FmuStructure(StructureSlave):
         self.t = t + dt
         self.n_steps += 1
 
+    def compiled_block(self, t: float, dt: float, n: int, time_of):
+        """The FMU's functions, value references and buffers for
+        :func:`orchestrator.coupling.step.coupled_steps` (:mod:`orchestrator.coupling.fmi.steps`),
+        steps k from ``time_of(k)`` [s]."""
+        from orchestrator.coupling.fmi.calls import address
+
+        self._live()
+        if self.in_init:
+            self.exit_initialization()
+        times = np.array([time_of(k) for k in range(n)], dtype=float)
+        gear = np.array([address(f) for f in (self._set_real, self._get_real, self._do_step,
+                                              self._get_state, self._set_state,
+                                              self._free_state)] + [address(self._c)],
+                        dtype=np.int64)
+        u32 = np.uint32
+        args = (gear, np.array(self._law_vr, dtype=u32), self._law_np,
+                np.array(self._jr_vr, dtype=u32), self._jr_np, np.array(self._ex_vr, dtype=u32),
+                np.frombuffer(self._ex_val, dtype=np.float64), np.zeros(1, dtype=np.int64),
+                times, float(dt))
+        self._since = len(self.slave.messages)
+        n_steps = self.n_steps
+
+        def finish(count: int) -> None:
+            if count:
+                self.t, self.n_steps = float(times[count - 1] + dt), n_steps + count
+
+        return args, n, finish
+
+    def raise_compiled_failure(self, k, code, d1, d2, d3, t, dt) -> None:
+        """The FMU's error of the block's step ``k`` whose call ``code``
+        (:mod:`orchestrator.coupling.fmi.steps`) returned the status ``d1``."""
+        from orchestrator.coupling.fmi import steps as fs
+
+        since = self._since
+        if code in (fs.JOURNALS_FAILED, fs.JOURNALS_NOT_FINITE, fs.RESTORE_FAILED,
+                    fs.OUTPUTS_FAILED):
+            self.t, self.n_steps = t + dt, self.n_steps + 1  # after the doStep
+        what = {fs.GET_STATE_FAILED: "fmi2GetFMUstate", fs.LAWS_FAILED:
+                "setting the bearing laws", fs.JOURNALS_FAILED: "reading the journal states",
+                fs.RESTORE_FAILED: "fmi2SetFMUstate", fs.OUTPUTS_FAILED: "reading outputs"}
+        if code == fs.STEP_FAILED:
+            self._fail(f"doStep {self.n_steps + 1} from t = {t:.9g} s (dt = {dt:.6g} s) failed",
+                       d1, since, where=False)
+        if code == fs.JOURNALS_NOT_FINITE:
+            self._fail("reading the journal states failed", since=since)
+        self._fail(what.get(code, f"call {code}"), d1, since)
+
     def _read_journal(self, what: str) -> np.ndarray:
         since = len(self.slave.messages)
-        self._check(self._get_real(self._c, self._jr_vr, 16, self._jr_val), what, since)
+        self._check(self._get_real(self._c, self._jr_vr, len(self._jr_val), self._jr_val), what,
+                    since)
         out = unpack_journal(self._jr_np).copy()
         if not all_finite(self._jr_val):
             self._fail(f"{what} failed", since=since)
         return out
 
     def journal_states(self) -> np.ndarray:
-        """(4, 4) [s, t, s_dot, t_dot] at bearings 1-4, global frame [m, m/s]."""
+        """(nb, 4) [s, t, s_dot, t_dot] at the bearings, global frame [m, m/s]."""
         self._live()
         return self._read_journal("reading the journal states")
 
@@ -240,11 +289,12 @@ class FmuStructure(StructureSlave):
             self._free_state(self._c, ctypes.byref(handle))
 
     def support_loads(self) -> np.ndarray:
-        """(4, 2) static loads of the structure on stiff bearings [N] (calculated parameters)."""
+        """(nb, 2) static loads of the structure on stiff bearings [N] (calculated
+        parameters)."""
         self._live()
-        self._check(self._get_real(self._c, self._sup_vr, 8, self._sup_val),
+        self._check(self._get_real(self._c, self._sup_vr, len(self._sup_val), self._sup_val),
                     "reading the support loads")
-        out = np.frombuffer(self._sup_val, dtype=np.float64).reshape(4, 2).copy()
+        out = np.frombuffer(self._sup_val, dtype=np.float64).reshape(-1, 2).copy()
         if not np.isfinite(out).all():
             self._fail("support loads failed")
         return out
@@ -257,11 +307,12 @@ class FmuStructure(StructureSlave):
         self._check(self._get_real(self._c, self._ex_vr, n, self._ex_val), "reading outputs")
         return {name: float(self._ex_val[i]) for name, i in self._ex_index.items()}
 
-    def step_outputs(self) -> tuple[float, float, np.ndarray]:
-        """Mesh force [N], transmission error [m] and the (2, 2) [u, v] of the pinion and gear
+    def step_outputs(self):
+        """Mesh forces [N], transmission errors [m] and the (n_gears, 2) [u, v] of the gear
         nodes [m] in one fmi2GetReal (:meth:`outputs`)."""
         o = self.outputs()
-        return o["mesh_force"], o["transmission_error"], _gear_nodes(o)
+        return (np.array([o["mesh_force"]]), np.array([o["transmission_error"]]),
+                _gear_nodes(o))
 
     def _extra(self, name: str) -> float:
         self._live()
