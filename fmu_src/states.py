@@ -7,9 +7,9 @@ sizes of its case), so that no array of the wrong size reaches a compiled kernel
 Structure (:class:`gear_fmu.structure.StructureState`):
 
 * ``t`` float64, ``n_steps`` int64, ``x``, ``v``, ``a`` float64 (n_dof,);
-* ``active`` bool (n_slices,): the contact set of the last solution, absent before one;
-* ``mesh/...`` the mesh state of the last solution (:class:`gear_fmu.mesh.element.MeshState`),
-  absent before one: ``force`` (12,), ``stiffness`` (12, 12), ``delta``, ``load``, ``xi``, ``z``
+* ``mesh/<m>/...`` each mesh's state at the last solution
+  (:class:`gear_fmu.mesh.element.MeshState`; m = 0, 1, ... in the layout's order), absent
+  before one: ``force`` (12,), ``stiffness`` (12, 12), ``delta``, ``load``, ``xi``, ``z``
   float64 (n_slices,), ``active``, ``inside`` bool (n_slices,), ``total_load``,
   ``transmission_error`` and ``extra/<name>`` float64 scalars.
 
@@ -48,38 +48,47 @@ _MESH_FLAGS = ("active", "inside")
 
 
 # --- structure ---------------------------------------------------------------------------------
+def _mesh_arrays(ms: MeshState) -> dict:
+    out = {"force": ms.force, "stiffness": ms.stiffness,
+           "total_load": np.float64(ms.total_load),
+           "transmission_error": np.float64(ms.transmission_error)}
+    out |= {name: getattr(ms, name) for name in _MESH_FLOATS + _MESH_FLAGS}
+    return out | nest("extra", {k: np.float64(v) for k, v in ms.extra.items()})
+
+
 def structure_state_arrays(state: StructureState) -> dict:
     """The entries of a structure state (module docstring)."""
     out = {"t": np.float64(state.t), "n_steps": np.int64(state.n_steps), "x": state.x,
            "v": state.v, "a": state.a}
-    if state.active is not None:
-        out["active"] = np.asarray(state.active, dtype=np.bool_)
-    ms = state.mesh_state
-    if ms is not None:
-        mesh = {"force": ms.force, "stiffness": ms.stiffness,
-                "total_load": np.float64(ms.total_load),
-                "transmission_error": np.float64(ms.transmission_error)}
-        mesh |= {name: getattr(ms, name) for name in _MESH_FLOATS + _MESH_FLAGS}
-        mesh |= nest("extra", {k: np.float64(v) for k, v in ms.extra.items()})
-        out |= nest("mesh", mesh)
+    for m, ms in enumerate(state.mesh_states or ()):
+        out |= nest(f"mesh/{m}", _mesh_arrays(ms))
     return out
 
 
-def _sizes(structure) -> tuple[int | None, int | None]:
-    """(n_dof, n_slices) of a structure, None where unknown (no structure given)."""
+def _sizes(structure) -> tuple[int | None, list | None]:
+    """(n_dof, slices of each mesh) of a structure, None where unknown (no structure)."""
     if structure is None:
         return None, None
-    mesh = structure.mesh
-    slices = getattr(mesh, "n_lines", None)
-    slices = None if slices is None else slices * mesh.n_slices
-    return structure.x.size, slices
+    return structure.x.size, [m.n_lines * m.n_slices for m in structure.meshes]
+
+
+def _mesh_state(m: StateArrays, n: int | None) -> MeshState:
+    values = {name: m.array(name, "float64", (n,)) for name in _MESH_FLOATS}
+    n = values["delta"].size
+    values |= {name: m.array(name, "bool", (n,)) for name in _MESH_FLAGS}
+    extra = m.sub("extra")
+    return MeshState(
+        m.array("force", "float64", (12,)), m.array("stiffness", "float64", (12, 12)),
+        values["active"], values["delta"], values["load"], values["inside"], values["xi"],
+        values["z"], m.float("total_load"), m.float("transmission_error"),
+        {name: extra.float(name) for name in extra.names()})
 
 
 def structure_state_from_arrays(arrays: StateArrays, structure=None) -> StructureState:
     """The structure state of :func:`structure_state_arrays` entries, checked against
-    ``structure`` (its number of DOFs and of mesh slices) when given, else for consistency
-    only (:class:`~fmu_src.state_codec.StateFormatError` otherwise)."""
-    n_dof, n = _sizes(structure)
+    ``structure`` (its number of DOFs, of meshes and of their slices) when given, else for
+    consistency only (:class:`~fmu_src.state_codec.StateFormatError` otherwise)."""
+    n_dof, slices = _sizes(structure)
     x = arrays.array("x", "float64", (n_dof,))
     v = arrays.array("v", "float64", x.shape)
     a = arrays.array("a", "float64", x.shape)
@@ -87,22 +96,18 @@ def structure_state_from_arrays(arrays: StateArrays, structure=None) -> Structur
     n_steps = arrays.int("n_steps")
     if n_steps < 0:
         raise StateFormatError(f"{arrays.what}: n_steps = {n_steps}, must be >= 0")
-    active = arrays.array("active", "bool", (n,)) if arrays.has("active") else None
-    if active is not None:
-        n = active.size
-    mesh_state = None
+    states = []
     if arrays.has_part("mesh"):
-        m = arrays.sub("mesh")
-        values = {name: m.array(name, "float64", (n,)) for name in _MESH_FLOATS}
-        n = values["delta"].size
-        values |= {name: m.array(name, "bool", (n,)) for name in _MESH_FLAGS}
-        extra = m.sub("extra")
-        mesh_state = MeshState(
-            m.array("force", "float64", (12,)), m.array("stiffness", "float64", (12, 12)),
-            values["active"], values["delta"], values["load"], values["inside"], values["xi"],
-            values["z"], m.float("total_load"), m.float("transmission_error"),
-            {name: extra.float(name) for name in extra.names()})
-    return StructureState(t, n_steps, x, v, a, active, mesh_state)
+        meshes = arrays.sub("mesh")
+        count = len(slices) if slices is not None else len(
+            {name.split("/")[0] for name in meshes.names()})
+        for m in range(count):
+            states.append(_mesh_state(meshes.sub(str(m)), None if slices is None
+                                      else slices[m]))
+    if slices is not None and states and len(states) != len(slices):
+        raise StateFormatError(f"{arrays.what}: {len(states)} mesh states for "
+                               f"{len(slices)} meshes")
+    return StructureState(t, n_steps, x, v, a, tuple(states) if states else None)
 
 
 # --- bearing models ----------------------------------------------------------------------------
