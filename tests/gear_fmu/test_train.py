@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 import scipy.linalg
 
-from gear_fmu.dofs import DOF_PER_NODE, THETA, U, V, W, dof
+from gear_fmu.dofs import DOF_PER_NODE, THETA, W, dof
 from gear_fmu.layout import (
     BearingSpec,
     DiscSpec,
@@ -35,10 +35,11 @@ ALPHA = math.radians(20.0)
 STIFF = 1e9  # isotropic bearing springs of the static checks [N/m]
 
 
-def two_stage(direction=math.radians(70.0), helix=0.0, hands=("left", "right"),
+def two_stage(direction=1.2217304763960306, helix=0.0, hands=("left", "right"),
               diameter=0.06, density=7800.0, gravity=(0.0, 0.0), stiff_supports=False,
               reverse=False, element_length=0.01):
-    """Three shafts a -> b -> c, stages m1 (g1, g2) and m2 (g3, g4), a disc on a; with
+    """Three shafts a -> b -> c, stages m1 (g1, g2) and m2 (g3, g4; its line of centres at
+    ``direction`` = 70 deg by default), a disc on a; with
     ``stiff_supports`` the bearings sit next to the gears (for the torsional chain)."""
     mat = dict(young=210e9, poisson=0.3, density=density, element_length=element_length)
     lengths = (0.1, 0.12, 0.1)
