@@ -173,8 +173,8 @@ class GearSpec:
     :func:`gear_fmu.system.annulus_inertias`); ``unbalance`` eccentricity [m] of the mass
     ``unbalance_mass`` (:data:`UNBALANCE_MASSES`) at angle ``unbalance_phase`` [rad] at t = 0;
     tooth deviations: ``tip_relief``, ``relief_length`` [m], ``pitch_errors`` (one per tooth or
-    none) [m], ``runout`` [m] at ``runout_phase`` [rad] (:class:`gear_fmu.mesh.element
-    .ToothDeviations`).
+    none) [m], ``runout`` [m] at ``runout_phase`` [rad]
+    (:class:`gear_fmu.mesh.element.ToothDeviations`).
     """
 
     name: str
@@ -330,6 +330,7 @@ class DiscSpec:
 
     @property
     def extent(self) -> tuple[float, float]:
+        """Axial extent from the shaft's start [m] (a disc has no width here)."""
         return self.position, self.position
 
 
@@ -348,7 +349,7 @@ class Drive:
     input_position: float | None = None
     output_position: float | None = None
     drivetrain: Drivetrain = field(default_factory=Drivetrain)
-    gravity: tuple[float, float] = (0.0, 0.0)
+    gravity: tuple = (0.0, 0.0)  # (g_s, g_t); "tuple[float, float]" breaks the API docs
 
     def __post_init__(self) -> None:
         _finite("drive.speed", self.speed, "rad/s", 0.0)
@@ -388,12 +389,12 @@ class Layout:
     # ------------------------------------------------------------------ lookups
     @cached_property
     def shaft_index(self) -> dict[str, int]:
-        """Shaft name -> index in :attr:`shafts`."""
+        """Shaft name -> index in ``shafts``."""
         return {s.name: i for i, s in enumerate(self.shafts)}
 
     @cached_property
     def gear_index(self) -> dict[str, int]:
-        """Gear name -> index in :attr:`gears`."""
+        """Gear name -> index in ``gears``."""
         return {g.name: i for i, g in enumerate(self.gears)}
 
     def shaft(self, name: str) -> ShaftSpec:
@@ -559,7 +560,7 @@ class Layout:
 
     @cached_property
     def speeds(self) -> np.ndarray:
-        """Signed speed of each shaft about +z [rad/s] (order of :attr:`shafts`)."""
+        """Signed speed of each shaft about +z [rad/s] (order of ``shafts``)."""
         w = {self.drive.input_shaft: self.drive.speed}
         for m in self._mesh_order():
             drv, dvn = self.drivers[self.meshes.index(m)]
