@@ -242,15 +242,16 @@ def _drive(v: dict) -> dict:
 
 def translate(data: dict, source: str, file: str | None = None) -> dict:
     """A single-stage file's data (parsed TOML) -> the data of the same case in the current
-    schema (values in SI; module docstring), with a :class:`LegacyCaseWarning` naming the
-    ``file`` (default ``source``). Its values are checked against :data:`FIELDS` first (the
-    messages name ``source`` and the single-stage keys)."""
+    schema (values in SI; module docstring), with a :class:`LegacyCaseWarning` naming
+    ``source`` and, for a case ``file``, the command that upgrades it. Its values are checked
+    against :data:`FIELDS` first (the messages name ``source`` and the single-stage keys)."""
     v = _read(data, source)
-    file = source if file is None else file
-    warnings.warn(f"{file} is a single-stage case file of an earlier version ([gear_pair], "
-                  "[operation], lists per shaft and bearing): read as the train pinion_shaft, "
-                  f"gear_shaft, bearings 1-4; `gsb case --upgrade {file}` writes it in the "
-                  "current schema (docs/case-files.md)", LegacyCaseWarning, stacklevel=2)
+    upgrade = (f"`gsb case --upgrade {file}` writes it in the current schema "
+               "(docs/case-files.md)" if file else "docs/case-files.md has the current schema")
+    warnings.warn(f"{file or source} is a single-stage case file of an earlier version "
+                  "([gear_pair], [operation], lists per shaft and bearing): read as the train "
+                  f"pinion_shaft, gear_shaft, bearings 1-4; {upgrade}", LegacyCaseWarning,
+                  stacklevel=2)
     return {"case": dict(data.get("case", {})), "shafts": _shafts(v), "gears": _gears(v),
             "meshes": {MESH: {"gears": list(GEARS),
                               "centre_distance": v["gear_pair.centre_distance"]}},
