@@ -33,7 +33,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         for case_name in args.cases.split(","):
             for model in args.models.split(","):
-                case = load_case(f"baguet2010_{case_name}", {"bearings.model": model})
+                case = load_case(f"baguet2010_{case_name}", {"bearings.*.model": model})
                 for periods in (2, args.periods):  # the first: numba's warm-up
                     s = run_case(case.with_overrides({"simulation.mesh_periods": periods}),
                                  in_process=True, out_dir=tmp, progress=False, overwrite=True)

@@ -72,7 +72,7 @@ def record(steps: int) -> tuple[np.ndarray, np.ndarray]:
     """The journal states (calls, nb, 4) [m, m/s] of every bearing evaluation of the static
     solution and ``steps`` steps of the paper's case, and what each call was (:data:`STATIC`,
     :data:`FIRST`, :data:`LATER`)."""
-    case = load_case("baguet2010_spur", {"bearings.model": "hybrid"})
+    case = load_case("baguet2010_spur", {"bearings.*.model": "hybrid"})
     master = build_master(case, in_process=True)
     master.fused = None  # the Python loop: every evaluation passes through evaluate()
     calls, kinds = [], []
@@ -103,8 +103,8 @@ def record(steps: int) -> tuple[np.ndarray, np.ndarray]:
 def fresh_arguments(threads: int = 1) -> tuple:
     """The arguments of ``hybrid_set_global`` (``hybrid_set_threads`` on more than one
     thread) for new bearings of the paper's case."""
-    case = load_case("baguet2010_spur", {"bearings.model": "hybrid"})
-    bearings = ModelBearings(description.bearing_models(case), description.BEARING_FRAMES,
+    case = load_case("baguet2010_spur", {"bearings.*.model": "hybrid"})
+    bearings = ModelBearings(description.bearing_models(case), description.bearing_frames(case),
                              description.bearing_speeds(case))
     if threads > 1 and bearings.hybrid_set.use_threads(threads) != threads:
         raise SystemExit(f"--threads {threads}: numba cannot give the bearings threads here")

@@ -143,7 +143,7 @@ def main() -> None:
     parser.add_argument("--steps", type=int, default=100, help="steps run before timing")
     parser.add_argument("--calls", type=int, default=20000, help="calls per timed loop")
     args = parser.parse_args()
-    case = load_case("baguet2010_spur", {"bearings.model": "hybrid"})
+    case = load_case("baguet2010_spur", {"bearings.*.model": "hybrid"})
     master = build_master(case, in_process=True)
     master.solve_static()
     master.exit_initialization()

@@ -154,7 +154,7 @@ def python_loop():
 def breakdown(periods: int, in_process: bool) -> None:
     """Per coupled iteration: the timed calls (:data:`TIMED`) and the rest."""
     kw = dict(in_process=in_process, progress=False)
-    case = load_case(CASE, {"bearings.model": "hybrid"})
+    case = load_case(CASE, {"bearings.*.model": "hybrid"})
     with tempfile.TemporaryDirectory() as tmp:
         run_case(case.with_overrides({"simulation.mesh_periods": 2}), out_dir=tmp + "/w",
                  **kw)  # warm-up
@@ -227,7 +227,7 @@ def main() -> None:
                 name = f"{args.threads} threads"
             run = load_case("baguet2010_helical" if "helical" in name else CASE,
                             {"simulation.locate_contact": "no-location" not in name,
-                             "bearings.model": model})
+                             "bearings.*.model": model})
             run_case(run.with_overrides({"simulation.mesh_periods": 2}),
                      **kw)  # warm-up: numba, FMU extraction
             s = run_case(run.with_overrides({"simulation.mesh_periods": args.periods}), **kw)

@@ -28,7 +28,7 @@ def main() -> None:
     parser.add_argument("--speeds", type=int, default=12, help="speeds from 100 to 1200 rad/s")
     args = parser.parse_args()
     speeds = np.linspace(100.0, 1200.0, args.speeds)
-    points = [SweepPoint({"operation.speed": float(w)}, m, f"{m} {w:g}")
+    points = [SweepPoint({"drive.speed": float(w)}, m, f"{m} {w:g}")
               for m in ("hybrid", "linear") for w in speeds]
     print(f"{len(points)} points (Fig. 8: {args.speeds} speeds x hybrid, linear), "
           f"{args.periods} mesh periods each; {os.cpu_count()} cores")

@@ -20,13 +20,14 @@ from fmu_src.examples import paper_case
 
 def main(model: str = "hybrid") -> dict:
     """Static equilibrium of bearing 1 of the paper's spur case with ``model``."""
-    case = paper_case(**{"bearings.model": model})
+    case = paper_case(**{"bearings.*.model": model})
+    first = case.names("bearings")[0]
     bearing = description.bearing_data(case)[0]
     omega = description.bearing_speeds(case)[0]
     pair = description.gear_pair(case)
-    load = case["operation.torque"] / pair.base_radius[0] / 2  # N, half the tooth force
+    load = case["drive.torque"] / pair.base_radius[0] / 2  # N, half the tooth force
     bearing_model = model_class(model).from_parameters(
-        bearing, **description.bearing_options(case))
+        bearing, **description.bearing_options(case, first))
     sol = static_equilibrium(bearing_model, (0.0, -load), omega)
     return {"model": model, "load_N": load, "speed_rad_s": omega,
             "sommerfeld": bearing.sommerfeld(omega, load), "eccentricity": sol.eccentricity,

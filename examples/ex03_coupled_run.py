@@ -23,7 +23,7 @@ def main(periods: int = 64, bearing: str = "hybrid", **overrides) -> dict:
     """The run's figures; ``overrides``: case fields (e.g. ``**{"simulation.locate_contact":
     False}``)."""
     case = gsb.load_case("baguet2010_spur", overrides)
-    z1 = case["gear_pair.teeth"][0]
+    z1 = description.mesh_teeth(case)[0][0]
     window = 2 * z1 * description.mesh_period(case)  # two pinion revolutions [s]
     result = gsb.simulate(case, periods, bearing, in_process=True, progress=False)
     r = result.as_dict()
@@ -35,7 +35,7 @@ def main(periods: int = 64, bearing: str = "hybrid", **overrides) -> dict:
             "static_bearing_force_N": np.asarray(result.attrs["static_bearing_force"]),
             "R": metrics["R"], "bearing1_ptp_N": float(metrics["force_ptp"][0]),
             "mean_mesh_force_N": float(result["mesh_force"][win].mean()),
-            "static_tooth_load_N": case["operation.torque"] / description.gear_pair(
+            "static_tooth_load_N": case["drive.torque"] / description.gear_pair(
                 case).base_radius[0]}
 
 

@@ -24,7 +24,7 @@ def main(speeds=SPEEDS, periods: int = 64, scheduler: str | None = "none",
     """One dict per speed; ``overrides``: further case fields for every point."""
     case = gsb.load_case("baguet2010_spur", overrides)
     with tempfile.TemporaryDirectory() as tmp:
-        res = gsb.sweep(case, {"operation.speed": list(speeds)}, Path(tmp) / "sweep.h5",
+        res = gsb.sweep(case, {"drive.speed": list(speeds)}, Path(tmp) / "sweep.h5",
                         periods, bearings=["hybrid"], steady_periods=52, scheduler=scheduler,
                         progress=False)
         data = read_sweep(res.path)

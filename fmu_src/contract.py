@@ -39,13 +39,20 @@ from numba import njit
 
 from bearing_fmu import MODELS, model_class
 from bearing_fmu.affine import AffineLaws
-from fmu_src.case import FIELDS, bound_violation, model_option_fields, shipped_case
+from fmu_src.case import (
+    FIELDS,
+    INSTANCE_SECTIONS,
+    bound_violation,
+    model_option_fields,
+    shipped_case,
+)
 from fmu_src.description import bearing_frames
+from fmu_src.fields import template
 from fmu_src.units import symbol
 
 __all__ = ["BEARINGS", "BEARING_RESOURCE", "GEAR_DEFAULT_CASE", "FmiVar", "ValueRefused",
            "bearing_fmu_name", "bearing_option_keys", "bearing_variables", "case_parameters",
-           "connections", "gear_case_fields", "gear_parameters",
+           "connections", "fmi_name", "gear_case_fields", "gear_parameters",
            "gear_variables", "journal_output_names", "law_input_names", "pack_law_arrays",
            "pack_laws", "parameter_field", "transmission_fields", "transmission_variables",
            "unpack_journal", "unpack_law_arrays"]
@@ -130,8 +137,9 @@ BEARING_OUTPUTS = (*FORCE_NAMES, *STIFFNESS_NAMES, *DAMPING_NAMES, *EVAL_NAMES)
 def _paper_bearing():
     """Start values of the bearing data: bearing 1 of the paper's spur case (Table 3)."""
     case = shipped_case("baguet2010_spur")
-    return {k: case[f"bearings.{k}"][0] for k in ("diameter", "length", "clearance",
-                                                   "viscosity")}
+    first = case.names("bearings")[0]
+    return {k: case[f"bearings.{first}.{k}"] for k in ("diameter", "length", "clearance",
+                                                       "viscosity")}
 
 
 def _field_variable(name: str, f, value, causality: str = _P) -> FmiVar:
@@ -149,8 +157,7 @@ def _field_variable(name: str, f, value, causality: str = _P) -> FmiVar:
 def _option_variables() -> tuple[FmiVar, ...]:
     """One parameter per option of the registered bearing models (:mod:`fmu_src.case` merges
     them the same way), so every bearing FMU has the same variables."""
-    return tuple(_field_variable(f.key.split(".", 1)[1], f, f.default)
-                 for f in model_option_fields())
+    return tuple(_field_variable(f.name, f, f.default) for f in model_option_fields())
 
 
 @functools.cache
@@ -217,6 +224,7 @@ def bearing_option_keys() -> tuple[str, ...]:
 #: the case the gear-shaft FMU carries by default (its parameters' start values)
 GEAR_DEFAULT_CASE = "baguet2010_spur.toml"
 #: the gear-shaft FMU's bearing numbering (1, 2 pinion shaft; 3, 4 gear shaft)
+# TODO(train): the ports per bearing name of the case (case.names("bearings"))
 BEARINGS = (1, 2, 3, 4)
 #: start values of the law inputs: isotropic 1e8 N/m, 1e4 N s/m, no force (stand-alone runs)
 _LAW_START = {"K_ss": 1e8, "K_tt": 1e8, "C_ss": 1e4, "C_tt": 1e4}
@@ -327,36 +335,54 @@ def unpack_journal(values) -> np.ndarray:
 
 
 def gear_case_fields():
-    """The case fields the gear-shaft FMU exposes as parameters: the case's name, the gear pair,
-    the shafts, the drivetrain, the operating point, the damping model, the structure's
-    tolerance and time-integration switches (the bearing fields belong to the bearing FMUs,
-    the run length and the coupled iterations to the master)."""
+    """The case fields (schema templates, :data:`fmu_src.case.FIELDS`) the gear-shaft FMU
+    exposes as parameters: the case's name, the shafts, gears, meshes and discs, where each
+    bearing sits (its shaft and position), the drive, the damping model, the structure's
+    tolerance and time-integration switches (the rest of the bearing fields belong to the
+    bearing FMUs, the run length and the coupled iterations to the master)."""
     master_only = ("simulation.steps_per_mesh_period", "simulation.mesh_periods",
                    "simulation.max_iterations")
     return tuple(f for f in FIELDS
-                 if f.key.split(".")[0] in ("gear_pair", "shafts", "drivetrain", "operation")
-                 or f.key == "case.name"
+                 if f.key.split(".")[0] in ("shafts", "gears", "meshes", "discs", "drive")
+                 or f.key in ("case.name", "bearings.*.shaft", "bearings.*.position")
                  or (f.key.startswith("simulation.") and f.key not in master_only))
 
 
 def gear_parameters(case) -> list[tuple]:
     """``(FMU parameter name, case field, value)`` of every gear-shaft FMU parameter of a
-    case: ``gear_pair.module``; a list field one per entry, ``gear_pair.teeth[1]``,
-    ``gear_pair.teeth[2]`` (FMI's 1-based index notation; :func:`parameter_field` inverts
-    the name)."""
+    case: its keys as FMI names (``drive.torque``, ``gears.pinion.module``,
+    ``bearings.'1'.position``: :func:`fmi_name`); a list field one per entry,
+    ``shafts.pinion_shaft.outer_diameter[1]``, ``meshes.mesh.gears[2]`` (FMI's 1-based index
+    notation; :func:`parameter_field` inverts the name)."""
     return case_parameters(case, gear_case_fields())
 
 
 def case_parameters(case, fields) -> list[tuple]:
-    """``(FMU parameter name, case field, value)`` of the case ``fields`` (the naming of
-    :func:`gear_parameters`)."""
+    """``(FMU parameter name, case field, value)`` of every key of ``case`` whose schema field
+    is one of ``fields`` (the naming of :func:`gear_parameters`), in the case's order; a
+    field left at None (``drive.input_position``: the shaft's start) has no parameter."""
+    keys = {f.key: f for f in fields}
     out = []
-    for field in fields:
+    for key, value in case.values.items():
+        field = keys.get(template(key, INSTANCE_SECTIONS))
+        if field is None or value is None:
+            continue
+        name = fmi_name(key)
         if field.shape is None:
-            out.append((field.key, field, case[field.key]))
+            out.append((name, field, value))
         else:
-            out += [(f"{field.key}[{i + 1}]", field, v) for i, v in enumerate(case[field.key])]
+            out += [(f"{name}[{i + 1}]", field, v) for i, v in enumerate(value)]
     return out
+
+
+_IDENTIFIER = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+
+
+def fmi_name(key: str) -> str:
+    """A case key as an FMI 2.0 structured name: a part that is no identifier (an instance
+    named ``1``) quoted, as the standard's Q-names are (``"bearings.1.clearance"`` ->
+    ``"bearings.'1'.clearance"``); :func:`parameter_field` drops the quotes."""
+    return ".".join(p if _IDENTIFIER.match(p) else f"'{p}'" for p in key.split("."))
 
 
 _INDEXED = re.compile(r"^(.*)\[(\d+)\]$")
@@ -364,7 +390,10 @@ _INDEXED = re.compile(r"^(.*)\[(\d+)\]$")
 
 def parameter_field(name: str) -> tuple[str, int | None]:
     """``(case field key, 0-based index or None)`` of a gear-shaft FMU parameter name
-    (:func:`gear_parameters`): ``"gear_pair.teeth[2]"`` -> ``("gear_pair.teeth", 1)``."""
+    (:func:`gear_parameters`): ``"meshes.mesh.gears[2]"`` -> ``("meshes.mesh.gears", 1)``,
+    ``"bearings.'1'.position"`` -> ``("bearings.1.position", None)`` (case names hold no
+    quote)."""
+    name = name.replace("'", "")
     m = _INDEXED.match(name)
     return (name, None) if m is None else (m.group(1), int(m.group(2)) - 1)
 
@@ -433,10 +462,11 @@ def transmission_variables(case, bearing_fmu: str = "") -> tuple[FmiVar, ...]:
         FmiVar("bearing_fmu", _P, "String", "", bearing_fmu,
                "a bearing FMU of your own for the four bearings (any FMU with the contract of "
                "docs/fmu-variables.md, 'A bearing FMU of your own'; a path relative to the "
-               "FMU's resources folder, or absolute); empty: the model bearings.model names"),
-        FmiVar("torque", _I, "Real", "torque", float(case["operation.torque"]),
-               "input torque T on the pinion shaft, held over a communication step; until a "
-               "host sets it, the parameter operation.torque acts"),
+               "FMU's resources folder, or absolute); empty: the model each bearing's "
+               "bearings.<name>.model names"),
+        FmiVar("torque", _I, "Real", "torque", float(case["drive.torque"]),
+               "input torque T on the input shaft, held over a communication step; until a "
+               "host sets it, the parameter drive.torque acts"),
         *(FmiVar(f"{n}_{j}", _O, "Real", _STATE_TEXT[n][0], 0.0, _STATE_TEXT[n][1].format(j=j))
           for j in BEARINGS for n in STATE_NAMES),
         *(FmiVar(f"{n}_{j}", _O, "Real", "force", 0.0,

@@ -12,9 +12,9 @@ A case-file quantity is a number in the SI unit or a string ``"value unit"``; a 
 only units of its own dimension, so ``clearance = "150 N"`` is an error that names the field,
 the unit and what was expected.
 
->>> parse_quantity("4 mm", "length", "gear_pair.module")
+>>> parse_quantity("4 mm", "length", "gears.pinion.module")
 0.004
->>> parse_quantity(20, "angle", "gear_pair.pressure_angle")  # numbers are SI: rad
+>>> parse_quantity(20, "angle", "gears.pinion.pressure_angle")  # numbers are SI: rad
 20.0
 >>> round(parse_quantity("20 deg", "angle", "x"), 6)
 0.349066
@@ -67,6 +67,7 @@ DIMENSIONS: dict[str, Dimension] = {d.name: d for d in (
     Dimension("damping", "N.s/m", {"kg": 1, "s": -1}, {"N.s/m": 1.0, "N s/m": 1.0}),
     Dimension("time", "s", {"s": 1}, {"s": 1.0, "ms": 1e-3}),
     Dimension("velocity", "m/s", {"m": 1, "s": -1}, {"m/s": 1.0}),
+    Dimension("acceleration", "m/s^2", {"m": 1, "s": -2}, {"m/s^2": 1.0, "m/s2": 1.0}),
     Dimension("dimensionless", "1", {}, {"1": 1.0, "-": 1.0}),
     Dimension("inertia", "kg.m^2", {"kg": 1, "m": 2}, {"kg.m^2": 1.0, "kg m^2": 1.0,
                                                       "kg.m2": 1.0, "kg m2": 1.0}),

@@ -27,6 +27,7 @@ Conventions
 
 from __future__ import annotations
 
+import difflib
 import itertools
 import math
 import re
@@ -39,8 +40,8 @@ import numpy as np
 from gear_fmu.drivetrain import Drivetrain
 from gear_fmu.timoshenko import HollowSection
 
-__all__ = ["HANDS", "UNBALANCE_MASSES", "BearingSpec", "DiscSpec", "Drive", "GearSpec",
-           "Layout", "LayoutError", "MeshSpec", "ShaftSpec"]
+__all__ = ["HANDS", "PAIR_FIELDS", "UNBALANCE_MASSES", "BearingSpec", "DiscSpec", "Drive",
+           "GearSpec", "Layout", "LayoutError", "MeshSpec", "ShaftSpec", "check_name"]
 
 #: helix hands of a gear ("" for a spur gear)
 HANDS = ("right", "left", "")
@@ -52,11 +53,28 @@ _NAME = re.compile(r"^[A-Za-z0-9_]+$")
 _SAME = 1e-9
 
 
+#: what the two gears of a mesh share: (GearSpec field, unit in messages, factor to it)
+PAIR_FIELDS = (("module", " mm", 1e3), ("pressure_angle", " deg", 180.0 / math.pi),
+               ("helix_angle", " deg", 180.0 / math.pi), ("addendum_coefficient", "", 1.0),
+               ("dedendum_coefficient", "", 1.0))
+
+
 class LayoutError(ValueError):
     """A gear train that cannot be modelled; the message names the component and the field."""
 
 
-def _check_name(kind: str, name: str) -> None:
+def _unknown(where: str, kind: str, name: str, names) -> LayoutError:
+    """The error for a name that is no ``kind`` of the train, the closest one as a hint."""
+    names = list(names)
+    close = difflib.get_close_matches(str(name), names, n=1, cutoff=0.6)
+    hint = f"; did you mean {close[0]}?" if close else ""
+    return LayoutError(f"{where} = {name!r}: no such {kind}{hint} ({kind}s: "
+                       f"{', '.join(names) or 'none'})")
+
+
+def check_name(kind: str, name: str) -> None:
+    """A :class:`LayoutError` unless ``name`` (of a ``kind``: "shaft", "gear", ...) is made of
+    letters, digits and ``_``."""
     if not isinstance(name, str) or not _NAME.match(name):
         raise LayoutError(f"{kind} name {name!r}: use letters, digits and _ only (it names "
                           "FMU ports, result labels and files)")
@@ -91,7 +109,7 @@ class ShaftSpec:
     axial_stiffness: float = 1e9
 
     def __post_init__(self) -> None:
-        _check_name("shaft", self.name)
+        check_name("shaft", self.name)
         where = f"shafts.{self.name}"
         n = len(self.lengths)
         if n < 1 or len(self.outer_diameters) != n or len(self.inner_diameters) != n:
@@ -155,8 +173,8 @@ class GearSpec:
     :func:`gear_fmu.system.annulus_inertias`); ``unbalance`` eccentricity [m] of the mass
     ``unbalance_mass`` (:data:`UNBALANCE_MASSES`) at angle ``unbalance_phase`` [rad] at t = 0;
     tooth deviations: ``tip_relief``, ``relief_length`` [m], ``pitch_errors`` (one per tooth or
-    none) [m], ``runout`` [m] at ``runout_phase`` [rad] (:class:`gear_fmu.mesh.element
-    .ToothDeviations`).
+    none) [m], ``runout`` [m] at ``runout_phase`` [rad]
+    (:class:`gear_fmu.mesh.element.ToothDeviations`).
     """
 
     name: str
@@ -184,14 +202,14 @@ class GearSpec:
     runout_phase: float = 0.0
 
     def __post_init__(self) -> None:
-        _check_name("gear", self.name)
+        check_name("gear", self.name)
         where = f"gears.{self.name}"
         if self.hand not in HANDS:
             raise LayoutError(f"{where}.hand = {self.hand!r}: one of right, left")
         if self.helix_angle > 0.0 and not self.hand:
             raise LayoutError(f"{where}: a helical gear (helix_angle "
-                              f"{math.degrees(self.helix_angle):g} deg) needs its hand: right or "
-                              "left")
+                              f"{math.degrees(self.helix_angle):g} deg) needs its hand: right "
+                              "or left")
         if self.unbalance_mass not in UNBALANCE_MASSES:
             raise LayoutError(f"{where}.unbalance_mass = {self.unbalance_mass!r}: one of "
                               f"{', '.join(UNBALANCE_MASSES)}")
@@ -201,6 +219,9 @@ class GearSpec:
         for key, unit in (("unbalance", "m"), ("tip_relief", "m"), ("relief_length", "m"),
                           ("runout", "m")):
             _finite(f"{where}.{key}", getattr(self, key), unit, 0.0)
+        if self.tip_relief > 0.0 and self.relief_length <= 0.0:
+            raise LayoutError(f"{where}.tip_relief = {self.tip_relief!r} m needs "
+                              f"{where}.relief_length > 0 (its extent along the line of action)")
 
     @property
     def extent(self) -> tuple[float, float]:
@@ -229,12 +250,15 @@ class MeshSpec:
     relief_exponent: float = 2.0
 
     def __post_init__(self) -> None:
-        _check_name("mesh", self.name)
+        check_name("mesh", self.name)
         if len(self.gears) != 2:
             raise LayoutError(f"meshes.{self.name}.gears: two gear names, got "
                               f"{len(self.gears)}")
         _finite(f"meshes.{self.name}.centre_distance", self.centre_distance, "m", 0.0, True)
         _finite(f"meshes.{self.name}.direction", self.direction, "rad")
+        if self.relief_exponent not in (1.0, 2.0):
+            raise LayoutError(f"meshes.{self.name}.relief_exponent = {self.relief_exponent!r}: "
+                              "1 (linear) or 2 (parabolic)")
 
 
 @dataclass(frozen=True)
@@ -257,7 +281,7 @@ class BearingSpec:
     options: tuple = ()
 
     def __post_init__(self) -> None:
-        _check_name("bearing", self.name)
+        check_name("bearing", self.name)
         where = f"bearings.{self.name}"
         for key, unit in (("diameter", "m"), ("length", "m"), ("clearance", "m"),
                           ("viscosity", "Pa.s")):
@@ -294,7 +318,7 @@ class DiscSpec:
     unbalance_mass: str = "body"
 
     def __post_init__(self) -> None:
-        _check_name("disc", self.name)
+        check_name("disc", self.name)
         where = f"discs.{self.name}"
         _finite(f"{where}.mass", self.mass, "kg", 0.0)
         _finite(f"{where}.polar_inertia", self.polar_inertia, "kg.m^2", 0.0)
@@ -306,6 +330,7 @@ class DiscSpec:
 
     @property
     def extent(self) -> tuple[float, float]:
+        """Axial extent from the shaft's start [m] (a disc has no width here)."""
         return self.position, self.position
 
 
@@ -324,7 +349,7 @@ class Drive:
     input_position: float | None = None
     output_position: float | None = None
     drivetrain: Drivetrain = field(default_factory=Drivetrain)
-    gravity: tuple[float, float] = (0.0, 0.0)
+    gravity: tuple = (0.0, 0.0)  # (g_s, g_t); "tuple[float, float]" breaks the API docs
 
     def __post_init__(self) -> None:
         _finite("drive.speed", self.speed, "rad/s", 0.0)
@@ -364,12 +389,12 @@ class Layout:
     # ------------------------------------------------------------------ lookups
     @cached_property
     def shaft_index(self) -> dict[str, int]:
-        """Shaft name -> index in :attr:`shafts`."""
+        """Shaft name -> index in ``shafts``."""
         return {s.name: i for i, s in enumerate(self.shafts)}
 
     @cached_property
     def gear_index(self) -> dict[str, int]:
-        """Gear name -> index in :attr:`gears`."""
+        """Gear name -> index in ``gears``."""
         return {g.name: i for i, g in enumerate(self.gears)}
 
     def shaft(self, name: str) -> ShaftSpec:
@@ -389,8 +414,7 @@ class Layout:
     # ------------------------------------------------------------------ checks
     def _shaft_of(self, kind: str, item) -> ShaftSpec:
         if item.shaft not in self.shaft_index:
-            raise LayoutError(f"{kind}.{item.name}.shaft = {item.shaft!r}: no such shaft "
-                              f"(shafts: {', '.join(self.shaft_index)})")
+            raise _unknown(f"{kind}.{item.name}.shaft", "shaft", item.shaft, self.shaft_index)
         return self.shaft(item.shaft)
 
     def _check_places(self) -> None:
@@ -418,8 +442,7 @@ class Layout:
         for key, name, pos in (("input", d.input_shaft, d.input_position),
                                ("output", d.output_shaft, d.output_position)):
             if name not in self.shaft_index:
-                raise LayoutError(f"drive.{key}_shaft = {name!r}: no such shaft (shafts: "
-                                  f"{', '.join(self.shaft_index)})")
+                raise _unknown(f"drive.{key}_shaft", "shaft", name, self.shaft_index)
             length = self.shaft(name).length
             if pos is not None and not (-_SAME <= pos <= length + _SAME):
                 raise LayoutError(f"drive.{key}_position = {pos * 1e3:.6g} mm lies outside "
@@ -432,13 +455,20 @@ class Layout:
         for m in self.meshes:
             for g in m.gears:
                 if g not in self.gear_index:
-                    raise LayoutError(f"meshes.{m.name}.gears: no gear {g!r} (gears: "
-                                      f"{', '.join(self.gear_index) or 'none'})")
+                    raise _unknown(f"meshes.{m.name}.gears", "gear", g, self.gear_index)
                 used.add(g)
             a, b = (self.gear(g).shaft for g in m.gears)
             if a == b:
                 raise LayoutError(f"meshes.{m.name}: gears {m.gears[0]} and {m.gears[1]} are "
                                   f"both on shaft {a}; a mesh joins gears of two shafts")
+            self._check_pair(m)
+            za, zb = (self.shaft(self.gear(g).shaft).offset + self.gear(g).position
+                      for g in m.gears)
+            if abs(za - zb) > 1e-6:
+                raise LayoutError(
+                    f"meshes.{m.name}: the face centres of gears {m.gears[0]} and {m.gears[1]} "
+                    f"lie at global z = {za * 1e3:.6g} and {zb * 1e3:.6g} mm: meshing gears "
+                    "share their face centre (shaft offset + gear position)")
         unused = [g.name for g in self.gears if g.name not in used]
         if unused:
             raise LayoutError(f"gear {unused[0]} is in no mesh (a body without teeth is a "
@@ -478,6 +508,23 @@ class Layout:
                 f"the output shaft {self.drive.output_shaft}: it would carry no torque (a "
                 "loose branch rattles, not modelled yet)")
 
+    def _check_pair(self, m: MeshSpec) -> None:
+        """The two gears of an (external) mesh cut by one rack: the same module, pressure
+        angle, helix angle and tooth proportions (:data:`PAIR_FIELDS`); helical, of opposite
+        hands."""
+        a, b = (self.gear(g) for g in m.gears)
+        for key, unit, scale in PAIR_FIELDS:
+            va, vb = getattr(a, key), getattr(b, key)
+            if not math.isclose(va, vb, rel_tol=1e-12, abs_tol=1e-15):
+                raise LayoutError(
+                    f"meshes.{m.name}: gears.{a.name}.{key} = {va * scale:.9g}{unit} and "
+                    f"gears.{b.name}.{key} = {vb * scale:.9g}{unit} differ: the two gears of "
+                    f"a mesh share {', '.join(k for k, _, _ in PAIR_FIELDS)}")
+        if a.helix_angle > 0.0 and a.hand == b.hand:
+            raise LayoutError(
+                f"meshes.{m.name}: gears.{a.name}.hand and gears.{b.name}.hand are both "
+                f"{a.hand!r}: the gears of an external helical pair have opposite hands")
+
     def _check_bearings(self) -> None:
         for s in self.shafts:
             n = sum(b.shaft == s.name for b in self.bearings)
@@ -513,7 +560,7 @@ class Layout:
 
     @cached_property
     def speeds(self) -> np.ndarray:
-        """Signed speed of each shaft about +z [rad/s] (order of :attr:`shafts`)."""
+        """Signed speed of each shaft about +z [rad/s] (order of ``shafts``)."""
         w = {self.drive.input_shaft: self.drive.speed}
         for m in self._mesh_order():
             drv, dvn = self.drivers[self.meshes.index(m)]

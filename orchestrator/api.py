@@ -2,7 +2,7 @@
 
 >>> import orchestrator as gsb
 >>> case = gsb.load_case("baguet2010_spur")
->>> case["operation.speed"]  # SI units: rad/s
+>>> case["drive.speed"]  # SI units: rad/s
 325.0
 
 ``gsb.simulate(case, periods=64)`` runs it and returns a
@@ -30,12 +30,13 @@ def _case(case) -> Case:
 
 def _with(case: Case, periods: int | None, bearing: str | None) -> Case:
     """``periods`` and ``bearing`` as the case fields they are (``simulation.mesh_periods``,
-    ``bearings.model``), through the case's one override path and its checks."""
+    ``bearings.*.model``: every bearing), through the case's one override path and its
+    checks."""
     fields = {}
     if periods is not None:
         fields["simulation.mesh_periods"] = periods
     if bearing is not None:
-        fields["bearings.model"] = bearing
+        fields["bearings.*.model"] = bearing
     return case.with_overrides(fields) if fields else case
 
 
@@ -52,8 +53,8 @@ def simulate(case, periods: int | None = None, bearing: str | None = None, *,
     periods : int, optional
         Mesh periods to simulate (the case's ``simulation.mesh_periods``).
     bearing : str, optional
-        Bearing model (the case's ``bearings.model``: ``hybrid``, ``short``, ``fd``,
-        ``linear``, ``lumped``).
+        Bearing model of every bearing (the case's ``bearings.*.model``: ``hybrid``,
+        ``short``, ``fd``, ``linear``, ``lumped``).
     in_process : bool
         Drive the physics objects directly instead of the FMUs (same numbers, bit for bit).
     steps : int, optional
@@ -79,7 +80,7 @@ def simulate(case, periods: int | None = None, bearing: str | None = None, *,
 
     Raises
     ------
-    fmu_src.case.CaseError
+    fmu_src.fields.CaseError
         A case or an override that cannot run (the message names the field and the limit).
     orchestrator.run.spec.RunError
         No static solution, or a step that failed (``exc.result``: the steps computed).
@@ -121,7 +122,7 @@ def read_result(path: str | Path) -> Result:
 def sweep(case, vary: dict, path: str | Path, periods: int, bearings=None,
           steady_periods: int = 26, scheduler: str | None = None, n_workers: int = 2,
           progress: bool = True):
-    """Every combination of the values in ``vary`` (``{"operation.speed": [300, 325, 350],
+    """Every combination of the values in ``vary`` (``{"drive.speed": [300, 325, 350],
     ...}``, values as in a case file) and of ``bearings`` (default: the case's model), each an
     in-process run of ``periods`` mesh periods on Dask (``scheduler``: a cluster's address;
     default: ``n_workers`` local processes), written to the sweep file ``path`` as the points

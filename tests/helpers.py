@@ -133,7 +133,7 @@ def run_paper_case(out_dir, periods, in_process=True, fmu_dir=None, bearing="hyb
     from orchestrator.run.results import read_results
     from orchestrator.run.runner import run_case
 
-    run = {"bearings.model": bearing, "simulation.mesh_periods": periods}
+    run = {"bearings.*.model": bearing, "simulation.mesh_periods": periods}
     s = run_case(load_case(case, (overrides or {}) | run),
                  in_process=in_process, out_dir=out_dir, fmu_dir=fmu_dir, progress=False,
                  steps=steps)

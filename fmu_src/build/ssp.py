@@ -158,8 +158,8 @@ def ssd_text(case: Case, gear_source: str, bearing_source: str, laws=None) -> by
 
 
 def write_ssp(case: Case, dest: Path | str, laws=None) -> Path:
-    """Build the FMUs of a case (the gear shaft carrying it, the bearing FMU of its
-    ``bearings.model``) and write ``dest/<case name>.ssp``; returns its path.
+    """Build the FMUs of a case (the gear shaft carrying it, the bearing FMU of the model its
+    bearings share, ``bearings.*.model``) and write ``dest/<case name>.ssp``; returns its path.
     ``laws``: the bearing laws at the static solution (:func:`ssd_text`)."""
     from fmu_src.contract import bearing_fmu_name
     from fmu_src.build.fmus import build_fmus, readable_entry
@@ -167,7 +167,11 @@ def write_ssp(case: Case, dest: Path | str, laws=None) -> Path:
     dest = Path(dest)
     dest.mkdir(parents=True, exist_ok=True)
     out = dest / f"{case['case.name']}.ssp"
-    bearing = bearing_fmu_name(case["bearings.model"])
+    model = description.shared_bearing_model(case)
+    if model is None:  # TODO(train): one bearing FMU per model in the archive
+        raise CaseError(f"{case.source}: an SSP archive takes one bearing model for every "
+                        "bearing; this case's bearings have several (bearings.*.model)")
+    bearing = bearing_fmu_name(model)
     with tempfile.TemporaryDirectory(prefix="gsb_ssp_") as tmp:
         fmus = build_fmus(tmp, ["GearShaft", bearing], case=case)
         part = Path(tmp) / "system.ssp"
@@ -205,7 +209,7 @@ def _parameters(comp) -> dict:
 
 def read_ssp(path: Path | str, folder: Path | str | None = None) -> SspSystem:
     """Extract an SSP archive (into ``folder``, default a new temporary folder) and read the
-    system (module docstring); :class:`~fmu_src.case.CaseError` naming what does not fit."""
+    system (module docstring); :class:`~fmu_src.fields.CaseError` naming what does not fit."""
     path = Path(path)
     if not path.is_file():
         raise CaseError(f"SSP file not found: {path}")
@@ -245,13 +249,15 @@ def read_ssp(path: Path | str, folder: Path | str | None = None) -> SspSystem:
             overrides[key] = current
     params = [{k: v for k, v in _parameters(comps[b]).items()
                if k not in (*STATE_NAMES, "omega")} for b in bearings]
+    names = base.names("bearings")  # TODO(train): the components per bearing name
     for key, field in (("diameter", "D"), ("length", "L"), ("clearance", "C"),
                        ("viscosity", "mu")):
-        values = [p.get(field, base[f"bearings.{key}"][j]) for j, p in enumerate(params)]
+        values = [p.get(field, base[f"bearings.{n}.{key}"]) for n, p in zip(names, params,
+                                                                            strict=True)]
         if not all(isinstance(v, float) and math.isfinite(v) for v in values):
             raise CaseError(f"{path}: bearing parameter {field} must be a finite number: "
                             f"{values}")
-        overrides[f"bearings.{key}"] = values
+        overrides.update({f"bearings.{n}.{key}": v for n, v in zip(names, values, strict=True)})
     case = Case(base.values, str(path)).with_overrides(overrides)
     return SspSystem(case, gear_fmu, [folder / comps[b].get("source") for b in bearings],
                      params, folder)

@@ -34,7 +34,7 @@ def _bounds(v) -> str:
     if v.maximum is not None:
         parts.append(f"<= {v.maximum:g}")
     if v.choices:
-        parts.append(" or ".join(map(str, v.choices)))
+        parts.append(" or ".join(str(c) if c != "" else '""' for c in v.choices))
     return ", ".join(parts) or "-"
 
 
@@ -212,7 +212,11 @@ The structural slave (`fmu_src/slaves/gear_shaft.py` around `gear_fmu.structure.
 Timoshenko shafts, the gear pair's distributed mesh element and the Newmark/Newton/contact step.
 It carries its case (`resources/case.toml`, the shipped paper case unless `gsb build-fmus CASE`
 built it for another); the case's structural fields are its parameters, starting at the
-case's values. It imports nothing from the master package `orchestrator`.
+case's values, named by their case keys (`gears.pinion.module`; where each bearing sits,
+`bearings.'1'.shaft` and `bearings.'1'.position`, a name that is no identifier quoted as
+FMI's structured names want it; a list field one parameter per entry,
+`shafts.pinion_shaft.outer_diameter[1]`). It imports nothing from the master package
+`orchestrator`.
 
 Behaviour:
 
@@ -244,8 +248,8 @@ _TRANSMISSION = """
 ## Transmission FMU (`gsb export-fmu CASE`)
 
 The whole system in one FMU, for tools that do not iterate FMUs (libcosim, OMSimulator, ecos
-and most fixed-step masters): the gear-shaft structure, the four bearings of the model
-`bearings.model` names (any registered model: {models}) and this package's iterative master
+and most fixed-step masters): the gear-shaft structure, the bearings, each of the model
+its `bearings.<name>.model` names (any registered model: {models}), and this package's iterative master
 inside `fmi2DoStep` (`orchestrator/coupling/transmission.py`). `gsb export-fmu CASE --dest
 DIR` writes `DIR/<case>.fmu`, carrying the case (`resources/case.toml`) and the code it runs,
 master included. It gives `gsb run`'s numbers at the same step in any FMI host, bit for bit at
@@ -253,11 +257,11 @@ the case's step.
 
 - Parameters: every case field but `case.description` and `simulation.mesh_periods` (the
   host's stop time decides the run's length), named as the gear-shaft FMU names them; a list
-  field one parameter per entry (`bearings.clearance[1]` ... `[4]`). A new value rebuilds the
+  field one parameter per entry (`shafts.pinion_shaft.outer_diameter[1]`, `meshes.mesh.gears[2]`). A new value rebuilds the
   system.
-- Input `torque` [N.m]: the input torque on the pinion shaft, held over each communication
-  step; until a host sets it, the parameter `operation.torque` acts. The mesh's contact
-  compliance stays linearised at `operation.torque`.
+- Input `torque` [N.m]: the input torque on the input shaft, held over each communication
+  step; until a host sets it, the parameter `drive.torque` acts. The mesh's contact
+  compliance stays linearised at `drive.torque`.
 - Initialisation mode: the outputs are the static solution X0 of the current parameters and
   torque (velocities zero), solved when first read or at fmi2ExitInitializationMode, which
   then builds the modal damping as a run does.

@@ -15,39 +15,18 @@ import math
 
 import numpy as np
 
-from gear_fmu.layout import Layout, LayoutError
+from gear_fmu.layout import Layout
 from gear_fmu.mesh.element import MeshElement, ToothDeviations, pair_frame
 from gear_fmu.mesh.geometry import GearPair
 
 __all__ = ["gear_pair", "mesh_element", "mesh_elements", "mesh_frame"]
 
-#: what both gears of a mesh must share (GearSpec field, words for the message)
-_SHARED = (("module", "normal module", "mm", 1e3), ("pressure_angle", "pressure angle", "deg",
-                                                     180.0 / math.pi),
-           ("helix_angle", "helix angle", "deg", 180.0 / math.pi),
-           ("addendum_coefficient", "addendum coefficient", "", 1.0),
-           ("dedendum_coefficient", "dedendum coefficient", "", 1.0))
-
-
 def gear_pair(layout: Layout, m: int) -> GearPair:
-    """The gear pair of mesh ``m``, driver first (module docstring); a
-    :class:`~gear_fmu.layout.LayoutError` when its gears cannot be a pair (different modules,
-    pressure or helix angles, tooth proportions; equal hands of a helical external pair), a
-    :class:`~gear_fmu.mesh.geometry.GearGeometryError` when they do not mesh at the centre
-    distance."""
+    """The gear pair of mesh ``m``, driver first (module docstring; the layout checked that
+    its gears can be a pair); a :class:`~gear_fmu.mesh.geometry.GearGeometryError` when they
+    do not mesh at the centre distance."""
     mesh = layout.meshes[m]
     driver, driven = (layout.gear(g) for g in layout.drivers[m])
-    for key, words, unit, scale in _SHARED:
-        a, b = getattr(driver, key), getattr(driven, key)
-        if a != b:
-            raise LayoutError(
-                f"meshes.{mesh.name}: gears {driver.name} and {driven.name} have different "
-                f"{words}s ({a * scale:g} and {b * scale:g}{' ' + unit if unit else ''}); "
-                "the gears of a mesh share it")
-    if driver.helix_angle > 0.0 and driver.hand == driven.hand:
-        raise LayoutError(f"meshes.{mesh.name}: gears {driver.name} and {driven.name} are both "
-                          f"{driver.hand}-handed; the gears of an external helical pair have "
-                          "opposite hands")
     material = layout.shaft(driver.shaft)
     return GearPair(
         teeth=(driver.teeth, driven.teeth), module=driver.module,

@@ -137,7 +137,7 @@ class Linearisation:
         :class:`~orchestrator.coupling.master.CouplingError`.
         """
         case = self.case if speed is None else self.case.with_overrides(
-            {"operation.speed": float(speed)})
+            {"drive.speed": float(speed)})
         st = self.structure
         if self.bearing_stiffness is None:
             master = build_master(case, in_process=True, structure=st)
@@ -154,7 +154,8 @@ class Linearisation:
             finally:
                 master.close()
             kb_ref = 0.5 * (kb + np.transpose(kb, (0, 2, 1)))
-            source = (f"{case['bearings.model']} film at the static solution X0 (damped modes: "
+            model = description.shared_bearing_model(case) or "each bearing's own"
+            source = (f"{model} film at the static solution X0 (damped modes: "
                       "Kb and Cb full 2x2; undamped modes: symmetric part of Kb)")
         else:
             k = self.bearing_stiffness

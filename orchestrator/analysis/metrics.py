@@ -13,7 +13,7 @@ import math
 import numpy as np
 
 from fmu_src.case import Case
-from fmu_src.description import gear_pair
+from fmu_src.description import gear_pairs, layout, mesh_teeth
 from orchestrator.analysis.spectrum import line_amplitudes, pinion_lines
 
 __all__ = ["fit_ellipse", "run_metrics", "run_report", "static_mesh_load", "steady_window",
@@ -43,11 +43,14 @@ def stored_case(attrs: dict, source: str | None = None) -> Case:
 
 
 def _static_load(results: dict) -> float:
-    """Static mesh load [N] of the case stored in a results file (:func:`stored_case`)."""
+    """Static load [N] of the first mesh of the case stored in a results file
+    (:func:`stored_case`): the torque on its driver's shaft over its base radius.
+    TODO(train): the mesh_force channel of one mesh, the dynamic factor of each."""
     case = stored_case(results["attrs"])
-    pair = gear_pair(case)
-    return static_mesh_load(case["operation.torque"], pair.base_radius[0],
-                            pair.base_helix_angle)
+    lay = layout(case)
+    pair = gear_pairs(case)[0]
+    torque = lay.torque_on(lay.gear(lay.drivers[0][0]).shaft)
+    return static_mesh_load(torque, pair.base_radius[0], pair.base_helix_angle)
 
 
 def fit_ellipse(x, y) -> dict:
@@ -141,9 +144,9 @@ def run_report(results: dict) -> dict:
     time_s = np.asarray(results["time"], dtype=float)
     if time_s.size < 2:
         raise ValueError(f"a report needs at least 2 time steps, got {time_s.size}")
-    values = stored_case(results["attrs"]).values
-    teeth = values["gear_pair.teeth"]
-    pinion_hz = abs(values["operation.speed"]) / (2.0 * np.pi)
+    case = stored_case(results["attrs"])
+    teeth = mesh_teeth(case)[0]  # TODO(train): the lines and window of a single pair
+    pinion_hz = abs(case["drive.speed"]) / (2.0 * np.pi)
     gear_rev_s = teeth[1] / (teeth[0] * pinion_hz)
     end_s = float(time_s[-1])
     if end_s >= gear_rev_s * (1.0 - 1e-9):

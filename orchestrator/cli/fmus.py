@@ -29,8 +29,8 @@ def add_parser(sub) -> None:
                                    "connections and parameter values (runs in SSP tools, "
                                    "e.g. ecos, and in `gsb run`).")
     add_case_argument(p)
-    p.add_argument("--bearing", choices=tuple(MODELS), help="bearing model (overrides the "
-                                                            "case)")
+    p.add_argument("--bearing", choices=tuple(MODELS), help="bearing model of every bearing "
+                                                            "(overrides bearings.*.model)")
     p.add_argument("--dest", default=".", help="output folder (default: the current folder)")
     p.set_defaults(func=export_ssp)
 
@@ -41,8 +41,8 @@ def add_parser(sub) -> None:
                                    "answer in any FMI tool, iterating or not. Parameters: the "
                                    "case's fields; input: torque [N m].")
     add_case_argument(p)
-    p.add_argument("--bearing", choices=tuple(MODELS), help="bearing model (overrides the "
-                                                            "case)")
+    p.add_argument("--bearing", choices=tuple(MODELS), help="bearing model of every bearing "
+                                                            "(overrides bearings.*.model)")
     p.add_argument("--bearing-fmu", default=None, metavar="FMU",
                    help="a bearing FMU of your own for the four bearings, carried inside")
     p.add_argument("--dest", default=".", help="output folder (default: the current folder)")

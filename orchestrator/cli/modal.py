@@ -25,7 +25,8 @@ def add_parser(sub) -> None:
                                    "mesh harmonic meets a mesh mode, and optionally a Campbell "
                                    "diagram over a speed range.")
     add_case_argument(p)
-    p.add_argument("--bearing", choices=tuple(MODELS), help="bearing model (overrides the case)")
+    p.add_argument("--bearing", choices=tuple(MODELS),
+                   help="bearing model of every bearing (overrides bearings.*.model)")
     p.add_argument("--bearing-stiffness", type=float, default=None,
                    help="isotropic bearing stiffness [N/m] instead of the film at X0 (then no "
                         "bearing damping, Cb = 0)")
@@ -78,6 +79,7 @@ def _finite(x):
 def modal(args) -> int:
     import json
 
+    from fmu_src import description
     from gear_fmu.modal.damped_modes import (
         critical_speed_table,
         damped_mode_table,
@@ -110,9 +112,10 @@ def modal(args) -> int:
             raise CaseError(f"--campbell: no static solution over {low:g}-{high:g} rad/s: "
                             f"{data['skipped'][0][1]}")
         model = (f"isotropic {args.bearing_stiffness:g} N/m bearings, Cb = 0"
-                 if args.bearing_stiffness else f"{case['bearings.model']} bearings")
+                 if args.bearing_stiffness
+                 else f"{description.shared_bearing_model(case) or 'mixed'} bearings")
         title = (f"{case['case.name']}: Campbell diagram of the damped modes\n"
-                 f"T = {case['operation.torque']:g} N m, {model}, z1 = {lin.z1}")
+                 f"T = {case['drive.torque']:g} N m, {model}, z1 = {lin.z1}")
         chart = {"path": str(plot_campbell(data, path, title,
                                                     min_mesh_fraction=args.mesh_fraction)),
                  "speeds_rad_s": data["speeds"].tolist(),
@@ -120,8 +123,8 @@ def modal(args) -> int:
                  "skipped": [{"speed_rad_s": w, "error": e} for w, e in data["skipped"]]}
     if args.json:
         out = {
-            "case": case["case.name"], "torque_N_m": case["operation.torque"],
-            "speed_rad_s": case["operation.speed"], "bearings": lin.bearings,
+            "case": case["case.name"], "torque_N_m": case["drive.torque"],
+            "speed_rad_s": case["drive.speed"], "bearings": lin.bearings,
             "mean_mesh_stiffness_N_per_m": lin.mesh_stiffness_loa,
             "mean_mesh_stiffness_N_per_mm_um": per_width,
             "undamped_modes": [
@@ -140,7 +143,7 @@ def modal(args) -> int:
         print(json.dumps(out, allow_nan=False))
         return 0
     print(f"{case['case.name']}: modes with the mean mesh stiffness at T = "
-          f"{case['operation.torque']:g} N m; bearings: {lin.bearings}")
+          f"{case['drive.torque']:g} N m; bearings: {lin.bearings}")
     print(mode_table(found, args.modes))
     ref = lin.reference_mesh_stiffness_loa
     ref = "" if ref is None else (f"; 16 equally spaced angles (damping reference): "

@@ -6,8 +6,8 @@ from __future__ import annotations
 import argparse
 import json
 
-__all__ = ["UsageError", "add_case_argument", "add_override_options", "case_from_args",
-           "overrides_from_args", "parse_override", "set_overrides"]
+__all__ = ["OPTION_FIELDS", "UsageError", "add_case_argument", "add_override_options",
+           "case_from_args", "overrides_from_args", "parse_override", "set_overrides"]
 
 
 class UsageError(ValueError):
@@ -26,9 +26,11 @@ class Override(tuple):
 
 
 def parse_override(text: str) -> Override:
-    """``section.key=value`` -> (key, value): JSON lists, numbers, else the text ("4 mm")."""
+    """``section.key=value`` or ``section.name.key=value`` (``*`` for every instance) ->
+    (key, value): JSON lists, numbers, else the text ("4 mm")."""
     if "=" not in text:
-        raise argparse.ArgumentTypeError(f"--set {text!r}: expected section.key=value")
+        raise argparse.ArgumentTypeError(f"--set {text!r}: expected section.key=value or "
+                                         "section.name.key=value")
     key, value = (part.strip() for part in text.split("=", 1))
     try:
         return Override(key, json.loads(value), text)
@@ -45,13 +47,23 @@ def add_case_argument(p, case_help: str = "case file (TOML) or the name of a shi
     add_override_options(p)
 
 
+#: the options that set a case field: option -> the field (``*``: every instance)
+OPTION_FIELDS = {"--speed": "drive.speed", "--torque": "drive.torque",
+                 "--unbalance": "gears.*.unbalance", "--bearing": "bearings.*.model",
+                 "--periods": "simulation.mesh_periods"}
+
+
 def add_override_options(p) -> None:
-    p.add_argument("--speed", help="override operation.speed (e.g. '500 rad/s', '3000 rpm')")
-    p.add_argument("--torque", help="override operation.torque (e.g. '300 N.m')")
-    p.add_argument("--unbalance", help="override operation.unbalance of both shafts (e.g. "
-                                       "'1.2 mm')")
+    p.add_argument("--speed", help="override drive.speed, the input shaft's speed (the others "
+                                   "follow from the gear ratios; e.g. '500 rad/s', '3000 rpm')")
+    p.add_argument("--torque", help="override drive.torque, the input torque (e.g. '300 N.m')")
+    p.add_argument("--unbalance", help="override gears.*.unbalance, the unbalance "
+                                       "eccentricity of every gear (e.g. '1.2 mm')")
     p.add_argument("--set", dest="overrides", action="append", type=parse_override, default=[],
-                   metavar="SECTION.KEY=VALUE", help="override any case field (repeatable)")
+                   metavar="SECTION.[NAME.]KEY=VALUE",
+                   help="override any case field, NAME an instance or * for every one "
+                        "(drive.speed=3000rpm, bearings.3.clearance='120 um', "
+                        "bearings.*.model=short; repeatable)")
 
 
 def set_overrides(pairs) -> dict:
@@ -77,12 +89,11 @@ def overrides_from_args(args) -> dict:
 
     overrides = set_overrides(args.overrides)
     periods = getattr(args, "periods", None)
-    for option, key, value in (("--speed", "operation.speed", args.speed),
-                               ("--torque", "operation.torque", args.torque),
-                               ("--unbalance", "operation.unbalance", args.unbalance),
-                               ("--bearing", "bearings.model", getattr(args, "bearing", None)),
-                               ("--periods", "simulation.mesh_periods",
-                                None if periods is None else check_periods(periods))):
+    given = {"--speed": args.speed, "--torque": args.torque, "--unbalance": args.unbalance,
+             "--bearing": getattr(args, "bearing", None),
+             "--periods": None if periods is None else check_periods(periods)}
+    for option, value in given.items():
+        key = OPTION_FIELDS[option]
         if value is not None:
             try:
                 check_override(key, value)

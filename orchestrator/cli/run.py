@@ -30,8 +30,9 @@ def add_parser(sub) -> None:
                         "`gsb cases` lists them), or an SSP archive of `gsb export-ssp` (its FMUs "
                         "and values are run)")
     add_override_options(p)
-    p.add_argument("--bearing", choices=tuple(MODELS), help="bearing model (overrides the "
-                                                            "case; swaps the bearing FMU)")
+    p.add_argument("--bearing", choices=tuple(MODELS), help="bearing model of every bearing "
+                                                            "(overrides bearings.*.model; "
+                                                            "swaps the bearing FMU)")
     p.add_argument("--periods", type=int, help="mesh periods to simulate (overrides the case; "
                                                "with --resume: the new total length)")
     p.add_argument("--in-process", action="store_true",
@@ -64,6 +65,17 @@ def add_parser(sub) -> None:
     p.add_argument("--show", metavar="NAME", default=None, help="print this case's file")
     p.set_defaults(func=cases)
 
+    p = sub.add_parser("case", help="write a case file in the current schema",
+                       description="Read a case file (a single-stage file of an earlier "
+                                   "version included: it is translated) and print it in the "
+                                   "current schema, numbers in SI units, every field given "
+                                   "(comments are not carried over); docs/case-files.md.")
+    p.add_argument("--upgrade", metavar="FILE", required=True,
+                   help="the case file (or the name of a shipped case)")
+    p.add_argument("--out", metavar="PATH", default=None,
+                   help="write it there (default: stdout); an existing file is kept")
+    p.set_defaults(func=upgrade_case)
+
     p = sub.add_parser("export", help="write a results file's channels as CSV",
                        description="One row per time step, one column per channel component, "
                                    "named by its dimensions and unit, bearings 1-4 and axes s, t "
@@ -82,7 +94,28 @@ def add_parser(sub) -> None:
 
 
 
+def upgrade_case(args) -> int:
+    import warnings
+
+    from fmu_src.case import LegacyCaseWarning, load_case
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", LegacyCaseWarning)  # what this command is for
+        case = load_case(args.upgrade)
+    text = case.to_toml()
+    if args.out is None:
+        print(text, end="")
+        return 0
+    out = Path(args.out)
+    if out.exists():
+        raise CaseError(f"--out {out}: exists; choose another path")
+    out.write_text(text)
+    print(f"wrote {out}")
+    return 0
+
+
 def cases(args) -> int:
+    from fmu_src import description
     from fmu_src.case import load_case, shipped_cases
 
     shipped = shipped_cases()
@@ -94,10 +127,14 @@ def cases(args) -> int:
         return 0
     for name, path in shipped.items():
         c = load_case(path)
-        print(f"{name:<24} {c['operation.speed']:g} rad/s, T = {c['operation.torque']:g} N m, "
-              f"helix {math.degrees(c['gear_pair.helix_angle']):g} deg, "
-              f"{c['bearings.model']} bearings, {c['simulation.mesh_periods']} mesh periods "
-              f"({path})")
+        helix = sorted({round(math.degrees(c[f"gears.{g}.helix_angle"]), 6)
+                        for g in c.names("gears")})
+        model = description.shared_bearing_model(c) or "mixed"
+        meshes = len(c.names("meshes"))
+        print(f"{name:<24} {c['drive.speed']:g} rad/s, T = {c['drive.torque']:g} N m, "
+              f"{len(c.names('shafts'))} shafts, {meshes} mesh{'es' * (meshes != 1)} (helix "
+              f"{', '.join(f'{b:g}' for b in helix)} deg), {len(c.names('bearings'))} "
+              f"{model} bearings, {c['simulation.mesh_periods']} mesh periods ({path})")
     return 0
 
 

@@ -25,20 +25,19 @@ from pathlib import Path
 import numpy as np
 
 from bearing_fmu import MODELS
-from fmu_src.case import FIELDS, CaseError
+from fmu_src.case import CaseError, field_of
 from fmu_src.units import DIMENSIONS, UnitError, parse_quantity
 
 __all__ = ["MAX_POINTS", "SHORTHANDS", "add_parser", "parse_vary", "sweep"]
 
-#: ``--vary`` shorthands
-SHORTHANDS = {"speed": "operation.speed", "torque": "operation.torque",
-              "unbalance": "operation.unbalance"}
+#: ``--vary`` shorthands (``*``: every gear)
+SHORTHANDS = {"speed": "drive.speed", "torque": "drive.torque",
+              "unbalance": "gears.*.unbalance"}
 #: the most points a sweep may have
 MAX_POINTS = 10000
 #: failed points listed at the end (the file has them all)
 LISTED = 20
 
-_BY_KEY = {f.key: f for f in FIELDS}
 _SPEC = re.compile(r"^\s*(\S+)\s*(.*?)\s*$")
 
 
@@ -58,18 +57,19 @@ def add_parser(sub) -> None:
                                 "baguet2010_spur")
     p.add_argument("--vary", action="append", default=[], required=True, metavar="KEY=SPEC",
                    help="a varied field (repeatable: Cartesian product). KEY: speed, torque, "
-                        "unbalance (operation.speed / .torque / .unbalance, both shafts) or "
-                        "any numeric case field section.key. SPEC: START:STOP:COUNT (COUNT "
+                        "unbalance (drive.speed, drive.torque, gears.*.unbalance: every gear) "
+                        "or any numeric case field, section.key or section.name.key (* for "
+                        "every instance). SPEC: START:STOP:COUNT (COUNT "
                         "evenly spaced values, ends included) or a comma list A,B,C; numbers "
                         "in the field's SI unit (speed rad/s, torque N m, unbalance m), or "
                         "followed by a unit the case files accept: 'speed=1000:12000:12 rpm', "
                         "'unbalance=0.6,1.2 mm'")
     p.add_argument("--set", dest="overrides", action="append", type=parse_override, default=[],
-                   metavar="SECTION.KEY=VALUE",
+                   metavar="SECTION.[NAME.]KEY=VALUE",
                    help="override a case field for every point (repeatable)")
     p.add_argument("--bearing", default=None, metavar="MODEL[,MODEL...]",
-                   help="bearing model(s), comma-separated: every point runs with each "
-                        f"({', '.join(MODELS)}; default: the case's)")
+                   help="bearing model(s) of every bearing, comma-separated: every point "
+                        f"runs with each ({', '.join(MODELS)}; default: the case's own)")
     p.add_argument("--periods", type=int, default=None,
                    help="mesh periods of every run (default: the case's "
                         "simulation.mesh_periods)")
@@ -106,16 +106,17 @@ def _number(text: str, option: str) -> float:
 
 def parse_vary(text: str) -> tuple[str, list]:
     """``KEY=SPEC`` of ``--vary`` -> (case field, values in SI units; ints for counts).
-    Raises :class:`~fmu_src.case.CaseError` naming the option, the value and the limit."""
+    Raises :class:`~fmu_src.fields.CaseError` naming the option, the value and the limit."""
     option = f"--vary {text}"
     if "=" not in text:
         raise CaseError(f"{option}: expected KEY=SPEC (e.g. speed=100:1200:12)")
     key, spec = (part.strip() for part in text.split("=", 1))
     full = SHORTHANDS.get(key, key)
-    if full not in _BY_KEY:
-        raise CaseError(f"{option}: unknown key {key!r}; use {', '.join(SHORTHANDS)} or a "
-                        "case field section.key (docs/case-files.md)")
-    field = _BY_KEY[full]
+    try:
+        field = field_of(full)
+    except CaseError as exc:
+        raise CaseError(f"{option}: unknown key {key!r} ({exc}); use "
+                        f"{', '.join(SHORTHANDS)} or a case field (docs/case-files.md)") from None
     if field.kind not in DIMENSIONS and field.kind != "count":
         raise CaseError(f"{option}: {full} is a {field.kind} field; --vary takes numeric "
                         "fields (set this one with --set)")
@@ -163,9 +164,10 @@ def parse_vary(text: str) -> tuple[str, list]:
     return full, values
 
 
-def _bearings(text: str | None, case) -> list[str]:
+def _bearings(text: str | None, case) -> list[str | None]:
+    """The models of ``--bearing``, or the case's own (None) when not given."""
     if text is None:
-        return [case["bearings.model"]]
+        return [None]
     names = [x.strip() for x in text.split(",")]
     for name in names:
         if name not in MODELS:
@@ -193,6 +195,7 @@ def sweep_hash(case, vary: list, bearings: list, periods: int, steady: int) -> s
 
 def _plan(args):
     """The checked inputs: (case, vary [(key, values)], bearings, points, periods, steady)."""
+    from fmu_src import description
     from fmu_src.case import load_case
     from orchestrator.cli.options import set_overrides
     from orchestrator.run.spec import check_periods
@@ -219,7 +222,7 @@ def _plan(args):
                         f"{MAX_POINTS}")
     periods = check_periods(case["simulation.mesh_periods"] if args.periods is None
                             else args.periods)
-    z2 = int(case["gear_pair.teeth"][1])
+    z2 = int(description.mesh_teeth(case)[0][1])  # TODO(train): the slowest shaft's turn
     steady = args.steady_periods
     if steady is None:
         steady = z2 if periods >= z2 else max(1, periods // 2)
@@ -230,7 +233,8 @@ def _plan(args):
     for bearing in bearings:
         for combo in itertools.product(*(values for _, values in vary)):
             overrides = dict(zip(keys, combo, strict=True))
-            label = ", ".join([bearing] + [_fmt(k, v) for k, v in overrides.items()])
+            own = description.shared_bearing_model(case) or "mixed"
+            label = ", ".join([bearing or own] + [_fmt(k, v) for k, v in overrides.items()])
             p = SweepPoint(overrides, bearing, label)
             try:
                 check_point(case, p)

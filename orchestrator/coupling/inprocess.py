@@ -230,7 +230,7 @@ class ModelBearings(BearingSet):
     def compiled_groups(self) -> tuple:
         groups = []
         others = []
-        for kind, idx, compiled in self._groups:
+        for _, idx, compiled in self._groups:
             if compiled is not None:
                 groups.append((compiled.kernel_arguments(), idx))
             else:

@@ -42,7 +42,6 @@ turns its outcome into the master's counters, laws and errors.
 
 from __future__ import annotations
 
-import itertools
 from dataclasses import dataclass
 
 import numpy as np
@@ -54,7 +53,6 @@ from bearing_fmu.hybrid._kernels import hybrid_set_global, hybrid_set_threads
 from bearing_fmu.short_bearing import short_set_global
 from gear_fmu.step.contact_loop import CONVERGED
 from gear_fmu.step.kernel import advance_pieces, keep_evaluation
-from orchestrator.coupling.master import CouplingError, not_converged, python_evaluate
 from orchestrator.coupling.fmi.steps import (
     fmu_bearing_group,
     fmu_structure_accept,
@@ -63,6 +61,7 @@ from orchestrator.coupling.fmi.steps import (
     fmu_structure_retry,
     fmu_structure_solve,
 )
+from orchestrator.coupling.master import CouplingError, not_converged, python_evaluate
 
 __all__ = ["RELAXATION", "STALL", "CoupledSteps", "StepBlock", "coupled_steps", "evaluate_set",
            "relaxed_law"]

@@ -31,7 +31,7 @@ def build_master(case: Case, in_process: bool = False, fmu_dir: Path | str | Non
     """The master of a case with its two slaves (``master.structure``, ``master.bearings``).
 
     In-process the physics objects of :mod:`fmu_src.description` are driven directly; through
-    FMUs the bearing FMU of the case's ``bearings.model`` and the gear-shaft FMU are taken from
+    FMUs the bearing FMU of each bearing's model and the gear-shaft FMU are taken from
     ``fmu_dir`` (default: the per-user cache; built there if missing), or ``fmus`` names the
     files: ``{"gear": path, "bearings": [4 paths], "bearing_parameters": [4 dicts]
     (optional)}`` (an SSP's, or a bearing FMU of the user's own). In-process, ``fmus`` with
@@ -79,7 +79,7 @@ def build_master(case: Case, in_process: bool = False, fmu_dir: Path | str | Non
         structure, bearings = fmi.system_from_case(case, fmu_dir=fmu_dir)
     if threads != 1:
         _share_bearings(bearings, threads, "the bearing FMUs" if fmus is not None or not
-                        in_process else f"the {case['bearings.model']} bearings")
+                        in_process else "bearings other than hybrid")
     announce_compilation(cold)  # after the FMUs' build: the kernels compile on first calls
     return Master(structure, bearings, tol, max_it,
                   stepper=CoupledSteps(structure, bearings))

@@ -11,7 +11,7 @@ the case into its resources (``case.toml``).
   and ``bearing_fmu``, a bearing FMU of the user's own (run through fmpy, in the host's
   Python) instead of ``bearings.model``; a change rebuilds the system.
 * Input ``torque`` [N m]: the input torque, held over a communication step
-  (:meth:`gear_fmu.structure.Structure.set_torque`); until set, the case's ``operation.torque``.
+  (:meth:`gear_fmu.structure.Structure.set_torque`); until set, the case's ``drive.torque``.
 * Initialisation: the outputs are the static solution X0 (Sec. 2.2.3), solved when first read
   or at ``exitInitializationMode``.
 * ``doStep(t, h)``: ``n = ceil(h / (dt (1 + 1e-4)))`` equal coupled steps of ``h / n``, dt the
@@ -167,7 +167,7 @@ class TransmissionSlave(ContractSlave):
         return str(path)
 
     def _get_torque(self) -> float:
-        return self.case()["operation.torque"] if self._torque is None else self._torque
+        return self.case()["drive.torque"] if self._torque is None else self._torque
 
     def _set_torque(self, value) -> None:
         self._torque = float(value)

@@ -1,6 +1,6 @@
 """Figures of a sweep file (``gsb sweep``, :mod:`orchestrator.sweeps.runner`).
 
-:func:`sweep_figures` draws, against the pinion speed when the sweep varies it (else against
+:func:`sweep_figures` draws, against the input speed when the sweep varies it (else against
 the first varied field):
 
 * ``R_ptp.png``: the dynamic factor R, one curve per bearing model (and per value of the other
@@ -35,32 +35,38 @@ BEARING_STYLES = tuple(
      "mfc": "none" if b % 2 else colour}
     for b, (colour, ls, marker) in enumerate(BEARING_STYLE))
 
-_NAMES = {"operation.speed": "pinion speed", "operation.torque": "input torque",
-          "operation.unbalance": "unbalance e_mu"}
+#: the operating fields a sweep varies most (and their keys in sweep files of the
+#: single-stage schema) -> (axis name, short name)
+_NAMES = {"drive.speed": ("input speed", "speed"), "operation.speed": ("pinion speed", "speed"),
+          "drive.torque": ("input torque", "torque"),
+          "operation.torque": ("input torque", "torque"),
+          "gears.*.unbalance": ("unbalance e_mu", "unbalance"),
+          "operation.unbalance": ("unbalance e_mu", "unbalance")}
+_SPEEDS = ("drive.speed", "operation.speed")
 
 
 def _axis_label(key: str, unit: str) -> str:
-    name = _NAMES.get(key, key)
+    name = _NAMES.get(key, (key, key))[0]
     return f"{name} [{unit}]" if unit else name
 
 
 def _short(key: str, value: float, unit: str) -> str:
-    name = {"operation.speed": "speed", "operation.torque": "torque",
-            "operation.unbalance": "unbalance"}.get(key, key)
+    name = _NAMES.get(key, (key, key))[1]
     return f"{name} {value:g}{' ' + unit if unit not in ('', '1') else ''}"
 
 
 def _fixed(case, keys) -> str:
     """The operating values the sweep keeps fixed."""
+    varied = {_NAMES[k][1] for k in keys if k in _NAMES}
     parts = []
-    if "operation.speed" not in keys:
-        w = case["operation.speed"]
+    if "speed" not in varied:
+        w = case["drive.speed"]
         parts.append(f"speed {w:g} rad/s ({w * 30 / math.pi:.0f} rpm)")
-    if "operation.torque" not in keys:
-        parts.append(f"torque {case['operation.torque']:g} N m")
-    if "operation.unbalance" not in keys:
-        e = case["operation.unbalance"]
-        parts.append(f"unbalance {e[0] * 1e3:g} / {e[1] * 1e3:g} mm")
+    if "torque" not in varied:
+        parts.append(f"torque {case['drive.torque']:g} N m")
+    if "unbalance" not in varied:
+        e = [case[f"gears.{g}.unbalance"] * 1e3 for g in case.names("gears")]
+        parts.append(f"unbalance {' / '.join(f'{x:g}' for x in e)} mm")
     return ", ".join(parts)
 
 
@@ -118,6 +124,7 @@ def sweep_figures(path, out_dir=None) -> list[Path]:
     succeeded)."""
     from matplotlib.colors import LogNorm
 
+    from fmu_src.description import mesh_teeth
     from orchestrator.analysis.metrics import stored_case
     from orchestrator.figures.base import pyplot
     from orchestrator.sweeps.file import read_sweep, read_sweep_attrs
@@ -132,8 +139,8 @@ def sweep_figures(path, out_dir=None) -> list[Path]:
     if not keys:
         raise ValueError(f"{path}: the sweep varies no field")
     case = stored_case(attrs, str(path))
-    z1 = int(case["gear_pair.teeth"][0])
-    ix = keys.index("operation.speed") if "operation.speed" in keys else 0
+    z1 = int(mesh_teeth(case)[0][0])  # TODO(train): the orders of the input shaft's pinion
+    ix = next((keys.index(k) for k in _SPEEDS if k in keys), 0)
     points = read_sweep(path)
     groups = _groups(points, keys, units, ix)
     if not groups:

@@ -1,7 +1,7 @@
 """Checks of a run before its transient: what the time step resolves, what the films carry.
 
 :func:`unbalance_warnings` compares each shaft's unbalance force ``M e_mu omega^2`` (Eq. 10)
-with the static load capacity of its two bearings (:func:`film_capacities`, the film force at
+with the static load capacity of its bearings (:func:`film_capacities`, the film force at
 the eccentricity limit); :func:`overload_message` explains a static solution that fails because
 a bearing's static load exceeds that capacity, in newtons and case fields.
 
@@ -17,6 +17,7 @@ in the results file.
 
 from __future__ import annotations
 
+import cmath
 import math
 from pathlib import Path
 
@@ -39,9 +40,9 @@ EPS_LIMIT = 0.995
 #: thickness 0.1 C, a common design limit; the film force grows without bound towards 1)
 EPS_DESIGN = 0.9
 #: the case fields that raise a film's load capacity, and those that lower the load
-RAISE_CAPACITY = ("bearings.length", "bearings.diameter", "bearings.viscosity",
-                  "operation.speed", "a smaller bearings.clearance")
-LOWER_LOAD = "operation.torque"
+RAISE_CAPACITY = ("bearings.*.length", "bearings.*.diameter", "bearings.*.viscosity",
+                  "drive.speed", "a smaller bearings.*.clearance")
+LOWER_LOAD = "drive.torque"
 #: period error of a damped mesh mode [-] above which the time step warns. The period error is
 #: the error of where the mode's resonances fall (the speeds at which a mesh harmonic meets it,
 #: gsb modal's tooth critical speeds), and detunes its forced response: 1 % is a third of the
@@ -53,14 +54,18 @@ PERIOD_ERROR_LIMIT = 0.01
 
 
 def film_capacities(case: Case, eps: float = EPS_LIMIT) -> tuple[np.ndarray, str]:
-    """The static load capacity of each bearing's film [N] (4,): the film force at the
-    eccentricity ratio ``eps``, zero velocity, at the bearing's speed; and the model that gave
-    it (the case's model if it is a film model, else the hybrid film)."""
-    name = case["bearings.model"]
+    """The static load capacity of each bearing's film [N] (one per bearing, the case's
+    order): the film force at the eccentricity ratio ``eps``, zero velocity, at the bearing's
+    speed; and the model that gave it (each bearing's own if it is a film model, else the
+    hybrid film; ``"each bearing's"`` for several)."""
     models = description.bearing_models(case)
+    names = [case[f"bearings.{b}.model"] for b in case.names("bearings")]
     if not all(isinstance(m, FilmBearingModel) for m in models):
-        name = "hybrid"
-        models = description.bearing_models(case.with_overrides({"bearings.model": name}))
+        hybrid = description.bearing_models(case.with_overrides({"bearings.*.model": "hybrid"}))
+        film = [isinstance(m, FilmBearingModel) for m in models]
+        models = [m if f else h for m, h, f in zip(models, hybrid, film, strict=True)]
+        names = [n if f else "hybrid" for n, f in zip(names, film, strict=True)]
+    name = names[0] if len(set(names)) == 1 else "each bearing's"
     out = np.empty(len(models))
     for b, (m, w) in enumerate(zip(models, description.bearing_speeds(case), strict=True)):
         fbar = m.dimensionless(eps, 0.0, jacobian=False).force
@@ -68,26 +73,39 @@ def film_capacities(case: Case, eps: float = EPS_LIMIT) -> tuple[np.ndarray, str
     return out, name
 
 
+def _shaft_unbalance(lay, shaft: str) -> tuple[float, list[str]]:
+    """``|sum M e_mu exp(i phase)|`` of the unbalanced gears and discs on a shaft [kg m] (M
+    each body's ``unbalance_mass``, Eq. 10), and their unbalance fields."""
+    total, keys = 0j, []
+    for kind, bodies in (("gears", lay.gears), ("discs", lay.discs)):
+        for body in bodies:
+            if body.shaft == shaft and body.unbalance > 0.0:
+                mass = body.mass if body.unbalance_mass == "body" else lay.carried_mass(shaft)
+                total += mass * body.unbalance * cmath.exp(1j * body.unbalance_phase)
+                keys.append(f"{kind}.{body.name}.unbalance")
+    return abs(total), keys
+
+
 def unbalance_warnings(case: Case) -> list[str]:
     """One sentence per shaft whose unbalance force ``M e_mu omega^2`` exceeds the static load
-    capacity of its two bearings at the eccentricity ratio :data:`EPS_DESIGN` (the journals
-    then orbit closer to the wall than a minimum film thickness of 0.1 C)."""
-    system = description.gear_shaft_system(case)
-    speeds = description.bearing_speeds(case)
-    unbalance = case["operation.unbalance"]
+    capacity of its bearings at the eccentricity ratio :data:`EPS_DESIGN` (the journals then
+    orbit closer to the wall than a minimum film thickness of 0.1 C)."""
+    lay = description.layout(case)
     capacity, model = film_capacities(case, EPS_DESIGN)
     out = []
-    for i, shaft in enumerate(("pinion", "gear")):
-        force = system.shaft_masses[i] * unbalance[i] * speeds[2 * i] ** 2
-        cap = capacity[2 * i] + capacity[2 * i + 1]
+    for shaft, speed in zip(lay.shafts, lay.speeds, strict=True):
+        me, keys = _shaft_unbalance(lay, shaft.name)
+        force = me * speed**2
+        on = [j for j, b in enumerate(lay.bearings) if b.shaft == shaft.name]
+        cap = float(sum(capacity[j] for j in on))
         if force > cap:
+            names = " and ".join(lay.bearings[j].name for j in on)
             out.append(
-                f"the unbalance force of the {shaft} shaft, M e_mu omega^2 = "
-                f"{system.shaft_masses[i]:.3g} kg x {unbalance[i] * 1e3:g} mm x "
-                f"({speeds[2 * i]:.4g} rad/s)^2 = {force:.4g} N, exceeds the static load "
-                f"capacity of bearings {2 * i + 1} and {2 * i + 2}, {cap:.4g} N ({model} film at "
-                f"eccentricity {EPS_DESIGN}): the journals will orbit near the bearing wall "
-                f"(or the run fail); lower operation.unbalance[{i}] or operation.speed")
+                f"the unbalance force of shaft {shaft.name}, M e_mu omega^2 = "
+                f"{me * 1e3:.4g} kg mm x ({abs(speed):.4g} rad/s)^2 = {force:.4g} N, exceeds "
+                f"the static load capacity of its bearings {names}, {cap:.4g} N ({model} film "
+                f"at eccentricity {EPS_DESIGN}): the journals will orbit near the bearing wall "
+                f"(or the run fail); lower {' or '.join(keys)} or drive.speed")
     return out
 
 
@@ -101,10 +119,11 @@ def overload_message(case: Case) -> str | None:
     over = [b for b in range(len(loads)) if loads[b] > capacity[b]]
     if not over:
         return None
-    what = "; ".join(f"bearing {b + 1} carries {loads[b]:.4g} N, its film at most "
+    names = case.names("bearings")
+    what = "; ".join(f"bearing {names[b]} carries {loads[b]:.4g} N, its film at most "
                      f"{capacity[b]:.4g} N" for b in over)
-    return (f"{what} (static loads with T = {case['operation.torque']:g} N m, {model} film at "
-            f"eccentricity {EPS_LIMIT}, {case['operation.speed']:g} rad/s): raise "
+    return (f"{what} (static loads with T = {case['drive.torque']:g} N m, {model} film at "
+            f"eccentricity {EPS_LIMIT}, {case['drive.speed']:g} rad/s): raise "
             f"{', '.join(RAISE_CAPACITY)}, or lower {LOWER_LOAD}")
 
 

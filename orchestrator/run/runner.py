@@ -210,23 +210,23 @@ def failure_text(case: Case, cause: BaseException) -> str:
     if bearing is None or state is None or len(state) != 4:
         return str(cause)
     s, t, sd, td = (float(v) for v in state)
-    clearance = float(case["bearings.clearance"][bearing - 1])
+    name = case.names("bearings")[bearing - 1]
+    clearance = float(case[f"bearings.{name}.clearance"])
     eps = math.hypot(s, t) / clearance
     where = (f"s = {s * 1e6:.1f} um, t = {t * 1e6:.1f} um (radial clearance "
              f"{clearance * 1e6:.1f} um)")
     if eps >= 1.0:
         if unbalance_warnings(case):
             todo = ("the unbalance force exceeds the bearings' load capacity (the warning "
-                    "above): lower operation.unbalance (--unbalance) or operation.speed "
-                    "(--speed)")
+                    "above): lower gears.*.unbalance (--unbalance) or drive.speed (--speed)")
         else:
             todo = ("lower the load (--torque, --unbalance) or the speed (--speed), or give "
-                    "the film more capacity (bearings.viscosity, bearings.length, a smaller "
-                    "bearings.clearance)")
-        return (f"bearing {bearing}'s journal reached the bearing wall: eccentricity ratio "
+                    f"the film more capacity (bearings.{name}.viscosity, "
+                    f"bearings.{name}.length, a smaller bearings.{name}.clearance)")
+        return (f"bearing {name}'s journal reached the bearing wall: eccentricity ratio "
                 f"{eps:.4g} (must stay below 1) at {where}; {todo}")
     reason = str(getattr(cause, "reason", "")) or str(cause)
-    return (f"bearing {bearing} failed at {where}, eccentricity ratio {eps:.4g}, velocity "
+    return (f"bearing {name} failed at {where}, eccentricity ratio {eps:.4g}, velocity "
             f"s_dot = {sd:.4g} m/s, t_dot = {td:.4g} m/s: {reason}")
 
 
@@ -413,7 +413,7 @@ def run_case(case: Case, in_process: bool = False, out_dir: Path | str = "result
              echo_warnings: bool = True, threads: int = 1) -> RunSummary:
     """Run a case into a results file (module docstring); returns a :class:`RunSummary`.
 
-    The case carries every setting (the bearing model in ``bearings.model``, the length in
+    The case carries every setting (the bearing models in ``bearings.*.model``, the length in
     ``simulation.mesh_periods``: :meth:`fmu_src.case.Case.with_overrides`). ``steps``: stop
     after this many time steps (a quick look; default: all the periods'). ``echo_warnings``:
     print the checks' warnings on stderr (they are also in the summary and the results file).
@@ -652,8 +652,9 @@ def _store_report(path: Path) -> dict | None:
 def static_report(case: Case, positions: np.ndarray) -> str:
     """Eccentricity ratio and position of each journal at X0 (clearance units)."""
     lines = []
-    clearances = [float(c) for c in case["bearings.clearance"]]
-    for b, (pos, c) in enumerate(zip(positions, clearances, strict=True)):
-        lines.append(f"bearing {b + 1}: s/C = {pos[0] / c:+.4f}, t/C = {pos[1] / c:+.4f}, "
+    names = case.names("bearings")
+    clearances = [float(case[f"bearings.{b}.clearance"]) for b in names]
+    for b, pos, c in zip(names, positions, clearances, strict=True):
+        lines.append(f"bearing {b}: s/C = {pos[0] / c:+.4f}, t/C = {pos[1] / c:+.4f}, "
                      f"eccentricity {math.hypot(*pos) / c:.4f}")
     return "\n".join(lines)

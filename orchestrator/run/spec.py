@@ -92,23 +92,29 @@ class RunSpec:
 
     @property
     def label(self) -> str:
-        """The bearing model's name (``hybrid``), also when the bearing FMUs are this
-        package's own of that model (an SSP archive of ``gsb export-ssp``: ``BearingHybrid``
-        is named ``hybrid`` as in a direct run); for a bearing FMU of the user's own, ``fmu-``
-        and its file's stem, so that the results file says whose bearing law it holds."""
+        """The bearings' model's name (``hybrid``; ``mixed`` for bearings of several models),
+        also when the bearing FMUs are this package's own of that model (an SSP archive of
+        ``gsb export-ssp``: ``BearingHybrid`` is named ``hybrid`` as in a direct run); for a
+        bearing FMU of the user's own, ``fmu-`` and its file's stem, so that the results file
+        says whose bearing law it holds."""
+        model = description.shared_bearing_model(self.case) or "mixed"
         if self.fmus is None:
-            return self.case["bearings.model"]
+            return model
         stems = {Path(p).stem for p in self.fmus["bearings"]}
-        model = self.case["bearings.model"]
-        if stems == {bearing_fmu_name(model)}:
+        if model != "mixed" and stems == {bearing_fmu_name(model)}:
             return model
         stem = Path(self.fmus["bearings"][0]).stem
         return "fmu-" + "".join(c if c.isalnum() or c in "-." else "-" for c in stem)
 
     def attributes(self) -> dict:
         """The settings stored as root attributes of the results file (numbers in SI units;
-        :func:`with_units` adds the units)."""
+        :func:`with_units` adds the units): ``speed`` the input speed, ``speeds`` and
+        ``clearance`` per bearing, ``unbalance`` per gear, ``teeth`` of the first mesh's gears
+        (driver first)."""
         case = self.case
+        lay = description.layout(case)
+        # TODO(train): the figures read the first mesh's teeth as the pinion's and the gear's
+        teeth = [lay.gear(g).teeth for g in lay.drivers[0]] if lay.meshes else []
         return {
             "kind": "run", "case": case["case.name"], "case_file": str(case.source),
             "case_toml": case.to_toml(), "bearing_model": self.label,
@@ -119,10 +125,11 @@ class RunSpec:
                 Path(self.fmus["bearings"][0]).read_bytes()).hexdigest()),
             "dt": self.dt, "steps_per_mesh_period": case["simulation.steps_per_mesh_period"],
             "mesh_periods": case["simulation.mesh_periods"], "steps_total": self.n_steps,
-            "speed": case["operation.speed"], "speeds": description.bearing_speeds(case),
-            "teeth": list(case["gear_pair.teeth"]), "torque": case["operation.torque"],
-            "unbalance": list(case["operation.unbalance"]),
-            "clearance": [float(c) for c in case["bearings.clearance"]],
+            "speed": case["drive.speed"], "speeds": description.bearing_speeds(case),
+            "teeth": teeth, "torque": case["drive.torque"],
+            "unbalance": [case[f"gears.{g}.unbalance"] for g in case.names("gears")],
+            "clearance": [float(case[f"bearings.{b}.clearance"])
+                          for b in case.names("bearings")],
             "tolerance": case["simulation.tolerance"], "interrupted": "", "stopped_by": "",
         }
 

@@ -27,14 +27,14 @@ from pathlib import Path
 
 import numpy as np
 
-from fmu_src.case import FIELDS, Case
+from fmu_src import description
+from fmu_src.case import INSTANCE_SECTIONS, Case, CaseError, field_of
 from fmu_src.units import DIMENSIONS, symbol
 from orchestrator.analysis.spectrum import PAD
 
 __all__ = ["DATASETS", "field_unit", "finish", "point_values", "read_sweep", "read_sweep_attrs",
            "store_point", "write_header"]
 
-_BY_KEY = {f.key: f for f in FIELDS}
 
 #: Datasets of a successful point: name -> (unit, description).
 #:
@@ -67,25 +67,43 @@ DATASETS = {
 }
 
 
+def _kind(key: str) -> str | None:
+    """The kind of a case key or override key (``gears.*.unbalance``), None for no field."""
+    try:
+        return field_of(key).kind
+    except CaseError:
+        return None
+
+
 def field_unit(key: str) -> str:
     """SI unit of a case field (``"1"`` for counts, ``""`` for text, choices and flags)."""
-    kind = _BY_KEY[key].kind
+    kind = _kind(key)
     if kind in DIMENSIONS:
         return symbol(kind)
     return "1" if kind == "count" else ""
 
 
+def _first(base: Case, key: str) -> str:
+    """A ``*`` key as its first instance's (``gears.*.unbalance`` -> ``gears.pinion.unbalance``)."""
+    section, *rest = key.split(".")
+    if len(rest) == 2 and rest[0] == "*":
+        names = base.names(section) if section in INSTANCE_SECTIONS else []
+        return f"{section}.{names[0]}.{rest[1]}" if names else key
+    return key
+
+
 def point_values(base: Case, overrides: dict, keys) -> list[float]:
     """The varied values of a point in SI units, bounds not checked (the first entry of a list
-    field; NaN where a value is not a number or not readable)."""
+    field, the first instance's for a ``*`` key; NaN where a value is not a number or not
+    readable)."""
     from fmu_src.units import UnitError, parse_quantity
 
     out = []
     for key in keys:
-        value = overrides[key] if key in overrides else base.values.get(key)
+        value = overrides[key] if key in overrides else base.values.get(_first(base, key))
         if isinstance(value, (list, tuple)):
             value = value[0] if value else math.nan
-        kind = _BY_KEY[key].kind if key in _BY_KEY else None
+        kind = _kind(key)
         if kind in DIMENSIONS and isinstance(value, (int, float, str)) \
                 and not isinstance(value, bool):
             try:
@@ -129,8 +147,7 @@ def write_header(path: Path, base: Case, vary_keys, bearings, periods: int,
         f.attrs["case_file"] = str(base.source)
         f.attrs["case_toml"] = base.to_toml()
         f.attrs["vary_keys"] = _strings(vary_keys)
-        f.attrs["vary_units"] = _strings(field_unit(k) if k in _BY_KEY else ""
-                                         for k in vary_keys)
+        f.attrs["vary_units"] = _strings(field_unit(k) for k in vary_keys)
         f.attrs["bearings"] = _strings(bearings)
         f.attrs["periods"] = int(periods)
         f.attrs["steady_periods"] = int(steady_periods)
@@ -152,7 +169,7 @@ def store_point(path: Path, index: int, point, base: Case, vary_keys, result: di
         g.attrs["overrides"] = json.dumps(point.overrides)
         g.attrs["values"] = np.asarray(point_values(base, point.overrides, vary_keys),
                                        dtype=float)
-        g.attrs["bearing"] = point.bearing or base["bearings.model"]
+        g.attrs["bearing"] = point.bearing or description.shared_bearing_model(base) or "mixed"
         g.attrs["label"] = point.label
         if result["ok"]:
             for key, val in result["data"].items():

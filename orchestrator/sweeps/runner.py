@@ -36,6 +36,7 @@ from pathlib import Path
 
 import numpy as np
 
+from fmu_src import description
 from fmu_src.case import Case, CaseError, load_case, parse_case, parse_toml
 from orchestrator.run.progress import RunInterrupted, deferred_signals
 from orchestrator.run.spec import RunError
@@ -104,10 +105,10 @@ def point_spectrum(case: Case, results: dict, steady_periods: int) -> dict:
     ``steady_periods`` mesh periods), or the whole steady window if it is shorter than one
     revolution; so the pinion orders 1, z1, 2 z1, ... fall on bins when it holds a revolution
     and read their amplitudes exactly."""
-    from fmu_src.description import time_step
+    from fmu_src.description import mesh_teeth, time_step
     from orchestrator.analysis.spectrum import order_spectrum
 
-    z1 = int(case["gear_pair.teeth"][0])
+    z1 = int(mesh_teeth(case)[0][0])  # TODO(train): the orders of the input shaft's pinion
     per_mesh = int(case["simulation.steps_per_mesh_period"])
     steady = max(1, int(steady_periods))
     revolutions = steady // z1
@@ -116,7 +117,7 @@ def point_spectrum(case: Case, results: dict, steady_periods: int) -> dict:
     n = min(n, time_s.size)
     force = np.asarray(results["bearing_force"][-n:], dtype=float)
     norm = np.hypot(force[..., 0], force[..., 1])
-    pinion_hz = abs(case["operation.speed"]) / (2.0 * math.pi)
+    pinion_hz = abs(case["drive.speed"]) / (2.0 * math.pi)
     orders, amp = order_spectrum(norm, time_step(case), pinion_hz,
                                  max_order=MAX_MESH_ORDER * z1)
     step = time_s[1] - time_s[0] if time_s.size > 1 else 0.0
@@ -131,6 +132,7 @@ def run_point(case, point: SweepPoint, periods: int, steady_periods: int,
     applied here. Never raises (errors are returned) except
     :class:`~orchestrator.run.progress.RunInterrupted`, a Ctrl-C of a serial sweep."""
     try:
+        from fmu_src.description import mesh_period
         from orchestrator.analysis.metrics import run_metrics, steady_window
         from orchestrator.run.runner import simulate_case
         from orchestrator.run.spec import RunSpec
@@ -141,12 +143,10 @@ def run_point(case, point: SweepPoint, periods: int, steady_periods: int,
             case = as_case(case)
         run = {"simulation.mesh_periods": periods}
         if point.bearing is not None:
-            run["bearings.model"] = point.bearing
+            run["bearings.*.model"] = point.bearing
         case = case.with_overrides(point.overrides | run)
-        z1 = case["gear_pair.teeth"][0]
-        mesh_period = 2 * math.pi / (case["operation.speed"] * z1)
         steady_n = min(steady_periods, periods)
-        steady = steady_n * mesh_period
+        steady = steady_n * mesh_period(case)
         t0 = time.perf_counter()
         result = simulate_case(RunSpec.of(case, in_process=True), echo_warnings=False)
         s, r = result.summary, result.as_dict()
@@ -172,10 +172,10 @@ def run_point(case, point: SweepPoint, periods: int, steady_periods: int,
 
 def check_point(case: Case, point: SweepPoint) -> Case:
     """The case of a point (its overrides and bearing model applied), checked; raises
-    :class:`~fmu_src.case.CaseError`."""
+    :class:`~fmu_src.fields.CaseError`."""
     overrides = dict(point.overrides)
     if point.bearing is not None:
-        overrides["bearings.model"] = point.bearing
+        overrides["bearings.*.model"] = point.bearing
     return case.with_overrides(overrides)
 
 
@@ -264,7 +264,8 @@ def run_sweep(case, points, path: str | Path, periods: int, steady_periods: int 
     if vary_keys is None:
         vary_keys = list(dict.fromkeys(k for p in points for k in p.overrides))
     vary_keys = list(vary_keys)
-    bearings = list(dict.fromkeys(p.bearing or base["bearings.model"] for p in points))
+    own = description.shared_bearing_model(base) or "mixed"
+    bearings = list(dict.fromkeys(p.bearing or own for p in points))
     path = Path(path)
     t0 = time.perf_counter()
     failed = []

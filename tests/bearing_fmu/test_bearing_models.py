@@ -136,7 +136,7 @@ def test_one_coupled_step_through_its_fmu_equals_in_process(name, fmu_dir):
     case = load_case("baguet2010_spur")
     res = {}
     for in_process in (True, False):
-        m = build_master(case.with_overrides({"bearings.model": name}), in_process=in_process,
+        m = build_master(case.with_overrides({"bearings.*.model": name}), in_process=in_process,
                          fmu_dir=fmu_dir)
         try:
             static = m.solve_static()

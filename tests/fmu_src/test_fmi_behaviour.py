@@ -73,8 +73,8 @@ def test_bounds_are_declared_in_the_model_description(fmu_dir):
     with zipfile.ZipFile(fmu_dir / "GearShaft.fmu") as z:
         root = ET.fromstring(z.read("modelDescription.xml"))
     typed = {sv.get("name"): next(iter(sv)) for sv in root.iter("ScalarVariable")}
-    assert typed["gear_pair.pressure_angle"].get("max") == "0.7"
-    assert typed["gear_pair.teeth[2]"].get("min") == "5"
+    assert typed["gears.pinion.pressure_angle"].get("max") == "0.7"
+    assert typed["gears.gear.teeth"].get("min") == "5"
 
 
 @pytest.mark.parametrize("model", list(MODELS))

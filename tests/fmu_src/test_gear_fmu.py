@@ -41,9 +41,11 @@ def test_gear_fmu_passes_fmpy_validation_with_units_and_descriptions(gear_fmu):
         if v.type == "Real":
             assert variables[v.name].unit == v.unit, v.name
     # the carried case's fields are parameters, with the bounds the case schema declares
-    teeth = variables["gear_pair.teeth[1]"]
+    teeth = variables["gears.pinion.teeth"]
     assert teeth.type == "Integer" and teeth.start == "26" and teeth.min == "5"
-    module = variables["gear_pair.module"]  # > 0: the least value accepted is the next double
+    module = variables["gears.pinion.module"]  # > 0: the least accepted is the next double
+    assert variables["shafts.gear_shaft.outer_diameter[1]"].start == "0.09"
+    assert variables["bearings.'3'.position"].start == "0"
     assert module.min == "5e-324" and module.unit == "m" and module.description.endswith("(> 0)")
     assert variables["rotation_sign_3"].causality == "calculatedParameter"
     assert variables["K_st_3"].unit == "N/m" and variables["C_tt_4"].unit == "N.s/m"
@@ -74,7 +76,8 @@ def test_a_case_that_does_not_fit_is_logged_not_raised():
     slave = GearShaftSlave(instance_name="t")
     slave._fmi_status_protocol = True  # as the patched library sets it
     vr = {v.name: v.value_reference for v in slave.vars.values()}
-    assert slave.set_real([vr["gear_pair.addendum_coefficient"]], [1.4]) is None
+    assert slave.set_real([vr["gears.pinion.addendum_coefficient"],
+                           vr["gears.gear.addendum_coefficient"]], [1.4, 1.4]) is None
     values, status = slave.get_real([vr["s_1"], vr["mesh_force"]])
     assert status == 3 and all(math.isnan(x) for x in values)
     values, status = slave.get_real([vr["support_load_s_1"]])
@@ -82,7 +85,7 @@ def test_a_case_that_does_not_fit_is_logged_not_raised():
     slave.exit_initialization_mode()
     assert slave.do_step(0.0, 1e-5) is False
     text = " | ".join(m.msg for m in slave.log_queue)
-    assert "gear_pair (centre_distance" in text
+    assert "meshes.mesh (gears pinion and gear: centre_distance" in text
     assert "the pinion tips touch the gear's root circle" in text
     assert "not stepping after an earlier failure" in text
 
@@ -93,9 +96,9 @@ def test_bad_values_are_refused_by_the_call_that_sets_them(gear_fmu):
     limit, and the variable keeps its value; the 56 law inputs set in one call likewise."""
     out = run_here(module=PROBES, args=["refuse_bad_values", {"fmu": gear_fmu}])
     assert out["module"][0] == 3
-    assert "gear_pair.module = -0.004 m refused: must be > 0 m" in out["module"][1]
+    assert "gears.pinion.module = -0.004 m refused: must be > 0 m" in out["module"][1]
     assert out["teeth"][0] == 3
-    assert "gear_pair.teeth[2] = 3 refused: must be >= 5" in out["teeth"][1]
+    assert "gears.gear.teeth = 3 refused: must be >= 5" in out["teeth"][1]
     assert out["law"][0] == 3 and "K_ss_2 = nan N/m refused: not a finite number" in out["law"][1]
     assert out["module_kept"] == 0.004 and out["teeth_kept"] == 157
     assert "setting the bearing laws (status error)" in out["laws"]
@@ -166,8 +169,8 @@ def test_a_checked_case_reaches_the_fmu_unchanged(tmp_path):
     """Case.to_toml: a Case with overrides written as a case file reloads to the same values."""
     from fmu_src.case import load_case
 
-    case = load_case(CASE).with_overrides({"operation.torque": "150 N.m",
-                                           "operation.gravity": True,
+    case = load_case(CASE).with_overrides({"drive.torque": "150 N.m",
+                                           "drive.gravity": [0.0, -9.81],
                                            "case.description": 'quote " and backslash \\'})
     path = tmp_path / "case.toml"
     path.write_text(case.to_toml())

@@ -223,11 +223,11 @@ def test_master_checkpoint_restores_every_bearing_model_exactly_and_refuses_misf
     from orchestrator.run.runner import build_master
 
     case = load_case("baguet2010_spur", {"simulation.steps_per_mesh_period": 8,
-                                         "bearings.nodes": 48, "bearings.axial_intervals": 8})
+                                         "bearings.*.nodes": 48, "bearings.*.axial_intervals": 8})
     dt = description.time_step(case)
 
     def started(model):
-        m = build_master(case.with_overrides({"bearings.model": model}), in_process=True)
+        m = build_master(case.with_overrides({"bearings.*.model": model}), in_process=True)
         m.solve_static()
         m.exit_initialization()
         return m

@@ -180,8 +180,8 @@ def test_load_end_balances_the_input_torque():
     spring that fixes the free rotation in the static solution carries nothing, and the
     static state equals the clamped one up to that rotation (transmission error, mesh load)."""
     ref = structure(load_case("baguet2010_spur"))
-    st = structure(load_case("baguet2010_spur", {"drivetrain.output_end": "load",
-                                                 "drivetrain.load_inertia": "4 kg m^2"}))
+    st = structure(load_case("baguet2010_spur", {"drive.output_end": "load",
+                                                 "drive.load_inertia": "4 kg m^2"}))
     kb = np.broadcast_to(1e9 * np.eye(2), (4, 2, 2)).copy()
     for s in (ref, st):
         s.static(np.zeros((4, 2)), kb)
@@ -193,8 +193,10 @@ def test_load_end_balances_the_input_torque():
 
 
 def test_gear_inertias_can_be_given():
-    case = load_case("baguet2010_spur", {"gear_pair.polar_inertia": ["0.004 kg.m^2", 5.0],
-                                         "gear_pair.diametral_inertia": [0.002, 2.5]})
+    case = load_case("baguet2010_spur", {"gears.pinion.polar_inertia": "0.004 kg.m^2",
+                                         "gears.gear.polar_inertia": 5.0,
+                                         "gears.pinion.diametral_inertia": 0.002,
+                                         "gears.gear.diametral_inertia": 2.5})
     sys_ = structure(case).system
     node = sys_.gear_dofs[6:]
     assert sys_.gears[1].inertias[1:] == (2.5, 5.0)
@@ -202,9 +204,9 @@ def test_gear_inertias_can_be_given():
 
 
 @pytest.mark.parametrize("overrides, words", [
-    ({"drivetrain.motor_coupling_stiffness": 1e4}, "motor_inertia must be > 0"),
-    ({"drivetrain.load_inertia": 1.0}, "output_end = 'load'"),
-    ({"drivetrain.motor_inertia": "0.1 kg"}, "inertia"),
+    ({"drive.motor_coupling_stiffness": 1e4}, "motor_inertia must be > 0"),
+    ({"drive.load_inertia": 1.0}, "output_end = 'load'"),
+    ({"drive.motor_inertia": "0.1 kg"}, "inertia"),
     ({"simulation.damping_model": "rayleigh"}, "rayleigh_frequencies"),
     ({"simulation.damping_model": "rayleigh", "simulation.rayleigh_frequencies": [500, 100]},
      "0 < f1 < f2"),

@@ -244,7 +244,7 @@ def test_a_new_torque_acts_as_if_built_with_it(name):
     from fmu_src.case import load_case
 
     case = load_case(name)
-    new = 1.5 * case["operation.torque"]
+    new = 1.5 * case["drive.torque"]
     pair = d.gear_pair(case)
 
     def build(torque):
@@ -254,7 +254,7 @@ def test_a_new_torque_acts_as_if_built_with_it(name):
     kb, cb = iso(2e8), iso(1e4)
     f0 = np.zeros((4, 2))
     dt = d.time_step(case)
-    built, changed = build(new), build(case["operation.torque"])
+    built, changed = build(new), build(case["drive.torque"])
     changed.static(f0, kb)
     changed.set_damping_reference(kb)
     changed.step(dt, f0, kb, cb)  # fills the cache of the step's factorisation

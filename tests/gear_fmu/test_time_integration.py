@@ -24,7 +24,7 @@ def paper_case_state(n, refined, model, periods=2):
     """Journal positions [m] after ``periods`` mesh periods at ``n`` steps per period, with the
     coupled iterations converged to 1e-10."""
     case = load_case("baguet2010_spur", {
-        "bearings.model": model, "simulation.tolerance": 1e-10,
+        "bearings.*.model": model, "simulation.tolerance": 1e-10,
         "simulation.steps_per_mesh_period": n, "simulation.consistent_start": refined,
         "simulation.locate_contact": refined})
     master = build_master(case, in_process=True)
@@ -84,7 +84,7 @@ def test_run_warns_when_newmark_lengthens_a_mesh_mode_period_over_1_percent(step
 
     from orchestrator.run.runner import run_case
 
-    case = load_case("baguet2010_spur", {"bearings.model": "linear",
+    case = load_case("baguet2010_spur", {"bearings.*.model": "linear",
                                          "simulation.steps_per_mesh_period": steps})
     s = run_case(case, steps=2, in_process=True, out_dir=tmp_path, progress=False)
     err = capsys.readouterr().err
@@ -130,7 +130,7 @@ def test_a_step_a_hair_off_the_mesh_periods_divisor(name):
     5e-8 of the run at the exact step, relative to the largest displacement (measured 7.7e-9
     spur, 3.5e-9 helical: the step's own difference; with sub-steps down to 5e-7 dt the spur
     case's was 0.94)."""
-    case = load_case(name, {"bearings.model": "lumped", "bearings.lumped_damping": 2000.0})
+    case = load_case(name, {"bearings.*.model": "lumped", "bearings.*.lumped_damping": 2000.0})
     dt = description.time_step(case)
     typed = float(f"{dt:.8g}")
     assert 0 < abs(typed / dt - 1) < 1e-7
@@ -168,7 +168,7 @@ def test_the_helical_case_condenses_each_recurring_sub_step_once(monkeypatch):
     lengths followed the drift, and 8192 steps condensed 117 lengths, not the 54 of one
     period's schedule."""
     made = _counted_condensations(monkeypatch)
-    case = load_case("baguet2010_helical", {"bearings.model": "linear"})
+    case = load_case("baguet2010_helical", {"bearings.*.model": "linear"})
     master = build_master(case, in_process=True)
     master.solve_static()
     master.exit_initialization()

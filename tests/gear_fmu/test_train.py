@@ -42,9 +42,9 @@ def two_stage(direction=1.2217304763960306, helix=0.0, hands=("left", "right"),
     ``direction`` = 70 deg by default), a disc on a; with
     ``stiff_supports`` the bearings sit next to the gears (for the torsional chain)."""
     mat = dict(young=210e9, poisson=0.3, density=density, element_length=element_length)
-    lengths = (0.1, 0.12, 0.1)
-    shafts = [ShaftSpec(n, (ln,), (diameter,), (0.0,), **mat)
-              for n, ln in zip("abc", lengths, strict=True)]
+    lengths, offsets = (0.1, 0.12, 0.1), (0.0, 0.02, 0.06)  # the meshing faces aligned
+    shafts = [ShaftSpec(n, (ln,), (diameter,), (0.0,), offset=z, **mat)
+              for n, ln, z in zip("abc", lengths, offsets, strict=True)]
     beta = math.radians(helix)
     hand = hands if helix else ("", "")
     a1 = zero_backlash_centre_distance((20, 40), 4e-3, ALPHA, beta, (0.0, 0.0))

@@ -14,7 +14,7 @@ def bearing_fmu_files(fmu_dir: str) -> dict:
     case = load_case("baguet2010_spur")
     out = {}
     for model in ("hybrid", "lumped"):
-        st, b = system_from_case(case.with_overrides({"bearings.model": model}), fmu_dir)
+        st, b = system_from_case(case.with_overrides({"bearings.*.model": model}), fmu_dir)
         out[model] = sorted({s.path.name for s in b.slaves})
         b.close()
         st.close()

@@ -20,8 +20,8 @@ def force_only_bearings(out_dir: str, gear_fmu: str, bearing_fmu: str) -> dict:
     from orchestrator.run.results import read_results
     from orchestrator.run.runner import run_case
 
-    case = load_case("baguet2010_spur", {"bearings.model": "lumped",
-                                         "bearings.lumped_damping": 2000.0})
+    case = load_case("baguet2010_spur", {"bearings.*.model": "lumped",
+                                         "bearings.*.lumped_damping": 2000.0})
     ref = run_case(case, steps=64, in_process=True, out_dir=out_dir, progress=False)
     mine = run_case(case, steps=64, out_dir=out_dir, progress=False,
                     fmus=dict(gear=gear_fmu, bearings=[bearing_fmu] * 4))

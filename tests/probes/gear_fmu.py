@@ -50,11 +50,11 @@ def refuse_bad_values(fmu: str) -> dict:
         except FMICallException as exc:
             r[key] = [exc.status, s.log_tail(since=since)]
 
-    attempt("module", lambda: s.fmu.setReal([vr["gear_pair.module"]], [-0.004]))
-    attempt("teeth", lambda: s.fmu.setInteger([vr["gear_pair.teeth[2]"]], [3]))
+    attempt("module", lambda: s.fmu.setReal([vr["gears.pinion.module"]], [-0.004]))
+    attempt("teeth", lambda: s.fmu.setInteger([vr["gears.gear.teeth"]], [3]))
     attempt("law", lambda: s.fmu.setReal([vr["K_ss_2"]], [math.nan]))
-    r["module_kept"] = s.fmu.getReal([vr["gear_pair.module"]])[0]
-    r["teeth_kept"] = s.fmu.getInteger([vr["gear_pair.teeth[2]"]])[0]
+    r["module_kept"] = s.fmu.getReal([vr["gears.pinion.module"]])[0]
+    r["teeth_kept"] = s.fmu.getInteger([vr["gears.gear.teeth"]])[0]
     bad = AffineLaws(law_a.f0, law_a.kb, law_a.cb.copy())
     bad.cb[2, 0, 1] = float("nan")
     try:
@@ -143,7 +143,7 @@ def comparison(fmu: str, case: str) -> dict:
     states, its = [], []
     for slave in (InProcessStructure(description.structure(case)),
                   FmuStructure(fmu, case=case)):
-        short = case.with_overrides({"bearings.model": "short"})
+        short = case.with_overrides({"bearings.*.model": "short"})
         bearings = ModelBearings(description.bearing_models(short),
                                  description.BEARING_FRAMES, description.bearing_speeds(case))
         m = Master(slave, bearings)

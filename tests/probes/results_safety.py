@@ -51,11 +51,11 @@ def resume_every_model(in_process: bool, fmu_dir: str) -> dict:
 
     out = {}
     case = load_case("baguet2010_spur", {"simulation.steps_per_mesh_period": 8,
-                                         "bearings.nodes": 48, "bearings.axial_intervals": 8})
+                                         "bearings.*.nodes": 48, "bearings.*.axial_intervals": 8})
     kw = dict(in_process=in_process, fmu_dir=fmu_dir, progress=False)
     with tempfile.TemporaryDirectory() as tmp:
         for model in MODELS:
-            one = case.with_overrides({"bearings.model": model, "simulation.mesh_periods": 1})
+            one = case.with_overrides({"bearings.*.model": model, "simulation.mesh_periods": 1})
             ref = run_case(one, out_dir=tmp + "/ref_" + model, **kw)
             part = run_case(one, steps=4, out_dir=tmp + "/" + model, **kw)
             resume_run(part.results, periods=1, fmu_dir=fmu_dir, progress=False)

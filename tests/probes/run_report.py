@@ -15,7 +15,8 @@ def fmu_report(out_dir: str, fmu_dir: str) -> dict:
     from orchestrator.run.results import read_results
     from orchestrator.run.runner import run_case
 
-    case = load_case("baguet2010_spur", {"bearings.model": "linear", "simulation.mesh_periods": 8})
+    case = load_case("baguet2010_spur", {"bearings.*.model": "linear",
+                                         "simulation.mesh_periods": 8})
     s = run_case(case, out_dir=out_dir, fmu_dir=fmu_dir, progress=False)
     r = read_results(s.results)
     a = r["attrs"]

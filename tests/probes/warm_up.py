@@ -36,7 +36,7 @@ def native_and_structure() -> None:
     export_library()
     with tempfile.TemporaryDirectory() as tmp:
         for case, model in (("baguet2010_spur", "lumped"), ("baguet2010_helical", "lumped")):
-            run_case(load_case(case, {"bearings.model": model}), steps=2, in_process=True,
+            run_case(load_case(case, {"bearings.*.model": model}), steps=2, in_process=True,
                      out_dir=tmp + "/" + case, progress=False)
 
 

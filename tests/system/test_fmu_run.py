@@ -29,7 +29,7 @@ def compare(fmu_dir, model, periods, tmp, steps=None, overrides=None) -> dict:
     case = load_case("baguet2010_spur", overrides or None)
     out = {}
     for in_process in (True, False):
-        run = case.with_overrides({"bearings.model": model, "simulation.mesh_periods": periods})
+        run = case.with_overrides({"bearings.*.model": model, "simulation.mesh_periods": periods})
         s = run_case(run, in_process=in_process, out_dir=tmp, fmu_dir=fmu_dir, progress=False,
                      steps=steps)
         out[in_process] = (read_results(s.results), s)
@@ -77,15 +77,16 @@ def test_swapping_the_bearing_fmu_is_a_file_name(fmu_dir):
 #: (inertias, String choices, Boolean flags): each through FMUs equals in-process bit for bit
 SETTINGS = {
     "motor and load behind couplings, Rayleigh damping": {
-        "drivetrain.motor_inertia": 0.5, "drivetrain.motor_coupling_stiffness": 1e4,
-        "drivetrain.motor_coupling_damping": 5.0, "drivetrain.output_end": "load",
-        "drivetrain.load_inertia": 5.0, "drivetrain.load_coupling_stiffness": 1e5,
+        "drive.motor_inertia": 0.5, "drive.motor_coupling_stiffness": 1e4,
+        "drive.motor_coupling_damping": 5.0, "drive.output_end": "load",
+        "drive.load_inertia": 5.0, "drive.load_coupling_stiffness": 1e5,
         "simulation.damping_model": "rayleigh",
         "simulation.rayleigh_frequencies": [1000.0, 5000.0]},
     "rigid motor, structure basis, mesh damping, refinements off": {
-        "drivetrain.motor_inertia": 0.05, "simulation.damping_basis": "structure",
+        "drive.motor_inertia": 0.05, "simulation.damping_basis": "structure",
         "simulation.mesh_damping_ratio": 0.05, "simulation.consistent_start": False,
-        "simulation.locate_contact": False, "gear_pair.polar_inertia": [0.004, 4.6]},
+        "simulation.locate_contact": False, "gears.pinion.polar_inertia": 0.004,
+        "gears.gear.polar_inertia": 4.6},
 }
 
 

@@ -96,7 +96,8 @@ def test_the_ssp_archive_holds_the_system(ssp_file):
     assert values[("bearing3", "rotation_sign")] == "-1"
     from fmu_src.case import load_case
 
-    clearance = load_case("baguet2010_spur")["bearings.clearance"]
+    case = load_case("baguet2010_spur")
+    clearance = [case[f"bearings.{b}.clearance"] for b in case.names("bearings")]
     assert [float(values[(f"bearing{j}", "C")]) for j in range(1, 5)] == clearance  # exact
     # the static solution X0 as start values: a non-iterative master starts in equilibrium
     from orchestrator.coupling.system import build_master
@@ -223,7 +224,7 @@ def test_build_fmus_carries_the_case_and_names_a_bad_one(tmp_path):
     md = read_model_description(str(tmp_path / "GearShaft.fmu"))
     start = {v.name: v.start for v in md.modelVariables}
     assert start["case.name"] == "baguet2010_helical" and float(
-        start["gear_pair.helix_angle"]) > 0.1
+        start["gears.pinion.helix_angle"]) > 0.1
     proc = subprocess.run([*GSB, "build-fmus", "Nope", "--dest", str(tmp_path)],
                           capture_output=True, text=True, timeout=600)
     assert proc.returncode == 2 and "Traceback" not in proc.stderr

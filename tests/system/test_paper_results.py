@@ -21,8 +21,8 @@ from orchestrator.studies.reproduce.figures import force_spectrum, has_line
 
 def short_run(tmp_path, path=SPUR, model="hybrid", periods=192, **overrides):
     case = load_case(path, overrides)
-    s = run_case(case.with_overrides({"bearings.model": model, "simulation.mesh_periods": periods}),
-                 in_process=True, out_dir=tmp_path, progress=False)
+    run = {"bearings.*.model": model, "simulation.mesh_periods": periods}
+    s = run_case(case.with_overrides(run), in_process=True, out_dir=tmp_path, progress=False)
     return read_results(s.results), s
 
 
@@ -75,7 +75,7 @@ def test_mean_eccentricity_grows_with_torque():
     """Fig. 9: the static position (the centre of the orbits) moves out with the torque."""
     ecc = []
     for torque in (50.0, 100.0, 220.0, 400.0, 600.0):
-        master = build_master(load_case(SPUR, {"operation.torque": torque}), in_process=True)
+        master = build_master(load_case(SPUR, {"drive.torque": torque}), in_process=True)
         master.solve_static()
         ecc.append(np.hypot(*master.structure.journal_states()[0, :2]) / 150e-6)
     assert all(a < b for a, b in itertools.pairwise(ecc))
@@ -91,7 +91,7 @@ def test_linear_and_nonlinear_bearings_agree_at_small_unbalance(tmp_path):
         m = {}
         for model in ("hybrid", "linear"):
             r, _ = short_run(tmp_path, model=model, periods=96,
-                             **{"operation.unbalance": e, "operation.speed": speed})
+                             **{"gears.*.unbalance": e, "drive.speed": speed})
             m[model] = run_metrics(r, 26 * 2 * math.pi / (speed * 26))
         diffs[e] = abs(m["linear"]["force_ptp"][0] / m["hybrid"]["force_ptp"][0] - 1)
     print(f"\nbearing-1 peak-to-peak, linear vs nonlinear: {100 * diffs['0.6 mm']:.1f} % at "

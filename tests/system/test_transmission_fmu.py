@@ -97,9 +97,9 @@ def test_the_fmu_declares_the_case():
     case = _case()
     by_name = {v.name: v for v in transmission_variables(case)}
     assert by_name["torque"].causality == "input" and by_name["torque"].unit == "N.m"
-    assert by_name["torque"].start == case["operation.torque"]
-    assert by_name["bearings.model"].choices == tuple(MODELS)
-    assert by_name["gear_pair.teeth[2]"].start == case["gear_pair.teeth"][1]
+    assert by_name["torque"].start == case["drive.torque"]
+    assert by_name["bearings.'1'.model"].choices == tuple(MODELS)
+    assert by_name["gears.gear.teeth"].start == case["gears.gear.teeth"]
     assert "simulation.mesh_periods" not in by_name  # the host's stop time decides
     assert [n for n in OUTPUTS if by_name[n].causality != "output"] == []
 
@@ -120,11 +120,12 @@ def test_every_bearing_model_gives_gsb_runs_numbers(transmission_fmu):
     parameter) stepping at the case's step: ``gsb run`` of that model (:data:`SAME_RUN`)."""
     case = _case()
     h = _dt(case)
-    runs = [{"start_values": {"bearings.model": m}, "h": h, "n": STEPS} for m in MODELS]
+    runs = [{"start_values": {f"bearings.'{b}'.model": m for b in case.names("bearings")},
+             "h": h, "n": STEPS} for m in MODELS]
     got = run_isolated(module="tests.probes.transmission",
                        args=["run", {"fmu": str(transmission_fmu), "runs": runs}])
     for model, out in zip(MODELS, got, strict=True):
-        ref = gsb_run_rows(_case(**{"bearings.model": model}), STEPS)
+        ref = gsb_run_rows(_case(**{"bearings.*.model": model}), STEPS)
         assert_same_run(out["rows"][1:], ref, model)
         assert out["steps"] == STEPS
 
@@ -242,7 +243,7 @@ def test_a_bearing_fmu_of_your_own_carried_inside(fmu_dir, tmp_path):
                               "--bearing-fmu", str(tmp_path / "nowhere.fmu")],
                              capture_output=True, text=True, timeout=600, cwd=tmp_path)
     assert missing.returncode == 2 and "nowhere.fmu: no such file" in missing.stderr
-    case = _case(**{"bearings.model": "lumped"})
+    case = _case(**{"bearings.*.model": "lumped"})
     got = run_isolated(module="tests.probes.transmission",
                        args=["run", {"fmu": str(fmu), "runs": [{"h": _dt(case), "n": 8}]}])
     assert_same_run(got[0]["rows"][1:], gsb_run_rows(case, 8), "lumped through a bearing FMU")

@@ -88,9 +88,9 @@ def system_from_files(case, gear_fmu, bearing_fmus, bearing_parameters=None):
 
 
 def system_from_case(case, fmu_dir=None):
-    """(FmuStructure, FmuBearings) of a case: the gear-shaft FMU and four instances of the
-    bearing FMU of its ``bearings.model``, from ``fmu_dir`` (default :func:`default_fmu_dir`;
-    built there if missing or stale)."""
-    bearing_fmu = bearing_fmu_name(case["bearings.model"])
-    paths = ensure_fmus(["GearShaft", bearing_fmu], fmu_dir)
-    return system_from_files(case, paths["GearShaft"], [paths[bearing_fmu]] * 4)
+    """(FmuStructure, FmuBearings) of a case: the gear-shaft FMU and one instance per bearing
+    of the bearing FMU of its own model (``bearings.<name>.model``), from ``fmu_dir`` (default
+    :func:`default_fmu_dir`; built there if missing or stale)."""
+    names = [bearing_fmu_name(case[f"bearings.{b}.model"]) for b in case.names("bearings")]
+    paths = ensure_fmus(["GearShaft", *dict.fromkeys(names)], fmu_dir)
+    return system_from_files(case, paths["GearShaft"], [paths[n] for n in names])

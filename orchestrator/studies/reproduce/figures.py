@@ -41,7 +41,7 @@ def _curve(points, model, key, index=None, **match):
             continue
         if any(not np.isclose(_as_float(p["overrides"].get(k)), v) for k, v in match.items()):
             continue
-        x = p["overrides"]["operation.speed"]
+        x = p["overrides"]["drive.speed"]
         y = p[key] if index is None else p[key][index]
         xs.append(float(x))
         ys.append(float(y))
@@ -208,7 +208,7 @@ def _fig_torque(points, fig_dir, plt, clearance) -> tuple[Path, dict]:
     for p in points:
         if p["error"] is not None:
             continue
-        torque = _as_float(p["overrides"]["operation.torque"])
+        torque = _as_float(p["overrides"]["drive.torque"])
         o = p["orbit"][:, 0] / clearance
         ax.plot(o[:, 0], o[:, 1], lw=0.6, label=f"T = {torque:g} N m")
         c = fit_ellipse(o[:, 0], o[:, 1])["centre"]
@@ -232,7 +232,7 @@ def _fig_unbalance(points, base, fig_dir, plt, plan) -> tuple[Path, dict]:
         for model, style in (("hybrid", "-"), ("linear", "--")):
             src = base if e == 0.6e-3 else [
                 p for p in points
-                if np.isclose(_as_float(p["overrides"].get("operation.unbalance")), e)]
+                if np.isclose(_as_float(p["overrides"].get("gears.*.unbalance")), e)]
             w, p = _curve(src, model, "force_ptp", 0)
             w2, r = _curve(src, model, "R")
             axes[0].plot(w, p, "o" + style, label=f"{model} e_mu {e * 1e3:g} mm")
@@ -259,7 +259,7 @@ def _fig_helix(points, base, spur_run, fig_dir, plt, plan, clearance) -> tuple[P
             src = [p for p in base if p["bearing"] == "hybrid"]
         else:
             src = [p for p in points if np.isclose(
-                _as_float(p["overrides"]["gear_pair.helix_angle"]), beta)]
+                _as_float(p["overrides"]["gears.*.helix_angle"]), beta)]
         w, r = _curve(src, "hybrid", "R")
         keep = np.isin(w, np.asarray(plan.speeds))
         axes[0].plot(w[keep], r[keep], "o-", label=f"beta {beta:g} deg")
@@ -269,7 +269,7 @@ def _fig_helix(points, base, spur_run, fig_dir, plt, plan, clearance) -> tuple[P
             keep = np.isin(w, np.asarray(plan.speeds))
             axes[1 + k].plot(w[keep], p[keep], "o-", label=f"beta {beta:g} deg")
         at = [p["orbit"] for p in src if p["error"] is None
-              and np.isclose(_as_float(p["overrides"]["operation.speed"]), 325.0)]
+              and np.isclose(_as_float(p["overrides"]["drive.speed"]), 325.0)]
         if beta == 0.0:  # the spur base run (325 rad/s)
             at = [spur_run["journal_position"][_window(spur_run, 1.0, 2), :, :2]]
         if at:
@@ -385,7 +385,7 @@ def draw_all(runs: dict, sweeps: dict, plan, fig_dir: Path) -> dict:
     figs["fig11"] = _fig_helix(sweeps["fig11_helix"], base_speed, runs["spur_hybrid"], fig_dir,
                                plt, plan, c1)
     helical_hybrid = [p for p in sweeps["fig11_helix"]
-                      if np.isclose(_as_float(p["overrides"]["gear_pair.helix_angle"]), 12.5)]
+                      if np.isclose(_as_float(p["overrides"]["gears.*.helix_angle"]), 12.5)]
     figs["fig16"] = _fig_speed(sweeps["fig16_models"], fig_dir, plt, "fig16_models",
                                "Fig. 16: helical 12.5 deg, bearing models compared",
                                models=("hybrid", "linear", "lumped"), extra=helical_hybrid)

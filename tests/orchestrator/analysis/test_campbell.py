@@ -56,7 +56,7 @@ def test_campbell_modes_equal_each_speed_linearised_on_its_own(bearing_stiffness
     data = campbell_data(case, speeds, bearing_stiffness)
     assert data["speeds"].tolist() == speeds and not data["skipped"]
     for i in (1, 2):
-        alone = straightforward_modes(case.with_overrides({"operation.speed": speeds[i]}),
+        alone = straightforward_modes(case.with_overrides({"drive.speed": speeds[i]}),
                                       bearing_stiffness)
         got = data["modes"][i]
         assert got["frequency_hz"].size > 10

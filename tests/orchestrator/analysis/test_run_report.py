@@ -168,7 +168,7 @@ def test_run_report_over_the_last_half_of_a_short_run():
 
 def test_gsb_run_stores_the_report_as_numeric_attributes(tmp_path):
     """Through the pipeline: the spur case, linear bearings, 8 mesh periods in-process."""
-    case = load_case(SPUR, {"bearings.model": "linear"})
+    case = load_case(SPUR, {"bearings.*.model": "linear"})
     s = run_case(case.with_overrides({"simulation.mesh_periods": 8}), in_process=True,
                  out_dir=tmp_path, progress=False)
     with h5py.File(s.results, "r") as f:
@@ -207,7 +207,7 @@ def test_gsb_run_stores_the_report_as_numeric_attributes(tmp_path):
 
 def test_a_failing_run_stores_the_report_of_what_it_kept(tmp_path, monkeypatch):
     fail_master_step(monkeypatch, at=201)
-    case = load_case(SPUR, {"bearings.model": "linear"})
+    case = load_case(SPUR, {"bearings.*.model": "linear"})
     with pytest.raises(RunError, match="step 201 of 256"):
         run_case(case.with_overrides({"simulation.mesh_periods": 8}), in_process=True,
                  out_dir=tmp_path, progress=False)
@@ -218,7 +218,7 @@ def test_a_failing_run_stores_the_report_of_what_it_kept(tmp_path, monkeypatch):
 
 
 def test_a_single_step_has_no_report(tmp_path):
-    case = load_case(SPUR, {"bearings.model": "linear"})
+    case = load_case(SPUR, {"bearings.*.model": "linear"})
     s = run_case(case, in_process=True, out_dir=tmp_path, progress=False,
                  steps=1)
     assert s.report is None

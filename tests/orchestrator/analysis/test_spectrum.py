@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from fmu_src.case import load_case
-from fmu_src.description import time_step
+from fmu_src.description import mesh_teeth, time_step
 from orchestrator.analysis.metrics import run_report
 from orchestrator.analysis.spectrum import (
     PAD,
@@ -160,7 +160,7 @@ def synthetic_run():
     """A results dict of the spur case at 325 rad/s (32 steps per mesh period), 6000 steps:
     ||F_b|| a mean and the lines of :data:`LINES`, its direction turning with the pinion."""
     case = load_case(SPUR, {"simulation.steps_per_mesh_period": PER_MESH})
-    assert case["operation.speed"] == 325.0 and list(case["gear_pair.teeth"]) == [Z1, Z2]
+    assert case["drive.speed"] == 325.0 and mesh_teeth(case) == [(Z1, Z2)]
     assert time_step(case) == pytest.approx(DT, rel=1e-14)
     steps = 6000
     t = np.arange(1, steps + 1) * DT

@@ -118,7 +118,7 @@ def test_a_failed_step_names_the_bearing_in_units(tmp_path, capsys):
     assert m, line
     assert float(m[1]) ** 2 + float(m[2]) ** 2 == pytest.approx((1.10171 * 150.0) ** 2,
                                                                  rel=2e-3)
-    assert "lower operation.unbalance (--unbalance)" in line
+    assert "lower gears.*.unbalance (--unbalance)" in line
     assert "the 2 steps computed are in" in line
     assert not re.search(r"\[[-\d.e]+, ", line), line  # no raw state vector
 
@@ -133,7 +133,7 @@ def test_a_run_of_bearing_fmus_is_named_by_their_model(tmp_path, stems, model, l
     from fmu_src.case import load_case
     from orchestrator.run.spec import RunSpec
 
-    case = load_case("baguet2010_spur").with_overrides({"bearings.model": model})
+    case = load_case("baguet2010_spur").with_overrides({"bearings.*.model": model})
     spec = RunSpec.of(case, fmus={"gear": Path("GearShaft.fmu"),
                                   "bearings": [tmp_path / f"{s}.fmu" for s in stems]})
     assert spec.label == label

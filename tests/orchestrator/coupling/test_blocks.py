@@ -150,7 +150,7 @@ def _compare(case, n, structure=None, threads=1, change=None, warm=0):
 def test_blocks_give_the_bits_of_single_steps(name, model, steps):
     """Steps cut at contact events among them (test_fused counts them)."""
     blocked, single, error, in_blocks, long_blocks = _compare(
-        load_case(name, {"bearings.model": model}), steps)
+        load_case(name, {"bearings.*.model": model}), steps)
     assert error is None
     _same_state(blocked, single)
     assert _counters(blocked) == _counters(single)
@@ -177,7 +177,7 @@ def test_a_step_of_more_sub_steps_than_a_block_takes_ends_the_block(monkeypatch)
 
 def test_blocks_through_the_relaxed_step_at_300_rad_s_give_the_same_bits():
     """Step 408 at 300 rad/s is relaxed (test_master)."""
-    case = load_case("baguet2010_spur").with_overrides({"operation.speed": 300.0})
+    case = load_case("baguet2010_spur").with_overrides({"drive.speed": 300.0})
     blocked, single, error, _, _ = _compare(case, 13 * 32)
     assert error is None and blocked.relaxed_steps >= 1
     _same_state(blocked, single)
@@ -246,7 +246,7 @@ def test_blocks_of_the_python_loop_give_the_bits_of_single_steps_and_fail_alike(
     """Short bearings through the Python loop: the same rows, counters and state as single
     steps; a structure that fails from step 12 on (no Newton pass allowed) fails inside the
     second block, after the eleven steps before it, with the error of a single step."""
-    case = load_case("baguet2010_spur", {"bearings.model": "short"})
+    case = load_case("baguet2010_spur", {"bearings.*.model": "short"})
     blocked, single, error, in_blocks, long_blocks = _compare(case, 24, change=_python_loop)
     assert blocked.fused is None and error is None
     assert in_blocks == 24 and long_blocks == -(-24 // BLOCK)

@@ -72,7 +72,7 @@ def _close(*masters):
 def test_the_compiled_steps_give_the_bits_of_the_python_loop(name, model, steps, taken):
     """Step by step (a block of one each) for the first half, then one block for the rest:
     the reports, the rows, the laws, the counters and the FMUs' outputs."""
-    case = load_case(name, {"bearings.model": model})
+    case = load_case(name, {"bearings.*.model": model})
     compiled, python = _pair(case)
     dt = time_step(case)
     try:
@@ -97,7 +97,7 @@ def test_the_compiled_steps_give_the_bits_of_the_python_loop(name, model, steps,
 def test_the_relaxed_step_at_300_rad_s_gives_the_same_bits(taken):
     """Step 408 at 300 rad/s puts Newton into a two-cycle and is relaxed (test_master): its
     laws (given by f0 alone) go to the gear-shaft FMU as the Python loop sends them."""
-    case = load_case("baguet2010_spur").with_overrides({"operation.speed": 300.0})
+    case = load_case("baguet2010_spur").with_overrides({"drive.speed": 300.0})
     compiled, python = _pair(case)
     dt = time_step(case)
     try:
@@ -154,7 +154,7 @@ def _push_second_shaft(m, dt):
 def test_a_failing_bearing_fmu_fails_alike(model, taken):
     """Bearing 3 refuses its state (its FMU's fmi2GetReal returns an error): the same
     error, with the bearing, its state and the FMU's log, and the same counters."""
-    case = load_case("baguet2010_spur", {"bearings.model": model})
+    case = load_case("baguet2010_spur", {"bearings.*.model": model})
     compiled, python = _fail_both(case, _push_second_shaft)
     assert compiled == python
     assert compiled[3] == 3 and "fmi2GetReal returned" in compiled[1]

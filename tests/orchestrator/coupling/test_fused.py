@@ -80,7 +80,7 @@ def _run_both(case, steps, monkeypatch, structure=None, threads=(1, 1)):
 def test_the_compiled_step_gives_the_bits_of_the_python_loop(name, model, steps, monkeypatch):
     """Every step compiled, those cut at contact events (sub-steps and acceleration jumps)
     among them."""
-    _, n_compiled, events = _run_both(load_case(name, {"bearings.model": model}), steps,
+    _, n_compiled, events = _run_both(load_case(name, {"bearings.*.model": model}), steps,
                                       monkeypatch)
     assert n_compiled == steps
     assert 0 < events < steps
@@ -94,7 +94,7 @@ def _with_runout(case):
     from gear_fmu.structure import Structure
 
     pair = description.gear_pair(case)
-    mesh = MeshElement(pair, pair.nominal_line_load(case["operation.torque"]),
+    mesh = MeshElement(pair, pair.nominal_line_load(case["drive.torque"]),
                        deviations=ToothDeviations(runout=(20e-6, 10e-6),
                                                   runout_phase=(0.3, 1.1)))
     assert mesh.has_errors
@@ -125,7 +125,7 @@ def test_a_step_with_more_sub_steps_than_the_compiled_loop_takes_goes_to_the_pyt
 
 def test_the_relaxed_step_at_300_rad_s_gives_the_same_bits(monkeypatch):
     """Step 408 at 300 rad/s puts Newton into a two-cycle and is relaxed (test_master)."""
-    case = load_case("baguet2010_spur").with_overrides({"operation.speed": 300.0})
+    case = load_case("baguet2010_spur").with_overrides({"drive.speed": 300.0})
     compiled, _, _ = _run_both(case, 13 * 32, monkeypatch)
     assert compiled.relaxed_steps >= 1
 
@@ -191,7 +191,7 @@ def test_a_failing_bearing_fails_alike(threads, monkeypatch):
 def test_a_failing_short_bearing_fails_alike(monkeypatch):
     """The short bearings' set (:class:`bearing_fmu.short_bearing.ShortSet`) reports the state
     check of the first bearing out of its clearance, as the Python loop."""
-    case = load_case("baguet2010_spur", {"bearings.model": "short"})
+    case = load_case("baguet2010_spur", {"bearings.*.model": "short"})
     compiled, python = _fail_both(case, _push_second_shaft, monkeypatch)
     assert compiled == python
     assert issubclass(compiled[0], BearingError) and "eccentricity ratio" in compiled[1]
@@ -228,11 +228,11 @@ def test_threads_for_bearings_that_are_not_hybrid_ones_are_said_to_do_nothing():
     _need_threads(2)
     with pytest.warns(RuntimeWarning, match=r"threads = 2: the linear bearings run on one "
                                             r"thread \(threads share hybrid bearings only\)"):
-        m = build_master(load_case("baguet2010_spur", {"bearings.model": "linear"}),
+        m = build_master(load_case("baguet2010_spur", {"bearings.*.model": "linear"}),
                          in_process=True, threads=2)
     assert m.bearings.hybrid_set is None
     with pytest.raises(ValueError, match=r"threads = 0: need a whole number from 1 to"):
-        build_master(load_case("baguet2010_spur", {"bearings.model": "linear"}),
+        build_master(load_case("baguet2010_spur", {"bearings.*.model": "linear"}),
                      in_process=True, threads=0)  # the count is checked all the same
 
 
@@ -263,6 +263,6 @@ def test_every_bearing_model_but_fd_takes_the_compiled_step():
     from bearing_fmu import MODELS
 
     for model in MODELS:
-        m = build_master(load_case("baguet2010_spur", {"bearings.model": model}),
+        m = build_master(load_case("baguet2010_spur", {"bearings.*.model": model}),
                          in_process=True)
         assert (m.fused is not None) == (model != "fd"), model

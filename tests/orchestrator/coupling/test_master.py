@@ -332,6 +332,6 @@ def test_the_paper_case_at_300_rad_s_passes_the_step_newton_cycled_on(tmp_path, 
     from tests.helpers import run_paper_case
 
     _, summary = run_paper_case(tmp_path, periods=13, in_process=transport == "in-process",
-                                fmu_dir=fmu_dir, **{"operation.speed": 300.0})
+                                fmu_dir=fmu_dir, **{"drive.speed": 300.0})
     assert summary.steps == 13 * 32
     assert summary.relaxed_steps >= 1

@@ -48,7 +48,7 @@ def test_cosimulation_equals_the_monolithic_newton_solution(refined):
     reference by 1.3e-6 of the largest displacement at T/32 (measured; the discretisation error
     itself is 1e-3 there)."""
     flags = {"simulation.consistent_start": refined, "simulation.locate_contact": refined,
-             "bearings.model": "linear" if refined else "hybrid"}
+             "bearings.*.model": "linear" if refined else "hybrid"}
     case = paper_case(**{"simulation.tolerance": 1e-10}, **flags)
     master = build_master(case, in_process=True)
     static = master.solve_static()
@@ -138,7 +138,7 @@ def test_cosimulation_equals_the_monolithic_newton_solution(refined):
                                             ("hybrid", 1.5, 4.0), ("short", 1.5, 4.0)])
 def test_iterations_per_step(model, low, high, tmp_path):
     """Affine bearings converge in one pass; the film models in 2-4 on average (paper: ~3)."""
-    case = paper_case().with_overrides({"bearings.model": model, "simulation.mesh_periods": 8})
+    case = paper_case().with_overrides({"bearings.*.model": model, "simulation.mesh_periods": 8})
     s = run_case(case, in_process=True, out_dir=tmp_path, progress=False)
     print(f"\n{model}: {s.iterations_per_step:.2f} coupled iterations per step")
     assert low <= s.iterations_per_step <= high
@@ -204,7 +204,7 @@ def test_swapping_the_bearing_model_is_a_name():
     value (measured: 0.25)."""
     ecc = {}
     for model in ("hybrid", "short"):
-        master = build_master(paper_case().with_overrides({"bearings.model": model}),
+        master = build_master(paper_case().with_overrides({"bearings.*.model": model}),
                               in_process=True)
         assert isinstance(master.bearings, ModelBearings)
         assert [m.name for m in master.bearings.models] == [model] * 4
@@ -221,7 +221,7 @@ def test_linear_model_freezes_the_hybrid_law_at_the_static_position():
     F0 - Kb dX - Cb dXdot of the hybrid film at X0, computed here by an independent hybrid
     model; the nonlinear film differs from it at a finite displacement."""
     case = paper_case()
-    master = build_master(case.with_overrides({"bearings.model": "linear"}), in_process=True)
+    master = build_master(case.with_overrides({"bearings.*.model": "linear"}), in_process=True)
     static = master.solve_static()
     master.exit_initialization()
     models = master.bearings.models
@@ -249,14 +249,14 @@ def test_linear_model_freezes_the_hybrid_law_at_the_static_position():
 
 
 @pytest.mark.parametrize("text,message", [
-    ("", "missing field gear_pair.teeth"),
-    ('[gear_pair]\nmodule = "4 kg"', "gear_pair.module"),
-    ("[bearings]\nmodel = 'magnetic'", "bearings.model"),
+    ("", "missing field gears.pinion.teeth"),
+    ('[gears]\nmodule = "4 kg"', "gears.pinion.module"),
+    ("[bearings]\nmodel = 'magnetic'", "bearings.1.model"),
     ("[bogus]\nx = 1", "unknown section"),
 ])
 def test_bad_case_files_fail_before_the_run_naming_the_field(text, message, tmp_path, capsys):
     base = shipped_cases()[SPUR].read_text()
-    if text.startswith("[gear_pair]\nmodule"):
+    if text.startswith("[gears]\nmodule"):
         bad = base.replace('module = "4 mm"', 'module = "4 kg"')
     elif text.startswith("[bearings]"):
         bad = base.replace('model = "hybrid"', "model = 'magnetic'")
@@ -275,8 +275,8 @@ def test_bad_case_files_fail_before_the_run_naming_the_field(text, message, tmp_
 
 def test_interfering_geometry_fails_before_the_run(tmp_path, capsys):
     code = main(["run", SPUR, "--in-process", "--out", str(tmp_path), "--set",
-                 "gear_pair.addendum_coefficient=1.4", "--set",
-                 "gear_pair.dedendum_coefficient=1.0"])
+                 "gears.*.addendum_coefficient=1.4", "--set",
+                 "gears.*.dedendum_coefficient=1.0"])
     assert code == 2
     assert "cut 1.600 mm into the gear's root circle" in capsys.readouterr().err
     assert not list(tmp_path.glob("*.h5"))

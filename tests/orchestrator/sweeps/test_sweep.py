@@ -42,19 +42,19 @@ def test_sweep_gathers_points_and_reports_a_failed_one(scheduler, tmp_path):
     LocalCluster leaves this process's environment as it was (Dask's nanny sets the BLAS
     thread counts of later child processes to 1 there)."""
     environment = dict(os.environ)
-    points = [SweepPoint({"operation.speed": 200.0}, "linear", "a"),
-              SweepPoint({"operation.speed": -5.0}, "linear", "bad"),
-              SweepPoint({"operation.speed": 400.0}, "linear", "b")]
+    points = [SweepPoint({"drive.speed": 200.0}, "linear", "a"),
+              SweepPoint({"drive.speed": -5.0}, "linear", "bad"),
+              SweepPoint({"drive.speed": 400.0}, "linear", "b")]
     res = run_sweep(SPUR, points, tmp_path / "s.h5", periods=4, steady_periods=2,
                     scheduler=scheduler, progress=False)
     assert [i for i, _ in res.failed] == [1]
-    assert "operation.speed" in res.failed[0][1]
+    assert "drive.speed" in res.failed[0][1]
     assert dict(os.environ) == environment
     data = read_sweep(res.path)
     assert [d["label"] for d in data] == ["a", "bad", "b"]
     assert [d["values"].tolist() for d in data] == [[200.0], [-5.0], [400.0]]
     a = read_sweep_attrs(res.path)
-    assert a["kind"] == "sweep" and a["vary_keys"] == ["operation.speed"]
+    assert a["kind"] == "sweep" and a["vary_keys"] == ["drive.speed"]
     assert a["vary_units"] == ["rad/s"] and a["bearings"] == ["linear"]
     assert not a["complete"] and a["status"] == "failed points" and a["n_failed"] == 1
     assert data[1]["error"] and "R" not in data[1]

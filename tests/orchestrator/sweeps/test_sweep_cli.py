@@ -112,7 +112,7 @@ def test_sweep_file_attributes_units_and_values(dask_sweep):
     _, files, _, client = dask_sweep
     a = read_sweep_attrs(files[0])
     assert a["kind"] == "sweep" and a["case"] == SPUR
-    assert a["vary_keys"] == ["operation.speed"] and a["vary_units"] == ["rad/s"]
+    assert a["vary_keys"] == ["drive.speed"] and a["vary_units"] == ["rad/s"]
     assert a["bearings"] == ["linear"]
     assert (a["periods"], a["steady_periods"]) == (2, 1)
     assert a["wall_time"] > 0
@@ -124,7 +124,7 @@ def test_sweep_file_attributes_units_and_values(dask_sweep):
                                    rtol=1e-15)
         for g in f["points"].values():
             assert g.attrs["bearing"] == "linear"
-            assert json.loads(g.attrs["overrides"]) == {"operation.speed": g.attrs["values"][0]}
+            assert json.loads(g.attrs["overrides"]) == {"drive.speed": g.attrs["values"][0]}
             orders, spec = g["spectrum_orders"][()], g["spectrum"][()]
             z1 = 26
             assert spec.shape == (4, orders.size) and orders[-1] <= 3.5 * z1
@@ -144,9 +144,9 @@ def test_order_spectrum_of_a_synthetic_force_recovers_its_lines():
     case = load_case(SPUR, {"simulation.steps_per_mesh_period": 16})
     z1, per_mesh = 26, 16
     n = 60 * per_mesh  # 60 mesh periods simulated
-    dt = 2 * math.pi / (case["operation.speed"] * z1) / per_mesh
+    dt = 2 * math.pi / (case["drive.speed"] * z1) / per_mesh
     t = (np.arange(n) + 1) * dt
-    theta = t * case["operation.speed"] / (2 * math.pi)  # pinion revolutions
+    theta = t * case["drive.speed"] / (2 * math.pi)  # pinion revolutions
     lines = {1.0: 40.0, 2.5: 4.0, 26.0: 25.0, 52.0: 7.0, 78.0: 3.0}
     norm = 500.0 + sum(a * np.cos(2 * np.pi * q * theta + q) for q, a in lines.items())
     norm[: n - 2 * z1 * per_mesh] += 1e4  # not in the window: 2 revolutions
@@ -172,7 +172,7 @@ def test_a_worker_takes_the_case_content_never_a_path():
 
     case = load_case(SPUR, {"simulation.steps_per_mesh_period": 16})
     assert as_case(case.to_toml()).values == case.values
-    point = SweepPoint({"operation.speed": 400.0}, "linear")
+    point = SweepPoint({"drive.speed": 400.0}, "linear")
     res = run_point(case.to_toml(), point, 2, 1)
     # one mesh period (z1 orders) zero-padded PAD times, orders 0 to 3.5 z1
     assert res["ok"] and res["data"]["spectrum"].shape == (4, math.floor(3.5 * PAD) + 1)
@@ -242,7 +242,7 @@ BAD = {
     "not numeric": (["--vary", "simulation.damping_model=1,2"], ["choice field"]),
     "too many": (["--vary", "speed=100:1200:101", "--vary", "torque=50:600:100"],
                  ["10100 points", "<= 10000"]),
-    "twice": (["--vary", "speed=100,200", "--vary", "operation.speed=1,2"], ["varied twice"]),
+    "twice": (["--vary", "speed=100,200", "--vary", "drive.speed=1,2"], ["varied twice"]),
     "bearing": (["--vary", "speed=100,200", "--bearing", "hybrid,magic"],
                 ["--bearing hybrid,magic", "'magic'", "lumped"]),
     "periods": (["--vary", "speed=100,200", "--periods", "0"], ["--periods 0", ">= 1"]),
@@ -252,12 +252,12 @@ BAD = {
                 ["--worker-timeout 0", "> 0"]),
     "workers": (["--vary", "speed=100,200", "--workers", "0"], ["--workers 0", ">= 1"]),
     "rejected value": (["--vary", "speed=-100,200"],
-                       ["--vary speed=-100,200", "operation.speed = -100.0", "> 0.0 rad/s"]),
-    "rejected point": (["--set", "bearings.model=fd", "--vary", "bearings.nodes=8,32",
+                       ["--vary speed=-100,200", "drive.speed = -100.0", "> 0.0 rad/s"]),
+    "rejected point": (["--set", "bearings.*.model=fd", "--vary", "bearings.*.nodes=8,32",
                         "--bearing", "fd,hybrid"],
-                       ["point 2 (hybrid, nodes 8)", "bearings.nodes = 8", ">= 16"]),
-    "set": (["--vary", "speed=100,200", "--set", "operation.torque=-3"],
-            ["operation.torque", "-3"]),
+                       ["point 2 (hybrid, nodes 8)", "bearings.1.nodes = 8", ">= 16"]),
+    "set": (["--vary", "speed=100,200", "--set", "drive.torque=-3"],
+            ["drive.torque", "-3"]),
     "case": (["--vary", "speed=100,200"], ["case file not found", "no_such_case"]),
 }
 
@@ -310,8 +310,8 @@ def test_sweep_figures_of_a_two_speed_sweep(dask_sweep, tmp_path, monkeypatch):
     for title, labels in seen.values():
         assert SPUR in title and "linear" in title and "torque 220 N m" in title
         assert "unbalance 0.6 / 0.6 mm" in title and "speed" not in title.split(";")[1]
-        assert ("pinion speed [rad/s]", "peak-to-peak ||F_b|| [N]") in labels or \
-            ("order [1/pinion rev]", "pinion speed [rad/s]") in labels
+        assert ("input speed [rad/s]", "peak-to-peak ||F_b|| [N]") in labels or \
+            ("order [1/pinion rev]", "input speed [rad/s]") in labels
     # the waterfall's colour scale: the peak amplitude of every spectrum, in N
     assert ("", "bearing 1: ||F_b|| amplitude [N] (peak)") in seen["waterfall_bearing1.png"][1]
     # default folder: beside the file, named after its stem
