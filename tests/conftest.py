@@ -10,6 +10,7 @@ each compiling them at the same time at the start of a run from a fresh clone.
 from __future__ import annotations
 
 import os
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -25,21 +26,53 @@ ROOT = Path(__file__).resolve().parents[1]
 #: (:mod:`tests.probes.warm_up`): every bearing model's kernels; the native layer, the
 #: structure's and the master's kernels (short in-process runs)
 WARM_UP = ("bearing_kernels", "native_and_structure")
+#: the environment variable that names, in the workers, the folder of the warm-up's cold run
+#: (:func:`tests.probes.warm_up.cold_paper_case`): its numba cache and result
+COLD_RUN = "GSB_TEST_COLD_RUN"
+#: the paper case's length in mesh periods in tests/system/test_determinism.py
+DETERMINISM_PERIODS = 2
+
+
+def _numba_cache_is_empty() -> bool:
+    """Whether numba's cache holds no kernel of this code version (a fresh clone)."""
+    from bearing_fmu.numba_cache import PREFIX, cache_base, code_hash
+
+    folder = cache_base() / f"{PREFIX}{code_hash(str(ROOT))}"
+    return not folder.is_dir() or not any(p.is_file() for p in folder.rglob("*"))
 
 
 def pytest_configure(config):
     """Every module of :data:`LONGEST_FIRST` exists (a moved one would silently lose its place);
     in the xdist controller (not in a worker, not in a run without xdist): :data:`WARM_UP`.
-    A failure there is not reported: the tests that need the same things report it."""
+    With numba's cache empty for this code version, the second probe is the cold run of
+    tests/system/test_determinism.py instead, in a cache of its own that then fills numba's
+    (:func:`tests.probes.warm_up.cold_paper_case`): the kernels a fresh clone compiles once
+    for the workers are the cold ones that test compares, not compiled a second time by it.
+    A failure there is not reported: the tests that need the same things report it (the
+    determinism test then compiles its cold run itself)."""
+    import tempfile
+
     missing = [path for path in LONGEST_FIRST if not (ROOT / path).is_file()]
     if missing:
         raise pytest.UsageError(f"tests/conftest.py LONGEST_FIRST names missing modules: "
                                 f"{', '.join(missing)}")
     if hasattr(config, "workerinput") or not getattr(config.option, "numprocesses", None):
         return
-    procs = [subprocess.Popen(probe_command("tests.probes.warm_up", probe), env=probe_env(),
-                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-             for probe in WARM_UP]
+    commands = [(probe_command("tests.probes.warm_up", probe), probe_env())
+                for probe in WARM_UP]
+    if _numba_cache_is_empty():
+        from bearing_fmu.numba_cache import cache_base
+
+        folder = Path(tempfile.mkdtemp(prefix="gsb_cold_run_"))
+        (folder / "numba").mkdir()
+        config.add_cleanup(lambda: shutil.rmtree(folder, ignore_errors=True))
+        os.environ[COLD_RUN] = str(folder)  # the workers start with this environment
+        commands[1] = (probe_command("tests.probes.warm_up", "cold_paper_case", {
+            "folder": str(folder), "periods": DETERMINISM_PERIODS,
+            "default_cache": str(cache_base())}),
+            probe_env() | {"NUMBA_CACHE_DIR": str(folder / "numba")})
+    procs = [subprocess.Popen(command, env=env, stdout=subprocess.DEVNULL,
+                              stderr=subprocess.DEVNULL) for command, env in commands]
     for proc in procs:
         proc.wait(timeout=900)
 

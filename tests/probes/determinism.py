@@ -11,15 +11,17 @@ import tempfile
 from tests.probes import dispatch, probes_of
 
 
-def runs(fmu_dir: str, periods: int) -> dict:
-    """The paper's spur case in-process and through the FMUs: per transport, a hash of the
-    static solution and of every channel of the results file, and the number of rows."""
+def runs(fmu_dir: str | None, periods: int,
+         transports: tuple[str, ...] = ("in-process", "fmu")) -> dict:
+    """The paper's spur case in-process and through the FMUs (``transports``; the FMUs from
+    ``fmu_dir``): per transport, a hash of the static solution and of every channel of the
+    results file, and the number of rows."""
     import numpy as np
 
     from tests.helpers import run_paper_case
 
     out = {}
-    for transport in ("in-process", "fmu"):
+    for transport in transports:
         with tempfile.TemporaryDirectory() as tmp:
             r, s = run_paper_case(tmp, periods=periods, in_process=transport == "in-process",
                                   fmu_dir=fmu_dir)

@@ -1,6 +1,9 @@
 """What the xdist controller runs before the workers start (tests/conftest.py), two probes in
 two processes at once: the kernels are then loaded from numba's cache by the workers and the
-processes the tests start, not compiled by each of them at the same time."""
+processes the tests start, not compiled by each of them at the same time. With numba's cache
+empty for this code version (a fresh clone), :func:`cold_paper_case` compiles the structure's
+and the master's kernels instead of :func:`native_and_structure`, in a cache of its own, and
+that compilation is also the cold run of tests/system/test_determinism.py."""
 
 from __future__ import annotations
 
@@ -40,7 +43,38 @@ def native_and_structure() -> None:
                      out_dir=tmp + "/" + case, progress=False)
 
 
-PROBES = probes_of(bearing_kernels, native_and_structure)
+def cold_paper_case(folder: str, periods: int, default_cache: str) -> None:
+    """From an empty numba cache, in this process's own ``NUMBA_CACHE_DIR`` (``folder``/numba,
+    cold by construction): the native layer, then the in-process run of
+    :func:`tests.probes.determinism.runs` (every kernel compiled here), its result in
+    ``folder``/cold.json for tests/system/test_determinism.py; then this code version's
+    kernels copied into the ``default_cache`` folder where missing (each file written apart
+    and renamed into place), so that the workers load them."""
+    import json
+    import os
+    from pathlib import Path
+
+    from bearing_fmu.numba_cache import cache_base
+    from fmu_src.build.native import export_library
+    from tests.probes.determinism import runs
+
+    export_library()
+    own = cache_base()
+    if any(p.is_file() for p in own.rglob("*")):  # (importing the packages makes folders)
+        raise RuntimeError(f"{own}: not an empty numba cache")
+    result = runs(None, periods, ("in-process",))
+    (Path(folder) / "cold.json").write_text(json.dumps(result))
+    for path in sorted(p for p in own.rglob("*") if p.is_file()):
+        target = Path(default_cache) / path.relative_to(own)
+        if target.exists():
+            continue
+        target.parent.mkdir(parents=True, exist_ok=True)
+        part = target.with_name(f"{target.name}.{os.getpid()}.part")
+        part.write_bytes(path.read_bytes())
+        os.replace(part, target)
+
+
+PROBES = probes_of(bearing_kernels, native_and_structure, cold_paper_case)
 
 
 def main(argv: list[str] | None = None) -> None:
