@@ -37,7 +37,6 @@ from fmu_src.description import time_step
 from gear_fmu.loads import unbalance_into
 from gear_fmu.mesh.element import _mesh_kernel
 from gear_fmu.step.assembly import history_memo, prepare_step
-from gear_fmu.step.condensation import N_GEAR, NC
 from gear_fmu.step.contact_loop import _newton_solve
 from gear_fmu.step.newmark import newmark_history
 from orchestrator.coupling.system import build_master
@@ -94,9 +93,9 @@ def _substitute(n, ws, active, iws, nr, out):
 
 
 @njit
-def _prepare(n, mc, g, g_const, x, v, a, f_c, unb, f0, kb, cb, s0, dt, memo):
+def _prepare(n, mc, g, g_const, x, v, a, f_c, unb, unb_idx, f0, kb, cb, s0, dt, ng, memo):
     for _ in range(n):
-        prepare_step(mc, g, g_const, x, v, a, f_c, unb, f0, kb, cb, s0, dt, N_GEAR, memo)
+        prepare_step(mc, g, g_const, x, v, a, f_c, unb, unb_idx, f0, kb, cb, s0, dt, ng, memo)
 
 
 @njit
@@ -107,7 +106,7 @@ def _history(n, mc, g, x, v, a, dt):
 
 
 @njit
-def _mesh(n, fresh, angle, q, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1, pitch2,
+def _mesh(n, fresh, angle, q, p, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1, pitch2,
           cache, tangent):
     m = n_lines * zs.size
     force, stiff = np.empty(12), np.empty((12, 12))
@@ -116,8 +115,8 @@ def _mesh(n, fresh, angle, q, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1, 
     for _ in range(n):
         if fresh:  # a new angle: the slices and the tangent computed again
             cache[-1, 0] = math.nan
-        _mesh_kernel(angle, q, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1, pitch2, cache,
-                     tangent, force, stiff, active, inside, delta, load, xi, z)
+        _mesh_kernel(angle, q, p, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1, pitch2,
+                     cache, tangent, force, stiff, active, inside, delta, load, xi, z)
     return force, stiff
 
 
@@ -182,30 +181,31 @@ def main() -> None:
         print(f"  {label:50s} {value:6.2f}")
 
     cond, g_const = st._dynamic(dt)
-    unb = np.empty(4)
+    unb = np.empty((st._unb_coef.shape[0], 2))
     unbalance_into(st._unb_coef, st.t + dt, unb)
     laws = master.laws
-    step_args = (st._mc, cond.g, g_const, st.x, st.v, st.a, st._f_c, unb, laws.f0, laws.kb, laws.cb,
-                 cond.s0, dt)
-    s_lin, z0, _ = prepare_step(*step_args, N_GEAR, np.empty(0))
+    step_args = (st._mc, cond.g, g_const, st.x, st.v, st.a, st._f_c, unb, st._unb_idx, laws.f0,
+                 laws.kb, laws.cb, cond.s0, dt, st.ng)
+    s_lin, z0, _ = prepare_step(*step_args, np.empty(0))
     memo = history_memo(st.x.size)
-    prepare_step(*step_args, N_GEAR, memo)  # the products kept, as after a first iteration
+    prepare_step(*step_args, memo)  # the products kept, as after a first iteration
+    mesh = st.meshes[0]
     print(f"structure step ({st._mc.shape[0]} x {st._mc.shape[1]} history product and its "
-          f"{cond.g.shape[0]} x {cond.g.shape[1]} condensation, {NC} condensed "
-          f"DOFs, {st.mesh.n_lines} x {st.mesh.n_slices} mesh slices)")
-    angle = st.pinion_angle(st.t)
-    q = np.ascontiguousarray(st.x[:N_GEAR])
-    force, stiff = _mesh(1, True, angle, q, *st._mesh_arrays)
-    xc = np.ascontiguousarray(st.x[:NC])
+          f"{cond.g.shape[0]} x {cond.g.shape[1]} condensation, {st.nc} condensed "
+          f"DOFs, {mesh.n_lines} x {mesh.n_slices} mesh slices)")
+    angle = float(st.mesh_angles(st.input_angle(st.t))[0])
+    q = np.ascontiguousarray(st.x[st._mesh_idx[0]])
+    arrays = mesh.kernel_arrays()
+    force, stiff = _mesh(1, True, angle, q, *arrays)
+    xc = np.ascontiguousarray(st.x[:st.nc])
     rows = [("right-hand side and tangent (prepare_step)",
              timed(n, _prepare, *step_args, np.empty(0))),
             ("... at a later iteration of the step (memo)", timed(n, _prepare, *step_args, memo)),
             ("... its history product alone",
              timed(n, _history, st._mc, cond.g, st.x, st.v, st.a, dt)),
-            ("one mesh evaluation, tangent assembled",
-             timed(n, _mesh, True, angle, q, *st._mesh_arrays)),
+            ("one mesh evaluation, tangent assembled", timed(n, _mesh, True, angle, q, *arrays)),
             ("... at the angle and contact set of the last one",
-             timed(n, _mesh, False, angle, q, *st._mesh_arrays)),
+             timed(n, _mesh, False, angle, q, *arrays)),
             ("one Newton solve of the condensed system",
              timed(n, _newton, s_lin, z0, xc, force, stiff))]
     for label, value in rows:

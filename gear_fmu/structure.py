@@ -187,6 +187,7 @@ class Structure:
         self.consistent_start = bool(consistent_start)
         self.locate_contact = bool(locate_contact)
         self._m_inv = None  # M^-1 restricted to the condensed columns, when first needed
+        self._m_inv_g = None  # ... to the gear-node columns
         self._events = None  # the contact events of each mesh, when first needed
         self._work = [MeshWork(m, idx) for m, idx in zip(self.meshes, self._mesh_idx,
                                                           strict=True)]
@@ -416,6 +417,12 @@ class Structure:
                 scipy.linalg.cho_solve(cho, np.eye(self._m.shape[0])[:, :self.nc]))
         return self._m_inv
 
+    def _m_inv_gear_columns(self) -> np.ndarray:
+        """``M^-1`` restricted to the condensed gear-node columns, (n, ng), contiguous."""
+        if self._m_inv_g is None:
+            self._m_inv_g = np.ascontiguousarray(self._m_inv_columns()[:, :self.ng])
+        return self._m_inv_g
+
     def _errors(self, angles) -> np.ndarray:
         """(n_meshes, 12) error displacements at the meshes' ``angles`` [rad]."""
         out = np.zeros((len(self.meshes), 12))
@@ -539,8 +546,9 @@ class Structure:
             t1 = t + dt
             return [(dt, t1, self.mesh_angles(self.input_angle(t1)),
                      np.full(len(self.meshes), math.nan))]
-        if self._events is None:
-            self._events = [ContactEvents(mesh, lambda t, r=r: r * self.input_angle(t))
+        if self._events is None:  # (input_angle inlined: a call per angle on the hot path)
+            a0, w = self.loads.input_angle0, self.loads.input_speed
+            self._events = [ContactEvents(mesh, lambda t, r=float(r): r * (a0 + w * t))
                             for mesh, r in zip(self.meshes, self._driver_ratio, strict=True)]
         return train_pieces(self._events, t, dt)
 
@@ -591,7 +599,7 @@ class Structure:
             (self.x.copy(), self.v.copy(), self.a.copy()),
             (self._unb_coef, self._unb_idx, self._f_c, self._has_err, self._mesh_tuple,
              self._f_scale, self.tol, self.max_iter,
-             np.ascontiguousarray(self._m_inv_columns()[:, :ng]), self._memo),
+             self._m_inv_gear_columns(), self._memo),
             (np.empty(ng), np.empty((ng, ng)), self._totals.copy(), self._lengths.copy(),
              np.empty(self.max_iter + 1), np.empty(size), np.empty(size), np.empty(size)),
             [[te for _, te, _, _ in p] for p in steps])

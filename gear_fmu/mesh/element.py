@@ -359,8 +359,8 @@ def _mesh_kernel(angle, q, p, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1, 
                 stiff[i, j] = tangent[i, j]
         return total, length
     # K_gear = sum k dl V V^T = P (sum k dl u u^T) P^T: six moments of the slices in
-    # contact instead of a 12 x 12 product per slice
-    mom = np.zeros((3, 3))
+    # contact instead of a 12 x 12 product per slice (scalars: the kernel allocates nothing)
+    m00, m01, m02, m11, m12, m22 = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     for s in range(ns):
         z = zs[s]
         for j in range(n_lines):
@@ -369,21 +369,20 @@ def _mesh_kernel(angle, q, p, geo, xi_tab, k_tab, zs, dl, n_lines, dev, pitch1, 
             if active[m]:
                 kdl = cache[m, _KDL]
                 xi = cache[m, _XI]
-                mom[0, 0] += kdl
-                mom[0, 1] += kdl * xi
-                mom[0, 2] += kdl * z
-                mom[1, 1] += kdl * xi * xi
-                mom[1, 2] += kdl * xi * z
-                mom[2, 2] += kdl * z * z
-    mom[1, 0], mom[2, 0], mom[2, 1] = mom[0, 1], mom[0, 2], mom[1, 2]
-    pm = np.zeros((12, 3))
+                m00 += kdl
+                m01 += kdl * xi
+                m02 += kdl * z
+                m11 += kdl * xi * xi
+                m12 += kdl * xi * z
+                m22 += kdl * z * z
     for i in range(12):
-        for k in range(3):
-            for j in range(3):
-                pm[i, j] += p[i, k] * mom[k, j]
-    for i in range(12):
+        p0, p1, p2 = p[i, 0], p[i, 1], p[i, 2]
+        # (P mom)[i, :], each summed over k in order from 0.0
+        a0 = ((0.0 + p0 * m00) + p1 * m01) + p2 * m02
+        a1 = ((0.0 + p0 * m01) + p1 * m11) + p2 * m12
+        a2 = ((0.0 + p0 * m02) + p1 * m12) + p2 * m22
         for j in range(12):
-            stiff[i, j] = pm[i, 0] * p[j, 0] + pm[i, 1] * p[j, 1] + pm[i, 2] * p[j, 2]
+            stiff[i, j] = a0 * p[j, 0] + a1 * p[j, 1] + a2 * p[j, 2]
     for i in range(12):
         for j in range(12):
             tangent[i, j] = stiff[i, j]

@@ -31,7 +31,7 @@ from gear_fmu.mesh.element import MeshState, _mesh_kernel
 from gear_fmu.step.condensation import gauss_solve
 
 __all__ = ["CONVERGED", "NOT_CONVERGED", "ROUNDOFF", "SINGULAR", "MeshWork", "StepInfo",
-           "contact_newton", "evaluate_train"]
+           "contact_newton", "evaluate_train", "use_sets"]
 
 #: the round-off floor of the residual, in units of machine epsilon times the norms of its terms
 ROUNDOFF = 64.0 * np.finfo(float).eps
@@ -105,8 +105,8 @@ class MeshWork:
             b[...] = v
 
 
-@njit(cache=True)
-def evaluate_train(meshes, xc, angles, errs, has_err, fc, kc, totals, lengths):
+@njit(cache=True, _nrt=False)
+def evaluate_train(meshes, xc, angles, errs, has_err, fc, kc, totals, lengths, q):
     """Every mesh of ``meshes`` (workspace tuples) at its pinion angle ``angles[m]`` [rad] and
     the condensed DOFs ``xc`` (plus ``errs[m]``, the error displacement, when ``has_err``):
     each mesh's evaluation into its workspace, their forces summed into ``fc`` (ng,) and
@@ -117,7 +117,6 @@ def evaluate_train(meshes, xc, angles, errs, has_err, fc, kc, totals, lengths):
         fc[i] = 0.0
         for j in range(ng):
             kc[i, j] = 0.0
-    q = np.empty(12)
     for m in range(len(meshes)):
         w = meshes[m]
         idx = w[_IDX]
@@ -134,7 +133,7 @@ def evaluate_train(meshes, xc, angles, errs, has_err, fc, kc, totals, lengths):
                 kc[idx[i], idx[j]] += stiff[i, j]
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _same_sets(meshes):
     """Every mesh's contact set equals the one its iterate is consistent with."""
     for m in range(len(meshes)):
@@ -143,6 +142,18 @@ def _same_sets(meshes):
             if a[i] != b[i]:
                 return False
     return True
+
+
+@njit(cache=True, _nrt=False)
+def use_sets(meshes, kept):
+    """Each mesh's next iterate is consistent with its last evaluation's contact set, or with
+    its ``kept`` one (the state's)."""
+    for m in range(len(meshes)):
+        w = meshes[m]
+        src = w[_KEPT_ACTIVE] if kept else w[_ACTIVE]
+        used = w[_USED]
+        for i in range(used.size):
+            used[i] = src[i]
 
 
 @njit(cache=True)
@@ -190,8 +201,9 @@ def contact_newton(s_lin, z0, xc, angles, errs, has_err, meshes, fc, kc, totals,
     free in torsion).
     """
     z_norm = -1.0
+    q = np.empty(12)
     for k in range(max_iter + 1):
-        evaluate_train(meshes, xc, angles, errs, has_err, fc, kc, totals, lengths)
+        evaluate_train(meshes, xc, angles, errs, has_err, fc, kc, totals, lengths, q)
         ff = np.dot(fc, fc)
         scale = max(f_scale, math.sqrt(ff))
         scale = scale if scale > 0.0 else 1.0
@@ -209,7 +221,6 @@ def contact_newton(s_lin, z0, xc, angles, errs, has_err, meshes, fc, kc, totals,
         xc, ok = _newton_solve(s_lin, z0, xc, fc, kc)
         if not ok:
             return SINGULAR, k, xc
-        for m in range(len(meshes)):
-            meshes[m][_USED][:] = meshes[m][_ACTIVE]
+        use_sets(meshes, False)
         has_used = True
     return NOT_CONVERGED, max_iter, xc

@@ -30,15 +30,14 @@ from gear_fmu.step.contact_loop import (
     _DELTA,
     _IDX,
     _INSIDE,
-    _KEPT_ACTIVE,
     _LOAD,
     _OUT,
     _STIFF,
-    _USED,
     _XI,
     _Z,
     CONVERGED,
     contact_newton,
+    use_sets,
 )
 from gear_fmu.step.newmark import newmark_kinematics
 
@@ -95,17 +94,11 @@ def advance(mc, g, g_const, s0, w, x, v, a, f_c, unb_coef, unb_idx, t1, f0, kb, 
     return status, k
 
 
-@njit(cache=True)
-def contact_events(after, errs_after, has_err, meshes, x1, m_inv_g, a1, totals, lengths):
-    """Contact events at the end of a sub-step (:mod:`gear_fmu.structure`, contact location):
-    each mesh m whose ``after[m]`` is a number (not NaN) is evaluated again at that pinion
-    angle [rad] after its events, at the gear DOFs of ``x1`` (plus ``errs_after[m]`` when
-    ``has_err``), and the acceleration ``a1`` is raised by ``M^-1 (F_mesh+ - F_mesh-)`` at the
-    same X and Xd (``m_inv_g``: M^-1 restricted to the condensed gear-node columns, (n, ng));
-    ``totals[m]``, ``lengths[m]`` become the mesh's after the events."""
-    ng = m_inv_g.shape[1]
-    jump = np.zeros(ng)
-    q = np.empty(12)
+@njit(cache=True, _nrt=False)
+def _jump(after, errs_after, has_err, meshes, x1, jump, q, totals, lengths):
+    """:func:`contact_events`' meshes evaluated after their events, ``jump`` (ng,) receiving
+    ``F_mesh+ - F_mesh-``; whether any mesh had an event (no reference counting:
+    :func:`gear_fmu.step.contact_loop.evaluate_train`)."""
     jumped = False
     for m in range(len(meshes)):
         if not after[m] == after[m]:
@@ -122,6 +115,20 @@ def contact_events(after, errs_after, has_err, meshes, x1, m_inv_g, a1, totals, 
         for i in range(12):
             jump[idx[i]] += force[i]
         jumped = True
+    return jumped
+
+
+@njit(cache=True)
+def contact_events(after, errs_after, has_err, meshes, x1, m_inv_g, a1, totals, lengths):
+    """Contact events at the end of a sub-step (:mod:`gear_fmu.structure`, contact location):
+    each mesh m whose ``after[m]`` is a number (not NaN) is evaluated again at that pinion
+    angle [rad] after its events, at the gear DOFs of ``x1`` (plus ``errs_after[m]`` when
+    ``has_err``), and the acceleration ``a1`` is raised by ``M^-1 (F_mesh+ - F_mesh-)`` at the
+    same X and Xd (``m_inv_g``: M^-1 restricted to the condensed gear-node columns, (n, ng));
+    ``totals[m]``, ``lengths[m]`` become the mesh's after the events."""
+    ng = m_inv_g.shape[1]
+    jump = np.zeros(ng)
+    jumped = _jump(after, errs_after, has_err, meshes, x1, jump, np.empty(12), totals, lengths)
     if jumped:
         for i in range(a1.shape[0]):
             acc = 0.0
@@ -130,21 +137,27 @@ def contact_events(after, errs_after, has_err, meshes, x1, m_inv_g, a1, totals, 
             a1[i] = a1[i] + acc
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
+def _copy(dst, src):
+    for i in range(src.size):
+        dst.flat[i] = src.flat[i]
+
+
+@njit(cache=True, _nrt=False)
 def keep_evaluation(meshes):
     """Each mesh's last evaluation becomes the one its state ended on (the ``kept``
     buffers of :class:`gear_fmu.step.contact_loop.MeshWork`)."""
     for m in range(len(meshes)):
         wk = meshes[m]
         # (literal indices: a compiled tuple is indexed by constants only; _KEPT ... _KEPT + 7)
-        wk[23][:] = wk[_OUT]
-        wk[24][:, :] = wk[_STIFF]
-        wk[_KEPT_ACTIVE][:] = wk[_ACTIVE]
-        wk[26][:] = wk[_INSIDE]
-        wk[27][:] = wk[_DELTA]
-        wk[28][:] = wk[_LOAD]
-        wk[29][:] = wk[_XI]
-        wk[30][:] = wk[_Z]
+        _copy(wk[23], wk[_OUT])
+        _copy(wk[24], wk[_STIFF])
+        _copy(wk[25], wk[_ACTIVE])
+        _copy(wk[26], wk[_INSIDE])
+        _copy(wk[27], wk[_DELTA])
+        _copy(wk[28], wk[_LOAD])
+        _copy(wk[29], wk[_XI])
+        _copy(wk[30], wk[_Z])
 
 
 @njit(cache=True)
@@ -166,8 +179,7 @@ def advance_pieces(n_pieces, slots, mc, g_k, g_const_k, s0_k, w_k, table, angles
     sub-step it was; the final state in ``x1, v1, a1``, the meshes' final evaluations in their
     ``out`` buffers and ``totals``, ``lengths``.
     """
-    for m in range(len(meshes)):
-        meshes[m][_USED][:] = meshes[m][_KEPT_ACTIVE]
+    use_sets(meshes, True)
     xs, vs, as_ = x, v, a
     status, k = CONVERGED, 0
     for p in range(n_pieces):
@@ -183,6 +195,5 @@ def advance_pieces(n_pieces, slots, mc, g_k, g_const_k, s0_k, w_k, table, angles
                        lengths)
         if p + 1 < n_pieces:
             xs, vs, as_ = x1.copy(), v1.copy(), a1.copy()
-            for m in range(len(meshes)):
-                meshes[m][_USED][:] = meshes[m][_ACTIVE]
+            use_sets(meshes, False)
     return status, n_pieces - 1, k
