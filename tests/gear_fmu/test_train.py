@@ -233,3 +233,4 @@ def test_newmark_keeps_order_two_on_two_stages():
     d1 = np.linalg.norm(ends[0] - ends[1])
     d2 = np.linalg.norm(ends[1] - ends[2])
     assert math.log2(d1 / d2) >= 1.8, (d1, d2)
+
