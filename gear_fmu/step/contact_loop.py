@@ -107,11 +107,14 @@ class MeshWork:
 
 @njit(cache=True, _nrt=False)
 def evaluate_train(meshes, xc, angles, errs, has_err, fc, kc, totals, lengths, q):
-    """Every mesh of ``meshes`` (workspace tuples) at its pinion angle ``angles[m]`` [rad] and
-    the condensed DOFs ``xc`` (plus ``errs[m]``, the error displacement, when ``has_err``):
-    each mesh's evaluation into its workspace, their forces summed into ``fc`` (ng,) and
-    their tangents into ``kc`` (ng, ng) on the condensed gear-node DOFs, each mesh's total
-    load [N] and contact length [m] into ``totals[m]``, ``lengths[m]``."""
+    """The mesh forces of Eq. (9): every mesh of ``meshes`` (workspace tuples) at its pinion
+    angle ``angles[m]`` [rad] and the condensed DOFs ``xc`` (plus ``errs[m]``, the error
+    displacement, when ``has_err``): each mesh's evaluation into its workspace, their forces
+    summed into ``fc`` (ng,) and their tangents into ``kc`` (ng, ng) on the condensed
+    gear-node DOFs, each mesh's total load [N] and contact length [m] into ``totals[m]``,
+    ``lengths[m]``; ``q`` (12,) a buffer. Compiled without reference counting: the meshes'
+    tuples are read, never kept (a count per array of each tuple read cost more than the
+    sums)."""
     ng = fc.size
     for i in range(ng):
         fc[i] = 0.0

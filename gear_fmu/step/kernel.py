@@ -165,7 +165,8 @@ def advance_pieces(n_pieces, slots, mc, g_k, g_const_k, s0_k, w_k, table, angles
                    errs_after, x, v, a, f_c, unb_coef, unb_idx, f0, kb, cb, has_err, meshes,
                    fc, kc, totals, lengths, f_scale, tol, max_iter, m_inv_g, residuals, x1,
                    v1, a1, memo):
-    """A step cut at its contact events in one call: sub-step ``p < n_pieces`` is
+    """A step cut at its contact events in one call (Eq. 11-16, the Newton iteration of
+    Eq. 13 in each sub-step): sub-step ``p < n_pieces`` is
     :func:`advance` of length ``table[p, 0]`` [s] to ``table[p, 1]`` [s] with the
     condensation of slot ``slots[p]`` of ``g_k`` ... ``w_k``
     (:class:`gear_fmu.step.condensation.CondensationSlots`), the meshes at ``angles[p]``
