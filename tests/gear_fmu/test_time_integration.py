@@ -7,6 +7,8 @@ time steps, the error taken against a run at a much finer step.
 """
 
 
+import math
+
 import numpy as np
 import pytest
 
@@ -240,3 +242,37 @@ def test_a_step_that_does_not_recur_with_the_mesh_period_cuts_on_a_coarser_grain
           f"coarse grain, {n_fine} on the fine one; change / golden tolerance {ratio:.1e}")
     assert n_coarse <= 0.6 * n_fine
     assert ratio <= 5e-2
+
+
+def two_stage_state(n, periods=2):
+    """Journal positions [m] of the shipped two-stage reducer (linear bearings, contact
+    located at the events of both meshes, the coupled iterations converged to 1e-10) after
+    ``periods`` periods of its faster mesh at ``n`` steps per period."""
+    case = load_case("two_stage_reducer", {
+        "bearings.*.model": "linear", "simulation.tolerance": 1e-10,
+        "simulation.steps_per_mesh_period": n})
+    master = build_master(case, in_process=True)
+    master.solve_static()
+    master.exit_initialization()
+    dt = description.time_step(case)
+    i = 0
+    while i < periods * n:
+        block = master.steps(i, dt, periods * n - i)
+        assert block.error is None, block.error
+        i += block.count
+    return master.structure.journal_states()[:, :2].copy()
+
+
+def test_two_stage_reducer_keeps_order_two():
+    """The shipped two-stage reducer (a helical and a spur stage, the second's events not
+    commensurate with the step): order 2 once the steps resolve its helical stage. Its error
+    against a run at 4096 steps per period of the faster mesh falls by 2^p from 256 to 512
+    steps with p = 1.93 measured (>= 1.8 asserted). Coarser ladders are not asymptotic yet,
+    as on the paper's helical case alone (local orders 1.0, 1.4, 1.8, 2.0 from 64 to 1024
+    steps; the two-stage case 1.2, 1.3, 1.9 from 64 to 512)."""
+    ref = two_stage_state(4096)
+    errors = [np.abs(two_stage_state(n) - ref).max() for n in (256, 512)]
+    order = math.log2(errors[0] / errors[1])
+    print(f"\ntwo-stage reducer: journal errors {errors[0]:.2e}, {errors[1]:.2e} m at 256, 512 "
+          f"steps per mesh period: observed order {order:.2f}")
+    assert order >= 1.8
