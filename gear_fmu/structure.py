@@ -73,7 +73,7 @@ from gear_fmu.step.contact_loop import (
     contact_newton,
 )
 from gear_fmu.step.events import ContactEvents, train_pieces
-from gear_fmu.step.kernel import advance_pieces, keep_evaluation
+from gear_fmu.step.kernel import advance_step, keep_evaluation
 from gear_fmu.step.newmark import NewmarkConvergenceError
 from gear_fmu.system import GearShaftSystem
 
@@ -188,6 +188,9 @@ class Structure:
         self.locate_contact = bool(locate_contact)
         self._m_inv = None  # M^-1 restricted to the condensed columns, when first needed
         self._m_inv_g = None  # ... to the gear-node columns
+        self._one = None  # the arguments of the last single step (_one_step)
+        self._one_buf = None  # their arrays
+        self._step_work = None  # its buffers
         self._events = None  # the contact events of each mesh, when first needed
         self._work = [MeshWork(m, idx) for m, idx in zip(self.meshes, self._mesh_idx,
                                                           strict=True)]
@@ -518,25 +521,63 @@ class Structure:
             With the step number, the time and the residual.
         """
         f0, kb, cb = check_laws_fast(F0, Kb, Cb, self.nb)
-        plan = self.steps_plan(dt, 1)
-        counts, slots, mc, g_k, gc_k, s0_k, w_k, table, angles, after, errs, errs_a = plan.head
-        x, v, a = plan.state
-        unb_coef, unb_idx, f_c, has_err, meshes, f_scale, tol, max_iter, m_inv_g, memo = \
-            plan.tail
-        fc, kc, totals, lengths, residuals, x1, v1, a1 = plan.work
-        status, piece, k = advance_pieces(
-            counts[0], slots[0], mc, g_k, gc_k, s0_k, w_k, table[0], angles[0], after[0],
-            errs[0], errs_a[0], x, v, a, f_c, unb_coef, unb_idx, f0, kb, cb, has_err, meshes,
-            fc, kc, totals, lengths, f_scale, tol, max_iter, m_inv_g, residuals, x1, v1, a1,
-            memo)
-        t1 = float(table[0, piece, 1])
-        self._raise(status, k, residuals, t1, f"Newmark step {self.n_steps + 1}")
-        keep_evaluation(meshes)
+        counts, slots, table, angles, after, errs, errs_a, end = self._one_step(dt)
+        g_k, gc_k, s0_k, w_k = self._condensations.arrays()
+        fc, kc, totals, lengths, residuals, x1, v1, a1 = self._step_work
+        status, piece, k = advance_step(
+            counts, slots, self._mc, g_k, gc_k, s0_k, w_k, table, angles, after, errs, errs_a,
+            self.x, self.v, self.a, self._f_c, self._unb_coef, self._unb_idx, f0, kb, cb,
+            self._has_err, self._mesh_tuple, fc, kc, totals, lengths, self._f_scale, self.tol,
+            self.max_iter, self._m_inv_g, residuals, x1, v1, a1, self._memo, self._totals,
+            self._lengths)
+        if status != CONVERGED:
+            self._raise(status, k, residuals, float(table[piece, 1]),
+                        f"Newmark step {self.n_steps + 1}")
+        # the new state in the work buffers, the old state's arrays the next step's buffers
+        self._step_work[5:] = [self.x, self.v, self.a]
         self.x, self.v, self.a = x1, v1, a1
-        self._totals[:], self._lengths[:] = totals, lengths
-        self.t = plan.ends[0][-1]
+        self.t = end
         self.n_steps += 1
         return StepInfo(self.t, k, float(residuals[k]), residuals[:k + 1].tolist())
+
+    def _one_step(self, dt: float) -> tuple:
+        """The arguments of :func:`gear_fmu.step.kernel.advance_pieces` for the step of dt
+        from the structure's time (:meth:`steps_plan`'s for one step, built lean: a step alone
+        is on an FMU's hot path), kept for the next call from the same time: a master takes a
+        step again at each of its iterations."""
+        key = (self.t, dt, self._condensations.generation)
+        if self._one is not None and self._one[0] == key:
+            return self._one[1]
+        self._check_step(dt)
+        pieces = self._pieces(dt, self.t)
+        slots = self._condensations
+        slots.make_room([h for h, _, _, _ in pieces], first=True)
+        n, n_meshes = len(pieces), len(self.meshes)
+        buf = self._one_buf
+        if buf is None or buf[0].size < n:  # (filled in place: arrays per step cost more)
+            size = max(n, 4)
+            buf = self._one_buf = (np.zeros(size, dtype=np.int64), np.zeros((size, 2)),
+                                   np.zeros((size, n_meshes)), np.zeros((size, n_meshes)),
+                                   np.zeros((size, n_meshes, 12)),
+                                   np.zeros((size, n_meshes, 12)))
+        index, table, angles, after, errs, errs_after = buf
+        for p, (h, te, before, aft) in enumerate(pieces):
+            index[p] = slots.slot(h, self._dynamic)
+            table[p, 0], table[p, 1] = h, te
+            for m in range(n_meshes):
+                angles[p, m], after[p, m] = before[m], aft[m]
+            if self._has_err:
+                errs[p] = self._errors(before)
+                errs_after[p] = self._errors(np.where(np.isnan(aft), before, aft))
+        key = (self.t, dt, slots.generation)
+        self._one = (key, (n, index, table, angles, after, errs, errs_after, pieces[-1][1]))
+        self._m_inv_gear_columns()
+        if self._step_work is None:
+            ng, size = self.ng, self.x.size
+            self._step_work = [np.empty(ng), np.empty((ng, ng)), self._totals.copy(),
+                               self._lengths.copy(), np.empty(self.max_iter + 1),
+                               np.empty(size), np.empty(size), np.empty(size)]
+        return self._one[1]
 
     def _pieces(self, dt: float, t: float) -> list:
         """``[(h [s], end time [s], angles before, angles after or NaN)]`` of a step of dt

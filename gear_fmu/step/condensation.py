@@ -58,11 +58,14 @@ class CondensationSlots:
         self._index: dict[float, int] = {}
         self._stacks: tuple | None = None
         self._n = 0
+        #: counts the clearings (a slot number is valid within one generation only)
+        self.generation = 0
 
     def clear(self) -> None:
         """Forget every slot (the condensations changed: damping, torque)."""
         self._index.clear()
         self._n = 0
+        self.generation += 1
 
     def make_room(self, lengths, first: bool) -> bool:
         """Whether the slots can take sub-steps of ``lengths`` [s] besides the ones they hold;

@@ -41,7 +41,8 @@ from gear_fmu.step.contact_loop import (
 )
 from gear_fmu.step.newmark import newmark_kinematics
 
-__all__ = ["advance", "advance_pieces", "contact_events", "keep_evaluation", "sum_squares"]
+__all__ = ["advance", "advance_pieces", "advance_step", "contact_events", "keep_evaluation",
+           "sum_squares"]
 
 
 @njit(cache=True)
@@ -198,3 +199,23 @@ def advance_pieces(n_pieces, slots, mc, g_k, g_const_k, s0_k, w_k, table, angles
             xs, vs, as_ = x1.copy(), v1.copy(), a1.copy()
             use_sets(meshes, False)
     return status, n_pieces - 1, k
+
+
+@njit(cache=True)
+def advance_step(n_pieces, slots, mc, g_k, g_const_k, s0_k, w_k, table, angles, after, errs,
+                 errs_after, x, v, a, f_c, unb_coef, unb_idx, f0, kb, cb, has_err, meshes, fc,
+                 kc, totals, lengths, f_scale, tol, max_iter, m_inv_g, residuals, x1, v1, a1,
+                 memo, kept_totals, kept_lengths):
+    """:func:`advance_pieces` for a step taken alone (not iterated by a master): on success
+    the meshes' evaluations are kept (:func:`keep_evaluation`) with their total loads and
+    contact lengths in ``kept_totals``, ``kept_lengths``, in the same call. Returns as
+    :func:`advance_pieces`."""
+    status, piece, k = advance_pieces(
+        n_pieces, slots, mc, g_k, g_const_k, s0_k, w_k, table, angles, after, errs,
+        errs_after, x, v, a, f_c, unb_coef, unb_idx, f0, kb, cb, has_err, meshes, fc, kc,
+        totals, lengths, f_scale, tol, max_iter, m_inv_g, residuals, x1, v1, a1, memo)
+    if status == CONVERGED:
+        keep_evaluation(meshes)
+        kept_totals[:] = totals
+        kept_lengths[:] = lengths
+    return status, piece, k
