@@ -14,27 +14,20 @@ the run on one thread to it. The numba kernels are
 compiled before the clock starts (a 2-period warm-up run per configuration). The paper needed
 8 minutes for case 2 in 2010.
 
-``--breakdown`` times every call the master and the runner make on the slaves, per coupled
-iteration (microseconds): the structure step (in-process: the Python Structure and its
-kernels; through FMUs: the fmi2DoStep call, the FMU's Python included), the bearing set's
-evaluation, state saves and restores, the law linearisation and mismatch of the master, the
-results writer, and the rest (the loop, the progress test); and the ratio of the total to the
-sum of the timed calls. The timers add about 0.5 us per call (measured by the ratio of the
-runs with and without them). A third run times the compiled kernels alone (:data:`KERNELS`:
-the structure's step, the hybrid bearing, the master's update) and prints the ratio of the
-total to their sum: what is left is Python and, through FMUs, the FMI layer. In-process the
-master takes most steps in compiled calls of many steps each (:mod:`orchestrator.coupling.
-fused`, timed as one line with the Python around them), and through FMUs the bearing FMUs'
-native layer calls the hybrid law without Python (``fmu_src/native/patches/0011-native-
-bearing-law.patch``, timed within "bearing evaluation"); the third run uses the master's
-Python loop and the bearing FMUs' Python, whose kernels can be timed apart.
+``--breakdown`` times, per coupled iteration (microseconds), the compiled coupled steps
+(:func:`orchestrator.coupling.step.coupled_steps`, one call per block of steps: the structure,
+the bearings and the master's update, the same iteration in-process and through the FMUs), the
+structure's plan of each block, the static solution's calls and the results writer, and the
+rest (the runner's loop, the progress test); the timers add about 0.5 us per call. Through the
+FMUs the gear-shaft FMU's doStep and its state's save and restore run its slave's Python inside
+the compiled call; the bearing FMUs' native layer calls the hybrid law without Python
+(``fmu_src/native/patches/0011-native-bearing-law.patch``).
 """
 
 from __future__ import annotations
 
 import argparse
 import contextlib
-import importlib
 import platform
 import tempfile
 import time
@@ -49,37 +42,14 @@ INPROCESS = "orchestrator.coupling.inprocess.InProcessStructure"
 FMU_STRUCTURE = "orchestrator.coupling.fmi.structure.FmuStructure"
 #: (label, class path, method) of the calls timed by --breakdown
 TIMED = [
-    ("structure step", INPROCESS, "do_step"),
-    ("structure step", FMU_STRUCTURE, "do_step"),
-    ("bearing evaluation", "orchestrator.coupling.inprocess.ModelBearings", "evaluate"),
-    ("bearing evaluation", "orchestrator.coupling.fmi.bearings.FmuBearings", "evaluate"),
-    ("state save / restore", INPROCESS, "get_state"),
-    ("state save / restore", INPROCESS, "set_state"),
-    ("state save / restore", FMU_STRUCTURE, "get_state"),
-    ("state save / restore", FMU_STRUCTURE, "set_state"),
-    ("laws in / journals out", INPROCESS, "set_bearing_laws"),
-    ("laws in / journals out", INPROCESS, "journal_states"),
-    ("laws in / journals out", FMU_STRUCTURE, "set_bearing_laws"),
-    ("laws in / journals out", FMU_STRUCTURE, "journal_states"),
-    ("master: linearise + mismatch", "bearing_fmu.affine.AffineLaws", "relinearise"),
-    ("compiled coupled step", "orchestrator.coupling.fused.FusedStep", "step"),
-    ("compiled coupled step", "orchestrator.coupling.fused.FusedStep", "steps"),
-    ("compiled coupled step", "orchestrator.coupling.fmi.steps.FmuSteps", "step"),
-    ("compiled coupled step", "orchestrator.coupling.fmi.steps.FmuSteps", "steps"),
+    ("compiled coupled steps", "orchestrator.coupling.step", "coupled_steps"),
+    ("structure: plan of a block", INPROCESS, "compiled_block"),
+    ("structure: plan of a block", FMU_STRUCTURE, "compiled_block"),
+    ("bearing groups", "orchestrator.coupling.inprocess.ModelBearings", "compiled_groups"),
+    ("bearing groups", "orchestrator.coupling.fmi.bearings.FmuBearings", "compiled_groups"),
+    ("static solution", "orchestrator.coupling.master.Master", "solve_static"),
     ("outputs + results writer", "orchestrator.run.results.ResultsWriter", "append"),
     ("outputs + results writer", "orchestrator.run.results.ResultsWriter", "append_rows"),
-    ("outputs + results writer", "orchestrator.coupling.master.StructureSlave", "step_outputs"),
-    ("outputs + results writer", FMU_STRUCTURE, "step_outputs"),
-]
-
-
-#: the compiled kernels of a coupled iteration, as the code calls them (module attributes):
-#: the structure's step, the hybrid bearing, the master's update
-KERNELS = [
-    ("structure: advance", "gear_fmu.structure", "advance"),
-    ("bearings: hybrid_global", "bearing_fmu.hybrid._kernels", "hybrid_global"),
-    ("bearings: hybrid_set_global", "bearing_fmu.hybrid._kernels", "hybrid_set_global"),
-    ("master: _relinearise", "bearing_fmu.affine", "_relinearise"),
 ]
 
 
@@ -125,32 +95,6 @@ def timed_calls(targets=TIMED, counts: dict | None = None):
             setattr(owner, name, raw)
 
 
-@contextlib.contextmanager
-def python_loop():
-    """The master's Python loop instead of its compiled steps (:mod:`orchestrator.coupling.
-    fused`, :mod:`orchestrator.coupling.fmi.steps`), and the bearing FMUs' law through their
-    Python instead of their native layer
-    (``fmu_src/native/patches/0011-native-bearing-law.patch``): the kernels these call
-    without Python cannot be timed one by one."""
-    with contextlib.ExitStack() as undo:
-        for module, owner, name, value in (
-                ("orchestrator.coupling.fused", "FusedStep", "fits",
-                 staticmethod(lambda *a: False)),
-                ("orchestrator.coupling.fmi.steps", "FmuSteps", "fits",
-                 staticmethod(lambda *a: False)),
-                ("fmu_src.slaves.bearing", "BearingSlave", "_fmi_native_law",
-                 lambda self: None)):
-            try:
-                cls = getattr(importlib.import_module(module), owner)
-            except (ModuleNotFoundError, AttributeError):  # a commit without it
-                continue
-            if name not in cls.__dict__:
-                continue
-            undo.callback(setattr, cls, name, cls.__dict__[name])
-            setattr(cls, name, value)
-        yield
-
-
 def breakdown(periods: int, in_process: bool) -> None:
     """Per coupled iteration: the timed calls (:data:`TIMED`) and the rest."""
     kw = dict(in_process=in_process, progress=False)
@@ -163,10 +107,6 @@ def breakdown(periods: int, in_process: bool) -> None:
         with timed_calls() as totals:
             s = run_case(case.with_overrides({"simulation.mesh_periods": periods}),
                          out_dir=tmp + "/t", **kw)
-        calls: dict[str, int] = {}
-        with timed_calls(KERNELS, calls) as kernels, python_loop():
-            k = run_case(case.with_overrides({"simulation.mesh_periods": periods}),
-                         out_dir=tmp + "/k", **kw)
     n = s.iterations
     us = 1e6 / n
     where = "in-process" if in_process else "FMUs (fmpy)"
@@ -178,15 +118,6 @@ def breakdown(periods: int, in_process: bool) -> None:
     rest = s.wall_time - sum(totals.values())
     print(f"  {'rest (loop, progress, ...)':30s} {rest * us:8.1f} us/iteration  "
           f"{100 * rest / s.wall_time:5.1f} %")
-    print(f"  {'total':30s} {s.wall_time * us:8.1f} us/iteration; total / timed calls "
-          f"{s.wall_time / sum(totals.values()):.3f}")
-    kus = 1e6 / k.iterations
-    seconds = sum(kernels.values())
-    print(f"  compiled kernels (a third run, kernels timed alone: {k.wall_time:.2f} s): "
-          f"{seconds * kus:.1f} us/iteration; total / kernels {k.wall_time / seconds:.2f}")
-    for label, total in sorted(kernels.items(), key=lambda kv: -kv[1]):
-        print(f"    {label:28s} {total * kus:8.1f} us/iteration in "
-              f"{calls[label] / k.iterations:.2f} calls")
 
 
 def main() -> None:
