@@ -51,6 +51,7 @@ from numba.extending import overload
 from bearing_fmu.affine import AffineLaws, _relinearise, affine_set_global
 from bearing_fmu.hybrid._kernels import hybrid_set_global, hybrid_set_threads
 from bearing_fmu.short_bearing import short_set_global
+from fmu_src.lifecycle import step_output_row
 from gear_fmu.step.contact_loop import CONVERGED
 from gear_fmu.step.kernel import advance_pieces, keep_evaluation
 from orchestrator.coupling.fmi.steps import (
@@ -159,24 +160,15 @@ def _in_process_accept(structure, row):
     x, v, a = state
     meshes = tail[4]
     totals, lengths, x1, v1, a1 = work[2], work[3], work[5], work[6], work[7]
-    gear_uv, kept_totals, kept_lengths = rec
+    gear_uv, kept_totals, kept_lengths, te_idx, te_coef = rec
     x[:] = x1
     v[:] = v1
     a[:] = a1
     keep_evaluation(meshes)
-    n_meshes = totals.size
-    for m in range(n_meshes):
+    for m in range(totals.size):
         kept_totals[m] = totals[m]
         kept_lengths[m] = lengths[m]
-        row[m] = totals[m]
-        idx, te = meshes[m][12], meshes[m][13]
-        acc = 0.0
-        for j in range(12):
-            acc += te[j] * x1[idx[j]]
-        row[n_meshes + m] = acc
-    for g in range(gear_uv.shape[0]):
-        row[2 * n_meshes + 2 * g] = x1[gear_uv[g, 0]]
-        row[2 * n_meshes + 2 * g + 1] = x1[gear_uv[g, 1]]
+    step_output_row(te_idx, te_coef, gear_uv, totals, x1, row)
     return 0
 
 
