@@ -49,7 +49,7 @@ def paper_case(helix_angle_deg: float = 0.0, **overrides) -> Case:
 
 def paper_gear_pair(helix_angle_deg: float = 0.0):
     """The gear pair of Table 1 (:class:`gear_fmu.mesh.geometry.GearPair`)."""
-    return description.gear_pair(paper_case(helix_angle_deg))
+    return description.gear_pairs(paper_case(helix_angle_deg))[0]
 
 
 def paper_system(helix_angle_deg: float = 0.0, n_elements: int = 8):
