@@ -445,8 +445,8 @@ class CoupledSteps:
         outputs, n_meshes = rec[2][:count], self.structure.n_meshes
         block = StepBlock(count, rec[0][:count], rec[1][:count],
                           outputs[:, :n_meshes].copy(), outputs[:, n_meshes:2 * n_meshes].copy(),
-                          outputs[:, 2 * n_meshes:].reshape(count, -1, 2), rec[3][:count],
-                          mismatch)
+                          outputs[:, 2 * n_meshes:].reshape(count, self.structure.n_gears, 2),
+                          rec[3][:count], mismatch)
         if count < m:
             self._count(master, outcome, it)
             try:
