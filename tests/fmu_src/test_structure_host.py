@@ -3,8 +3,9 @@
 ``hosts/structure_host.c`` sets the law inputs (14 per bearing), steps and reads the journal
 outputs (4 per bearing), as the package's master does, with a saved state restored among the
 steps; it prints what it read as hexadecimal floats. The paper's gear-shaft FMU (4 bearings) and
-another train's (:data:`tests.conftest.TRAIN_CASE`: 6 bearings, 2 meshes) are driven. In a C host the FMU's loader starts the interpreter, and the patched
-library serves these sets and reads while stepping from the slave's buffer
+another train's (:data:`tests.conftest.TRAIN_CASE`: 6 bearings, 2 meshes) are driven. In a C
+host the FMU's loader starts the interpreter, and the patched library serves these sets and
+reads while stepping from the slave's buffer
 (fmu_src/native/patches/0012-native-structure-io.patch; that it does, rather than the slave's
 Python, is asserted by tests/fmu_src/test_gear_fmu.py, where the calls can be counted).
 Skipped without a C compiler.
