@@ -10,7 +10,7 @@ before accepted:
 2. every bearing is evaluated at its new journal state (:func:`evaluate_set`: groups of
    bearings, each of one kind, whatever their mix of models);
 3. if the film forces differ from the laws by more than ``tol`` (relative to the force norm,
-   :func:`bearing_fmu.affine._relinearise`), the laws are linearised at the new iterate (or,
+   ``bearing_fmu.affine._relinearise``), the laws are linearised at the new iterate (or,
    once the iteration stalls, relaxed: :func:`relaxed_law`), the structure's state restored
    and the step taken again; else the step is accepted.
 
@@ -76,8 +76,10 @@ STALL = 0.5
 #: the outcomes of a step of :func:`coupled_steps`
 ACCEPTED, STRUCTURE_FAILED, BEARING_FAILED, NOT_CONVERGED = 0, 1, 2, 3
 #: the lengths of the tuples that tell the kinds apart in compiled code: a structure's
-#: arguments in-process (:meth:`InProcess.arguments`) and through the gear-shaft FMU; a bearing
-#: group's arguments: hybrid, hybrid on threads, short, affine, FMUs, Python
+#: arguments in-process
+#: (:meth:`~orchestrator.coupling.inprocess.InProcessStructure.compiled_block`) and through
+#: the gear-shaft FMU; a bearing group's arguments: hybrid, hybrid on threads, short, affine,
+#: FMUs, Python
 IN_PROCESS, THROUGH_FMU = 5, 10
 HYBRID, THREADED, SHORT, AFFINE, FMUS, PYTHON = 11, 12, 7, 4, 5, 1
 
