@@ -8,19 +8,26 @@ which the film model runs. Besides the force and its stiffness and damping (Eq. 
 the journal state they were evaluated at (its inputs, ``s_eval`` ...): what the gear-shaft FMU
 linearises about (Eq. 17).
 
-:func:`gear_variables`: the gear-shaft FMU (``GearShaft``): the structural fields of its case
-as parameters (:func:`gear_case_fields`); per bearing j = 1..4 the bearing FMU's outputs as
-inputs (``F_s_j``, ``K_ss_j``, ..., ``s_eval_j``, ...); the journal states, the shaft speeds at
-the bearings, mesh and gear outputs. A system is wired by plain output -> input connections
-(:func:`connections`), with no arithmetic in between.
+:func:`gear_variables`: the gear-shaft FMU (``GearShaft``) of a case's gear train: the
+structural fields of its case as parameters (:func:`gear_case_fields`); one group of ports per
+bearing, named after it (bearing ``b``: the bearing FMU's outputs as inputs ``F_s_b``,
+``K_ss_b``, ..., ``s_eval_b``, ...; its journal state ``s_b`` ... ``t_dot_b`` and its shaft's
+speed ``omega_b`` as outputs; ``support_load_s_b``, ``rotation_sign_b`` ... as calculated
+parameters); per mesh ``m`` the outputs ``mesh_force_m`` and ``transmission_error_m``; per gear
+``g`` the outputs ``u_g`` and ``v_g`` (:func:`step_output_names`). Every list of names follows
+the train's layout (:func:`fmu_src.description.layout`): nothing here counts bearings, meshes
+or gears. The paper's bearings are named ``1`` ... ``4``, so its ports are ``F_s_1`` ... A
+system is wired by plain output -> input connections (:func:`connections`), with no arithmetic
+in between.
 
 Every bound a value must respect is declared here (:class:`FmiVar`: minimum, maximum, choices;
 written as ``min``/``max`` into modelDescription.xml) and checked by the FMUs when the value is
-set (:meth:`FmiVar.check`). The layouts of the 56 law inputs and the 16 journal outputs are
-defined once (:func:`law_input_names`, :func:`pack_laws`, :func:`unpack_law_arrays`,
-:func:`unpack_journal`). Units are the dimensions of :mod:`fmu_src.units`. The tables are
-rendered into ``docs/fmu-variables.md`` by :mod:`fmu_src.build.variables_doc` and into each FMU's
-modelDescription.xml by :mod:`fmu_src.build.fmus`.
+set (:meth:`FmiVar.check`). The layouts of the law inputs (14 per bearing) and of the journal
+outputs (4 per bearing) are defined once (:func:`law_input_names`, :func:`pack_laws`,
+:func:`unpack_law_arrays`, :func:`unpack_journal`). Units are the dimensions of
+:mod:`fmu_src.units`. The tables are rendered into ``docs/fmu-variables.md`` by
+:mod:`fmu_src.build.variables_doc` and into each FMU's modelDescription.xml by
+:mod:`fmu_src.build.fmus`.
 
 The two variable lists take start values from the shipped case ``baguet2010_spur``; they are
 built on first use and kept (:func:`bearing_variables`, :func:`gear_variables`), so importing
@@ -46,15 +53,19 @@ from fmu_src.case import (
     model_option_fields,
     shipped_case,
 )
-from fmu_src.description import bearing_frames
-from fmu_src.fields import template
+from fmu_src.description import bearing_frames, layout
+from fmu_src.fields import CaseError, template
 from fmu_src.units import symbol
+from gear_fmu.layout import Layout
 
-__all__ = ["BEARINGS", "BEARING_RESOURCE", "GEAR_DEFAULT_CASE", "FmiVar", "ValueRefused",
-           "bearing_fmu_name", "bearing_option_keys", "bearing_variables", "case_parameters",
-           "connections", "fmi_name", "gear_case_fields", "gear_parameters",
-           "gear_variables", "journal_output_names", "law_input_names", "pack_law_arrays",
-           "pack_laws", "parameter_field", "transmission_fields", "transmission_variables",
+__all__ = ["BEARING_RESOURCE", "GEAR_DEFAULT_CASE", "LAWS_PER_BEARING", "FmiVar",
+           "ValueRefused", "bearing_component", "bearing_fmu_name", "bearing_names",
+           "bearing_option_keys", "bearing_variables", "case_parameters", "connections",
+           "fmi_name", "gear_case_fields", "gear_names", "gear_parameters", "gear_variables",
+           "journal_output_names", "law_input_names", "mesh_names", "pack_law_arrays",
+           "pack_laws", "parameter_field", "speed_output_names", "step_output_names",
+           "support_load_names", "transmission_fields", "transmission_output_names",
+           "transmission_variables",
            "unpack_journal", "unpack_law_arrays"]
 
 
@@ -132,6 +143,8 @@ STATE_NAMES = ("s", "t", "s_dot", "t_dot")
 EVAL_NAMES = ("s_eval", "t_eval", "s_dot_eval", "t_dot_eval")
 #: what a bearing FMU gives the gear-shaft FMU (the law of Eq. 17 and where it was evaluated)
 BEARING_OUTPUTS = (*FORCE_NAMES, *STIFFNESS_NAMES, *DAMPING_NAMES, *EVAL_NAMES)
+#: the gear-shaft FMU's law inputs per bearing (:data:`BEARING_OUTPUTS`)
+LAWS_PER_BEARING = len(BEARING_OUTPUTS)
 
 
 def _paper_bearing():
@@ -223,9 +236,6 @@ def bearing_option_keys() -> tuple[str, ...]:
 
 #: the case the gear-shaft FMU carries by default (its parameters' start values)
 GEAR_DEFAULT_CASE = "baguet2010_spur.toml"
-#: the gear-shaft FMU's bearing numbering (1, 2 pinion shaft; 3, 4 gear shaft)
-# TODO(train): the ports per bearing name of the case (case.names("bearings"))
-BEARINGS = (1, 2, 3, 4)
 #: start values of the law inputs: isotropic 1e8 N/m, 1e4 N s/m, no force (stand-alone runs)
 _LAW_START = {"K_ss": 1e8, "K_tt": 1e8, "C_ss": 1e4, "C_tt": 1e4}
 _LAW_DIMENSION = {**dict.fromkeys(FORCE_NAMES, "force"),
@@ -234,49 +244,108 @@ _LAW_DIMENSION = {**dict.fromkeys(FORCE_NAMES, "force"),
                   "s_eval": "length", "t_eval": "length", "s_dot_eval": "velocity",
                   "t_dot_eval": "velocity"}
 _STATE_TEXT = {
-    "s": ("length", "bearing {j}: journal-centre displacement along s (global frame)"),
-    "t": ("length", "bearing {j}: journal-centre displacement along t (global frame)"),
-    "s_dot": ("velocity", "bearing {j}: journal-centre velocity along s"),
-    "t_dot": ("velocity", "bearing {j}: journal-centre velocity along t"),
+    "s": ("length", "bearing {b}: journal-centre displacement along s (global frame)"),
+    "t": ("length", "bearing {b}: journal-centre displacement along t (global frame)"),
+    "s_dot": ("velocity", "bearing {b}: journal-centre velocity along s"),
+    "t_dot": ("velocity", "bearing {b}: journal-centre velocity along t"),
 }
-#: outputs of the gear-shaft FMU after the journal states and speeds (name, dimension, text)
-GEAR_OUTPUTS = (
-    ("mesh_force", "force", "total normal tooth load of the mesh (sum of the slice loads)"),
-    ("transmission_error", "length",
-     "transmission error r_b1 theta_1 + r_b2 theta_2 of the gear nodes' elastic torsion"),
-    ("u_pinion", "length", "pinion node displacement along s"),
-    ("v_pinion", "length", "pinion node displacement along t"),
-    ("u_gear", "length", "gear node displacement along s"),
-    ("v_gear", "length", "gear node displacement along t"),
-)
 
 
-def law_input_names() -> list[str]:
-    """The 56 law inputs of the gear-shaft FMU: bearing-major, the bearing FMU's outputs
-    (:data:`BEARING_OUTPUTS`) within, suffixed with the bearing number."""
-    return [f"{n}_{j}" for j in BEARINGS for n in BEARING_OUTPUTS]
+def _train(case) -> Layout:
+    """The gear train of a case (a :class:`fmu_src.case.Case` or its
+    :class:`gear_fmu.layout.Layout`)."""
+    return case if isinstance(case, Layout) else layout(case)
 
 
-def journal_output_names() -> list[str]:
-    """The 16 journal outputs: bearing-major, (s, t, s_dot, t_dot) within (journal_states)."""
-    return [f"{n}_{j}" for j in BEARINGS for n in STATE_NAMES]
+def bearing_names(case) -> tuple[str, ...]:
+    """The bearings' names in the layout's order (the case's): the suffix of each bearing's
+    group of ports (``"1"`` ... ``"4"`` for the paper's cases)."""
+    return _train(case).bearing_names
 
 
-def support_load_names() -> list[str]:
-    """The 8 support loads: bearing-major, (s, t) within."""
-    return [f"support_load_{a}_{j}" for j in BEARINGS for a in ("s", "t")]
+def mesh_names(case) -> tuple[str, ...]:
+    """The meshes' names in the layout's order."""
+    return _train(case).mesh_names
+
+
+def gear_names(case) -> tuple[str, ...]:
+    """The gears' names in the layout's order."""
+    return tuple(g.name for g in _train(case).gears)
+
+
+def law_input_names(case) -> list[str]:
+    """The gear-shaft FMU's law inputs: bearing-major (the layout's order), the bearing FMU's
+    outputs (:data:`BEARING_OUTPUTS`, :data:`LAWS_PER_BEARING` of them) within, suffixed with
+    the bearing's name (``F_s_1``, ..., ``t_dot_eval_4`` for the paper's case)."""
+    return [f"{n}_{b}" for b in bearing_names(case) for n in BEARING_OUTPUTS]
+
+
+def journal_output_names(case) -> list[str]:
+    """The journal outputs: bearing-major, (s, t, s_dot, t_dot) within (journal_states)."""
+    return [f"{n}_{b}" for b in bearing_names(case) for n in STATE_NAMES]
+
+
+def speed_output_names(case) -> list[str]:
+    """The speed of each bearing's shaft, ``omega_<bearing>``, in the bearings' order."""
+    return [f"omega_{b}" for b in bearing_names(case)]
+
+
+def support_load_names(case) -> list[str]:
+    """The support loads: bearing-major, (s, t) within."""
+    return [f"support_load_{a}_{b}" for b in bearing_names(case) for a in ("s", "t")]
+
+
+def step_output_names(case) -> list[str]:
+    """What the structure outputs at each step, in the row of
+    :class:`orchestrator.coupling.step.StepBlock`: each mesh's force ``mesh_force_<mesh>``,
+    then each mesh's ``transmission_error_<mesh>``, then ``u_<gear>``, ``v_<gear>`` of each
+    gear's node (the layout's orders)."""
+    lay = _train(case)
+    return [*(f"mesh_force_{m}" for m in lay.mesh_names),
+            *(f"transmission_error_{m}" for m in lay.mesh_names),
+            *(f"{a}_{g.name}" for g in lay.gears for a in ("u", "v"))]
+
+
+def _step_output_variables(lay: Layout) -> list[FmiVar]:
+    """The variables of :func:`step_output_names`."""
+    pairs = {m.name: m.gears for m in lay.meshes}
+    return [*(FmiVar(f"mesh_force_{m}", _O, "Real", "force", 0.0,
+                     f"mesh {m} (gears {pairs[m][0]} and {pairs[m][1]}): total normal tooth "
+                     "load (the sum of the slice loads)") for m in lay.mesh_names),
+            *(FmiVar(f"transmission_error_{m}", _O, "Real", "length", 0.0,
+                     f"mesh {m}: transmission error r_b1 theta_1 + r_b2 theta_2 of its gear "
+                     "nodes' elastic torsion") for m in lay.mesh_names),
+            *(FmiVar(f"{a}_{g.name}", _O, "Real", "length", 0.0,
+                     f"gear {g.name}: node displacement along {axis}")
+              for g in lay.gears for a, axis in (("u", "s"), ("v", "t")))]
+
+
+def _unique(variables, case) -> tuple[FmiVar, ...]:
+    """``variables``, or a :class:`~fmu_src.fields.CaseError` naming two that one name would
+    denote (a bearing ``a`` has the output ``s_dot_a``, which is also ``s`` of a bearing
+    ``dot_a``)."""
+    seen: set = set()
+    for v in variables:
+        if v.name in seen:
+            source = getattr(case, "source", None) or "the case"
+            raise CaseError(f"{source}: two FMU variables would be named {v.name!r}: rename "
+                            "the bearing, mesh or gear whose name makes it (a name is the "
+                            "suffix of its ports, e.g. s_<bearing>, mesh_force_<mesh>)")
+        seen.add(v.name)
+    return tuple(variables)
 
 
 def pack_laws(laws: AffineLaws, out: np.ndarray) -> None:
     """Write the affine laws of every bearing (Eq. 17, global frame) into ``out``, the law
-    inputs in the order of :func:`law_input_names` (14 per bearing): each law's expansion
+    inputs in the order of :func:`law_input_names` (:data:`LAWS_PER_BEARING` per bearing):
+    each law's expansion
     (force, Kb, Cb and the journal state it was linearised about;
     :meth:`bearing_fmu.affine.AffineLaws.expansion`)."""
     states, force, kb, cb = laws.expansion()
     c = np.ascontiguousarray
     pack_law_arrays(c(states, dtype=np.float64), c(force, dtype=np.float64),
                     c(kb, dtype=np.float64), c(cb, dtype=np.float64),
-                    out.reshape(len(states), 14))
+                    out.reshape(len(states), LAWS_PER_BEARING))
 
 
 @njit(cache=True)
@@ -300,7 +369,7 @@ def unpack_law_arrays(values):
     arithmetic of :meth:`bearing_fmu.affine.AffineLaws.linearise` (``F + (Kb X) + (Cb Xdot)``,
     each product summed in order), so the laws are the master's bit for bit. Compiled: the
     gear FMU unpacks at every doStep."""
-    return _unpack(np.asarray(values, dtype=np.float64).reshape(-1, 14))
+    return _unpack(np.asarray(values, dtype=np.float64).reshape(-1, LAWS_PER_BEARING))
 
 
 @njit(cache=True)
@@ -399,36 +468,41 @@ def parameter_field(name: str) -> tuple[str, int | None]:
 
 
 def gear_variables(case=None) -> tuple[FmiVar, ...]:
-    """The gear-shaft FMU's variables, the case parameters starting at the values of ``case``
-    (default: the shipped :data:`GEAR_DEFAULT_CASE`, read on first use and kept: the variables
-    of the gear-shaft FMU built for the shipped case)."""
+    """The gear-shaft FMU's variables for the gear train of ``case`` (module docstring), the
+    case parameters starting at its values (default: the shipped :data:`GEAR_DEFAULT_CASE`,
+    read on first use and kept: the variables of the gear-shaft FMU built for the shipped
+    case). A :class:`~fmu_src.fields.CaseError` for names that would make two variables of one
+    name."""
     if case is None:
         return _shipped_gear_variables()
+    lay = _train(case)
+    names = lay.bearing_names
+    frames = bearing_frames(lay)
     params = [_field_variable(n, f, v) for n, f, v in gear_parameters(case)]
-    return (
+    return _unique((
         *params,
-        *(FmiVar(f"{n}_{j}", _I, "Real", _LAW_DIMENSION[n], _LAW_START.get(n, 0.0),
-                 f"bearing {j}: the bearing FMU's {n} (connect bearing {j}'s output {n})")
-          for j in BEARINGS for n in BEARING_OUTPUTS),
-        *(FmiVar(f"{n}_{j}", _O, "Real", _STATE_TEXT[n][0], 0.0, _STATE_TEXT[n][1].format(j=j))
-          for j in BEARINGS for n in STATE_NAMES),
-        *(FmiVar(f"omega_{j}", _O, "Real", "angular_speed", 0.0,
-                 f"bearing {j}: speed magnitude of its shaft (connect to bearing {j}'s omega)")
-          for j in BEARINGS),
-        *(FmiVar(n, _O, "Real", u, 0.0, d) for n, u, d in GEAR_OUTPUTS),
+        *(FmiVar(f"{n}_{b}", _I, "Real", _LAW_DIMENSION[n], _LAW_START.get(n, 0.0),
+                 f"bearing {b}: the bearing FMU's {n} (connect bearing {b}'s output {n})")
+          for b in names for n in BEARING_OUTPUTS),
+        *(FmiVar(f"{n}_{b}", _O, "Real", _STATE_TEXT[n][0], 0.0, _STATE_TEXT[n][1].format(b=b))
+          for b in names for n in STATE_NAMES),
+        *(FmiVar(f"omega_{b}", _O, "Real", "angular_speed", 0.0,
+                 f"bearing {b}: speed magnitude of its shaft (connect to bearing {b}'s omega)")
+          for b in names),
+        *_step_output_variables(lay),
         FmiVar("iterations", _O, "Integer", "", 0,
                "Newton/contact iterations (linear solves) of the last step or static solution"),
-        *(FmiVar(f"support_load_{a}_{j}", _CP, "Real", "force", 0.0,
-                 f"bearing {j}: static load of the structure on the bearing along {a} with "
+        *(FmiVar(f"support_load_{a}_{b}", _CP, "Real", "force", 0.0,
+                 f"bearing {b}: static load of the structure on the bearing along {a} with "
                  "stiff (1e12 N/m) supports (a first guess of the static solution)")
-          for j in BEARINGS for a in ("s", "t")),
-        *(FmiVar(f"rotation_sign_{j}", _CP, "Integer", "", fr.rotation_sign,
-                 f"bearing {j}: the rotation_sign its bearing FMU needs (+1: shaft turning "
-                 "about +z)") for j, fr in zip(BEARINGS, bearing_frames(case), strict=True)),
-        *(FmiVar(f"frame_angle_{j}", _CP, "Real", "angle", fr.angle,
-                 f"bearing {j}: the frame_angle its bearing FMU needs")
-          for j, fr in zip(BEARINGS, bearing_frames(case), strict=True)),
-    )
+          for b in names for a in ("s", "t")),
+        *(FmiVar(f"rotation_sign_{b}", _CP, "Integer", "", fr.rotation_sign,
+                 f"bearing {b}: the rotation_sign its bearing FMU needs (+1: shaft turning "
+                 "about +z)") for b, fr in zip(names, frames, strict=True)),
+        *(FmiVar(f"frame_angle_{b}", _CP, "Real", "angle", fr.angle,
+                 f"bearing {b}: the frame_angle its bearing FMU needs")
+          for b, fr in zip(names, frames, strict=True)),
+    ), case)
 
 
 @functools.cache
@@ -450,47 +524,67 @@ def transmission_fields():
 
 
 def transmission_variables(case, bearing_fmu: str = "") -> tuple[FmiVar, ...]:
-    """The variables of the transmission FMU of ``case`` (the gear-shaft structure, the four
-    bearings and the iterative master in one FMU): every case field of
+    """The variables of the transmission FMU of ``case`` (the gear-shaft structure, every
+    bearing and the iterative master in one FMU): every case field of
     :func:`transmission_fields` as a parameter starting at the case's value (the naming of
     :func:`gear_parameters`), the parameter ``bearing_fmu`` (starting at ``bearing_fmu``), the
-    input ``torque``, the journal states, the film forces, the mesh force and the transmission
-    error."""
+    input ``torque``, per bearing (named after it, as the gear-shaft FMU's ports) its journal
+    state and film force, per mesh its force and transmission error."""
+    lay = _train(case)
+    names = lay.bearing_names
     params = [_field_variable(n, f, v) for n, f, v in case_parameters(case, transmission_fields())]
-    return (
+    meshes = len(lay.mesh_names)
+    return _unique((
         *params,
         FmiVar("bearing_fmu", _P, "String", "", bearing_fmu,
-               "a bearing FMU of your own for the four bearings (any FMU with the contract of "
+               "a bearing FMU of your own for every bearing (any FMU with the contract of "
                "docs/fmu-variables.md, 'A bearing FMU of your own'; a path relative to the "
                "FMU's resources folder, or absolute); empty: the model each bearing's "
                "bearings.<name>.model names"),
         FmiVar("torque", _I, "Real", "torque", float(case["drive.torque"]),
                "input torque T on the input shaft, held over a communication step; until a "
                "host sets it, the parameter drive.torque acts"),
-        *(FmiVar(f"{n}_{j}", _O, "Real", _STATE_TEXT[n][0], 0.0, _STATE_TEXT[n][1].format(j=j))
-          for j in BEARINGS for n in STATE_NAMES),
-        *(FmiVar(f"{n}_{j}", _O, "Real", "force", 0.0,
-                 f"bearing {j}: film force on the journal along {n[-1]} (global frame)")
-          for j in BEARINGS for n in FORCE_NAMES),
-        *(FmiVar(n, _O, "Real", u, 0.0, d) for n, u, d in GEAR_OUTPUTS[:2]),
+        *(FmiVar(f"{n}_{b}", _O, "Real", _STATE_TEXT[n][0], 0.0, _STATE_TEXT[n][1].format(b=b))
+          for b in names for n in STATE_NAMES),
+        *(FmiVar(f"{n}_{b}", _O, "Real", "force", 0.0,
+                 f"bearing {b}: film force on the journal along {n[-1]} (global frame)")
+          for b in names for n in FORCE_NAMES),
+        *_step_output_variables(lay)[:2 * meshes],
         FmiVar("iterations", _O, "Integer", "", 0,
                "coupled iterations of the master in the last communication step (the static "
                "solution's before the first step)"),
         FmiVar("steps", _O, "Integer", "", 0,
                "internal Newmark steps taken since the start (each no longer than the case's "
                "time step)"),
-    )
+    ), case)
 
 
-def connections(gear: str = "gear_shaft", bearing: str = "bearing{j}") -> list[tuple]:
-    """The wiring of the system: ``(from instance, output, to instance, input)`` for every
-    connection, plain output -> input (instance names: ``gear`` and ``bearing`` with ``{j}``
-    the bearing number). The journal state and the shaft speed go to each bearing FMU; its
-    force, stiffness, damping and evaluation state come back."""
+def transmission_output_names(case) -> list[str]:
+    """The transmission FMU's Real outputs in the order of its variables: each bearing's
+    journal state, each bearing's film force, each mesh's force then transmission error."""
+    lay = _train(case)
+    return [*journal_output_names(lay),
+            *(f"{n}_{b}" for b in lay.bearing_names for n in FORCE_NAMES),
+            *step_output_names(lay)[:2 * len(lay.mesh_names)]]
+
+
+def bearing_component(bearing: str) -> str:
+    """The name of bearing ``bearing``'s FMU instance in a system (an SSP component):
+    ``bearing<name>`` for a name that starts with a digit (the paper's ``bearing1`` ...),
+    else ``bearing_<name>`` (``bearing_in_a``)."""
+    return f"bearing{bearing}" if bearing[:1].isdigit() else f"bearing_{bearing}"
+
+
+def connections(case, gear: str = "gear_shaft", bearing=bearing_component) -> list[tuple]:
+    """The wiring of the system of ``case``'s gear train: ``(from instance, output, to
+    instance, input)`` for every connection, plain output -> input, bearing by bearing in the
+    layout's order (instance names: ``gear`` and ``bearing(name)`` for each bearing,
+    :func:`bearing_component` by default). The journal state and the shaft speed go to each
+    bearing FMU; its force, stiffness, damping and evaluation state come back."""
     out = []
-    for j in BEARINGS:
-        b = bearing.format(j=j)
-        out += [(gear, f"{n}_{j}", b, n) for n in STATE_NAMES]
-        out.append((gear, f"omega_{j}", b, "omega"))
-        out += [(b, n, gear, f"{n}_{j}") for n in BEARING_OUTPUTS]
+    for b in bearing_names(case):
+        comp = bearing(b)
+        out += [(gear, f"{n}_{b}", comp, n) for n in STATE_NAMES]
+        out.append((gear, f"omega_{b}", comp, "omega"))
+        out += [(comp, n, gear, f"{n}_{b}") for n in BEARING_OUTPUTS]
     return out

@@ -12,6 +12,10 @@ static iteration and the FMI calls need them (paper Sec. 2.2.3 and 3.2):
   laws' bearing stiffness;
 * stepping (:meth:`StructureCycle.step`): Newmark steps from the structure's own time.
 
+What a step outputs besides the journal states (each mesh's force and transmission error, u
+and v of each gear's node) is computed once for both, :func:`step_output_row`, with the
+arithmetic the coupled step records it with, so that both transports give the same bits.
+
 >>> cycle = StructureCycle(lambda: None)
 >>> cycle.phase
 <Phase.NO_STATIC: 'no static solution'>
@@ -24,8 +28,51 @@ from __future__ import annotations
 import enum
 
 import numpy as np
+from numba import njit
 
-__all__ = ["Phase", "StructureCycle"]
+__all__ = ["Phase", "StructureCycle", "step_output_row", "step_outputs",
+           "transmission_error_terms"]
+
+
+@njit(cache=True)
+def step_output_row(te_idx, te_coef, gear_uv, totals, x, row):
+    """What a step outputs into ``row`` (``2 n_meshes + 2 n_gears``): each mesh's total load
+    ``totals`` [N], each mesh's transmission error ``r_b1 theta_1 + r_b2 theta_2`` [m] (the
+    sum over its gear nodes' 12 DOFs in order: ``te_coef[m] . x[te_idx[m]]``,
+    :func:`transmission_error_terms`), then u and v of each gear's node (``gear_uv``
+    (n_gears, 2) their indices in ``x``) [m]. The coupled step
+    (:func:`orchestrator.coupling.step.coupled_steps`) records its accepted steps with it, and
+    the gear-shaft FMU outputs its state with it."""
+    n_meshes = totals.size
+    for m in range(n_meshes):
+        row[m] = totals[m]
+        acc = 0.0
+        for j in range(12):
+            acc += te_coef[m, j] * x[te_idx[m, j]]
+        row[n_meshes + m] = acc
+    for g in range(gear_uv.shape[0]):
+        row[2 * n_meshes + 2 * g] = x[gear_uv[g, 0]]
+        row[2 * n_meshes + 2 * g + 1] = x[gear_uv[g, 1]]
+
+
+def transmission_error_terms(structure) -> tuple[np.ndarray, np.ndarray]:
+    """``(te_idx, te_coef)`` (n_meshes, 12) of a :class:`gear_fmu.structure.Structure`: where
+    each mesh's gear-node DOFs sit in its state vector and their coefficients in the
+    transmission error (the compiled loop's mesh arrays, ``[12]`` and ``[13]``:
+    :meth:`gear_fmu.step.contact_loop.MeshWork.arrays`)."""
+    meshes = structure._mesh_tuple
+    return (np.array([m[12] for m in meshes], dtype=np.int64).reshape(-1, 12),
+            np.array([m[13] for m in meshes], dtype=np.float64).reshape(-1, 12))
+
+
+def step_outputs(structure, terms=None) -> np.ndarray:
+    """:func:`step_output_row` of a structure's current state (``terms``: its
+    :func:`transmission_error_terms`, computed when not given)."""
+    st = structure
+    te_idx, te_coef = transmission_error_terms(st) if terms is None else terms
+    row = np.empty(2 * te_idx.shape[0] + 2 * st._gear_uv.shape[0])
+    step_output_row(te_idx, te_coef, st._gear_uv, st._totals, st.x, row)
+    return row
 
 
 class Phase(enum.Enum):

@@ -110,18 +110,30 @@ def _shared(tmp_path_factory, name: str):
     return folder
 
 
+#: an environment variable naming a folder for :func:`fmu_dir` kept between test runs (the
+#: FMUs are then built again only when stale: other code, other variables)
+FMU_DIR = "GSB_TEST_FMU_DIR"
+#: the shipped case of another gear train than the paper's whose gear-shaft FMU the tests use
+TRAIN_CASE = "two_stage_reducer"
+
+
 @pytest.fixture(scope="session")
 def fmu_dir(tmp_path_factory):
-    """A folder with every FMU of :data:`fmu_src.build.fmus.FMUS`, built once per test run."""
+    """A folder with every FMU of :data:`fmu_src.build.fmus.FMUS`, built once per test run
+    (or kept in the folder :data:`FMU_DIR` names), and the gear-shaft FMU of
+    :data:`TRAIN_CASE`'s gear train (:func:`orchestrator.coupling.fmi.cache.gear_fmu_name`)."""
     from fmu_src.build.fmus import FMUS
     from fmu_src.build.native import export_library, native_status
+    from fmu_src.case import shipped_case
     from orchestrator.coupling.fmi.cache import ensure_fmus
 
     if export_library() is None:  # the FMUs would behave as pythonfmu's own, not as specified
         pytest.fail(f"the FMUs' native layer cannot be built here: {native_status()[1]}",
                     pytrace=False)
-    dest = _shared(tmp_path_factory, "fmus")
+    kept = os.environ.get(FMU_DIR)
+    dest = Path(kept) if kept else _shared(tmp_path_factory, "fmus")
     ensure_fmus(list(FMUS), dest)  # under its own lock: one build for every worker
+    ensure_fmus(["GearShaft"], dest, case=shipped_case(TRAIN_CASE))
     return dest
 
 

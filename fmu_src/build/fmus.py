@@ -338,11 +338,13 @@ def _pythonfmu_builder():
     return FmuBuilder
 
 
-def build_fmus(dest: Path | str, names=None, case=None) -> list[Path]:
+def build_fmus(dest: Path | str, names=None, case=None, gear_name: str = "GearShaft") -> list[Path]:
     """Build the FMUs named (default: all of :data:`FMUS`) into ``dest``; return their paths.
 
-    ``case`` (a :class:`fmu_src.case.Case`): the case the gear-shaft FMU carries (its
-    parameters' start values; default: the shipped paper case)."""
+    ``case`` (a :class:`fmu_src.case.Case`): the case the gear-shaft FMU carries (its gear
+    train's ports, its parameters' start values; default: the shipped paper case).
+    ``gear_name``: the gear-shaft FMU's file stem, model identifier and slave class (a gear
+    train's own, :func:`orchestrator.coupling.fmi.cache.gear_fmu_name`)."""
     from fmu_src.build.native import export_library
     from fmu_src.case import shipped_case
     from fmu_src.contract import GEAR_DEFAULT_CASE
@@ -352,6 +354,8 @@ def build_fmus(dest: Path | str, names=None, case=None) -> list[Path]:
     unknown = [n for n in (names or ()) if n not in FMUS]
     if unknown:
         raise ValueError(f"unknown FMU {unknown[0]!r}; available: {', '.join(FMUS)}")
+    if not gear_name.isidentifier():
+        raise ValueError(f"gear_name {gear_name!r}: an identifier (it names the slave class)")
     FmuBuilder = _pythonfmu_builder()
     native = export_library()
     case = shipped_case(GEAR_DEFAULT_CASE.removesuffix(".toml")) if case is None else case
@@ -359,10 +363,12 @@ def build_fmus(dest: Path | str, names=None, case=None) -> list[Path]:
     for name in names or FMUS:
         spec = FMUS[name]
         if name == "GearShaft":
-            spec = FmuSpec(spec.script, functools.partial(gear_variables, case),
-                           spec.feedthrough)
-        built.append(_build(FmuBuilder, native, name, spec, dest,
-                            case if name == "GearShaft" else None))
+            spec = FmuSpec(slave_script(gear_name, "the gear-shaft structure",
+                                        "fmu_src.slaves.gear_shaft", "GearShaftSlave"),
+                           functools.partial(gear_variables, case), spec.feedthrough)
+            built.append(_build(FmuBuilder, native, gear_name, spec, dest, case))
+        else:
+            built.append(_build(FmuBuilder, native, name, spec, dest))
     return built
 
 
@@ -376,10 +382,10 @@ def transmission_fmu_name(case) -> str:
 
 def build_transmission_fmu(case, dest: Path | str, bearing_fmu: Path | str | None = None) -> Path:
     """Write ``dest/<case>.fmu``, the transmission FMU of ``case``
-    (:class:`orchestrator.coupling.transmission.TransmissionSlave`: the structure, the four
-    bearings and the iterative master in one FMU, the case in its resources); return its
+    (:class:`orchestrator.coupling.transmission.TransmissionSlave`: the structure, every
+    bearing and the iterative master in one FMU, the case in its resources); return its
     path. ``bearing_fmu``: a bearing FMU of the user's own, carried in the resources
-    (:data:`fmu_src.contract.BEARING_RESOURCE`) and used for the four bearings."""
+    (:data:`fmu_src.contract.BEARING_RESOURCE`) and used for every bearing."""
     from fmu_src.build.native import export_library
     from fmu_src.contract import BEARING_RESOURCE, transmission_variables
 

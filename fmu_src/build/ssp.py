@@ -1,19 +1,23 @@
-"""The system of a case as an SSP 1.0 archive: five FMU components, plain connections, values.
+"""The system of a case as an SSP 1.0 archive: the gear-shaft FMU and one bearing FMU per
+bearing, plain connections, values.
 
-:func:`write_ssp` writes ``<dest>/<case name>.ssp``: ``SystemStructure.ssd`` (the components
-``gear_shaft`` and ``bearing1`` ... ``bearing4``, the connections of
-:func:`fmu_src.contract.connections`, each component's parameter values in one inline parameter
+:func:`write_ssp` writes ``<dest>/<case name>.ssp``: ``SystemStructure.ssd`` (the component
+``gear_shaft`` and one component per bearing of the case's gear train, named after it
+(:func:`fmu_src.contract.bearing_component`: ``bearing1`` ... ``bearing4`` for the paper's,
+``bearing_in_a`` ...), each an instance of the FMU of its own model; the connections of
+:func:`fmu_src.contract.connections`; each component's parameter values in one inline parameter
 set named ``case``, with start values of the connected inputs at the static solution when
-given, a default experiment with the case's time step as the fixed step of OSP's master (its
+given; a default experiment with the case's time step as the fixed step of OSP's master (its
 annotation of the default experiment) and of OMSimulator's (its annotation of the system)) and
-``resources/`` with the gear-shaft FMU carrying the case and the bearing FMU of the case's
-model (the four bearing components share the file). Any SSP tool runs it without this package;
-ecos needs ``--parameterSet case`` to apply the values (it applies bindings only by name).
+``resources/`` with the gear-shaft FMU carrying the case and the bearing FMU of each model the
+case's bearings use (the components of one model share its file). Any SSP tool runs it
+without this package; ecos needs ``--parameterSet case`` to apply the values (it applies
+bindings only by name).
 
 :func:`read_ssp` reads such an archive back (``gsb run X.ssp``): the case the gear-shaft FMU
 carries with the SSD's values applied, and the FMU files and parameter values of the bearings,
-identified by what is connected to the gear-shaft FMU's law inputs, so any bearing FMU with
-the bearing contract may stand in a component.
+identified by what is connected to the gear-shaft FMU's law inputs (``F_s_<bearing>``), so
+any bearing FMU with the bearing contract may stand in a component.
 """
 
 from __future__ import annotations
@@ -30,8 +34,10 @@ from xml.etree import ElementTree as ET
 from fmu_src import description
 from fmu_src.case import Case, CaseError, load_case
 from fmu_src.contract import (
-    BEARINGS,
     STATE_NAMES,
+    bearing_component,
+    bearing_fmu_name,
+    bearing_names,
     connections,
     gear_parameters,
     law_input_names,
@@ -51,9 +57,9 @@ NS = {
 for _prefix, _uri in NS.items():  # ecos and OMSimulator read the prefixes literally
     ET.register_namespace(_prefix, _uri)
 
-#: component names in the SSD, and the name of the parameter set
+#: the gear-shaft FMU's component name in the SSD (each bearing's:
+#: :func:`fmu_src.contract.bearing_component`), and the name of the parameter set
 GEAR = "gear_shaft"
-BEARING = "bearing{j}"
 PARAMETER_SET = "case"
 _SSV_TYPE = {bool: "Boolean", int: "Integer", float: "Real", str: "String"}
 
@@ -91,12 +97,13 @@ def _start_values(case: Case, laws) -> tuple[dict, list[dict]]:
     """Start values of the connected inputs at the static solution: the gear-shaft FMU's law
     inputs (the bearings' outputs at X0) and each bearing's journal state and speed."""
     if laws is None:
-        return {}, [{} for _ in BEARINGS]
+        return {}, [{} for _ in bearing_names(case)]
     import numpy as np
 
-    packed = np.empty(len(law_input_names()))
+    names = law_input_names(case)
+    packed = np.empty(len(names))
     pack_laws(laws, packed)
-    gear = {n: float(v) for n, v in zip(law_input_names(), packed, strict=True)}
+    gear = {n: float(v) for n, v in zip(names, packed, strict=True)}
     states, _, _, _ = laws.expansion()
     bearings = [{**{n: float(v) for n, v in zip(STATE_NAMES, states[j], strict=True)},
                  "omega": float(w)}
@@ -118,29 +125,35 @@ def _omsimulator_master(system, dt: float, tolerance: float) -> None:
                   relativeTolerance=repr(float(tolerance)))
 
 
-def ssd_text(case: Case, gear_source: str, bearing_source: str, laws=None) -> bytes:
-    """``SystemStructure.ssd`` of a case, the FMUs at the given paths inside the archive;
-    ``laws`` (:class:`bearing_fmu.affine.AffineLaws` linearised at the static solution X0,
+def ssd_text(case: Case, gear_source: str, bearing_sources, laws=None) -> bytes:
+    """``SystemStructure.ssd`` of a case, the FMUs at the given paths inside the archive
+    (``bearing_sources``: one per bearing, the layout's order; a single path: every
+    bearing's); ``laws`` (:class:`bearing_fmu.affine.AffineLaws` linearised at the static solution X0,
     as :meth:`orchestrator.coupling.master.Master.solve_static` leaves them): start values of the
     connected inputs at X0, so that a non-iterative master starts in equilibrium."""
     root = ET.Element(_q("ssd", "SystemStructureDescription"), version="1.0",
                       name=case["case.name"])
     system = ET.SubElement(root, _q("ssd", "System"), name=case["case.name"],
-                           description="gear-shaft structure and four journal bearings "
-                                       "(Baguet & Jacquenot 2010); global frame, SI units")
+                           description="gear-shaft structure of a parallel-axis gear train "
+                                       "and its journal bearings (Baguet & Jacquenot 2010); "
+                                       "global frame, SI units")
     elements = ET.SubElement(system, _q("ssd", "Elements"))
-    wiring = connections(GEAR, BEARING)
+    names = bearing_names(case)
+    if isinstance(bearing_sources, str):
+        bearing_sources = [bearing_sources] * len(names)
+    wiring = connections(case, GEAR)
     gear_conns = [(a_var, "output") for a, a_var, _, _ in wiring if a == GEAR]
     gear_conns += [(b_var, "input") for _, _, b, b_var in wiring if b == GEAR]
     gear_start, bearing_start = _start_values(case, laws)
     _component(elements, GEAR, gear_source, gear_conns,
                {n: v for n, _, v in gear_parameters(case)} | gear_start)
-    for j, params, start in zip(BEARINGS, description.bearing_parameters(case), bearing_start,
-                                strict=True):
-        name = BEARING.format(j=j)
-        conns = [(b_var, "input") for _, _, b, b_var in wiring if b == name]
+    for b, source, params, start in zip(names, bearing_sources,
+                                        description.bearing_parameters(case), bearing_start,
+                                        strict=True):
+        name = bearing_component(b)
+        conns = [(b_var, "input") for _, _, c, b_var in wiring if c == name]
         conns += [(a_var, "output") for a, a_var, _, _ in wiring if a == name]
-        _component(elements, name, bearing_source, conns, params | start)
+        _component(elements, name, source, conns, params | start)
     links = ET.SubElement(system, _q("ssd", "Connections"))
     for a, a_var, b, b_var in wiring:
         ET.SubElement(links, _q("ssd", "Connection"), startElement=a, startConnector=a_var,
@@ -158,27 +171,22 @@ def ssd_text(case: Case, gear_source: str, bearing_source: str, laws=None) -> by
 
 
 def write_ssp(case: Case, dest: Path | str, laws=None) -> Path:
-    """Build the FMUs of a case (the gear shaft carrying it, the bearing FMU of the model its
-    bearings share, ``bearings.*.model``) and write ``dest/<case name>.ssp``; returns its path.
-    ``laws``: the bearing laws at the static solution (:func:`ssd_text`)."""
-    from fmu_src.contract import bearing_fmu_name
+    """Build the FMUs of a case (the gear shaft carrying it, the bearing FMU of each model its
+    bearings use, ``bearings.<name>.model``) and write ``dest/<case name>.ssp``; returns its
+    path. ``laws``: the bearing laws at the static solution (:func:`ssd_text`)."""
     from fmu_src.build.fmus import build_fmus, readable_entry
 
     dest = Path(dest)
     dest.mkdir(parents=True, exist_ok=True)
     out = dest / f"{case['case.name']}.ssp"
-    model = description.shared_bearing_model(case)
-    if model is None:  # TODO(train): one bearing FMU per model in the archive
-        raise CaseError(f"{case.source}: an SSP archive takes one bearing model for every "
-                        "bearing; this case's bearings have several (bearings.*.model)")
-    bearing = bearing_fmu_name(model)
+    models = [bearing_fmu_name(case[f"bearings.{b}.model"]) for b in bearing_names(case)]
     with tempfile.TemporaryDirectory(prefix="gsb_ssp_") as tmp:
-        fmus = build_fmus(tmp, ["GearShaft", bearing], case=case)
+        fmus = build_fmus(tmp, ["GearShaft", *dict.fromkeys(models)], case=case)
         part = Path(tmp) / "system.ssp"
         with zipfile.ZipFile(part, "w", zipfile.ZIP_DEFLATED) as z:
             z.writestr(readable_entry("SystemStructure.ssd"),
-                       ssd_text(case, "resources/GearShaft.fmu", f"resources/{bearing}.fmu",
-                                laws))
+                       ssd_text(case, "resources/GearShaft.fmu",
+                                [f"resources/{m}.fmu" for m in models], laws))
             for path in fmus:
                 z.write(path, f"resources/{path.name}")  # their mode: 0644 (build_fmus)
         shutil.move(part, out)
@@ -191,8 +199,8 @@ class SspSystem:
 
     case: Case  # the gear FMU's carried case with the SSD's values
     gear_fmu: Path
-    bearing_fmus: list  # per bearing 1-4
-    bearing_parameters: list  # per bearing 1-4: {name: value} from the SSD
+    bearing_fmus: list  # per bearing (the layout's order)
+    bearing_parameters: list  # per bearing: {name: value} from the SSD
     folder: Path  # where the archive was extracted (remove it when done)
 
 
@@ -221,22 +229,32 @@ def read_ssp(path: Path | str, folder: Path | str | None = None) -> SspSystem:
     except (OSError, KeyError, zipfile.BadZipFile, ET.ParseError) as exc:
         raise CaseError(f"{path}: not an SSP archive with a SystemStructure.ssd ({exc})") from None
     comps = {c.get("name"): c for c in root.iterfind(".//ssd:Component", NS)}
-    links = {(c.get("endElement"), c.get("endConnector")): c.get("startElement")
-             for c in root.iterfind(".//ssd:Connection", NS)}
-    gear = next((n for (n, var) in links if var == "F_s_1"), None)
-    if gear is None:
-        raise CaseError(f"{path}: no component has the gear-shaft FMU's input F_s_1 connected")
-    bearings = [links.get((gear, f"F_s_{j}")) for j in BEARINGS]
-    if None in bearings:
-        raise CaseError(f"{path}: the gear-shaft FMU's inputs F_s_1 ... F_s_4 are not all "
-                        "connected to bearing components")
+    connected = [(c.get("startConnector"), c.get("endElement"), c.get("endConnector"),
+                  c.get("startElement")) for c in root.iterfind(".//ssd:Connection", NS)]
+    links = {(end, var): start for _, end, var, start in connected}
+    # the gear-shaft FMU: the component whose inputs F_s_<bearing> take bearings' F_s
+    gear = next((end for out, end, var, _ in connected
+                 if out == "F_s" and var.startswith("F_s_")), None)
+    if gear is None or gear not in comps:
+        raise CaseError(f"{path}: no component has a gear-shaft FMU's input F_s_<bearing> "
+                        "connected to a bearing's F_s")
     gear_fmu = folder / comps[gear].get("source")
-    with zipfile.ZipFile(gear_fmu) as z:
-        carried = z.read("resources/case.toml").decode()
+    try:
+        with zipfile.ZipFile(gear_fmu) as z:
+            carried = z.read("resources/case.toml").decode()
+    except (OSError, KeyError, zipfile.BadZipFile) as exc:
+        raise CaseError(f"{path}: component {gear!r} is no gear-shaft FMU carrying its case "
+                        f"({exc})") from None
     (folder / "case.toml").write_text(carried)
     base = load_case(folder / "case.toml")
+    names = bearing_names(base)
+    bearings = [links.get((gear, f"F_s_{b}")) for b in names]
+    if None in bearings or not set(bearings) <= set(comps):
+        missing = [f"F_s_{b}" for b, c in zip(names, bearings, strict=True) if c not in comps]
+        raise CaseError(f"{path}: the gear-shaft FMU's inputs {', '.join(missing)} are not "
+                        "connected to bearing components")
     overrides: dict = {}
-    starts = set(law_input_names())
+    starts = set(law_input_names(base))
     for name, value in _parameters(comps[gear]).items():
         if name in starts:
             continue  # start values of the law inputs (the master finds X0 itself)
@@ -249,7 +267,6 @@ def read_ssp(path: Path | str, folder: Path | str | None = None) -> SspSystem:
             overrides[key] = current
     params = [{k: v for k, v in _parameters(comps[b]).items()
                if k not in (*STATE_NAMES, "omega")} for b in bearings]
-    names = base.names("bearings")  # TODO(train): the components per bearing name
     for key, field in (("diameter", "D"), ("length", "L"), ("clearance", "C"),
                        ("viscosity", "mu")):
         values = [p.get(field, base[f"bearings.{n}.{key}"]) for n, p in zip(names, params,

@@ -76,16 +76,25 @@ centre to the gear centre, z along the shafts, t = z x s), SI units. Build the F
 
 ## Conventions and wiring
 
-- The pinion shaft (bearings 1, 2) turns about +z at the input speed omega; the gear shaft
-  (bearings 3, 4) about -z at omega z1 / z2. A bearing FMU works in its own local frame: its
-  parameter `rotation_sign` is +1 on the pinion shaft and -1 on the gear shaft (the local frame
-  is mirrored so that the film model always sees the journal turning about its +z), and
-  `frame_angle` is 0 (local x along s). The gear-shaft FMU publishes both per bearing
-  (`rotation_sign_j`, `frame_angle_j`, calculated parameters) and the shaft speeds as outputs
-  (`omega_j`).
+- A case describes a parallel-axis gear train (`docs/case-files.md`): named shafts, gears,
+  meshes and bearings. The gear-shaft FMU of a train has one group of ports per bearing, each
+  suffixed with the bearing's name (`F_s_<bearing>`, `s_<bearing>`, `omega_<bearing>`, ...),
+  the outputs `mesh_force_<mesh>` and `transmission_error_<mesh>` per mesh and `u_<gear>`,
+  `v_<gear>` per gear; a system has one bearing FMU instance per bearing, of the bearing's own
+  model, named `bearing<name>` (`bearing_<name>` for a name that starts with a letter). The
+  paper's cases name their bearings `1` ... `4`: ports `F_s_1` ..., instances `bearing1` ...
+- Each shaft turns about +z or -z (the input shaft about +z at the input speed omega; a mesh
+  reverses the direction, at the ratio of its teeth): in the paper's case the pinion shaft
+  (bearings 1, 2) about +z at omega, the gear shaft (bearings 3, 4) about -z at omega z1 / z2.
+  A bearing FMU works in its own local frame: its parameter `rotation_sign` is +1 on a shaft
+  turning about +z and -1 on one turning about -z (the local frame is mirrored so that the
+  film model always sees the journal turning about its +z), and `frame_angle` is 0 (local x
+  along s). The gear-shaft FMU publishes both per bearing (`rotation_sign_<bearing>`,
+  `frame_angle_<bearing>`, calculated parameters) and the shaft speeds as outputs
+  (`omega_<bearing>`).
 - The system is wired by plain output -> input connections, nothing computed in between
-  (`fmu_src.contract.connections`; `gsb export-ssp` writes them into an SSP file). For bearing
-  1 (bearings 2-4 alike, with the suffix `_2` ... `_4`):
+  (`fmu_src.contract.connections`; `gsb export-ssp` writes them into an SSP file). For the
+  paper's bearing 1 (every bearing alike, with its own suffix and instance):
 
 | from | output | to | input |
 | --- | --- | --- | --- |
@@ -209,14 +218,17 @@ _GEAR = """
 ## Gear-shaft FMU (GearShaft)
 
 The structural slave (`fmu_src/slaves/gear_shaft.py` around `gear_fmu.structure.Structure`):
-Timoshenko shafts, the gear pair's distributed mesh element and the Newmark/Newton/contact step.
+Timoshenko shafts, each mesh's distributed mesh element and the Newmark/Newton/contact step.
 It carries its case (`resources/case.toml`, the shipped paper case unless `gsb build-fmus CASE`
-built it for another); the case's structural fields are its parameters, starting at the
-case's values, named by their case keys (`gears.pinion.module`; where each bearing sits,
-`bearings.'1'.shaft` and `bearings.'1'.position`, a name that is no identifier quoted as
-FMI's structured names want it; a list field one parameter per entry,
-`shafts.pinion_shaft.outer_diameter[1]`). It imports nothing from the master package
-`orchestrator`.
+built it for another), whose gear train gives its ports: one group per bearing, per mesh and
+per gear, named after them (previous section). The case's structural fields are its
+parameters, starting at the case's values, named by their case keys (`gears.pinion.module`;
+where each bearing sits, `bearings.'1'.shaft` and `bearings.'1'.position`, a name that is no
+identifier quoted as FMI's structured names want it; a list field one parameter per entry,
+`shafts.pinion_shaft.outer_diameter[1]`). A case of another train (other names of bearings,
+meshes, gears or shafts) needs the gear-shaft FMU built for it (`gsb build-fmus CASE`; `gsb
+run` builds it once per train beside the others, as `GearShaft_<digest>.fmu`). It imports
+nothing from the master package `orchestrator`.
 
 Behaviour:
 
@@ -248,8 +260,8 @@ _TRANSMISSION = """
 ## Transmission FMU (`gsb export-fmu CASE`)
 
 The whole system in one FMU, for tools that do not iterate FMUs (libcosim, OMSimulator, ecos
-and most fixed-step masters): the gear-shaft structure, the bearings, each of the model
-its `bearings.<name>.model` names (any registered model: {models}), and this package's iterative master
+and most fixed-step masters): the gear-shaft structure of the case's gear train, its bearings,
+each of the model its `bearings.<name>.model` names (any registered model: {models}), and this package's iterative master
 inside `fmi2DoStep` (`orchestrator/coupling/transmission.py`). `gsb export-fmu CASE --dest
 DIR` writes `DIR/<case>.fmu`, carrying the case (`resources/case.toml`) and the code it runs,
 master included. It gives `gsb run`'s numbers at the same step in any FMI host, bit for bit at
@@ -279,7 +291,8 @@ the case's step.
 - Outputs: `iterations` counts the master's coupled iterations in the last communication
   step, `steps` the internal steps so far.
 
-Its variables for the shipped paper case (parameters with the case's values as start):
+Its variables for the shipped paper case (parameters with the case's values as start; per
+bearing and per mesh of another train, the same outputs with its names):
 
 """
 
@@ -287,11 +300,12 @@ Its variables for the shipped paper case (parameters with the case's values as s
 def document() -> str:
     """The text of docs/fmu-variables.md."""
     fmus = ", ".join(bearing_fmu_name(m) for m in MODELS)
-    wiring = "\n".join(f"| `{a}` | `{o}` | `{b}` | `{i}` |" for a, o, b, i in connections()
-                       if "bearing1" in (a, b))
     from fmu_src.case import shipped_case
 
-    transmission = transmission_variables(shipped_case("baguet2010_spur"))
+    paper = shipped_case("baguet2010_spur")
+    wiring = "\n".join(f"| `{a}` | `{o}` | `{b}` | `{i}` |" for a, o, b, i in connections(paper)
+                       if "bearing1" in (a, b))
+    transmission = transmission_variables(paper)
     return (_HEADER.format(fmus=fmus, wiring=wiring, accuracy=ACCURACY.rstrip("\n"))
             + markdown_table(bearing_variables()) + "\n"
             + _GEAR + markdown_table(gear_variables()) + "\n"

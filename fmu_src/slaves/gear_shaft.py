@@ -3,9 +3,13 @@
 Nothing physical happens here: the slave builds :class:`gear_fmu.structure.Structure` from its
 case (``resources/case.toml`` with the FMU parameters' values, through :mod:`fmu_src.case` and
 :mod:`fmu_src.description`, the system description shared with the in-process runs), keeps the
-56 law inputs (layout: :func:`fmu_src.contract.unpack_law_arrays`: each bearing FMU's outputs) and
-maps the FMI calls onto the structure through the life cycle the in-process transport shares
-(:class:`fmu_src.lifecycle.StructureCycle`, its phase a :class:`fmu_src.lifecycle.Phase`):
+law inputs (14 per bearing, layout: :func:`fmu_src.contract.unpack_law_arrays`: each bearing
+FMU's outputs) and maps the FMI calls onto the structure through the life cycle the in-process
+transport shares (:class:`fmu_src.lifecycle.StructureCycle`, its phase a
+:class:`fmu_src.lifecycle.Phase`). Its variables are those of its carried case's gear train
+(:func:`fmu_src.contract.gear_variables`: one group of ports per bearing, named after it, the
+outputs of every mesh and gear): the numbers of bearings, meshes and gears, and every size
+below, come from that case.
 
 * initialisation mode: outputs are the static solution for the current laws, solved in the
   getter when an input changed since the last solve (the master iterates X0 this way);
@@ -25,13 +29,16 @@ pythonfmu callback would be fatal for the instance and its host. A step that can
 mesh periods) leaves the structure at no computed state: its outputs then read fmi2Error and
 further steps are refused until ``fmi2SetFMUstate`` restores a saved state.
 
-The slave keeps the 56 law inputs and the 16 journal outputs in one float64 array, the *I/O
-buffer* (layout: the ``IO_*`` constants), and answers ``_fmi_native_io`` with its address. The
-patched FMU library (``fmu_src/native/patches/0012-native-structure-io.patch``) then serves the
-master's two calls around each doStep itself: fmi2SetReal of the 56 law inputs (finite values)
-while the slave is stepping (the laws act at the next doStep only), and fmi2GetReal of the 16
-journal outputs while the buffer holds those of the current state (a doStep computes them).
-Neither enters Python; every other call does, and reads and writes the same buffer.
+The slave keeps the law inputs (14 nb for nb bearings) and the journal outputs (4 nb) in one
+float64 array, the *I/O buffer* (:data:`IO_LAYOUT`: the laws, the journals, then the flag
+"laws armed" and the flag "journals valid", :func:`io_size` values), and answers
+``_fmi_native_io`` with its address, its size and the value references of both groups, whose
+counts the library checks against that layout. The patched FMU library
+(``fmu_src/native/patches/0012-native-structure-io.patch``) then serves the master's two calls
+around each doStep itself: fmi2SetReal of the law inputs (finite values) while the slave is
+stepping (the laws act at the next doStep only), and fmi2GetReal of the journal outputs while
+the buffer holds those of the current state (a doStep computes them). Neither enters Python;
+every other call does, and reads and writes the same buffer.
 """
 
 from __future__ import annotations
@@ -44,15 +51,18 @@ from pythonfmu.default_experiment import DefaultExperiment
 
 from fmu_src.contract import (
     GEAR_DEFAULT_CASE,
-    GEAR_OUTPUTS,
+    LAWS_PER_BEARING,
+    STATE_NAMES,
     ValueRefused,
     gear_variables,
     journal_output_names,
     law_input_names,
+    speed_output_names,
+    step_output_names,
     support_load_names,
     unpack_law_arrays,
 )
-from fmu_src.lifecycle import Phase, StructureCycle
+from fmu_src.lifecycle import Phase, StructureCycle, step_outputs, transmission_error_terms
 from fmu_src.slaves.support import (
     FMI_ERROR,
     ContractSlave,
@@ -63,27 +73,25 @@ from fmu_src.slaves.support import (
 from fmu_src.state_codec import StateArrays, StateFormatError, nest
 from fmu_src.states import structure_state_arrays, structure_state_from_arrays
 
-__all__ = ["CASE_RESOURCE", "IO_LAYOUT", "GearShaftSlave"]
+__all__ = ["CASE_RESOURCE", "IO_LAYOUT", "GearShaftSlave", "io_size"]
 
 #: the case an FMU carries, in its resources
 CASE_RESOURCE = "case.toml"
 
-_LAWS = law_input_names()
-_OUTPUTS = [*journal_output_names(), *(f"omega_{j}" for j in range(1, 5)),
-            *(name for name, _, _ in GEAR_OUTPUTS)]
-_SUPPORT = support_load_names()
-
-#: the I/O buffer's layout (module docstring): the library serves the calls natively only for
-#: a buffer it knows; the patch repeats the indices, and a change of them changes this name
-#: there and here
-IO_LAYOUT = "gsb-structure-io-1"
-IO_LAWS = 0  # 0-55: the law inputs (order of fmu_src.contract.law_input_names)
-IO_JOURNALS = 56  # 56-71: the journal outputs (order of fmu_src.contract.journal_output_names)
-IO_LAWS_ARMED = 72  # 1.0: stepping, so the library may write the laws
-IO_JOURNALS_VALID = 73  # 1.0: IO_JOURNALS are the outputs of the current state (no failure)
-IO_SIZE = 74
-_NAN_OUTPUTS = [math.nan] * len(_OUTPUTS)
+#: the I/O buffer's layout (module docstring): for nb bearings, the law inputs at 0 ... 14 nb - 1
+#: (order of fmu_src.contract.law_input_names), the journal outputs at 14 nb ... 18 nb - 1
+#: (order of fmu_src.contract.journal_output_names), then 1.0 at 18 nb while stepping (the
+#: library may write the laws) and 1.0 at 18 nb + 1 while the journals are the outputs of the
+#: current state (no failure). The library serves the calls natively only for a buffer of the
+#: layout it knows: the patch repeats it, and a change of it changes this name there and here
+IO_LAYOUT = "gsb-structure-io-2"
+_JOURNALS_PER_BEARING = len(STATE_NAMES)
 _FLAGS = ("dirty", "failed")
+
+
+def io_size(n_bearings: int) -> int:
+    """The length of the I/O buffer of a train of ``n_bearings`` bearings (:data:`IO_LAYOUT`)."""
+    return (LAWS_PER_BEARING + _JOURNALS_PER_BEARING) * n_bearings + 2
 #: the kind tag of this slave's serialised states (fmu_src.state_codec)
 STATE_KIND = "gsb.gear_shaft_fmu_state"
 #: the longest step doStep takes, in mesh periods: a longer one resolves nothing of the mesh
@@ -98,9 +106,9 @@ class GearShaftSlave(ContractSlave):
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
         self.description = (
-            "Gear-shaft structure (Timoshenko shafts, distributed gear mesh, Newmark/Newton/"
-            "contact step) driven by the outputs of four bearing FMUs; global frame, SI units "
-            "(Baguet & Jacquenot 2010)."
+            "Gear-shaft structure of a parallel-axis gear train (Timoshenko shafts, distributed "
+            "gear meshes, Newmark/Newton/contact step) driven by the outputs of one bearing FMU "
+            "per bearing; global frame, SI units (Baguet & Jacquenot 2010)."
         )
         from fmu_src.description import time_step
 
@@ -109,13 +117,27 @@ class GearShaftSlave(ContractSlave):
         #: two mesh periods of the carried case at its time step (``fmpy simulate`` defaults)
         self.default_experiment = DefaultExperiment(start_time=0.0, stop_time=64 * step,
                                                     step_size=step)
-        variables = gear_variables(self._base)
+        base = self._base
+        variables = gear_variables(base)
         starts = {v.name: v.start for v in variables}
+        # the names of the train's ports (fmu_src.contract), in the order of the buffers
+        self._law_names = law_input_names(base)
+        self._journal_names = journal_output_names(base)
+        self._output_names = [*self._journal_names, *speed_output_names(base),
+                              *step_output_names(base)]
+        self._support_names = support_load_names(base)
+        nb = len(self._journal_names) // _JOURNALS_PER_BEARING
+        self._nb = nb
+        self._nan_outputs = [math.nan] * len(self._output_names)
         self._overrides: dict = {}  # case field -> value set through a parameter
-        self._io = np.zeros(IO_SIZE)  # the I/O buffer (module docstring)
-        self._laws = self._io[IO_LAWS:IO_LAWS + len(_LAWS)]  # never rebound: setters hold it
-        self._laws[:] = [float(starts[n]) for n in _LAWS]
-        self._outputs = list(_NAN_OUTPUTS)
+        self._io = np.zeros(io_size(nb))  # the I/O buffer (module docstring)
+        n_laws, n_journals = LAWS_PER_BEARING * nb, _JOURNALS_PER_BEARING * nb
+        self._io_journals = slice(n_laws, n_laws + n_journals)
+        self._io_armed, self._io_valid = n_laws + n_journals, n_laws + n_journals + 1
+        self._laws = self._io[:n_laws]  # never rebound: setters hold it
+        self._laws[:] = [float(starts[n]) for n in self._law_names]
+        self._outputs = list(self._nan_outputs)
+        self._te_terms = None  # the structure's transmission_error_terms
         self._iterations = 0
         self._support: list | None = None
         self._cycle = StructureCycle(self._build_structure)  # phases shared with in-process
@@ -134,9 +156,9 @@ class GearShaftSlave(ContractSlave):
 
     # --- FMI plumbing ------------------------------------------------------------------------
     def _register_all(self, variables) -> None:
-        index = {name: i for i, name in enumerate(_LAWS)}
-        out_index = {name: i for i, name in enumerate(_OUTPUTS)}
-        sup_index = {name: i for i, name in enumerate(_SUPPORT)}
+        index = {name: i for i, name in enumerate(self._law_names)}
+        out_index = {name: i for i, name in enumerate(self._output_names)}
+        sup_index = {name: i for i, name in enumerate(self._support_names)}
         fixed = {v.name: v.start for v in variables if v.name.startswith(("rotation_sign_",
                                                                           "frame_angle_"))}
         for v in variables:
@@ -157,15 +179,17 @@ class GearShaftSlave(ContractSlave):
             else:  # pragma: no cover - the contract and this slave disagree
                 raise RuntimeError(f"gear-shaft slave has no handler for variable {v.name!r}")
         vr = {v.name: v.value_reference for v in self.vars.values()}
-        self._law_vrs = [vr[n] for n in _LAWS]
-        self._journal_vrs = [vr[n] for n in _OUTPUTS[:16]]
+        self._law_vrs = [vr[n] for n in self._law_names]
+        self._journal_vrs = [vr[n] for n in self._journal_names]
 
     def _fmi_native_io(self):
         """What the patched library needs to serve the law inputs and the journal outputs
-        itself (module docstring): ``(layout, buffer address, law value references, journal
-        value references)``. Called once per instance; the address holds while the slave
-        lives (the buffer is never replaced)."""
-        return (IO_LAYOUT, self._io.ctypes.data, tuple(self._law_vrs), tuple(self._journal_vrs))
+        itself (module docstring): ``(layout, buffer address, buffer size, law value
+        references, journal value references)``, the library checking the counts against
+        the layout. Called once per instance; the address holds while the slave lives (the
+        buffer is never replaced)."""
+        return (IO_LAYOUT, self._io.ctypes.data, self._io.size, tuple(self._law_vrs),
+                tuple(self._journal_vrs))
 
     @property
     def _dirty(self) -> bool:
@@ -177,34 +201,35 @@ class GearShaftSlave(ContractSlave):
     def _dirty(self, dirty: bool) -> None:
         self._dirty_outputs = dirty
         if dirty:
-            self._io[IO_JOURNALS_VALID] = 0.0
+            self._io[self._io_valid] = 0.0
 
     def _arm_laws(self) -> None:
         """Let the library write the laws while stepping: they then act at the next doStep
         only (set_real), so a set changes nothing else. Called after every phase change."""
-        self._io[IO_LAWS_ARMED] = 1.0 if self._cycle.stepping else 0.0
+        self._io[self._io_armed] = 1.0 if self._cycle.stepping else 0.0
 
     def _take_outputs(self, outputs: list) -> None:
         """``outputs`` (finite) as the current state's, the journal ones in the buffer too."""
         self._outputs = outputs
         self._failed = False
         self._dirty = False
-        self._io[IO_JOURNALS:IO_JOURNALS + 16] = outputs[:16]
-        self._io[IO_JOURNALS_VALID] = 1.0
+        self._io[self._io_journals] = outputs[:len(self._journal_names)]
+        self._io[self._io_valid] = 1.0
 
     def _fail_outputs(self) -> None:
         """No outputs: they read NaN with fmi2Error until the structure has a state again."""
-        self._outputs = list(_NAN_OUTPUTS)
+        self._outputs = list(self._nan_outputs)
         self._failed = True
         self._dirty = False
-        self._io[IO_JOURNALS_VALID] = 0.0
+        self._io[self._io_valid] = 0.0
 
-    # The master sets all 56 law inputs and reads the 16 journal states in one call each:
+    # The master sets all the law inputs and reads all the journal states in one call each:
     # served without the per-variable loop (same checks and effect, several times cheaper).
     def set_real(self, vrs, values):
         if vrs == self._law_vrs:
             if not all(map(math.isfinite, values)):
-                bad = next(n for n, x in zip(_LAWS, values, strict=True) if not math.isfinite(x))
+                bad = next(n for n, x in zip(self._law_names, values, strict=True)
+                           if not math.isfinite(x))
                 return self.refuse(ValueRefused(
                     f"bearing laws refused: {bad} is not a finite number (no input applied)"))
             laws = self._laws
@@ -223,13 +248,14 @@ class GearShaftSlave(ContractSlave):
                 self._refresh()
             if self._failed:
                 self._read_status = 3
-            return self._with_status(self._outputs[:16])
+            return self._with_status(self._outputs[:len(self._journal_vrs)])
         return super().get_real(vrs)
 
     def _reset_structure(self) -> None:
         self._cycle.reset()
         self._arm_laws()
         self._support = None
+        self._te_terms = None
         self._dirty = True
         self._error = None
 
@@ -304,16 +330,19 @@ class GearShaftSlave(ContractSlave):
             self._fail_outputs()
 
     def _outputs_of(self, st) -> list:
-        """The outputs of the structure's current state, in the order of ``_OUTPUTS``; raises
+        """The outputs of the structure's current state, in the order of its output names
+        (journal states, shaft speeds, then the step outputs of
+        :func:`fmu_src.lifecycle.step_outputs`: the in-process transport's arithmetic); raises
         when it has no solution or an output is not finite."""
-        if st.mesh_state is None:
+        if not st.solved:
             raise RuntimeError("the structure has no solution yet (no static solution)")
-        ms = st.mesh_state
-        values = st.state_outputs()  # the journal states, then u, v of the gear nodes
-        outputs = [*values[:16], *self._speeds, float(ms.total_load),
-                   float(ms.transmission_error), *values[16:]]
+        if self._te_terms is None:
+            self._te_terms = transmission_error_terms(st)
+        journals = st.journal_states().ravel().tolist()
+        outputs = [*journals, *self._speeds, *step_outputs(st, self._te_terms).tolist()]
         if not math.isfinite(sum(outputs)):  # finite terms may overflow the sum
-            bad = [n for n, x in zip(_OUTPUTS, outputs, strict=True) if not math.isfinite(x)]
+            bad = [n for n, x in zip(self._output_names, outputs, strict=True)
+                   if not math.isfinite(x)]
             if bad:
                 raise FloatingPointError(f"outputs not finite: {', '.join(bad)}")
         return outputs
@@ -325,7 +354,7 @@ class GearShaftSlave(ContractSlave):
             self._support = support_loads(self._ensure_structure()).ravel().tolist()
         except Exception as exc:  # anything raised here would be fatal for the host
             self.output_failed("support loads failed", exc)
-            self._support = [math.nan] * len(_SUPPORT)
+            self._support = [math.nan] * len(self._support_names)
 
     # --- FMI life cycle -----------------------------------------------------------------------
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):
@@ -395,9 +424,22 @@ class GearShaftSlave(ContractSlave):
             "damping_kb": self._cycle.damping_kb,
         }
 
+    def _check_sizes(self, state) -> None:
+        """StateFormatError for a state of another gear train (its laws, outputs or damping
+        reference sized for other numbers of bearings, meshes or gears)."""
+        kb = state["damping_kb"]
+        sizes = (len(state["laws"]), len(state["outputs"]), None if kb is None else kb.shape)
+        mine = (self._laws.size, len(self._output_names),
+                None if kb is None else (self._nb, 2, 2))
+        if sizes != mine:
+            raise StateFormatError(
+                f"the FMU state is of another gear train: law inputs, outputs and damping "
+                f"reference {sizes}, this FMU's {mine}")
+
     def _set_fmu_state(self, state):
-        self._io[IO_JOURNALS_VALID] = 0.0  # until the state is restored
+        self._io[self._io_valid] = 0.0  # until the state is restored
         try:
+            self._check_sizes(state)
             overrides = state["overrides"]
             if overrides != self._overrides:
                 if overrides:
@@ -436,9 +478,9 @@ class GearShaftSlave(ContractSlave):
             return FMI_ERROR
         return None
 
-    # Serialised: ``overrides/<case field>``, ``laws`` (56,), ``outputs``, ``iterations``,
+    # Serialised: ``overrides/<case field>``, ``laws`` (14 nb,), ``outputs``, ``iterations``,
     # ``phase`` (a :class:`fmu_src.lifecycle.Phase` name), the flags, ``error`` (text, absent
-    # for none), ``damping_kb`` (4, 2, 2) and
+    # for none), ``damping_kb`` (nb, 2, 2) and
     # ``structure/...`` (fmu_src.states) once built (``has_structure``)
     STATE_KIND = STATE_KIND
 
@@ -462,11 +504,12 @@ class GearShaftSlave(ContractSlave):
     @classmethod
     def _state_from_arrays(cls, arrays: StateArrays):
         state = {"overrides": overrides_from_arrays(arrays),
-                 "laws": arrays.array("laws", "float64", (len(_LAWS),)),
-                 "outputs": arrays.array("outputs", "float64", (len(_OUTPUTS),)).tolist(),
+                 # their lengths are checked against the instance's train when set
+                 "laws": arrays.array("laws", "float64", (None,)),
+                 "outputs": arrays.array("outputs", "float64", (None,)).tolist(),
                  "iterations": arrays.int("iterations"),
                  "error": arrays.text("error") if arrays.has("error") else None,
-                 "damping_kb": (arrays.array("damping_kb", "float64", (4, 2, 2))
+                 "damping_kb": (arrays.array("damping_kb", "float64", (None, 2, 2))
                                 if arrays.has("damping_kb") else None),
                  # checked against the structure when set
                  "structure": arrays.part("structure") if arrays.bool("has_structure") else None}

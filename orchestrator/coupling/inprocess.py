@@ -18,7 +18,7 @@ from bearing_fmu.base import BearingError, BearingModel
 from bearing_fmu.frames import LocalFrame
 from bearing_fmu.hybrid.model import HybridBearing, HybridSet
 from bearing_fmu.short_bearing import ShortBearing, ShortSet
-from fmu_src.lifecycle import StructureCycle
+from fmu_src.lifecycle import StructureCycle, step_outputs, transmission_error_terms
 from fmu_src.state_codec import StateArrays, nest
 from fmu_src.states import (
     bearing_state_arrays,
@@ -50,6 +50,7 @@ class InProcessStructure(StructureSlave):
         self.n_meshes = len(structure.meshes)
         self.n_gears = len(structure.layout.gears)
         self._plan = None  # the plan of the last compiled block (its failure's details)
+        self._te_terms = None  # transmission_error_terms of the structure
 
     @property
     def physics(self) -> Structure:
@@ -77,14 +78,17 @@ class InProcessStructure(StructureSlave):
     def compiled_block(self, t: float, dt: float, n: int, time_of):
         """The structure's planned steps (:meth:`gear_fmu.structure.Structure.steps_plan`) as
         :func:`orchestrator.coupling.step.coupled_steps` takes them: ``(head, state, tail,
-        work, (gear_uv, totals, lengths))``, ``gear_uv`` (n_gears, 2) the condensed indices of
-        each gear node's u, v, ``totals``, ``lengths`` (n_meshes,) receiving the meshes' total
-        loads [N] and contact lengths [m] of each accepted step."""
+        work, (gear_uv, totals, lengths, te_idx, te_coef))``, ``gear_uv`` (n_gears, 2) the
+        condensed indices of each gear node's u, v, ``totals``, ``lengths`` (n_meshes,)
+        receiving the meshes' total loads [N] and contact lengths [m] of each accepted step,
+        ``te_idx``, ``te_coef`` the transmission errors' terms
+        (:func:`fmu_src.lifecycle.transmission_error_terms`)."""
         st = self.cycle.check_step(t, dt)
         plan = st.steps_plan(dt, n)
         self._plan = plan
         totals, lengths = st.mesh_forces(), np.zeros(self.n_meshes)
-        args = (plan.head, plan.state, plan.tail, plan.work, (st._gear_uv, totals, lengths))
+        args = (plan.head, plan.state, plan.tail, plan.work,
+                (st._gear_uv, totals, lengths, *self._terms()))
 
         def finish(count: int) -> None:
             st.end_steps(plan, count, totals, lengths)
@@ -118,9 +122,16 @@ class InProcessStructure(StructureSlave):
     def support_loads(self) -> np.ndarray:
         return support_loads(self.structure)
 
+    def _terms(self):
+        """The structure's :func:`fmu_src.lifecycle.transmission_error_terms` (kept)."""
+        if self._te_terms is None:
+            self._te_terms = transmission_error_terms(self.structure)
+        return self._te_terms
+
     def step_outputs(self):
-        st = self.structure
-        return st.mesh_forces(), st.transmission_errors(), st.gear_displacements()[:, :2]
+        row = step_outputs(self.structure, self._terms())
+        n = self.n_meshes
+        return row[:n], row[n:2 * n], row[2 * n:].reshape(-1, 2)
 
 
 def _kind(model) -> tuple:

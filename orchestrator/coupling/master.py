@@ -61,9 +61,9 @@ class PythonGroup:
     """Bearings evaluated in Python from the compiled coupled step (numba's object mode,
     :func:`orchestrator.coupling.step.evaluate_set`), a few microseconds per call:
     ``evaluate(indices, states, out)`` evaluates the set's bearings ``indices`` at their
-    states (k, 4) into their rows (k, 5, 2). An exception is kept in :attr:`error` (the
+    states (k, 4) into their rows (k, 5, 2). An exception is kept in ``error`` (the
     compiled loop returns the group's failed bearing, ``bearing_index`` on the exception, for
-    the set to raise it). Registered while the set lives (:meth:`close`)."""
+    the set to raise it). Registered while the set lives (``close()``)."""
 
     def __init__(self, evaluate, indices):
         self._evaluate = evaluate

@@ -10,7 +10,7 @@ before accepted:
 2. every bearing is evaluated at its new journal state (:func:`evaluate_set`: groups of
    bearings, each of one kind, whatever their mix of models);
 3. if the film forces differ from the laws by more than ``tol`` (relative to the force norm,
-   :func:`bearing_fmu.affine._relinearise`), the laws are linearised at the new iterate (or,
+   ``bearing_fmu.affine._relinearise``), the laws are linearised at the new iterate (or,
    once the iteration stalls, relaxed: :func:`relaxed_law`), the structure's state restored
    and the step taken again; else the step is accepted.
 
@@ -51,6 +51,7 @@ from numba.extending import overload
 from bearing_fmu.affine import AffineLaws, _relinearise, affine_set_global
 from bearing_fmu.hybrid._kernels import hybrid_set_global, hybrid_set_threads
 from bearing_fmu.short_bearing import short_set_global
+from fmu_src.lifecycle import step_output_row
 from gear_fmu.step.contact_loop import CONVERGED
 from gear_fmu.step.kernel import advance_pieces, keep_evaluation
 from orchestrator.coupling.fmi.steps import (
@@ -75,8 +76,10 @@ STALL = 0.5
 #: the outcomes of a step of :func:`coupled_steps`
 ACCEPTED, STRUCTURE_FAILED, BEARING_FAILED, NOT_CONVERGED = 0, 1, 2, 3
 #: the lengths of the tuples that tell the kinds apart in compiled code: a structure's
-#: arguments in-process (:meth:`InProcess.arguments`) and through the gear-shaft FMU; a bearing
-#: group's arguments: hybrid, hybrid on threads, short, affine, FMUs, Python
+#: arguments in-process
+#: (:meth:`~orchestrator.coupling.inprocess.InProcessStructure.compiled_block`) and through
+#: the gear-shaft FMU; a bearing group's arguments: hybrid, hybrid on threads, short, affine,
+#: FMUs, Python
 IN_PROCESS, THROUGH_FMU = 5, 10
 HYBRID, THREADED, SHORT, AFFINE, FMUS, PYTHON = 11, 12, 7, 4, 5, 1
 
@@ -159,24 +162,15 @@ def _in_process_accept(structure, row):
     x, v, a = state
     meshes = tail[4]
     totals, lengths, x1, v1, a1 = work[2], work[3], work[5], work[6], work[7]
-    gear_uv, kept_totals, kept_lengths = rec
+    gear_uv, kept_totals, kept_lengths, te_idx, te_coef = rec
     x[:] = x1
     v[:] = v1
     a[:] = a1
     keep_evaluation(meshes)
-    n_meshes = totals.size
-    for m in range(n_meshes):
+    for m in range(totals.size):
         kept_totals[m] = totals[m]
         kept_lengths[m] = lengths[m]
-        row[m] = totals[m]
-        idx, te = meshes[m][12], meshes[m][13]
-        acc = 0.0
-        for j in range(12):
-            acc += te[j] * x1[idx[j]]
-        row[n_meshes + m] = acc
-    for g in range(gear_uv.shape[0]):
-        row[2 * n_meshes + 2 * g] = x1[gear_uv[g, 0]]
-        row[2 * n_meshes + 2 * g + 1] = x1[gear_uv[g, 1]]
+    step_output_row(te_idx, te_coef, gear_uv, totals, x1, row)
     return 0
 
 
@@ -459,8 +453,8 @@ class CoupledSteps:
         outputs, n_meshes = rec[2][:count], self.structure.n_meshes
         block = StepBlock(count, rec[0][:count], rec[1][:count],
                           outputs[:, :n_meshes].copy(), outputs[:, n_meshes:2 * n_meshes].copy(),
-                          outputs[:, 2 * n_meshes:].reshape(count, -1, 2), rec[3][:count],
-                          mismatch)
+                          outputs[:, 2 * n_meshes:].reshape(count, self.structure.n_gears, 2),
+                          rec[3][:count], mismatch)
         if count < m:
             self._count(master, outcome, it)
             try:

@@ -1,7 +1,8 @@
 """pythonfmu slave of the transmission FMU: the whole coupled system in one FMU.
 
-The gear-shaft structure, the four bearings of the case's ``bearings.model`` and the iterative
-master (:class:`orchestrator.coupling.master.Master`, in-process slaves built by
+The gear-shaft structure of any gear train, its bearings (each of its own
+``bearings.<name>.model``) and the iterative master
+(:class:`orchestrator.coupling.master.Master`, in-process slaves built by
 :func:`orchestrator.coupling.system.build_master`) inside one FMI 2.0 co-simulation slave, so
 that a tool that does not iterate FMUs (libcosim, OMSimulator, ecos) gets ``gsb run``'s answer.
 Written by ``gsb export-fmu`` (:func:`fmu_src.build.fmus.build_transmission_fmu`), which puts
@@ -9,7 +10,10 @@ the case into its resources (``case.toml``).
 
 * Parameters: every case field but the run length (:func:`fmu_src.contract.transmission_fields`)
   and ``bearing_fmu``, a bearing FMU of the user's own (run through fmpy, in the host's
-  Python) instead of ``bearings.model``; a change rebuilds the system.
+  Python) for every bearing instead of their models; a change rebuilds the system.
+* Outputs (:func:`fmu_src.contract.transmission_output_names`): each bearing's journal state
+  and film force, named after the bearing, each mesh's force and transmission error, named
+  after the mesh.
 * Input ``torque`` [N m]: the input torque, held over a communication step
   (:meth:`gear_fmu.structure.Structure.set_torque`); until set, the case's ``drive.torque``.
 * Initialisation: the outputs are the static solution X0 (Sec. 2.2.3), solved when first read
@@ -45,9 +49,7 @@ from pythonfmu.default_experiment import DefaultExperiment
 from bearing_fmu.blas_threads import ONE_BLAS_THREAD
 from fmu_src.contract import (
     BEARING_RESOURCE,
-    BEARINGS,
-    FORCE_NAMES,
-    journal_output_names,
+    transmission_output_names,
     transmission_variables,
 )
 from fmu_src.description import mesh_period, time_step
@@ -58,7 +60,7 @@ from fmu_src.slaves.support import (
     overrides_from_arrays,
     overrides_to_arrays,
 )
-from fmu_src.state_codec import StateArrays
+from fmu_src.state_codec import StateArrays, StateFormatError
 from orchestrator.coupling.system import build_master
 
 __all__ = ["CASE_RESOURCE", "CLOCK_ULPS", "STATE_KIND", "TransmissionSlave", "internal_steps",
@@ -77,9 +79,6 @@ CLOCK_ULPS = 4
 #: the structure's clock is set to the host's time when they differ by more
 CLOCK_SLACK = 1e-9
 
-_OUTPUTS = [*journal_output_names(), *(f"{n}_{j}" for j in BEARINGS for n in FORCE_NAMES),
-            "mesh_force", "transmission_error"]
-_NAN = [math.nan] * len(_OUTPUTS)
 
 
 def internal_steps(h: float, dt: float) -> int:
@@ -109,11 +108,14 @@ class TransmissionSlave(ContractSlave):
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
         self.description = (
-            "Gear-shaft-bearing transmission (Timoshenko shafts, distributed gear mesh, four "
-            "journal bearings) with its iterative co-simulation master inside; global frame, "
-            "SI units (Baguet & Jacquenot 2010).")
+            "Gear-shaft-bearing transmission (a parallel-axis gear train: Timoshenko shafts, "
+            "distributed gear meshes, journal bearings) with its iterative co-simulation master "
+            "inside; global frame, SI units (Baguet & Jacquenot 2010).")
 
         self._base = self._base_case()
+        #: the Real outputs of the carried case's train, in the order of the variables
+        self._output_names = transmission_output_names(self._base)
+        self._nan = [math.nan] * len(self._output_names)
         step = time_step(self._base)
         stop = self._base["simulation.mesh_periods"] * mesh_period(self._base)
         self.default_experiment = DefaultExperiment(start_time=0.0, stop_time=stop,
@@ -126,7 +128,7 @@ class TransmissionSlave(ContractSlave):
         self._master = None
         self._static_key = None  # _key() of the master's static solution
         self._stepping = False
-        self._outputs = list(_NAN)
+        self._outputs = list(self._nan)
         self._iterations = 0
         self._steps = 0
         self._error: str | None = None  # a failure that forbids stepping
@@ -144,7 +146,7 @@ class TransmissionSlave(ContractSlave):
 
     # --- FMI plumbing ------------------------------------------------------------------------
     def _register_all(self, variables) -> None:
-        out_index = {name: i for i, name in enumerate(_OUTPUTS)}
+        out_index = {name: i for i, name in enumerate(self._output_names)}
         for v in variables:
             if v.name == "bearing_fmu":
                 self._bearing_fmu = v.start
@@ -215,7 +217,7 @@ class TransmissionSlave(ContractSlave):
                 self._solve_static()
             except Exception as exc:  # anything raised here would be fatal for the host
                 self._error = self.output_failed("static solution failed", exc)
-                self._outputs = list(_NAN)
+                self._outputs = list(self._nan)
         if self._error is not None and any(map(math.isnan, self._outputs)):
             self._read_status = FMI_ERROR
         return self
@@ -242,8 +244,9 @@ class TransmissionSlave(ContractSlave):
         self._drop_master()
         case = self.case()
         fmu = self._bearing_fmu_path()
+        n = len(case.names("bearings"))
         master = build_master(case, in_process=True,
-                              fmus=None if fmu is None else {"bearings": [fmu] * 4})
+                              fmus=None if fmu is None else {"bearings": [fmu] * n})
         master.structure.physics.t = self._time = self._start_time
         master.structure.physics.set_torque(self._get_torque())
         report = master.solve_static()
@@ -253,10 +256,10 @@ class TransmissionSlave(ContractSlave):
 
     def _record(self, states, bearing_force) -> None:
         """The outputs: journal states (nb, 4) [m, m/s], film forces (nb, 2) [N], and the
-        structure's mesh force [N] and transmission error [m] now."""
-        s = self._master.structure
+        structure's mesh forces [N] and transmission errors [m] now (n_meshes,)."""
+        forces, errors, _ = self._master.structure.step_outputs()
         self._outputs = [*states.ravel().tolist(), *bearing_force.ravel().tolist(),
-                         float(s.mesh_force()), float(s.transmission_error())]
+                         *forces.tolist(), *errors.tolist()]
 
     # --- FMI life cycle -----------------------------------------------------------------------
     def setup_experiment(self, start_time, stop_time=None, tolerance=None):
@@ -315,7 +318,7 @@ class TransmissionSlave(ContractSlave):
             self._error = self.output_failed(
                 f"doStep from t = {current_time:.9g} s, h = {step_size:.6g} s failed", exc)
             self._read_status = 0  # the step reports discard, not the next read
-            self._outputs = list(_NAN)
+            self._outputs = list(self._nan)
             return False
         self._iterations = iterations
         self._time = current_time + step_size
@@ -362,6 +365,10 @@ class TransmissionSlave(ContractSlave):
 
     def _set_fmu_state(self, state):
         try:
+            outputs = state["outputs"]
+            if outputs is not None and len(outputs) != len(self._output_names):
+                raise StateFormatError(f"the FMU state holds {len(outputs)} outputs, this "
+                                       f"FMU's train {len(self._output_names)}")
             if state["overrides"] != self._overrides:
                 if state["overrides"]:
                     self._base.with_overrides(state["overrides"])  # a case error before a change
@@ -390,7 +397,7 @@ class TransmissionSlave(ContractSlave):
                 self._time = (self._start_time if self._master is None
                               else self._master.structure.physics.t)
             self._stepping = state["stepping"]
-            self._outputs = None if state["outputs"] is None else list(state["outputs"])
+            self._outputs = None if outputs is None else list(outputs)
             self._iterations, self._steps = state["iterations"], state["steps"]
             self._error = state["error"]
         except Exception as exc:  # anything raised here would be fatal for the host
@@ -435,7 +442,7 @@ class TransmissionSlave(ContractSlave):
                                if has("static_torque") else None),
                 "checkpoint": (arrays.array("checkpoint", "uint8").tobytes()
                                if has("checkpoint") else None),
-                "outputs": (arrays.array("outputs", "float64", (len(_OUTPUTS),)).tolist()
+                "outputs": (arrays.array("outputs", "float64", (None,)).tolist()
                             if has("outputs") else None),
                 "iterations": arrays.int("iterations"), "steps": arrays.int("steps"),
                 "error": arrays.text("error") if has("error") else None}

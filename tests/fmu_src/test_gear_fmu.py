@@ -5,7 +5,9 @@ fresh host process that must exit cleanly). The FMU is driven through
 :class:`orchestrator.coupling.fmi.FmuStructure` and compared with the in-process structure of the
 same case (:class:`orchestrator.coupling.inprocess.InProcessStructure`) driven with the same
 laws (:mod:`tests.probes.gear_fmu`): the FMU runs the same code on the same numbers, so the
-results agree bit for bit.
+results agree bit for bit. Both the paper's gear-shaft FMU (``GearShaft``) and the one of
+another gear train (:data:`tests.conftest.TRAIN_CASE`: three shafts, two meshes, six bearings,
+``GearShaft_<digest>``) are checked.
 """
 
 import math
@@ -15,7 +17,9 @@ import sys
 import numpy as np
 import pytest
 
+from fmu_src.case import shipped_case
 from fmu_src.contract import gear_variables
+from tests.conftest import TRAIN_CASE
 from tests.helpers import run_here
 
 CASE = "baguet2010_spur"
@@ -26,6 +30,24 @@ PROBES = "tests.probes.gear_fmu"
 @pytest.fixture(scope="module")
 def gear_fmu(fmu_dir):
     return fmu_dir / "GearShaft.fmu"
+
+
+@pytest.fixture(scope="module")
+def train_fmu(fmu_dir):
+    """The gear-shaft FMU of :data:`TRAIN_CASE`'s gear train (tests/conftest.py builds it)."""
+    from orchestrator.coupling.fmi.cache import gear_fmu_name
+
+    return fmu_dir / f"{gear_fmu_name(shipped_case(TRAIN_CASE))}.fmu"
+
+
+#: the gear-shaft FMUs of the paper's train and of another (module docstring)
+TRAINS = [CASE, TRAIN_CASE]
+
+
+@pytest.fixture(scope="module", params=TRAINS)
+def any_gear_fmu(request, gear_fmu, train_fmu):
+    """``(case name, its gear-shaft FMU)`` for each of :data:`TRAINS`."""
+    return request.param, gear_fmu if request.param == CASE else train_fmu
 
 
 def test_gear_fmu_passes_fmpy_validation_with_units_and_descriptions(gear_fmu):
@@ -49,7 +71,8 @@ def test_gear_fmu_passes_fmpy_validation_with_units_and_descriptions(gear_fmu):
     assert module.min == "5e-324" and module.unit == "m" and module.description.endswith("(> 0)")
     assert variables["rotation_sign_3"].causality == "calculatedParameter"
     assert variables["K_st_3"].unit == "N/m" and variables["C_tt_4"].unit == "N.s/m"
-    assert variables["s_dot_2"].unit == "m/s" and variables["mesh_force"].unit == "N"
+    assert variables["s_dot_2"].unit == "m/s" and variables["mesh_force_mesh"].unit == "N"
+    assert variables["u_pinion"].unit == "m" and variables["transmission_error_mesh"].unit == "m"
     assert variables["support_load_t_4"].causality == "calculatedParameter"
     # no direct feedthrough: outputs change at doStep only
     assert all(not u.dependencies for u in md.outputs)
@@ -57,13 +80,62 @@ def test_gear_fmu_passes_fmpy_validation_with_units_and_descriptions(gear_fmu):
     assert md.defaultExperiment.stepSize is not None
 
 
-def test_slave_registers_exactly_the_contract():
-    """The slave class (no FMI layer) exposes the contract's variables in its order."""
-    from fmu_src.slaves.gear_shaft import GearShaftSlave
+def test_the_gear_fmu_of_another_train_passes_fmpy_validation_with_its_ports(train_fmu):
+    """Three shafts, two meshes, six bearings: one group of ports per bearing named after it,
+    the outputs of each mesh and gear, the frames of its bearings' shafts (the intermediate
+    shaft turns the other way), and the train's fields as parameters."""
+    from fmpy import read_model_description
+    from fmpy.validation import validate_fmu
 
-    slave = GearShaftSlave(instance_name="t")
+    from fmu_src.contract import law_input_names, step_output_names
+
+    case = shipped_case(TRAIN_CASE)
+    assert validate_fmu(str(train_fmu)) == []
+    md = read_model_description(str(train_fmu))
+    variables = {v.name: v for v in md.modelVariables}
+    assert [v.name for v in md.modelVariables] == [v.name for v in gear_variables(case)]
+    assert all(v.description for v in md.modelVariables)
+    assert md.coSimulation.modelIdentifier == train_fmu.stem
+    inputs = [v.name for v in md.modelVariables if v.causality == "input"]
+    assert inputs == law_input_names(case) and len(inputs) == 6 * 14
+    assert step_output_names(case) == [
+        "mesh_force_stage1", "mesh_force_stage2", "transmission_error_stage1",
+        "transmission_error_stage2", "u_pinion1", "v_pinion1", "u_wheel1", "v_wheel1",
+        "u_pinion2", "v_pinion2", "u_wheel2", "v_wheel2"]
+    assert variables["F_s_out_b"].unit == "N" and variables["t_dot_eval_mid_a"].unit == "m/s"
+    assert variables["s_dot_in_a"].causality == "output"
+    assert variables["omega_mid_b"].unit == "rad/s" and variables["u_wheel2"].unit == "m"
+    assert variables["rotation_sign_mid_a"].causality == "calculatedParameter"
+    from orchestrator.coupling.fmi import FmuStructure
+
+    with FmuStructure(train_fmu) as structure:  # the case it carries
+        vr = structure.slave.vr
+        names = case.names("bearings")
+        signs = structure.slave.fmu.getInteger([vr[f"rotation_sign_{b}"] for b in names])
+        assert structure.bearing_names == tuple(names)
+        assert (structure.n_meshes, structure.n_gears) == (2, 4)
+    assert dict(zip(names, signs, strict=True)) == {"in_a": 1, "in_b": 1, "mid_a": -1,
+                                                    "mid_b": -1, "out_a": 1, "out_b": 1}
+    assert variables["meshes.stage2.direction"].start == repr(case["meshes.stage2.direction"])
+    assert variables["bearings.out_a.position"].start == "0.15"
+    assert all(not u.dependencies for u in md.outputs)
+
+
+@pytest.mark.parametrize("train", TRAINS)
+def test_slave_registers_exactly_the_contract(train, tmp_path):
+    """The slave class (no FMI layer) exposes the contract's variables of its carried case's
+    train in their order, and answers the native layer with the counts of that train."""
+    from fmu_src.slaves.gear_shaft import CASE_RESOURCE, IO_LAYOUT, GearShaftSlave
+
+    case = shipped_case(train)
+    (tmp_path / CASE_RESOURCE).write_text(case.to_toml())
+    slave = GearShaftSlave(instance_name="t", resources=str(tmp_path))
     names = [(v.name, v.causality.name) for v in slave.vars.values()]
-    assert names == [(v.name, v.causality) for v in gear_variables()]
+    assert names == [(v.name, v.causality) for v in gear_variables(case)]
+    nb = len(case.names("bearings"))
+    layout, address, size, laws, journals = slave._fmi_native_io()
+    assert (layout, size, len(laws), len(journals)) == (IO_LAYOUT, 18 * nb + 2, 14 * nb, 4 * nb)
+    assert address == slave._io.ctypes.data and slave._io.size == size
 
 
 def test_a_case_that_does_not_fit_is_logged_not_raised():
@@ -78,7 +150,7 @@ def test_a_case_that_does_not_fit_is_logged_not_raised():
     vr = {v.name: v.value_reference for v in slave.vars.values()}
     assert slave.set_real([vr["gears.pinion.addendum_coefficient"],
                            vr["gears.gear.addendum_coefficient"]], [1.4, 1.4]) is None
-    values, status = slave.get_real([vr["s_1"], vr["mesh_force"]])
+    values, status = slave.get_real([vr["s_1"], vr["mesh_force_mesh"]])
     assert status == 3 and all(math.isnan(x) for x in values)
     values, status = slave.get_real([vr["support_load_s_1"]])
     assert status == 3 and math.isnan(values[0])
@@ -106,13 +178,16 @@ def test_bad_values_are_refused_by_the_call_that_sets_them(gear_fmu):
 
 
 @pytest.fixture(scope="module")
-def comparison(gear_fmu):
-    """The FMU and the in-process structure driven side by side.
+def comparison(any_gear_fmu):
+    """The FMU and the in-process structure of its carried case driven side by side.
 
     Static solutions, 50 Newmark steps with alternating laws, the outputs, a rollback, a
     serialised state, then a second instance coupled by the master with short-bearing models.
     """
-    return run_here(module=PROBES, args=["comparison", {"fmu": gear_fmu, "case": CASE}])
+    case, fmu = any_gear_fmu
+    out = run_here(module=PROBES, args=["comparison", {"fmu": fmu, "case": case}])
+    out["case"] = case
+    return out
 
 
 def test_fmu_static_solution_equals_in_process(comparison):
@@ -125,6 +200,8 @@ def test_fmu_static_solution_equals_in_process(comparison):
 def test_fmu_newmark_steps_equal_in_process(comparison):
     assert comparison["steps"] == 0.0 and comparison["outputs"] == 0.0
     assert comparison["moved"] > 1e-6  # the journals really move (unbalance): not trivial
+    meshes, gears = {CASE: (1, 2), TRAIN_CASE: (2, 4)}[comparison["case"]]
+    assert comparison["output_shapes"] == [[meshes], [meshes], [gears, 2]]
 
 
 def test_fmu_state_round_trip_is_exact(comparison):
@@ -139,14 +216,17 @@ def test_master_through_the_fmu_equals_master_in_process(comparison):
 
 
 
-@pytest.mark.parametrize("case", [CASE, "baguet2010_helical"])
-def test_the_laws_and_journals_are_served_without_python_with_the_same_bits(gear_fmu, case):
-    """The patched library serves the master's set of the 56 law inputs (while stepping) and
-    its read of the 16 journal outputs (those of the current state) from the slave's buffer;
-    what it does not serve reaches the slave's Python, whose calls are counted. Along the way
-    the journals equal the in-process structure's bit for bit (the spur case the FMU carries,
-    and the helical one set through its parameters)."""
-    out = run_here(module=PROBES, args=["native_io", {"fmu": gear_fmu, "case": case}])
+@pytest.mark.parametrize("case", [CASE, "baguet2010_helical", TRAIN_CASE])
+def test_the_laws_and_journals_are_served_without_python_with_the_same_bits(gear_fmu, train_fmu,
+                                                                             case):
+    """The patched library serves the master's set of the law inputs (while stepping) and its
+    read of the journal outputs (those of the current state) from the slave's buffer, whatever
+    the number of bearings (the counts of the slave's answer); what it does not serve reaches
+    the slave's Python, whose calls are counted. Along the way the journals equal the
+    in-process structure's bit for bit (the spur case the FMU carries, the helical one set
+    through its parameters, and the six bearings of another train)."""
+    fmu = train_fmu if case == TRAIN_CASE else gear_fmu
+    out = run_here(module=PROBES, args=["native_io", {"fmu": fmu, "case": case}])
     assert len(out["same"]) == 2 + 12 + 3 + 1 + 3 + 1 + 1 + 2 + 4 and all(out["same"])
     calls = out["calls"]
     # initialisation: each set makes the static solution stale, each solve reads in Python;
@@ -158,12 +238,14 @@ def test_the_laws_and_journals_are_served_without_python_with_the_same_bits(gear
     # laws with a NaN go to the slave, which refuses them (none applied: the step after it
     # takes the laws set before)
     assert calls["nan"] == {"set_real": 1, "get_real": 0}
-    assert "C_ts_2 is not a finite number (no input applied)" in out["nan"]
+    second = shipped_case(case).names("bearings")[1]
+    assert f"C_ts_{second} is not a finite number (no input applied)" in out["nan"]
     # after a failed step the journals read fmi2Error in Python, until a state is restored
     assert calls["failure"] == {"set_real": 0, "get_real": 1}
     assert "reading the journal states (status error)" in out["after_failure"]
     # fmi2Reset makes a new slave: the library serves it as the first
     assert calls["after_reset"] == {"set_real": 2, "get_real": 2}
+
 
 def test_a_checked_case_reaches_the_fmu_unchanged(tmp_path):
     """Case.to_toml: a Case with overrides written as a case file reloads to the same values."""
@@ -178,11 +260,24 @@ def test_a_checked_case_reaches_the_fmu_unchanged(tmp_path):
 
 
 def test_ensure_fmus_builds_missing_fmus_once(tmp_path):
-    from orchestrator.coupling.fmi import ensure_fmus
+    """One gear-shaft FMU per gear train: the paper's cases share ``GearShaft``, another train
+    gets its own file, built once; a gear-shaft FMU of one train refuses a case of another."""
+    from orchestrator.coupling.fmi import FmuError, FmuStructure, ensure_fmus
 
     path = ensure_fmus(["GearShaft"], tmp_path)["GearShaft"]
     stamp = path.stat().st_mtime_ns
     assert ensure_fmus(["GearShaft"], tmp_path)["GearShaft"].stat().st_mtime_ns == stamp
+    helical = shipped_case("baguet2010_helical")
+    assert ensure_fmus(["GearShaft"], tmp_path, case=helical)["GearShaft"] == path
+    train = shipped_case(TRAIN_CASE)
+    other = ensure_fmus(["GearShaft"], tmp_path, case=train)["GearShaft"]
+    assert other != path and other.stem.startswith("GearShaft_")
+    stamp = other.stat().st_mtime_ns
+    assert ensure_fmus(["GearShaft"], tmp_path, case=train)["GearShaft"].stat().st_mtime_ns \
+        == stamp
+    with pytest.raises(FmuError, match="built for another gear train than case "
+                                       "'two_stage_reducer': it lacks F_s_in_a"):
+        FmuStructure(path, case=train)
     with pytest.raises(ValueError, match="unknown FMU 'Nope'"):
         ensure_fmus(["Nope"], tmp_path)
 
@@ -207,10 +302,11 @@ def test_fmpy_simulate_from_a_fresh_process(gear_fmu, tmp_path):
     assert proc.returncode == 0, f"exit code {proc.returncode}: {proc.stderr[-2000:]}"
     lines = out.read_text().splitlines()
     header = lines[0].replace('"', "").split(",")
-    assert "s_1" in header and "mesh_force" in header and "transmission_error" in header
+    assert "s_1" in header and "mesh_force_mesh" in header
+    assert "transmission_error_mesh" in header
     rows = [[float(x) for x in line.split(",")] for line in lines[1:]]
     assert len(rows) == 11
-    force = np.array([r[header.index("mesh_force")] for r in rows])
+    force = np.array([r[header.index("mesh_force_mesh")] for r in rows])
     # the static tooth load T / r_b1 of the shipped case (independent of the FMU), plus the
     # dynamic part over 10 steps from the static solution: measured within 1.97 %, margin 1.5
     from fmu_src.examples import paper_gear_pair
@@ -220,3 +316,36 @@ def test_fmpy_simulate_from_a_fresh_process(gear_fmu, tmp_path):
     print(f"\nfmpy simulate: mesh force / (T / r_b1) - 1 within "
           f"{np.abs(force / w0 - 1).max():.2e}")
     assert np.abs(force / w0 - 1).max() < 3e-2
+
+
+def test_fmpy_simulate_runs_the_gear_fmu_of_another_train_from_a_fresh_process(train_fmu,
+                                                                              tmp_path):
+    """``fmpy simulate`` runs the two-stage train's gear-shaft FMU stand-alone (its carried
+    case, start values: stiff isotropic bearings): each mesh carries the static tooth load the
+    torque chain gives it (T on its driver's shaft / the driver's base radius, normal to the
+    helix), independent of the FMU, within the dynamics of ten steps from the static
+    solution."""
+    from fmu_src.description import gear_pairs, layout
+
+    case = shipped_case(TRAIN_CASE)
+    out = tmp_path / "out.csv"
+    proc = subprocess.run(
+        [sys.executable, "-m", "fmpy", "simulate", str(train_fmu), "--stop-time", "4.3e-4",
+         "--output-interval", "4.3e-5", "--output-file", str(out)],
+        capture_output=True, text=True, timeout=300, cwd=tmp_path)
+    assert proc.returncode == 0, f"exit code {proc.returncode}: {proc.stderr[-2000:]}"
+    lines = out.read_text().splitlines()
+    header = lines[0].replace('"', "").split(",")
+    assert "s_out_b" in header and "u_wheel2" in header
+    rows = np.array([[float(x) for x in line.split(",")] for line in lines[1:]])
+    assert len(rows) == 11 and np.isfinite(rows).all()
+    lay = layout(case)
+    torque = case["drive.torque"]
+    for mesh, pair in zip(lay.meshes, gear_pairs(case), strict=True):
+        force = rows[:, header.index(f"mesh_force_{mesh.name}")]
+        w0 = torque / (pair.base_radius[0] * math.cos(pair.base_helix_angle))
+        print(f"\n{mesh.name}: mesh force / (T / r_b1) - 1 within "
+              f"{np.abs(force / w0 - 1).max():.2e}")
+        # measured within 2.36 % (stage 1) and 0.26 % (stage 2): margin 1.7
+        assert np.abs(force / w0 - 1).max() < 4e-2
+        torque *= pair.teeth[1] / pair.teeth[0]  # the next stage's driver shaft

@@ -6,13 +6,18 @@ from __future__ import annotations
 from tests.probes import dispatch, probes_of
 
 
-def simulate(ssp: str, step_size: float, steps: int) -> dict:
-    """The 16 journal outputs of the gear-shaft FMU (``x``) and the four eccentricities
-    (``e``) after the initialisation and after each of ``steps`` steps, at full precision."""
+def simulate(ssp: str, step_size: float, steps: int, case: str = "baguet2010_spur") -> dict:
+    """The journal outputs of the gear-shaft FMU (``x``, 4 per bearing) and each bearing's
+    eccentricity (``e``) after the initialisation and after each of ``steps`` steps, at full
+    precision; ``case``: the shipped case whose train the archive holds (its names)."""
     from ecospy import EcosSimulation
 
-    names = [f"gear_shaft::{v}_{j}" for j in range(1, 5) for v in ("s", "t", "s_dot", "t_dot")]
-    ecc = [f"bearing{j}::eccentricity" for j in range(1, 5)]
+    from fmu_src.case import shipped_case
+    from fmu_src.contract import bearing_component, bearing_names, journal_output_names
+
+    train = shipped_case(case)
+    names = [f"gear_shaft::{n}" for n in journal_output_names(train)]
+    ecc = [f"{bearing_component(b)}::eccentricity" for b in bearing_names(train)]
     x, e = [], []
     with EcosSimulation(ssp_path=ssp, step_size=step_size) as sim:
         sim.init(parameter_set="case")

@@ -181,7 +181,7 @@ def refuse_foreign_states(fmu: str, gear: bool, marker: str) -> dict:
     f.setupExperiment(startTime=0.0)
     f.enterInitializationMode()
     if gear:
-        names = ["s_1", "t_1", "s_dot_1", "mesh_force"]
+        names = ["s_1", "t_1", "s_dot_1", "mesh_force_mesh"]
     else:
         names = ["F_s", "F_t", "K_ss", "C_tt"]
         c = f.getReal([vr["C"]])[0]
@@ -283,13 +283,14 @@ def gear_step_that_cannot_be_computed(fmu: str) -> dict:
     (F_s_1 = 1e300 N) and a step of 1e6 s (more mesh periods than a step may span), each from
     the saved state after the good step. Per case the doStep's status and log and the read of
     the journal states (status and values); then a good step from the saved state."""
-    from fmu_src.contract import journal_output_names
+    from fmu_src.case import shipped_case
+    from fmu_src.contract import GEAR_DEFAULT_CASE, journal_output_names
     from orchestrator.coupling.fmi import FmuInstance
 
     s = FmuInstance(fmu, "g")
     f, vr = s.fmu, s.vr
     do_step, get_real = _raw(s)
-    journal = journal_output_names()
+    journal = journal_output_names(shipped_case(GEAR_DEFAULT_CASE.removesuffix(".toml")))
     f.setupExperiment(startTime=0.0)
     f.enterInitializationMode()
     f.exitInitializationMode()

@@ -12,15 +12,22 @@ import numpy as np
 from tests.probes import counted_calls, dispatch, probes_of
 
 
-def laws():
-    """Two sets of affine laws (anisotropic, cross-coupled, non-zero F0): ``(LAW_A, LAW_B)``."""
+def laws(nb: int = 4):
+    """Two sets of affine laws of ``nb`` bearings (anisotropic, cross-coupled, non-zero F0):
+    ``(LAW_A, LAW_B)``."""
     from bearing_fmu.affine import AffineLaws
 
     rng = np.random.default_rng(7)
-    kb = np.array([[2e8, 3e7], [-2e7, 1.5e8]]) * (1 + 0.1 * rng.random((4, 1, 1)))
-    cb = np.array([[2e4, 1e3], [1e3, 3e4]]) * (1 + 0.1 * rng.random((4, 1, 1)))
-    f0 = rng.normal(0.0, 300.0, (4, 2))
+    kb = np.array([[2e8, 3e7], [-2e7, 1.5e8]]) * (1 + 0.1 * rng.random((nb, 1, 1)))
+    cb = np.array([[2e4, 1e3], [1e3, 3e4]]) * (1 + 0.1 * rng.random((nb, 1, 1)))
+    f0 = rng.normal(0.0, 300.0, (nb, 2))
     return AffineLaws(f0, kb, cb), AffineLaws(1.1 * f0, 0.9 * kb, 1.2 * cb)
+
+
+def _case(case: str):
+    from fmu_src.case import load_case
+
+    return load_case(case)
 
 
 def rel(a, b) -> float:
@@ -73,15 +80,15 @@ def comparison(fmu: str, case: str) -> dict:
     instance coupled by the master with short-bearing models. Relative differences and
     flags."""
     from fmu_src import description
-    from fmu_src.case import load_case
     from orchestrator.coupling.fmi import FmuStructure
     from orchestrator.coupling.inprocess import InProcessStructure, ModelBearings
     from orchestrator.coupling.master import Master
+    from orchestrator.coupling.step import CoupledSteps
 
-    law_a, law_b = laws()
-    case = load_case(case)
+    case = _case(case)
     ref = InProcessStructure(description.structure(case))
-    structure = FmuStructure(fmu)
+    law_a, law_b = laws(ref.n_bearings)
+    structure = FmuStructure(fmu)  # the case it carries
     r = {}
     r["support"] = rel(structure.support_loads(), ref.support_loads())
     # static iterations as the master does them: two law sets in initialisation mode
@@ -91,7 +98,8 @@ def comparison(fmu: str, case: str) -> dict:
         structure.set_bearing_laws(law)
         structure.solve_static()
     r["static"] = rel(structure.journal_states(), ref.journal_states())
-    r["static_mesh"] = rel(structure.mesh_force(), ref.mesh_force())
+    r["static_mesh"] = max(rel(a, b) for a, b in zip(structure.step_outputs(),
+                                                     ref.step_outputs(), strict=True))
     r["static_iterations"] = [structure.iterations(),
                               ref.structure.static(law_a.f0, law_a.kb).iterations]
     # the master's last laws (linearised at X0) set without a new solve, then the transient
@@ -110,11 +118,14 @@ def comparison(fmu: str, case: str) -> dict:
         t += dt
         worst = max(worst, rel(structure.journal_states(), ref.journal_states()))
     r["steps"] = worst
+    forces, errors, nodes = ref.step_outputs()
     o = structure.outputs()
-    r["outputs"] = max(rel(o["mesh_force"], ref.mesh_force()),
-                       rel(o["transmission_error"], ref.transmission_error()),
-                       rel(structure.gear_displacements(), ref.gear_displacements()),
-                       rel(structure.transmission_error(), ref.transmission_error()))
+    r["outputs"] = max(rel([o[f"mesh_force_{m}"] for m in structure.mesh_names], forces),
+                       rel([o[f"transmission_error_{m}"] for m in structure.mesh_names], errors),
+                       rel(structure.gear_displacements(), nodes),
+                       rel(structure.transmission_errors(), errors),
+                       rel(structure.mesh_forces(), forces))
+    r["output_shapes"] = [list(np.shape(a)) for a in structure.step_outputs()]
     r["moved"] = float(abs(structure.journal_states()[:, 2:]).max())
     # rollback: save, 5 steps, restore, the same 5 steps again
     saved, rsaved = structure.get_state(), ref.get_state()
@@ -145,12 +156,14 @@ def comparison(fmu: str, case: str) -> dict:
                   FmuStructure(fmu, case=case)):
         short = case.with_overrides({"bearings.*.model": "short"})
         bearings = ModelBearings(description.bearing_models(short),
-                                 description.BEARING_FRAMES, description.bearing_speeds(case))
-        m = Master(slave, bearings)
+                                 description.bearing_frames(case),
+                                 description.bearing_speeds(case))
+        m = Master(slave, bearings, stepper=CoupledSteps(slave, bearings))
         m.solve_static()
         m.exit_initialization()
         its.append([m.step(k * dt, dt).iterations for k in range(8)])
         states.append(slave.journal_states())
+        m.close()
     r["master"] = rel(states[1], states[0])
     r["master_iterations"] = its
     return r
@@ -164,8 +177,8 @@ def failures(fmu: str) -> dict:
     from bearing_fmu.affine import AffineLaws
     from orchestrator.coupling.fmi import FmuError, FmuStructure
 
-    law_a, _ = laws()
     structure = FmuStructure(fmu)
+    law_a, _ = laws(structure.n_bearings)
     msgs = {}
     # static solution that does not converge (almost no bearing stiffness)
     structure.set_bearing_laws(AffineLaws(law_a.f0, 1e-12 * law_a.kb, law_a.cb))
@@ -181,7 +194,8 @@ def failures(fmu: str) -> dict:
     saved = structure.get_state()
     x1 = structure.journal_states()
     # absurd law: Newton diverges (non-finite residuals) -> NewmarkConvergenceError inside
-    structure.set_bearing_laws(AffineLaws(np.full((4, 2), 1e300), law_a.kb, law_a.cb))
+    structure.set_bearing_laws(AffineLaws(np.full((structure.n_bearings, 2), 1e300), law_a.kb,
+                                          law_a.cb))
     try:
         structure.do_step(dt, dt)
     except FmuError as exc:
@@ -202,8 +216,8 @@ def failures(fmu: str) -> dict:
 
 
 def native_io(fmu: str, case: str) -> dict:
-    """The master's calls on the gear-shaft FMU (the 56 law inputs set, a doStep, the 16
-    journal outputs read), beside the in-process structure with the same laws, and how many
+    """The master's calls on the gear-shaft FMU (the law inputs set, a doStep, the journal
+    outputs read), beside the in-process structure with the same laws, and how many
     of the sets and reads reached the slave's Python (``GearShaftSlave.set_real`` and
     ``get_real`` counted): the patched library serves the others from the slave's buffer
     (fmu_src/native/patches/0012-native-structure-io.patch). Along: initialisation (static
@@ -211,7 +225,6 @@ def native_io(fmu: str, case: str) -> dict:
     and fmi2Reset."""
     from bearing_fmu.affine import AffineLaws
     from fmu_src import description
-    from fmu_src.case import load_case
     from fmu_src.slaves.gear_shaft import GearShaftSlave
     from orchestrator.coupling.fmi import FmuError, FmuStructure
     from orchestrator.coupling.inprocess import InProcessStructure
@@ -221,8 +234,9 @@ def native_io(fmu: str, case: str) -> dict:
         calls.update(set_real=0, get_real=0)
         return out
 
-    law_a, law_b = laws()
-    case = load_case(case)
+    case = _case(case)
+    nb = len(case.names("bearings"))
+    law_a, law_b = laws(nb)
     r = {"same": [], "calls": {}}
 
     def start(structure, ref):
@@ -281,7 +295,8 @@ def native_io(fmu: str, case: str) -> dict:
             r["calls"]["nan"] = count()
             # a failed step: the journals read fmi2Error, in Python, until a state is restored
             saved = structure.get_state()
-            structure.set_bearing_laws(AffineLaws(np.full((4, 2), 1e300), law_a.kb, law_a.cb))
+            structure.set_bearing_laws(AffineLaws(np.full((nb, 2), 1e300), law_a.kb,
+                                                  law_a.cb))
             with contextlib.suppress(FmuError):
                 structure.do_step(t, dt)
             try:

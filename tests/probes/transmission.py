@@ -5,16 +5,27 @@ from __future__ import annotations
 
 from tests.probes import dispatch, probes_of
 
-#: the outputs read after the initialisation and after every communication step
-OUTPUTS = ([f"{n}_{j}" for j in range(1, 5) for n in ("s", "t", "s_dot", "t_dot")]
-           + [f"F_{a}_{j}" for j in range(1, 5) for a in ("s", "t")]
-           + ["mesh_force", "transmission_error"])
+
+def outputs_of(case: str = "baguet2010_spur") -> list[str]:
+    """The Real outputs of the transmission FMU of the shipped case ``case`` (per bearing its
+    journal state and film force, per mesh its force and transmission error)."""
+    from fmu_src.case import shipped_case
+    from fmu_src.contract import transmission_output_names
+
+    return transmission_output_names(shipped_case(case))
+
+
+#: the outputs of the paper's transmission FMU, read after the initialisation and after every
+#: communication step: per bearing (s, t, s_dot, t_dot), the film forces, the mesh force and
+#: the transmission error
+OUTPUTS = outputs_of()
 
 
 class Host:
-    """One instance of the FMU (fmpy's FMU2Slave) with its variables by name."""
+    """One instance of the FMU (fmpy's FMU2Slave) with its variables by name; ``outputs``:
+    the names :meth:`outputs` reads (default :data:`OUTPUTS`)."""
 
-    def __init__(self, fmu: str, name: str = "transmission"):
+    def __init__(self, fmu: str, name: str = "transmission", outputs=None):
         from fmpy import extract, read_model_description
         from fmpy.fmi2 import FMU2Slave
 
@@ -25,7 +36,7 @@ class Host:
                                modelIdentifier=self.md.coSimulation.modelIdentifier,
                                instanceName=name)
         self.slave.instantiate()
-        self.out_vrs = [self.vars[n].valueReference for n in OUTPUTS]
+        self.out_vrs = [self.vars[n].valueReference for n in (outputs or OUTPUTS)]
 
     def set(self, values: dict) -> None:
         for name, value in values.items():
@@ -63,12 +74,13 @@ class Host:
         shutil.rmtree(self.folder, ignore_errors=True)
 
 
-def run(fmu: str, runs: list) -> list:
+def run(fmu: str, runs: list, case: str = "baguet2010_spur") -> list:
     """Each run ``{"start_values": {...}, "h": step [s], "n": steps}`` in a new instance: the
-    outputs after the initialisation, then after each step; the internal step count."""
+    outputs after the initialisation, then after each step; the internal step count. ``case``:
+    the shipped case whose train the FMU holds (its outputs' names)."""
     out = []
     for spec in runs:
-        host = Host(fmu)
+        host = Host(fmu, outputs=outputs_of(case))
         rows = [host.start(spec.get("start_values"))]
         rows += host.steps(spec["h"], spec["n"])
         out.append({"rows": rows, "steps": host.integer("steps")})

@@ -52,8 +52,8 @@ def _cold_runs(fmu_dir, cache: Path) -> dict:
 
 
 #: kernels that call kernels of other files: the hybrid film's driver, the structure step and
-#: the master's compiled step
-CALLERS = ("hybrid/_kernels.*", "step/kernel.*", "coupling/fused.*")
+#: the master's compiled step (orchestrator.coupling.step)
+CALLERS = ("hybrid/_kernels.*", "step/kernel.*", "coupling/step.*")
 
 
 def test_same_bits_with_a_cold_a_warm_and_a_half_warm_numba_cache(fmu_dir, tmp_path):

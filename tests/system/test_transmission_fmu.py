@@ -40,8 +40,9 @@ def _dt(case) -> float:
 
 
 def gsb_run_rows(case, steps: int) -> np.ndarray:
-    """(steps, 26) ``gsb run``'s channels in the order of the probe's outputs: per bearing
-    (s, t, s_dot, t_dot), the film forces, the mesh force and the transmission error."""
+    """(steps, 26) ``gsb run``'s channels of the paper's case in the order of the probe's
+    outputs: per bearing (s, t, s_dot, t_dot), the film forces, the mesh force and the
+    transmission error."""
     import orchestrator as gsb
 
     r = gsb.simulate(case, in_process=True, steps=steps, progress=False)
@@ -51,9 +52,11 @@ def gsb_run_rows(case, steps: int) -> np.ndarray:
 
 
 def master_rows(case, h, steps: int) -> np.ndarray:
-    """The same rows from the master of ``gsb run`` stepping at ``h`` (not the case's step),
-    X0 first; ``h`` one step [s] for all, or a sequence of ``steps`` steps (a host's clock
-    that rounds its own time, as libcosim's, gives steps differing in their last bits)."""
+    """The same rows (of any train: per bearing its journal state and film force, per mesh
+    its force and transmission error) from the master of ``gsb run`` stepping at ``h`` (not
+    necessarily the case's step), X0 first; ``h`` one step [s] for all, or a sequence of
+    ``steps`` steps (a host's clock that rounds its own time, as libcosim's, gives steps
+    differing in their last bits)."""
     hs = [float(h)] * steps if np.ndim(h) == 0 else [float(x) for x in h]
     assert len(hs) == steps, (len(hs), steps)
     from orchestrator.coupling.system import build_master
@@ -66,8 +69,9 @@ def master_rows(case, h, steps: int) -> np.ndarray:
     for k in range(steps + 1):
         if k:
             report = master.step(s.physics.t, hs[k - 1])
-        rows.append([*report.states.ravel(), *report.bearing_force.ravel(), s.mesh_force(),
-                     s.transmission_error()])
+        force, errors, _ = s.step_outputs()
+        rows.append([*report.states.ravel(), *report.bearing_force.ravel(), *force, *errors])
+    master.close()
     return np.array(rows)
 
 
@@ -281,3 +285,34 @@ def test_a_bearing_fmu_of_your_own_carried_inside(fmu_dir, tmp_path):
     got = run_isolated(module="tests.probes.transmission",
                        args=["run", {"fmu": str(fmu), "runs": [{"h": _dt(case), "n": 8}]}])
     assert_same_run(got[0]["rows"][1:], gsb_run_rows(case, 8), "lumped through a bearing FMU")
+
+
+def test_the_transmission_fmu_of_another_train(tmp_path):
+    """``gsb export-fmu two_stage_reducer`` with bearings of three models: the FMU passes
+    fmpy's validation, declares each of its six bearings' journal state and film force and
+    each of its two meshes' outputs by name, and in a fresh interpreter gives the bits of the
+    master of ``gsb run`` (in-process) at the case's step."""
+    from fmpy import read_model_description
+    from fmpy.validation import validate_fmu
+
+    from fmu_src.build.fmus import build_transmission_fmu
+    from fmu_src.contract import transmission_output_names
+    from tests.conftest import TRAIN_CASE
+    from tests.probes.transmission import outputs_of
+
+    case = _case(TRAIN_CASE)
+    fmu = build_transmission_fmu(case, tmp_path)
+    assert validate_fmu(str(fmu)) == []
+    md = read_model_description(str(fmu))
+    outputs = [v.name for v in md.modelVariables if v.causality == "output" and v.type == "Real"]
+    assert outputs == transmission_output_names(case) == outputs_of(TRAIN_CASE)
+    assert {"s_dot_mid_b", "F_t_out_a", "mesh_force_stage2",
+            "transmission_error_stage1"} <= set(outputs)
+    models = {"bearings.in_b.model": "short", "bearings.mid_b.model": "linear"}
+    steps = 6
+    got = run_isolated(module="tests.probes.transmission", args=[
+        "run", {"fmu": str(fmu), "case": TRAIN_CASE, "runs": [{
+            "start_values": models, "h": _dt(case), "n": steps}]}])[0]
+    assert got["steps"] == steps
+    ref = master_rows(case.with_overrides(models), _dt(case), steps)
+    assert_same_run(got["rows"], ref, "two-stage reducer")

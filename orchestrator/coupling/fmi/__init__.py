@@ -9,9 +9,9 @@
   (:class:`~orchestrator.coupling.fmi.structure.FmuStructure`, rollback with
   :class:`~orchestrator.coupling.fmi.structure.FmuState`);
 * :mod:`~orchestrator.coupling.fmi.cache`: built FMUs on disk and a case's system through them;
-* :mod:`~orchestrator.coupling.fmi.steps`: the master's steps through them in one compiled call
-  (:class:`~orchestrator.coupling.fmi.steps.FmuSteps`), with the FMI functions called from
-  compiled code (:mod:`~orchestrator.coupling.fmi.calls`).
+* :mod:`~orchestrator.coupling.fmi.steps`: their part of the coupled step
+  (:func:`orchestrator.coupling.step.coupled_steps`), the FMI functions called from compiled
+  code (:mod:`~orchestrator.coupling.fmi.calls`).
 """
 
 from orchestrator.coupling.fmi.bearings import FmuBearings

@@ -10,8 +10,8 @@ Two kinds of bearing FMU are accepted, told apart by their variables:
   case gives a bearing, those the FMU declares are set; an input ``omega`` gets the shaft speed.
 
 Every call's status is checked; a failure raises
-:class:`~orchestrator.coupling.fmi.instance.FmuError`
-with the FMU's log.
+:class:`~orchestrator.coupling.fmi.instance.FmuError` with the FMU's log, naming the bearing
+(``exc.bearing``: its name, ``exc.bearing_index``: its 0-based index in the set).
 """
 
 from __future__ import annotations
@@ -25,6 +25,7 @@ from fmu_src.contract import (
     FORCE_NAMES,
     STATE_NAMES,
     STIFFNESS_NAMES,
+    bearing_component,
 )
 from fmu_src.state_codec import StateArrays
 from orchestrator.coupling.fmi.instance import FmuError, FmuInstance, all_finite, status_name
@@ -43,42 +44,54 @@ FD_STEP = 1e-5
 
 
 class FmuBearings(BearingSet):
-    """Bearing FMUs, one instance per bearing (swap a model by naming another file).
+    """Bearing FMUs, one instance per bearing, each of its own file (swap a model by naming
+    another file).
 
     Parameters
     ----------
     fmus : sequence of path
-        FMU file of each bearing.
+        FMU file of each bearing (the layout's order).
     parameters : sequence of dict
         Parameter values of each bearing (names of :func:`fmu_src.contract.bearing_variables`).
         This package's FMUs must accept all of them; a force-only FMU gets those it declares.
     omegas : sequence of float
         Shaft speed magnitude at each bearing [rad/s].
+    names : sequence of str, optional
+        The bearings' names (messages, ``exc.bearing``; each instance is named
+        :func:`fmu_src.contract.bearing_component` of it); default "1", "2", ...
     """
 
     _OUTPUTS = FORCE_NAMES + STIFFNESS_NAMES + DAMPING_NAMES
 
-    def __init__(self, fmus, parameters, omegas):
+    def __init__(self, fmus, parameters, omegas, names=None):
+        fmus, parameters = list(fmus), list(parameters)
+        self.names = ([str(b + 1) for b in range(len(fmus))] if names is None
+                      else [str(n) for n in names])
+        if not (len(fmus) == len(parameters) == len(omegas) == len(self.names)):
+            raise ValueError(f"FmuBearings: {len(fmus)} FMU files, {len(parameters)} "
+                             f"parameter sets, {len(omegas)} speeds and {len(self.names)} "
+                             "names: one of each per bearing")
         self.slaves = []
         self.force_only = []  # per bearing: stiffness and damping by finite differences
         self.clearances = []  # per bearing [m]: FD steps, the first guess's bound
         self._omegas = [float(w) for w in omegas]
         try:
             for b, (path, params) in enumerate(zip(fmus, parameters, strict=True)):
-                s = FmuInstance(path, f"bearing{b + 1}")
+                who = f"bearing {self.names[b]}"
+                s = FmuInstance(path, bearing_component(self.names[b]))
                 self.slaves.append(s)
-                self.force_only.append(self._check_contract(b, s))
+                self.force_only.append(self._check_contract(who, s))
                 if not self.force_only[-1]:
                     unknown = sorted(set(params) - set(s.vr))
                     if unknown:
-                        raise FmuError(f"bearing {b + 1} ({s.path.name}): unknown FMU "
-                                       f"parameters {unknown}")
+                        raise FmuError(f"{who} ({s.path.name}): unknown FMU parameters "
+                                       f"{unknown}")
                 s.fmu.setupExperiment(startTime=0.0)
                 s.fmu.enterInitializationMode()
-                s.set({k: v for k, v in params.items() if k in s.vr}, f"bearing {b + 1}")
+                s.set({k: v for k, v in params.items() if k in s.vr}, who)
                 if "omega" in s.vr:
-                    s.set({"omega": float(omegas[b])}, f"bearing {b + 1}")
-                self.clearances.append(self._clearance(b, s, params))
+                    s.set({"omega": float(omegas[b])}, who)
+                self.clearances.append(self._clearance(who, s, params))
         except BaseException:
             self.close()
             raise
@@ -104,21 +117,33 @@ class FmuBearings(BearingSet):
                                       ctypes.POINTER(ctypes.c_double)) for b in range(nb)]
 
     @staticmethod
-    def _check_contract(b: int, s: FmuInstance) -> bool:
+    def _check_contract(who: str, s: FmuInstance) -> bool:
         """True for a force-only FMU; FmuError naming what is missing for anything else."""
         kinds = {v.name: (v.causality, v.type) for v in s.md.modelVariables}
         missing = [f"input {n}" for n in MINIMAL_INPUTS if kinds.get(n) != ("input", "Real")]
         missing += [f"output {n}" for n in MINIMAL_OUTPUTS if kinds.get(n) != ("output", "Real")]
         if missing:
-            raise FmuError(f"bearing {b + 1} ({s.path.name}) lacks the minimal bearing "
+            raise FmuError(f"{who} ({s.path.name}) lacks the minimal bearing "
                            f"contract: {', '.join(missing)} (docs/fmu-variables.md)")
         jac = STIFFNESS_NAMES + DAMPING_NAMES
         return not all(kinds.get(n) == ("output", "Real") for n in jac)
 
+    def _failed(self, b: int, state, reason: str) -> FmuError:
+        """The error of bearing ``b`` (0-based) failing at its global journal state (s, t,
+        s_dot, t_dot) [m, m/s], carried as ``bearing`` (its name), ``bearing_index`` (b),
+        ``state`` and ``reason`` for a run's message in units
+        (:func:`orchestrator.run.runner.failure_text`)."""
+        state = np.array(state, dtype=float)
+        exc = FmuError(f"bearing {self.names[b]} ({self.slaves[b].path.name}) failed at state "
+                       f"{state.tolist()}: {reason}")
+        exc.bearing, exc.bearing_index = self.names[b], b
+        exc.state, exc.reason = state, reason
+        return exc
+
     def _call(self, b: int, s: FmuInstance, status: int, what: str, states) -> None:
         if status > 1:  # discard, error, fatal
-            raise _failed(b, s, states, f"{what} returned {status_name(status)}; FMU log: "
-                                        f"{s.log_tail()}")
+            raise self._failed(b, states, f"{what} returned {status_name(status)}; FMU log: "
+                                          f"{s.log_tail()}")
 
     def _exchange(self, b: int, s: FmuInstance, n: int) -> None:
         """Set the journal state of bearing b from its row of the state buffer, read its first
@@ -131,7 +156,7 @@ class FmuBearings(BearingSet):
         self._call(b, s, get_real(c, self._out_vr[b], n, self._law_at[b]), "fmi2GetReal",
                    state)
         if not all_finite(self._laws[10 * b:10 * b + n]):
-            raise _failed(b, s, state, f"non-finite outputs; FMU log: {s.log_tail()}")
+            raise self._failed(b, state, f"non-finite outputs; FMU log: {s.log_tail()}")
 
     def _force(self, b: int, s: FmuInstance, state, n: int) -> np.ndarray:
         """Set the journal state of bearing b, read its first ``n`` outputs."""
@@ -153,14 +178,14 @@ class FmuBearings(BearingSet):
         return self._force(b, s, state, 2), jac[:, :2], jac[:, 2:]
 
     @staticmethod
-    def _clearance(b, s, params) -> float:
+    def _clearance(who, s, params) -> float:
         """Radial clearance C [m] of bearing ``b``: the FMU's own value when it declares one
         (what the film uses), else the case's (a force-only FMU)."""
         if "C" in s.vr:
             return float(s.fmu.getReal([s.vr["C"]])[0])
         if "C" in params:
             return float(params["C"])
-        raise FmuError(f"bearing {b + 1} ({s.path.name}): neither the FMU nor the case gives "
+        raise FmuError(f"{who} ({s.path.name}): neither the FMU nor the case gives "
                        "the radial clearance C [m] (it scales the finite-difference steps and "
                        "bounds the first guess of X0)")
 
@@ -174,6 +199,7 @@ class FmuBearings(BearingSet):
                 laws[b, 0], laws[b, 1:3], laws[b, 3:5] = self._fd_jacobian(b, s, states[b])
             else:
                 self._exchange(b, s, 10)
+        self.evaluations += self.count
         out = laws.copy()
         return out[:, 0], out[:, 1:3], out[:, 3:5]
 
@@ -225,10 +251,10 @@ class FmuBearings(BearingSet):
         s = self.slaves[b]
         which, fmi_status = divmod(int(status), 8)
         if which == 3:
-            raise _failed(b, s, states[b], f"non-finite outputs; FMU log: {s.log_tail()}")
+            raise self._failed(b, states[b], f"non-finite outputs; FMU log: {s.log_tail()}")
         what = "fmi2SetReal" if which == 1 else "fmi2GetReal"
-        raise _failed(b, s, states[b], f"{what} returned {status_name(fmi_status)}; FMU log: "
-                                       f"{s.log_tail()}")
+        raise self._failed(b, states[b], f"{what} returned {status_name(fmi_status)}; FMU "
+                                         f"log: {s.log_tail()}")
 
     def exit_initialization(self) -> None:
         """Leave initialisation mode (the linear FMU freezes its coefficients here)."""
@@ -237,7 +263,8 @@ class FmuBearings(BearingSet):
             since = len(s.messages)
             status = f.dll.fmi2ExitInitializationMode(f.component)
             if status > 1 or s.errors_since(since):
-                raise FmuError(f"bearing {b + 1} ({s.path.name}): fmi2ExitInitializationMode "
+                raise FmuError(f"bearing {self.names[b]} ({s.path.name}): "
+                               "fmi2ExitInitializationMode "
                                f"returned {status_name(status)}; FMU log: "
                                f"{s.log_tail(since=since)}")
         self.in_init = False
@@ -266,13 +293,3 @@ class FmuBearings(BearingSet):
             python.close()
             self._python = None
 
-
-def _failed(b: int, s: FmuInstance, state, reason: str) -> FmuError:
-    """The error of bearing ``b`` (0-based) failing at its global journal state (s, t, s_dot,
-    t_dot) [m, m/s], carried as ``bearing`` (1-based), ``state`` and ``reason`` for a run's
-    message in units (:class:`orchestrator.run.runner.StepFailed`)."""
-    state = np.array(state, dtype=float)
-    exc = FmuError(f"bearing {b + 1} ({s.path.name}) failed at state {state.tolist()}: "
-                   f"{reason}")
-    exc.bearing, exc.state, exc.reason = b + 1, state, reason
-    return exc

@@ -11,9 +11,10 @@ transport. The gear-shaft FMU's doStep and its state's save and restore still ru
 Python; the bearing FMUs and the gear-shaft FMU's laws and journals are served by their native
 layer (``fmu_src/native/patches``) without Python.
 
-A call that fails returns which call with its status; :class:`FmuStructure` and
-:class:`FmuBearings` raise the error with the FMU's log (``raise_compiled_failure``,
-``raise_failure``).
+A call that fails returns which call with its status;
+:class:`~orchestrator.coupling.fmi.structure.FmuStructure` and
+:class:`~orchestrator.coupling.fmi.bearings.FmuBearings` raise the error with the FMU's log
+(``raise_compiled_failure``, ``raise_failure``).
 """
 
 from __future__ import annotations

@@ -1,20 +1,26 @@
 """The gear-shaft FMU behind the master's :class:`~orchestrator.coupling.master.StructureSlave`
-interface, with rollback through fmi2GetFMUstate / fmi2SetFMUstate."""
+interface, with rollback through fmi2GetFMUstate / fmi2SetFMUstate. The FMU's ports are those
+of a gear train (:func:`fmu_src.contract.gear_variables`): the names of the bearings, meshes
+and gears come from the case the FMU is driven with, or else from the case it carries."""
 
 from __future__ import annotations
 
 import ctypes
 import sys
 import weakref
+from pathlib import Path
 
 import numpy as np
 
 from fmu_src.contract import (
-    GEAR_OUTPUTS,
+    bearing_names,
+    gear_names,
     gear_parameters,
     journal_output_names,
     law_input_names,
+    mesh_names,
     pack_laws,
+    step_output_names,
     support_load_names,
     unpack_journal,
 )
@@ -62,7 +68,8 @@ class FmuStructure(StructureSlave):
     case : fmu_src.case.Case, optional
         A checked case (e.g. with command-line overrides): its structural fields are set as
         the FMU's parameters (:func:`fmu_src.contract.gear_parameters`); default: the case the
-        FMU carries.
+        FMU carries. Its gear train must be the one the FMU was built for (the same names of
+        bearings, meshes, gears and parameters: :func:`fmu_src.contract.gear_variables`).
     start_time : float
         Time of the initial (static) state [s].
 
@@ -80,6 +87,12 @@ class FmuStructure(StructureSlave):
                  instance_name: str = "gear_shaft"):
         self.slave = FmuInstance(fmu, instance_name)
         self._states: weakref.WeakSet = weakref.WeakSet()
+        try:
+            train = case if case is not None else self._carried_case()
+            self._check_train(train)
+        except BaseException:
+            self.slave.close()
+            raise
         f = self.slave.fmu
         f.setupExperiment(startTime=float(start_time))
         f.enterInitializationMode()
@@ -99,12 +112,16 @@ class FmuStructure(StructureSlave):
         self._get_state = dll.fmi2GetFMUstate
         self._set_state = dll.fmi2SetFMUstate
         self._free_state = dll.fmi2FreeFMUstate
-        laws = law_input_names()
-        journal = journal_output_names()
-        extra = [name for name, _, _ in GEAR_OUTPUTS]
-        support = support_load_names()
-        self.n_bearings = len(journal) // 4
-        self.n_meshes, self.n_gears = 1, 2  # TODO(train): from the FMU's step outputs
+        laws = law_input_names(train)
+        journal = journal_output_names(train)
+        extra = step_output_names(train)
+        support = support_load_names(train)
+        #: the train's names (the suffixes of the FMU's ports), in the layout's order
+        self.bearing_names = bearing_names(train)
+        self.mesh_names = mesh_names(train)
+        self.gear_names = gear_names(train)
+        self.n_bearings = len(self.bearing_names)
+        self.n_meshes, self.n_gears = len(self.mesh_names), len(self.gear_names)
         nb = self.n_bearings
         n_laws = len(laws)
         self._n_laws = n_laws
@@ -117,12 +134,34 @@ class FmuStructure(StructureSlave):
         self._ex_vr = (ctypes.c_uint * len(extra))(*[vr[n] for n in extra])
         self._ex_val = (ctypes.c_double * len(extra))()
         self._ex_index = {n: i for i, n in enumerate(extra)}
-        self._one_vr = {n: (ctypes.c_uint * 1)(vr[n]) for n in extra}
-        self._one_val = (ctypes.c_double * 1)()
         self._sup_vr = (ctypes.c_uint * (2 * nb))(*[vr[n] for n in support])
         self._sup_val = (ctypes.c_double * (2 * nb))()
         self._it_vr = (ctypes.c_uint * 1)(vr["iterations"])
         self._it_val = (ctypes.c_int * 1)()
+
+    def _carried_case(self):
+        """The case the FMU carries (``resources/case.toml``)."""
+        from fmu_src.case import load_case
+        from fmu_src.slaves.gear_shaft import CASE_RESOURCE
+
+        path = Path(self.slave._dir) / "resources" / CASE_RESOURCE
+        if not path.is_file():
+            raise FmuError(f"gear-shaft FMU ({self.slave.path.name}) carries no case "
+                           f"(resources/{CASE_RESOURCE}): give the case it simulates")
+        return load_case(path)
+
+    def _check_train(self, case) -> None:
+        """FmuError unless the FMU has the ports and parameters of ``case``'s gear train."""
+        names = [*law_input_names(case), *journal_output_names(case),
+                 *step_output_names(case), *support_load_names(case)]
+        names += [n for n, _, _ in gear_parameters(case)]
+        missing = [n for n in names if n not in self.slave.vr]
+        if missing:
+            raise FmuError(
+                f"gear-shaft FMU ({self.slave.path.name}) was built for another gear train "
+                f"than case {case['case.name']!r}: it lacks {', '.join(missing[:6])}"
+                f"{' ...' if len(missing) > 6 else ''} (build it for the case: gsb build-fmus "
+                "CASE, or orchestrator.coupling.fmi.ensure_fmus with the case)")
 
     def _set_case(self, case) -> None:
         """Set the case's structural fields as the FMU's parameters (one call per type)."""
@@ -146,8 +185,8 @@ class FmuStructure(StructureSlave):
 
     # --- master interface ---------------------------------------------------------------------
     def set_bearing_laws(self, laws) -> None:
-        """Set the 56 law inputs in one call: each law's expansion, as a bearing FMU's outputs
-        (force, Kb, Cb and the journal state they belong to; global frame)."""
+        """Set the law inputs (14 per bearing) in one call: each law's expansion, as a bearing
+        FMU's outputs (force, Kb, Cb and the journal state they belong to; global frame)."""
         self._live()
         pack_laws(laws, self._law_np)
         self._check(self._set_real(self._c, self._law_vr, self._n_laws, self._law_val),
@@ -301,37 +340,36 @@ class FmuStructure(StructureSlave):
 
     # --- other outputs ------------------------------------------------------------------------
     def outputs(self) -> dict:
-        """Mesh and gear-node outputs by name (mesh_force, transmission_error, u_pinion, ...)."""
+        """The step outputs by name (:func:`fmu_src.contract.step_output_names`:
+        ``mesh_force_<mesh>``, ``transmission_error_<mesh>``, ``u_<gear>``, ``v_<gear>``) in
+        one fmi2GetReal."""
+        return dict(zip(self._ex_index, self._read_outputs().tolist(), strict=True))
+
+    def _read_outputs(self) -> np.ndarray:
         self._live()
         n = len(self._ex_val)
         self._check(self._get_real(self._c, self._ex_vr, n, self._ex_val), "reading outputs")
-        return {name: float(self._ex_val[i]) for name, i in self._ex_index.items()}
+        return np.frombuffer(self._ex_val, dtype=np.float64).copy()
 
     def step_outputs(self):
-        """Mesh forces [N], transmission errors [m] and the (n_gears, 2) [u, v] of the gear
-        nodes [m] in one fmi2GetReal (:meth:`outputs`)."""
-        o = self.outputs()
-        return (np.array([o["mesh_force"]]), np.array([o["transmission_error"]]),
-                _gear_nodes(o))
+        """Mesh forces [N], transmission errors [m] (n_meshes,) and the (n_gears, 2) [u, v] of
+        the gear nodes [m] in one fmi2GetReal (the row of the compiled step)."""
+        row = self._read_outputs()
+        n = self.n_meshes
+        return row[:n], row[n:2 * n], row[2 * n:].reshape(-1, 2)
 
-    def _extra(self, name: str) -> float:
-        self._live()
-        self._check(self._get_real(self._c, self._one_vr[name], 1, self._one_val),
-                    f"reading {name}")
-        return float(self._one_val[0])
+    def mesh_forces(self) -> np.ndarray:
+        """Total normal tooth load of each mesh [N]."""
+        return self.step_outputs()[0]
 
-    def mesh_force(self) -> float:
-        """Total normal tooth load of the mesh [N]."""
-        return self._extra("mesh_force")
-
-    def transmission_error(self) -> float:
-        """Transmission error of the gear nodes [m]."""
-        return self._extra("transmission_error")
+    def transmission_errors(self) -> np.ndarray:
+        """Transmission error of each mesh's gear nodes [m]."""
+        return self.step_outputs()[1]
 
     def gear_displacements(self) -> np.ndarray:
-        """(2, 2) [u, v] of the pinion and gear nodes [m] (the in-process Structure gives all
-        six DOFs per node; the FMU outputs these two)."""
-        return _gear_nodes(self.outputs())
+        """(n_gears, 2) [u, v] of the gear nodes [m] (the in-process Structure gives all six
+        DOFs per node; the FMU outputs these two)."""
+        return self.step_outputs()[2]
 
     def iterations(self) -> int:
         """Newton/contact iterations of the last step or static solution."""
@@ -363,8 +401,3 @@ class FmuStructure(StructureSlave):
         except Exception:  # a destructor must not raise
             pass
 
-
-def _gear_nodes(outputs: dict) -> np.ndarray:
-    """(2, 2) [u, v] of the pinion and gear nodes from :meth:`FmuStructure.outputs`."""
-    o = outputs
-    return np.array([[o["u_pinion"], o["v_pinion"]], [o["u_gear"], o["v_gear"]]])

@@ -1,19 +1,19 @@
 /*
- * A minimal FMI 2.0 co-simulation host without Python that drives the gear-shaft FMU as the
- * package's master does: fmi2SetReal of the 56 law inputs, fmi2DoStep, fmi2GetReal of the 16
- * journal outputs, with a saved state restored among the steps. Built by
- * tests/fmu_src/test_structure_host.py:
+ * A minimal FMI 2.0 co-simulation host without Python that drives the gear-shaft FMU of a
+ * train of nb bearings as the package's master does: fmi2SetReal of the 14 nb law inputs,
+ * fmi2DoStep, fmi2GetReal of the 4 nb journal outputs, with a saved state restored among the
+ * steps. Built by tests/fmu_src/test_structure_host.py:
  *
  *   structure_host <unzipped FMU> <model identifier> <guid> <dt> <steps> <save at> <restore at>
- *                  <56 law value references> <16 journal value references>
- *                  <56 values of law A> <56 values of law B>
+ *                  <nb> <14 nb law value references> <4 nb journal value references>
+ *                  <14 nb values of law A> <14 nb values of law B>
  *
  * In initialisation it sets law A and reads the static solution's journals; then step k
  * (from 0) sets law A for odd k, B for even k, steps from k dt and reads the journals. After
  * step <save at> it saves the state (fmi2GetFMUstate); after step <restore at> it restores it
  * and reads the journals, then steps on from the saved time, the same laws again. Each read
  * prints one line: what it followed ("static", "step k", "restored"), the statuses of the
- * calls and the sixteen values as C99 hexadecimal floats (exact), so that the test compares
+ * calls and the 4 nb journal values as C99 hexadecimal floats (exact), so that the test compares
  * them bit for bit with the in-process structure. The FMU's loader loads libpython; the
  * patched library serves the sets and reads while stepping from the slave's buffer
  * (fmu_src/native/patches/0012-native-structure-io.patch).
@@ -21,8 +21,7 @@
 #define HOST_NAME "structure_host"
 #include "host.h"
 
-#define N_LAWS 56
-#define N_JOURNALS 16
+static int N_LAWS, N_JOURNALS;
 
 static void print_values(const fmi2Real* v)
 {
@@ -32,11 +31,14 @@ static void print_values(const fmi2Real* v)
 
 int main(int argc, char** argv)
 {
-    const int fixed = 8 + N_LAWS + N_JOURNALS;
-    if (argc != fixed + 2 * N_LAWS) {
+    int nb = argc > 8 ? atoi(argv[8]) : 0;
+    N_LAWS = 14 * nb;
+    N_JOURNALS = 4 * nb;
+    const int fixed = 9 + N_LAWS + N_JOURNALS;
+    if (nb < 1 || argc != fixed + 2 * N_LAWS) {
         fprintf(stderr, "usage: structure_host <unzipped FMU> <model identifier> <guid> <dt> "
-                        "<steps> <save at> <restore at> <56 law vrs> <16 journal vrs> "
-                        "<56 values of law A> <56 values of law B>\n");
+                        "<steps> <save at> <restore at> <nb> <14 nb law vrs> <4 nb journal vrs> "
+                        "<14 nb values of law A> <14 nb values of law B>\n");
         return 64;
     }
     OPEN_FMU(argv[1], argv[2])
@@ -54,11 +56,13 @@ int main(int argc, char** argv)
     RESOLVE(free_, fmi2FreeInstanceTYPE, "fmi2FreeInstance")
     double dt = strtod(argv[4], NULL);
     int steps = atoi(argv[5]), save_at = atoi(argv[6]), restore_at = atoi(argv[7]);
-    fmi2ValueReference in[N_LAWS], out[N_JOURNALS];
-    fmi2Real laws[2][N_LAWS], journals[N_JOURNALS];
-    for (int i = 0; i < N_LAWS; ++i) in[i] = (fmi2ValueReference)strtoul(argv[8 + i], NULL, 10);
+    fmi2ValueReference* in = malloc(N_LAWS * sizeof(fmi2ValueReference));
+    fmi2ValueReference* out = malloc(N_JOURNALS * sizeof(fmi2ValueReference));
+    fmi2Real* laws[2] = {malloc(N_LAWS * sizeof(fmi2Real)), malloc(N_LAWS * sizeof(fmi2Real))};
+    fmi2Real* journals = malloc(N_JOURNALS * sizeof(fmi2Real));
+    for (int i = 0; i < N_LAWS; ++i) in[i] = (fmi2ValueReference)strtoul(argv[9 + i], NULL, 10);
     for (int i = 0; i < N_JOURNALS; ++i)
-        out[i] = (fmi2ValueReference)strtoul(argv[8 + N_LAWS + i], NULL, 10);
+        out[i] = (fmi2ValueReference)strtoul(argv[9 + N_LAWS + i], NULL, 10);
     for (int j = 0; j < 2; ++j)
         for (int i = 0; i < N_LAWS; ++i) laws[j][i] = strtod(argv[fixed + j * N_LAWS + i], NULL);
     fmi2Component c = instantiate("structure_host", fmi2CoSimulation, argv[3], resources,

@@ -1,15 +1,13 @@
 """Blocks of coupled steps in one compiled call (:meth:`Master.steps`,
-:func:`orchestrator.coupling.fused.coupled_steps`) against the same steps one call each
-(:meth:`Master.step`, itself checked against the Python loop in ``test_fused``): the same
-bits, counters and errors, step for step, spur and helical, hybrid, short, linear and lumped
-bearings, with gear runouts, through the relaxation (on two threads: ``test_fused``, the
-module that compiles the threaded kernel); steps that the compiled loop does not take end a
-block and take
-:meth:`Master.step`. The physics of the step is asserted elsewhere (the
-monolithic Newton, the golden run, the order); runs through the runner are compared with
-runs through FMUs by the FMU suites. Slaves the compiled loop does not take (other bearing
-models, FMUs) take blocks of the master's Python loop, which gather the steps' rows: the same
-bits and errors as single steps too."""
+:func:`orchestrator.coupling.step.coupled_steps`) against the same steps one call each
+(:meth:`Master.step`, a block of one): the same bits, counters and errors, step for step,
+spur and helical, hybrid, short, linear and lumped bearings, with gear runouts, through the
+relaxation, with condensation slots that fill up and end a block (on two threads:
+``test_step``). A block carries the structure's plan, state and mesh evaluations from step to
+step where single steps start each from the slave's state: this checks that hand-over. The
+physics of the step is asserted elsewhere (the monolithic Newton, the golden run, the order);
+the FMU transport against the in-process one in ``test_fmu_steps``. (The master's Python loop,
+whose blocks this module also compared with single steps, no longer exists.)"""
 
 from __future__ import annotations
 
@@ -23,21 +21,23 @@ from fmu_src.description import time_step
 from gear_fmu.step.newmark import NewmarkConvergenceError
 from orchestrator.coupling.master import CouplingError
 from orchestrator.coupling.system import build_master
-from tests.orchestrator.coupling.test_fused import _counters, _same_state
-from tests.orchestrator.coupling.test_fused import _with_runout as with_runout
+from tests.orchestrator.coupling.test_step import _counters, _same_state
+
+#: gear runouts (error displacements of the gear nodes at every mesh evaluation, the ones
+#: after the contact events included)
+RUNOUT = {"gears.pinion.runout": 20e-6, "gears.gear.runout": 10e-6,
+          "gears.pinion.runout_phase": 0.3, "gears.gear.runout_phase": 1.1}
 
 #: block length of these tests: short, so that blocks end at their length, at contact
 #: events and at the end of the run
 BLOCK = 7
 
 
-def _masters(case, structure=None, threads=1):
+def _masters(case, threads=1):
     """Two masters of ``case`` after the static solution."""
     out = []
     for _ in range(2):
-        m = build_master(case, in_process=True,
-                         structure=None if structure is None else structure(case),
-                         threads=threads)
+        m = build_master(case, in_process=True, threads=threads)
         m.solve_static()
         m.exit_initialization()
         out.append(m)
@@ -52,8 +52,8 @@ def _step(m, i, dt):
         r = m.step(i * dt, dt)
     except Exception as exc:  # compared with the other master's
         return [], exc
-    return [(r.states.copy(), r.bearing_force.copy(), st.mesh_force(),
-             st.transmission_error(), st.gear_displacements().copy(), r.iterations)], None
+    force, errors, nodes = st.step_outputs()
+    return [(r.states.copy(), r.bearing_force.copy(), force, errors, nodes, r.iterations)], None
 
 
 def _rows_of_steps(m, dt, first, n):
@@ -75,13 +75,6 @@ def _rows_of_blocks(m, dt, first, n, each=None):
     rows, in_blocks, long_blocks, i = [], 0, 0, first
     while i < n:
         block = m.steps(i, dt, min(BLOCK, n - i))
-        if block is None:
-            row, error = _step(m, i, dt)
-            rows += row
-            if error is not None:
-                return rows, error, in_blocks, long_blocks
-            i += 1
-            continue
         for k in range(block.count):
             rows.append((block.states[k], block.bearing_force[k], block.mesh_force[k],
                          block.transmission_error[k], block.gear_nodes[k],
@@ -97,13 +90,14 @@ def _rows_of_blocks(m, dt, first, n, each=None):
 
 
 def _same_mesh_state(a, b):
-    """The structures' mesh evaluations, every array and figure (the load along the face
-    width of Fig. 13 included)."""
-    ma, mb = a.structure.physics.mesh_state, b.structure.physics.mesh_state
-    for name in ("force", "stiffness", "active", "delta", "load", "inside", "xi", "z"):
-        np.testing.assert_array_equal(getattr(ma, name), getattr(mb, name), err_msg=name)
-    assert (ma.total_load, ma.transmission_error, ma.contact_length) == (
-        mb.total_load, mb.transmission_error, mb.contact_length)
+    """The structures' mesh evaluations, every array and figure of every mesh (the load along
+    the face width of Fig. 13 included)."""
+    states_a, states_b = a.structure.physics.mesh_states, b.structure.physics.mesh_states
+    for ma, mb in zip(states_a, states_b, strict=True):
+        for name in ("force", "stiffness", "active", "delta", "load", "inside", "xi", "z"):
+            np.testing.assert_array_equal(getattr(ma, name), getattr(mb, name), err_msg=name)
+        assert (ma.total_load, ma.transmission_error, ma.contact_length) == (
+            mb.total_load, mb.transmission_error, mb.contact_length)
 
 
 def _same_rows(blocks, steps):
@@ -114,12 +108,12 @@ def _same_rows(blocks, steps):
             np.testing.assert_array_equal(x, y, err_msg=f"step {k + 1}: {name}")
 
 
-def _compare(case, n, structure=None, threads=1, change=None, warm=0):
+def _compare(case, n, threads=1, change=None, warm=0):
     """Steps 0 .. n - 1 of two masters, ``warm`` steps one by one, then ``change(master)``,
     then blocks against single steps: the same rows, errors and counters, and the same state
     after every block. Returns the masters, the error, the steps blocks took and the blocks
     of more than one step."""
-    blocked, single = _masters(case, structure, threads)
+    blocked, single = _masters(case, threads)
     dt = time_step(case)
     for m in (blocked, single):
         assert _rows_of_steps(m, dt, 0, warm)[1] is None
@@ -148,7 +142,7 @@ def _compare(case, n, structure=None, threads=1, change=None, warm=0):
                                                 ("baguet2010_spur", "lumped", 96),
                                                 ("baguet2010_spur", "short", 96)])
 def test_blocks_give_the_bits_of_single_steps(name, model, steps):
-    """Steps cut at contact events among them (test_fused counts them)."""
+    """Steps cut at contact events among them."""
     blocked, single, error, in_blocks, long_blocks = _compare(
         load_case(name, {"bearings.*.model": model}), steps)
     assert error is None
@@ -158,20 +152,10 @@ def test_blocks_give_the_bits_of_single_steps(name, model, steps):
 
 
 def test_blocks_with_gear_runouts_give_the_bits_of_single_steps():
-    blocked, single, error, in_blocks, _ = _compare(load_case("baguet2010_spur"), 48,
-                                                    structure=with_runout)
+    case = load_case("baguet2010_spur", RUNOUT)
+    assert any(m.has_errors for m in build_master(case, in_process=True).structure.physics.meshes)
+    blocked, single, error, in_blocks, _ = _compare(case, 48)
     assert error is None and in_blocks == 48
-    _same_state(blocked, single)
-
-
-def test_a_step_of_more_sub_steps_than_a_block_takes_ends_the_block(monkeypatch):
-    """With room for one piece only, the helical case's cut steps (most of them) end their
-    block and go through :meth:`Master.step` (the Python loop), with the same bits."""
-    import gear_fmu.structure
-
-    monkeypatch.setattr(gear_fmu.structure, "MAX_PIECES", 1)
-    blocked, single, error, in_blocks, _ = _compare(load_case("baguet2010_helical"), 24)
-    assert error is None and 0 < in_blocks < 12
     _same_state(blocked, single)
 
 
@@ -211,7 +195,7 @@ def test_a_failing_structure_step_in_a_block_fails_alike():
 
 
 def test_a_failing_bearing_at_a_block_s_first_step_fails_alike():
-    """Laws that throw the second shaft's journals out of their clearance (test_fused)."""
+    """Laws that throw the second shaft's journals out of their clearance (test_step)."""
     def push(m):
         f0 = m.laws.f0.copy()
         f0[2:] += 1e7
@@ -235,36 +219,3 @@ def test_condensation_slots_that_fill_up_end_the_block_and_start_again(monkeypat
     assert error is None and in_blocks == 32
     assert len(clears) >= 2
 
-
-def _python_loop(m):
-    """The master without its compiled step, as for slaves the compiled loop does not take
-    (the FD model, FMUs): its blocks are :meth:`Master.step` in a loop."""
-    m.fused = None
-
-
-def test_blocks_of_the_python_loop_give_the_bits_of_single_steps_and_fail_alike():
-    """Short bearings through the Python loop: the same rows, counters and state as single
-    steps; a structure that fails from step 12 on (no Newton pass allowed) fails inside the
-    second block, after the eleven steps before it, with the error of a single step."""
-    case = load_case("baguet2010_spur", {"bearings.*.model": "short"})
-    blocked, single, error, in_blocks, long_blocks = _compare(case, 24, change=_python_loop)
-    assert blocked.fused is None and error is None
-    assert in_blocks == 24 and long_blocks == -(-24 // BLOCK)
-    _same_state(blocked, single)
-    assert _counters(blocked) == _counters(single)
-
-    def fail_from_step_12(m):
-        _python_loop(m)
-        do_step = m.structure.do_step
-
-        def step(t, dt):
-            if t > 10.5 * dt:
-                m.structure.physics.max_iter = 0
-            return do_step(t, dt)
-        m.structure.do_step = step
-
-    blocked, single, error, in_blocks, _ = _compare(case, 24, change=fail_from_step_12)
-    assert isinstance(error, NewmarkConvergenceError)
-    assert str(error).startswith("Newmark step 12 at t = ") and "did not converge" in str(error)
-    assert in_blocks == 11 and 11 % BLOCK != 0  # inside a block
-    assert _counters(blocked) == _counters(single)
