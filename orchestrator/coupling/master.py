@@ -43,6 +43,7 @@ __all__ = [
     "CouplingError",
     "Master",
     "PythonGroup",
+    "PythonStructure",
     "StepReport",
     "StructureSlave",
     "decode_checkpoint",
@@ -94,6 +95,68 @@ def python_evaluate(key, states, out) -> int:
     return -1
 
 
+#: the Python structures called back from the compiled coupled step, by key
+_PYTHON_STRUCTURES: dict = {}
+
+
+class PythonStructure:
+    """A structure slave stepped from the compiled coupled step through call-backs into
+    Python (numba's object mode; :meth:`StructureSlave.compiled_block`'s default): the
+    operations of :mod:`orchestrator.coupling.step` on the slave's own methods, step k from
+    ``times[k]`` [s]. An exception is kept in :attr:`error` (the compiled loop gets a failure
+    code, the slave raises it)."""
+
+    def __init__(self, slave, times, dt: float):
+        self.slave = slave
+        self.times = times
+        self.dt = dt
+        self.saved = None
+        self.error: BaseException | None = None
+        self.key = next(_KEYS)
+        _PYTHON_STRUCTURES[self.key] = self
+
+    def arguments(self) -> tuple:
+        """The structure's arguments of :func:`orchestrator.coupling.step.coupled_steps`."""
+        return (np.array([self.key], dtype=np.int64),)
+
+    def close(self) -> None:
+        _PYTHON_STRUCTURES.pop(self.key, None)
+        self.saved = None
+
+    def call(self, op: int, i: int, laws, out) -> int:
+        """Operation ``op`` (0 begin, 1 solve, 2 retry, 3 accept, 4 end) of step ``i``: the
+        laws ``(f0, kb, cb, x0, force0, expanded)`` of a solve, ``out`` its journal states or
+        an accepted step's outputs. Returns 0, or 1 with the exception kept."""
+        s = self.slave
+        try:
+            if op == 0:
+                self.saved = s.get_state()
+            elif op == 1:
+                f0, kb, cb, x0, force0, expanded = laws
+                s.set_bearing_laws(AffineLaws(f0.copy(), kb.copy(), cb.copy(),
+                                              x0.copy() if expanded else None,
+                                              force0.copy() if expanded else None))
+                s.do_step(self.times[i], self.dt)
+                out[:] = s.journal_states()
+            elif op == 2:
+                s.set_state(self.saved)
+            elif op == 3:
+                mesh, te, gear = s.step_outputs()
+                out[:] = np.concatenate([np.ravel(mesh), np.ravel(te), np.ravel(gear)])
+            else:
+                self.saved = None
+        except Exception as exc:  # raised by the slave with the block's rows
+            self.error = exc
+            return 1
+        return 0
+
+
+def python_structure_call(key, op, i, f0, kb, cb, x0, force0, expanded, out) -> int:
+    """The compiled loop's call back into a :class:`PythonStructure`."""
+    laws = (f0, kb, cb, x0, force0, bool(expanded))
+    return _PYTHON_STRUCTURES[int(key)].call(int(op), int(i), laws, out)
+
+
 class CouplingError(RuntimeError):
     """The coupled iteration did not converge (step, time and mismatch in the message)."""
 
@@ -137,18 +200,30 @@ class StructureSlave(ABC):
         """One Newmark step from t to t + dt with the current laws (no coupling iteration:
         a non-iterative master's step); raises on non-convergence."""
 
-    @abstractmethod
     def compiled_block(self, t: float, dt: float, n: int, time_of):
         """The structure's arguments of up to ``n`` coupled steps of dt from t [s]
         (:func:`orchestrator.coupling.step.coupled_steps`; step k from ``time_of(k)`` [s]):
         ``(arguments, m, finish)``, m <= n the steps they plan, ``finish(count)`` to call
-        after the call with the number of accepted steps (the slave takes their state)."""
+        after the call with the number of accepted steps (the slave takes their state).
 
-    @abstractmethod
+        By default the compiled loop calls this slave back in Python (:class:`PythonStructure`:
+        :meth:`get_state`, :meth:`set_bearing_laws`, :meth:`do_step`, :meth:`journal_states`,
+        :meth:`set_state`, :meth:`step_outputs`), a few microseconds per call: a structure of
+        the user's own, or a test's; the in-process structure and the gear-shaft FMU give
+        their compiled form."""
+        callback = PythonStructure(self, [time_of(k) for k in range(n)], dt)
+        self._callback = callback
+        return callback.arguments(), n, lambda count: callback.close()
+
     def raise_compiled_failure(self, k: int, code: int, d1: int, d2: int, d3: int, t: float,
                                dt: float) -> None:
         """Raise the error of the block's step ``k`` from t [s] whose structure operation
-        returned ``code`` with details ``d1, d2, d3`` (the transport's)."""
+        returned ``code`` with details ``d1, d2, d3`` (the transport's; by default the
+        exception the Python call-back kept)."""
+        callback = getattr(self, "_callback", None)
+        if callback is not None and callback.error is not None:
+            raise callback.error
+        raise RuntimeError(f"structure step {k} from t = {t!r} s failed (code {code})")
 
     @abstractmethod
     def solve_static(self) -> None:
@@ -199,19 +274,33 @@ class BearingSet(ABC):
         """Film force (nb, 2), Kb (nb, 2, 2), Cb (nb, 2, 2) at journal states (nb, 4)."""
 
     @property
-    @abstractmethod
     def count(self) -> int:
         """The number of bearings."""
+        return len(self.clearances)
 
-    @abstractmethod
     def compiled_groups(self) -> tuple:
         """The bearings as groups of one kind each for the compiled loop
-        (:func:`orchestrator.coupling.step.evaluate_set`): ``((arguments, indices), ...)``."""
+        (:func:`orchestrator.coupling.step.evaluate_set`): ``((arguments, indices), ...)``.
+        By default one group called back in Python (:class:`PythonGroup`) through
+        :meth:`evaluate`; the in-process models and the bearing FMUs give compiled groups."""
+        group = getattr(self, "_default_group", None)
+        if group is None:
+            group = self._default_group = PythonGroup(self._evaluate_rows, range(self.count))
+        return (group.arguments(),)
 
-    @abstractmethod
+    def _evaluate_rows(self, index, states, out) -> None:
+        force, kb, cb = self.evaluate(states)
+        out[:, 0], out[:, 1:3], out[:, 3:5] = force, kb, cb
+
     def raise_failure(self, b: int, status: int, states: np.ndarray) -> None:
         """Raise the error of bearing ``b`` (0-based) whose group returned ``status`` at the
-        journal states ``states`` (nb, 4) in the compiled loop."""
+        journal states ``states`` (nb, 4) in the compiled loop (by default the exception the
+        Python call-back kept)."""
+        group = getattr(self, "_default_group", None)
+        if group is not None and group.error is not None:
+            exc, group.error = group.error, None
+            raise exc
+        raise RuntimeError(f"bearing {b + 1}: status {status} without an error")
 
     def record_states(self, states) -> None:  # noqa: B027 - optional
         """The journal states (nb, 4) [m, m/s] the compiled loop evaluated the set at last."""

@@ -62,7 +62,12 @@ from orchestrator.coupling.fmi.steps import (
     fmu_structure_retry,
     fmu_structure_solve,
 )
-from orchestrator.coupling.master import CouplingError, not_converged, python_evaluate
+from orchestrator.coupling.master import (
+    CouplingError,
+    not_converged,
+    python_evaluate,
+    python_structure_call,
+)
 
 __all__ = ["RELAXATION", "STALL", "CoupledSteps", "StepBlock", "coupled_steps", "evaluate_set",
            "relaxed_law"]
@@ -80,7 +85,7 @@ ACCEPTED, STRUCTURE_FAILED, BEARING_FAILED, NOT_CONVERGED = 0, 1, 2, 3
 #: (:meth:`~orchestrator.coupling.inprocess.InProcessStructure.compiled_block`) and through
 #: the gear-shaft FMU; a bearing group's arguments: hybrid, hybrid on threads, short, affine,
 #: FMUs, Python
-IN_PROCESS, THROUGH_FMU = 5, 10
+IN_PROCESS, THROUGH_FMU, PYTHON_STRUCTURE = 5, 10, 1
 HYBRID, THREADED, SHORT, AFFINE, FMUS, PYTHON = 11, 12, 7, 4, 5, 1
 
 
@@ -174,8 +179,24 @@ def _in_process_accept(structure, row):
     return 0
 
 
+@njit(cache=True)
+def _python_structure(structure, op, i, f0, kb, cb, x0, force0, expanded, out):
+    """A structure operation called back in Python (:class:`orchestrator.coupling.master
+    .PythonStructure`)."""
+    key = structure[0][0]
+    with objmode(code="int64"):
+        code = python_structure_call(key, op, i, f0, kb, cb, x0, force0, expanded, out)
+    return code
+
+
 @overload(structure_begin)
 def _begin(structure, i):
+    if len(structure) == PYTHON_STRUCTURE:
+        def python(structure, i):
+            z2, z22 = np.zeros((1, 2)), np.zeros((1, 2, 2))
+            return _python_structure(structure, 0, i, z2, z22, z22, np.zeros((1, 4)), z2,
+                                     False, np.zeros((1, 4)))
+        return python
     if len(structure) == IN_PROCESS:
         return lambda structure, i: 0
     if len(structure) == THROUGH_FMU:
@@ -185,6 +206,12 @@ def _begin(structure, i):
 
 @overload(structure_solve)
 def _solve(structure, i, f0, kb, cb, x0, force0, expanded, states):
+    if len(structure) == PYTHON_STRUCTURE:
+        def python(structure, i, f0, kb, cb, x0, force0, expanded, states):
+            code = _python_structure(structure, 1, i, f0, kb, cb, x0, force0, expanded,
+                                     states)
+            return code, 0, 0, 0
+        return python
     if len(structure) == IN_PROCESS:
         def in_process(structure, i, f0, kb, cb, x0, force0, expanded, states):
             return _in_process_solve(structure, i, f0, kb, cb, states)
@@ -198,6 +225,12 @@ def _solve(structure, i, f0, kb, cb, x0, force0, expanded, states):
 
 @overload(structure_retry)
 def _retry(structure, i):
+    if len(structure) == PYTHON_STRUCTURE:
+        def python(structure, i):
+            z2, z22 = np.zeros((1, 2)), np.zeros((1, 2, 2))
+            return _python_structure(structure, 2, i, z2, z22, z22, np.zeros((1, 4)), z2,
+                                     False, np.zeros((1, 4)))
+        return python
     if len(structure) == IN_PROCESS:
         return lambda structure, i: 0
     if len(structure) == THROUGH_FMU:
@@ -207,6 +240,12 @@ def _retry(structure, i):
 
 @overload(structure_accept)
 def _accept(structure, i, row):
+    if len(structure) == PYTHON_STRUCTURE:
+        def python(structure, i, row):
+            z2, z22 = np.zeros((1, 2)), np.zeros((1, 2, 2))
+            return _python_structure(structure, 3, i, z2, z22, z22, np.zeros((1, 4)), z2,
+                                     False, row)
+        return python
     if len(structure) == IN_PROCESS:
         return lambda structure, i, row: _in_process_accept(structure, row)
     if len(structure) == THROUGH_FMU:
@@ -216,6 +255,12 @@ def _accept(structure, i, row):
 
 @overload(structure_end)
 def _end(structure):
+    if len(structure) == PYTHON_STRUCTURE:
+        def python(structure):
+            z2, z22 = np.zeros((1, 2)), np.zeros((1, 2, 2))
+            _python_structure(structure, 4, 0, z2, z22, z22, np.zeros((1, 4)), z2, False,
+                              np.zeros((1, 4)))
+        return python
     if len(structure) == IN_PROCESS:
         return lambda structure: None
     if len(structure) == THROUGH_FMU:

@@ -19,6 +19,7 @@ from bearing_fmu.short_bearing import ShortBearing
 from bearing_fmu.static import static_equilibrium
 from orchestrator.coupling.inprocess import ModelBearings
 from orchestrator.coupling.master import BearingSet, CouplingError, Master, StructureSlave
+from orchestrator.coupling.step import CoupledSteps
 
 OMEGA = 325.0
 BEARING = BearingData(diameter=0.070, length=0.050, clearance=150e-6, viscosity=0.0288)
@@ -35,19 +36,18 @@ def external_force(t):
 
 
 class QuietStructure(StructureSlave):
-    """What the runner reads from a structure slave, which these tests do not use."""
+    """What the runner reads from a structure slave, which these tests do not use: no mesh,
+    no gear. The compiled coupled step calls these structures back in Python
+    (:class:`orchestrator.coupling.master.PythonStructure`)."""
+
+    n_meshes = 0
+    n_gears = 0
 
     def exit_initialization(self):
         pass
 
-    def mesh_force(self):
-        return 0.0
-
-    def transmission_error(self):
-        return 0.0
-
-    def gear_displacements(self):
-        return np.zeros((2, 2))
+    def step_outputs(self):
+        return np.zeros(0), np.zeros(0), np.zeros((0, 2))
 
 
 class TwoJournals(QuietStructure):
@@ -156,8 +156,14 @@ def monolithic(models, dt, n_steps, x0):
     return np.array(traj)
 
 
+def coupled(structure, bearings, **kw) -> Master:
+    """The master of these slaves with the coupled step (the structure called back in
+    Python)."""
+    return Master(structure, bearings, stepper=CoupledSteps(structure, bearings), **kw)
+
+
 def run_master(bearings, dt, n_steps, tol=1e-10):
-    master = Master(TwoJournals(dt), bearings, tol=tol)
+    master = coupled(TwoJournals(dt), bearings, tol=tol)
     static = master.solve_static()
     traj, iters = [], []
     for n in range(n_steps):
@@ -196,7 +202,7 @@ def static_guess(models):
 def test_static_solution_balances_the_loads():
     models = [ShortBearing(BEARING), ShortBearing(BEARING)]
     bearings = ModelBearings(models, frames(), [OMEGA, OMEGA])
-    master = Master(TwoJournals(DT), bearings, tol=1e-12)
+    master = coupled(TwoJournals(DT), bearings, tol=1e-12)
     rep = master.solve_static()
     # total force balance: bearing forces carry the total static load
     np.testing.assert_allclose(rep.bearing_force.sum(axis=0), -LOADS.sum(axis=0), rtol=1e-9)
@@ -231,7 +237,7 @@ def test_mirrored_frame_gives_mirrored_orbit():
 def test_non_convergence_names_step_time_and_mismatch():
     models = [ShortBearing(BEARING), ShortBearing(BEARING)]
     bearings = ModelBearings(models, frames(), [OMEGA, OMEGA])
-    master = Master(TwoJournals(DT), bearings, tol=1e-30, max_iterations=2)
+    master = coupled(TwoJournals(DT), bearings, tol=1e-30, max_iterations=2)
     master.laws = AffineLaws(np.zeros((2, 2)), np.tile(np.eye(2) * 1e8, (2, 1, 1)),
                              np.zeros((2, 2, 2)))
     master.structure.set_bearing_laws(master.laws)
@@ -280,6 +286,8 @@ class KinkedBearing(BearingSet):
     the coupled equation ``S x = W + F(x)`` has its root. Newton maps x to about -0.98 x there:
     a slowly shrinking two-cycle, as at the hybrid film's kinks."""
 
+    clearances = np.array([1e-4])
+
     def evaluate(self, states):
         x = states[0, 0]
         force = -W_KINK - S_KINK * X_KINK * math.copysign(math.sqrt(abs(x) / X_KINK), x)
@@ -295,7 +303,7 @@ class KinkedBearing(BearingSet):
 
 
 def _kinked_master(tol):
-    master = Master(OneSpring(), KinkedBearing(), tol=tol)
+    master = coupled(OneSpring(), KinkedBearing(), tol=tol)
     start = np.array([[3e-7, 0.0, 0.0, 0.0]])
     master.laws = AffineLaws.linearise(start, *master.bearings.evaluate(start))
     return master
@@ -307,7 +315,7 @@ def test_a_two_cycle_at_a_kink_is_relaxed_onto_the_root(monkeypatch):
     matches F to tol |F|, so |S x + S X0 sqrt(|x|/X0)| <= tol |F|, |x| <= X0 (tol |F| / (S X0))^2
     (|F| = W at the root; 1 % margin on it). Measured: 23 iterations, x = 4.2e-17 m against a
     bound of 1.0e-16 m."""
-    import orchestrator.coupling.master as master_module
+    import orchestrator.coupling.step as step_module
 
     tol = 1e-6
     master = _kinked_master(tol)
@@ -317,7 +325,7 @@ def test_a_two_cycle_at_a_kink_is_relaxed_onto_the_root(monkeypatch):
     print(f"\nrelaxed: {report.iterations} iterations, x = {master.structure.x:.2e} m "
           f"(bound {bound:.1e} m)")
     assert abs(master.structure.x) <= bound
-    monkeypatch.setattr(master_module, "RELAXATION", 1.0)
+    monkeypatch.setattr(step_module, "RELAXATION", 1.0)
     with pytest.raises(CouplingError, match="did not converge in 30 iterations"):
         _kinked_master(tol).step(0.0, 1e-5)
 
