@@ -97,7 +97,7 @@ def run_point(case_name: str, overrides: dict, periods: int) -> dict:
         if not math.isnan(e) and e >= 0.25 and f > 0.0]
     cb = np.array([lin.cb[j][1, 1] for j in range(4)])
     r = summary.report
-    return {"R": float(r["dynamic_factor"]), "ptp": np.asarray(r["bearing_force_ptp"]).tolist(),
+    return {"R": float(r["dynamic_factor"][0]), "ptp": np.asarray(r["bearing_force_ptp"]).tolist(),
             "lines": np.asarray(r["line_amplitudes"]).tolist(),
             "labels": [str(x) for x in r["line_labels"]], "mesh_modes": mesh,
             "cb_tt": cb.tolist(), "wall_s": wall, "steps": summary.steps,
