@@ -158,22 +158,22 @@ def modal(args) -> int:
     print(mode_table(found, args.modes))
     refs = lin.reference_mesh_stiffness_loa
     print("\nmean mesh stiffness over a mesh period (Gauss-Legendre between the contact "
-          "events), along the line of action:")
+          "events), along the line of action, per mesh:")
     for m, name in enumerate(lines["meshes"]):
         ref = "" if refs is None else (f"; 16 equally spaced angles (damping reference): "
                                        f"{refs[m] / lin.contact_width[m] / 1e9:.3f} N/(mm um)")
-        print(f"  mesh {name}: {lin.mesh_stiffness_loa[m]:.5g} N/m = {per_width[m]:.3f} "
+        print(f"  {name}: {lin.mesh_stiffness_loa[m]:.5g} N/m = {per_width[m]:.3f} "
               f"N/(mm um) per unit width ({lin.contact_width[m] * 1e3:g} mm){ref}")
     print("\ndamped modes (Eq. 20: M, C0 = C + Cb(X0), K0 = K_shaft + K_mesh,mean + Kb(X0)); "
           "f_d = |Im lambda| / 2 pi, zeta = -Re lambda / |lambda|, mesh = strain energy share"
           + (f"; {dm.n_rigid // 2} rigid-body motion(s) left out" if dm.n_rigid else ""))
     print(damped_mode_table(dm, args.modes))
     excitation = "; ".join(
-        f"mesh {m}: z = {z}" + ("" if r == 1.0 else f", r = {r:.4g}")
+        f"{m}: z = {z}" + ("" if r == 1.0 else f", r = {r:.4g}")
         for m, z, r in zip(lines["meshes"], lines["teeth"], lines["ratios"], strict=True))
     print(f"\ntooth critical speeds: harmonic k z r omega / 2 pi of a mesh (k = "
           f"1..{campbell.HARMONICS}; z its driver's teeth, r the driver shaft's speed over the "
-          f"input speed omega; {excitation}) = f_d of a mode with a share >= "
+          f"input speed omega; per mesh {excitation}) = f_d of a mode with a share >= "
           f"{args.mesh_fraction:g} of its strain energy in that mesh, {low:g} <= omega <= "
           f"{high:g} rad/s")
     print(critical_speed_table(critical) if critical else "(none)")

@@ -49,11 +49,17 @@ def plot_campbell(data: dict, path, title: str, harmonics: int = HARMONICS,
                 ax.annotate(f"{mesh + ' ' if several else ''}k = {k}",
                             (at * 2 * math.pi / (k * order), at), textcoords="offset points",
                             xytext=(-3, 0), ha="right", va="center", color=colour, fontsize=9)
-        for shaft, r in zip(lines["shafts"], lines["shaft_ratios"], strict=True):
+        order = sorted(zip(lines["shaft_ratios"], lines["shafts"], strict=True), reverse=True)
+        for r, _ in order:
             ax.plot(x, r * x / (2 * math.pi), ":", color="k", lw=1.0)
-            ax.annotate(f"1× {shaft}", (w.max(), r * w.max() / (2 * math.pi)),
-                        textcoords="offset points", xytext=(-4, 4), ha="right", fontsize=9)
-        ax.plot([], [], ":", color="k", lw=1.0, label="1× of each shaft")
+        # one label on the steepest 1x line: the shafts' lines lie too close to name each
+        top = order[0][0]
+        ax.annotate("1× " + ", ".join(name for _, name in order)
+                    + (" (steepest first)" if len(order) > 1 else ""),
+                    (w.max(), top * w.max() / (2 * math.pi)), textcoords="offset points",
+                    xytext=(-4, 4), ha="right", fontsize=9)
+        ax.plot([], [], ":", color="k", lw=1.0,
+                label="1× of each shaft" if len(order) > 1 else f"1× {order[0][1]}")
     for a, i, j in data["segments"]:
         ax.plot([w[a], w[a + 1]], [data["modes"][a]["frequency_hz"][i],
                                    data["modes"][a + 1]["frequency_hz"][j]],
