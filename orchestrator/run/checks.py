@@ -33,6 +33,7 @@ from orchestrator.analysis.campbell import mesh_shares
 
 __all__ = ["EPS_LIMIT", "PERIOD_ERROR_LIMIT", "film_capacities", "newmark_period_error",
            "newmark_resonance_response", "overload_message", "reference_step",
+           "shaft_unbalance",
            "steps_for_period_error", "time_step_findings", "unbalance_warnings"]
 
 #: eccentricity ratio up to which the static solution searches (bearing_fmu.static)
@@ -74,7 +75,7 @@ def film_capacities(case: Case, eps: float = EPS_LIMIT) -> tuple[np.ndarray, str
     return out, name
 
 
-def _shaft_unbalance(lay, shaft: str) -> tuple[float, list[str]]:
+def shaft_unbalance(lay, shaft: str) -> tuple[float, list[str]]:
     """``|sum M e_mu exp(i phase)|`` of the unbalanced gears and discs on a shaft [kg m] (M
     each body's ``unbalance_mass``, Eq. 10), and their unbalance fields."""
     total, keys = 0j, []
@@ -95,7 +96,7 @@ def unbalance_warnings(case: Case) -> list[str]:
     capacity, model = film_capacities(case, EPS_DESIGN)
     out = []
     for shaft, speed in zip(lay.shafts, lay.speeds, strict=True):
-        me, keys = _shaft_unbalance(lay, shaft.name)
+        me, keys = shaft_unbalance(lay, shaft.name)
         force = me * speed**2
         on = [j for j, b in enumerate(lay.bearings) if b.shaft == shaft.name]
         cap = float(sum(capacity[j] for j in on))

@@ -62,7 +62,12 @@ from orchestrator.coupling.master import StepReport, decode_checkpoint
 from orchestrator.coupling.system import build_master
 from orchestrator.run import files as run_files
 from orchestrator.run.channels import channels, coordinates, dims
-from orchestrator.run.checks import overload_message, time_step_findings, unbalance_warnings
+from orchestrator.run.checks import (
+    overload_message,
+    shaft_unbalance,
+    time_step_findings,
+    unbalance_warnings,
+)
 from orchestrator.run.progress import Progress, RunInterrupted, deferred_signals
 from orchestrator.run.result import MemoryRecorder, Result
 from orchestrator.run.results import (
@@ -249,11 +254,13 @@ def failure_text(case: Case, cause: BaseException) -> str:
     where = (f"s = {s * 1e6:.1f} um, t = {t * 1e6:.1f} um (radial clearance "
              f"{clearance * 1e6:.1f} um)")
     if eps >= 1.0:
-        shaft = description.layout(case).bearings[case.names("bearings").index(name)].shaft
+        lay = description.layout(case)
+        shaft = lay.bearings[case.names("bearings").index(name)].shaft
         if any(f"shaft {shaft}," in w for w in unbalance_warnings(case)):
+            keys = " or ".join(shaft_unbalance(lay, shaft)[1])
             todo = (f"the unbalance force of shaft {shaft} exceeds its bearings' load capacity "
-                    "(the warning above): lower its unbalance (--unbalance) or drive.speed "
-                    "(--speed)")
+                    f"(the warning above): lower {keys} (--unbalance sets every gear's) or "
+                    "drive.speed (--speed)")
         else:
             todo = ("lower the load (--torque, --unbalance) or the speed (--speed), or give "
                     f"the film more capacity (bearings.{name}.viscosity, "
