@@ -168,8 +168,9 @@ def run_report(results: dict) -> dict:
     * ``line_amplitudes`` (nb, n): the peak amplitudes [N] of the lines of ||F_b||
       (:func:`~orchestrator.analysis.spectrum.line_amplitudes`: least squares, NaN for a line
       the window does not resolve; the scale of the order spectrum of every figure) at every
-      shaft's 1x and every mesh's first harmonics (:func:`~orchestrator.analysis.spectrum
-      .train_lines`), named ``line_labels`` (n,), at ``line_frequencies`` (n,) [Hz], which
+      shaft's 1x and every mesh's first harmonics
+      (:func:`~orchestrator.analysis.spectrum.train_lines`), named ``line_labels`` (n,), at
+      ``line_frequencies`` (n,) [Hz], which
       are ``line_orders`` (nb, n) cycles per revolution of each bearing's own shaft;
     * ``mesh_names``, ``bearing_names``: the labels of those axes;
     * ``window_s`` (2,) [s]: the window's start and end (it holds the steps ending after the

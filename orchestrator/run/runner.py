@@ -142,8 +142,8 @@ class RunSummary:
 
 
 def report_text(r: dict) -> str:
-    """:meth:`RunSummary.report_text` of a report (:func:`orchestrator.analysis.metrics
-    .run_report`)."""
+    """:meth:`RunSummary.report_text` of a report
+    (:func:`orchestrator.analysis.metrics.run_report`)."""
     t0, t1 = r["window_s"]
     meshes, bearings = list(r["mesh_names"]), list(r["bearing_names"])
     R, te = np.atleast_1d(r["dynamic_factor"]), np.atleast_1d(r["transmission_error_ptp"])
