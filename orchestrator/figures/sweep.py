@@ -7,8 +7,9 @@ the first varied field):
   per value of the other varied fields), and the peak-to-peak of ||F_b|| at every bearing, a
   panel per curve; the bearings, named as in the case, differ in colour, line style and
   marker, so bearings that coincide (1 and 2, 3 and 4 in the spur case) both stay visible;
-* ``waterfall_bearing<name>.png``, one per shaft for its first bearing (the paper's:
-  ``waterfall_bearing1.png`` and ``waterfall_bearing3.png``): the order spectrum of ||F_b||
+* ``waterfall_bearing_<name>.png``, one per shaft for its first bearing (a bearing named by
+  a number without the ``_``: the paper's ``waterfall_bearing1.png`` and
+  ``waterfall_bearing3.png``): the order spectrum of ||F_b||
   at that bearing against the swept value, in orders of its shaft (peak amplitude, the scale
   of the run figures: the spectra the points stored,
   :func:`orchestrator.sweeps.runner.point_spectrum`; log colour scale), a panel per curve,
@@ -242,8 +243,14 @@ def sweep_figures(path, out_dir=None) -> list[Path]:
             fig.colorbar(mesh, ax=axes, label=f"bearing {names[b]}: ||F_b|| {AMPLITUDE_LABEL}")
         _suptitle(fig, f"{head}\norder spectrum of the force norm of bearing {names[b]} "
                   f"(shaft {shaft}; peak amplitude, Hann window); {window}")
-        paths.append(_save(fig, out_dir / f"waterfall_bearing{names[b]}.png", plt))
+        paths.append(_save(fig, out_dir / _waterfall_name(names[b]), plt))
     return paths
+
+
+def _waterfall_name(bearing: str) -> str:
+    """``waterfall_bearing1.png`` for a bearing numbered as the paper's, else
+    ``waterfall_bearing_<name>.png``."""
+    return f"waterfall_bearing{'' if bearing.isdigit() else '_'}{bearing}.png"
 
 
 def _pool(orders: np.ndarray, amp: np.ndarray, cells: int):

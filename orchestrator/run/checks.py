@@ -31,13 +31,16 @@ from gear_fmu.modal.analyses import exact_mean_mesh_stiffness
 from gear_fmu.modal.damped_modes import damped_modes, under_resolved
 from orchestrator.analysis.campbell import mesh_shares
 
-__all__ = ["EPS_LIMIT", "PERIOD_ERROR_LIMIT", "film_capacities", "newmark_period_error",
-           "newmark_resonance_response", "overload_message", "reference_step",
-           "shaft_unbalance",
+__all__ = ["EPS_LIMIT", "FIRST_GUESS_EPS", "PERIOD_ERROR_LIMIT", "film_capacities",
+           "newmark_period_error", "newmark_resonance_response", "overload_message",
+           "reference_step", "shaft_unbalance",
            "steps_for_period_error", "time_step_findings", "unbalance_warnings"]
 
 #: eccentricity ratio up to which the static solution searches (bearing_fmu.static)
 EPS_LIMIT = 0.995
+#: eccentricity ratio within which the master's first guess of X0 keeps each journal
+#: (:meth:`orchestrator.coupling.master.BearingSet.static_position`: 0.95 C)
+FIRST_GUESS_EPS = 0.95
 #: eccentricity ratio of the load capacity the unbalance warning compares with (minimum film
 #: thickness 0.1 C, a common design limit; the film force grows without bound towards 1)
 EPS_DESIGN = 0.9
@@ -111,13 +114,15 @@ def unbalance_warnings(case: Case) -> list[str]:
     return out
 
 
-def overload_message(case: Case) -> str | None:
+def overload_message(case: Case, eps: float = EPS_LIMIT) -> str | None:
     """Why a static solution cannot exist, in the case's terms, if a bearing's static load
-    (the structure on stiff supports) exceeds its film's capacity; None otherwise."""
+    (the structure on stiff supports) exceeds its film's capacity at the eccentricity ratio
+    ``eps`` (:data:`EPS_LIMIT`, or :data:`FIRST_GUESS_EPS` where the master's first guess of
+    X0 stops); None otherwise."""
     from gear_fmu.modal.analyses import support_loads
 
     loads = np.hypot(*support_loads(description.structure(case)).T)
-    capacity, model = film_capacities(case)
+    capacity, model = film_capacities(case, eps)
     over = [b for b in range(len(loads)) if loads[b] > capacity[b]]
     if not over:
         return None
@@ -130,7 +135,7 @@ def overload_message(case: Case) -> str | None:
     fields = ", ".join(f.replace("*", names[over[0]] if len(over) == 1 else "*")
                        for f in RAISE_CAPACITY)
     return (f"{what} (static loads with an input torque of {case['drive.torque']:g} N m, "
-            f"{model} film at eccentricity {EPS_LIMIT}): raise {fields}, or lower "
+            f"{model} film at eccentricity {eps:g}): raise {fields}, or lower "
             f"{LOWER_LOAD}")
 
 

@@ -63,6 +63,7 @@ from orchestrator.coupling.system import build_master
 from orchestrator.run import files as run_files
 from orchestrator.run.channels import channels, coordinates, dims
 from orchestrator.run.checks import (
+    FIRST_GUESS_EPS,
     overload_message,
     shaft_unbalance,
     time_step_findings,
@@ -320,12 +321,14 @@ class Runner:
             static = master.solve_static()
         except Exception as exc:
             try:
-                why = overload_message(case)
+                why = overload_message(case) or overload_message(case, FIRST_GUESS_EPS)
             except Exception:  # the explanation must not hide the failure
                 why = None
             if why is not None:
                 raise RunError(f"{case.source}: no static solution: {why}") from None
-            raise RunError(f"{case.source}: static solution failed: {exc}") from exc
+            name = _failed_bearing(case, exc)
+            at = "" if name is None else f" at bearing {name}"
+            raise RunError(f"{case.source}: static solution failed{at}: {exc}") from exc
         x0 = static.states[:, :2].copy()
         self.stop_if_asked("after the static solution")
         # leave initialisation: linear bearings freeze, the structure builds its modal
