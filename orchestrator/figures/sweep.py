@@ -69,7 +69,11 @@ def _fixed(case, keys) -> str:
         parts.append(f"torque {case['drive.torque']:g} N m")
     if "unbalance" not in varied:
         e = [case[f"gears.{g}.unbalance"] * 1e3 for g in case.names("gears")]
-        parts.append(f"unbalance {' / '.join(f'{x:g}' for x in e)} mm")
+        if len(set(e)) == 1:
+            parts.append(f"unbalance {e[0]:g} mm (every gear)")
+        else:
+            parts.append(f"unbalance {' / '.join(f'{x:g}' for x in e)} mm (gears "
+                         f"{', '.join(case.names('gears'))})")
     return ", ".join(parts)
 
 
