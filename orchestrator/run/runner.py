@@ -150,8 +150,9 @@ def report_text(r: dict) -> str:
     R, te = np.atleast_1d(r["dynamic_factor"]), np.atleast_1d(r["transmission_error_ptp"])
     lines = [f"report over the {r['window_kind']} (t = {t0:.6g} - {t1:.6g} s):"]
     if len(meshes) == 1:
+        which = "" if meshes[0] == "mesh" else f" (mesh {meshes[0]})"  # a pair's usual name
         lines.append(f"dynamic factor R = {R[0]:.3f}, transmission error peak-to-peak "
-                     f"{te[0] * 1e6:.3g} um (mesh {meshes[0]})")
+                     f"{te[0] * 1e6:.3g} um{which}")
     else:
         lines.append("dynamic factor R, transmission error peak-to-peak per mesh: "
                      + "; ".join(f"{m}: R = {v:.3f}, TE {e * 1e6:.3g} um"
