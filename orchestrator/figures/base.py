@@ -175,9 +175,8 @@ class RunData:
     def short_window(self) -> tuple[np.ndarray, str]:
         """The last revolution of the input shaft (the whole run if shorter)."""
         if self.time[-1] - self.time[0] >= self.input_rev * (1 - 1e-9):
-            return (steady_window(self.time, self.input_rev),
-                    f"last revolution of the input shaft {self.input_shaft}")
-        return np.ones(self.steps, dtype=bool), "whole run, shorter than an input revolution"
+            return steady_window(self.time, self.input_rev), "its last revolution"
+        return np.ones(self.steps, dtype=bool), "whole run, shorter than a revolution"
 
 
 def titled_figure(plt, run: RunData, what: str, **kw):
