@@ -221,7 +221,7 @@ class BearingModel(ABC):
     options: tuple[ModelOption, ...] = ()
     #: True for a model whose law is affine in the journal state (Eq. 17) once initialised:
     #: :meth:`affine_law` then gives it, and the master's compiled steps evaluate it
-    #: (:mod:`orchestrator.coupling.fused`)
+    #: (:mod:`orchestrator.coupling.step`)
     affine: bool = False
 
     def __init__(self, bearing: BearingData) -> None:

@@ -33,7 +33,7 @@ from pathlib import Path
 #: the packages whose kernels share one code version
 PACKAGES = ("bearing_fmu", "gear_fmu", "fmu_src")
 #: packages whose kernels call those of :data:`PACKAGES` but that an FMU does not all carry
-#: (the master's compiled step, :mod:`orchestrator.coupling.fused`): cached in the folder of
+#: (the master's compiled step, :mod:`orchestrator.coupling.step`): cached in the folder of
 #: the code version they call, with their own file's content in the source stamp (numba then
 #: compiles them again when that file changes; the code hash covers their callees)
 CALLERS = ("orchestrator",)

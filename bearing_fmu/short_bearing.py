@@ -257,7 +257,7 @@ class ShortBearing(FilmBearingModel):
 class ShortSet(FilmBearingSet):
     """Short bearings evaluated in one compiled call (:func:`short_set_global`): the numbers of
     one :meth:`ShortBearing.evaluate_global` per bearing, bit for bit, for a compiled caller
-    (:mod:`orchestrator.coupling.fused`). The model has no memory: the set holds its
+    (:mod:`orchestrator.coupling.step`). The model has no memory: the set holds its
     parameters only (:class:`bearing_fmu.base.FilmBearingSet`, and each bearing's L/D).
     """
 

@@ -88,7 +88,8 @@ def newton_equilibrium(law, loads, x, radius_limit, *, tol: float, maxit: int,
     Raises
     ------
     BearingError
-        If a journal does not converge (its index, the iterations and residual in the message).
+        If a journal does not converge (its index, the iterations and residual in the message;
+        its 0-based index in ``bearing_index``).
     """
     w = np.array(loads, dtype=float).reshape(-1, 2)
     x = np.array(x, dtype=float).reshape(w.shape)
@@ -116,10 +117,12 @@ def newton_equilibrium(law, loads, x, radius_limit, *, tol: float, maxit: int,
     if failed.size:
         b = int(failed[0])
         which = f"journal {b + 1} of {len(w)}: " if len(w) > 1 else ""
-        raise BearingError(
+        error = BearingError(
             f"static equilibrium did not converge in {maxit} iterations: {which}residual "
             f"{residual[b]:.3e} N for load {float(np.hypot(*w[b])):.6g} N {what}".rstrip()
         )
+        error.bearing_index = b  # the caller names the bearing (0-based, the loads' order)
+        raise error
     return x, out, iterations
 
 

@@ -24,7 +24,7 @@ def main(model: str = "hybrid") -> dict:
     first = case.names("bearings")[0]
     bearing = description.bearing_data(case)[0]
     omega = description.bearing_speeds(case)[0]
-    pair = description.gear_pair(case)
+    pair = description.gear_pairs(case)[0]  # the paper's one pair
     load = case["drive.torque"] / pair.base_radius[0] / 2  # N, half the tooth force
     bearing_model = model_class(model).from_parameters(
         bearing, **description.bearing_options(case, first))

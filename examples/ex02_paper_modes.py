@@ -25,18 +25,19 @@ STIFF = 1e12  # N/m, "stiff" bearings
 
 def gear_translation_mode(system, found) -> float:
     """Lowest mode where the gear body's translation holds most of the kinetic energy [rad/s]."""
-    g = system.gear_dofs[6:8]
-    share = system.gears[1].mass * (found.shapes[g] ** 2).sum(axis=0)
+    node = int(system.gear_nodes[1])  # the gear's node: u, v its first two DOFs
+    g = [6 * node, 6 * node + 1]
+    share = system.layout.gears[1].mass * (found.shapes[g] ** 2).sum(axis=0)
     return float(found.omega[share > 0.5][0])
 
 
 def rayleigh_gear_translation(system) -> float:
     """k = 1 / (L^3/(48 EI) + L/(4 kGA)), m = M_gear + 17/35 m_shaft [rad/s]."""
-    shaft = system.shafts[1]
-    s, length = shaft.section, shaft.length
+    shaft = system.layout.shafts[1]
+    s, length = shaft.section(0), shaft.length  # the paper's shafts: one segment each
     k = 1.0 / (length**3 / (48.0 * s.young * s.second_moment)
                + length / (4.0 * s.shear_coefficient * s.shear_modulus * s.area))
-    return math.sqrt(k / (system.gears[1].mass + 17.0 / 35.0 * shaft.mass))
+    return math.sqrt(k / (system.layout.gears[1].mass + 17.0 / 35.0 * shaft.mass))
 
 
 def main(n_modes: int = 12) -> dict:

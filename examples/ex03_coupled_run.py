@@ -33,10 +33,10 @@ def main(periods: int = 64, bearing: str = "hybrid", **overrides) -> dict:
     return {"steps": s.steps, "wall_time_s": s.wall_time,
             "iterations_per_step": s.iterations_per_step,
             "static_bearing_force_N": np.asarray(result.attrs["static_bearing_force"]),
-            "R": metrics["R"], "bearing1_ptp_N": float(metrics["force_ptp"][0]),
+            "R": float(metrics["R"][0]), "bearing1_ptp_N": float(metrics["force_ptp"][0]),
             "mean_mesh_force_N": float(result["mesh_force"][win].mean()),
-            "static_tooth_load_N": case["drive.torque"] / description.gear_pair(
-                case).base_radius[0]}
+            "static_tooth_load_N": case["drive.torque"] / description.gear_pairs(
+                case)[0].base_radius[0]}
 
 
 if __name__ == "__main__":

@@ -28,7 +28,7 @@ def main(speeds=SPEEDS, periods: int = 64, scheduler: str | None = "none",
                         periods, bearings=["hybrid"], steady_periods=52, scheduler=scheduler,
                         progress=False)
         data = read_sweep(res.path)
-    return [{"speed_rad_s": w, "R": float(d["R"]), "force_ptp_N": d["force_ptp"],
+    return [{"speed_rad_s": w, "R": float(d["R"][0]), "force_ptp_N": d["force_ptp"],
              "mean_mesh_force_N": float(d["mesh_force"].mean()), "error": d["error"]}
             for w, d in zip(speeds, data, strict=True)]
 

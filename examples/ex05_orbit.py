@@ -11,7 +11,7 @@ import orchestrator as gsb
 
 def main(png="orbit_bearing1.png", **options):
     result = gsb.simulate("baguet2010_spur", periods=64, **options)
-    orbit = result.to_xarray().journal_position.sel(bearing=1) * 1e6  # µm
+    orbit = result.to_xarray().journal_position.sel(bearing="1") * 1e6  # µm
     fig, ax = plt.subplots(figsize=(5.5, 5))
     ax.plot(orbit.sel(axis="s"), orbit.sel(axis="t"), lw=0.8)
     ax.set(xlabel="s [µm]", ylabel="t [µm]", aspect="equal",

@@ -86,8 +86,8 @@ def damping(case: Case):
 
 
 def gear_shaft_system(case: Case) -> GearShaftSystem:
-    """The shafts, gear bodies and discs of the case -> :class:`gear_fmu.system
-    .GearShaftSystem`."""
+    """The shafts, gear bodies and discs of the case ->
+    :class:`gear_fmu.system.GearShaftSystem`."""
     return GearShaftSystem(layout(case))
 
 

@@ -276,7 +276,7 @@ class HybridSet(FilmBearingSet):
     def kernel_arguments(self) -> tuple:
         """The arguments of ``hybrid_set_global`` before the journal states and the output
         (11), or of ``hybrid_set_threads`` on more than one thread (12: the statuses' array
-        after them): what a compiled caller passes on (:mod:`orchestrator.coupling.fused`).
+        after them): what a compiled caller passes on (:mod:`orchestrator.coupling.step`).
         On more than one thread this also gives the calling thread that many numba threads
         (``numba.set_num_threads``, a setting of the calling thread) for the calls that
         follow."""

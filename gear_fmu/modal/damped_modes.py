@@ -24,9 +24,10 @@ Energy shares of a complex shape phi (displacement part, ``phi^H M phi = 1``):
 * kinetic energy shares of bending / torsion / axial DOFs, ``Re(phi_c^H (M phi)_c)``, exact
   since M does not couple DOF kinds; the mode is named by :func:`gear_fmu.modal.modes.classify`.
 
-Tooth critical speeds (:func:`tooth_critical_speeds`): the pinion speeds at which a harmonic k
-of the mesh frequency, ``k z1 omega / (2 pi)``, meets the damped frequency of a mode that
-stores a given share of its strain energy in the mesh.
+Tooth critical speeds (:func:`tooth_critical_speeds`): the input speeds at which a harmonic k
+of a mesh frequency, ``k z1 r omega / (2 pi)`` (z1 the driver's teeth, r its shaft's speed
+over the input speed), meets the damped frequency of a mode that stores a given share of its
+strain energy in that mesh.
 """
 
 from __future__ import annotations
@@ -209,31 +210,44 @@ def damped_modes(system: GearShaftSystem, damping_full, mesh_stiffness, kb, cb
     return replace(found, shapes=shapes)
 
 
-def tooth_critical_speeds(frequency_hz, damping_ratio, mesh_energy_fraction, z1: int,
+def tooth_critical_speeds(frequency_hz, damping_ratio, mesh_energy_fraction, z1,
                           speed_range=(50.0, 1500.0), harmonics: int = 4,
-                          min_mesh_fraction: float = MESH_MODE_FRACTION) -> list[dict]:
-    """Pinion speeds at which a mesh harmonic meets a mesh mode, ``omega = 2 pi f / (k z1)``.
+                          min_mesh_fraction: float = MESH_MODE_FRACTION, ratios=None,
+                          meshes=None) -> list[dict]:
+    """Input speeds at which a harmonic of a mesh frequency meets a mode of that mesh.
+
+    Mesh m turns at ``ratios[m]`` times the input speed omega on its driver's shaft, whose
+    ``z1[m]`` teeth give its mesh frequency ``z1[m] ratios[m] omega / (2 pi)``; harmonic k of
+    it meets a mode of damped frequency f at ``omega = 2 pi f / (k z1[m] ratios[m])``, kept
+    when the mode stores ``>= min_mesh_fraction`` of its strain energy in mesh m. A single
+    pair (a scalar ``z1``, ratio 1): the pinion speeds ``2 pi f / (k z1)``.
 
     Parameters
     ----------
-    frequency_hz, damping_ratio, mesh_energy_fraction : (n,) array_like
-        Damped frequency [Hz], damping ratio [-] and mesh strain energy share [-] per mode
-        (:class:`DampedModes`).
-    z1 : int
-        Pinion teeth.
+    frequency_hz, damping_ratio : (n,) array_like
+        Damped frequency [Hz] and damping ratio [-] per mode (:class:`DampedModes`).
+    mesh_energy_fraction : (n,) or (n, n_meshes) array_like
+        Strain energy share [-] per mode in the mesh (one mesh), or in each mesh.
+    z1 : int or (n_meshes,) ints
+        The driver's teeth of each mesh.
     speed_range : (float, float)
-        Pinion speeds kept, ``low <= omega <= high`` [rad/s], ``0 < low < high``.
+        Input speeds kept, ``low <= omega <= high`` [rad/s], ``0 < low < high``.
     harmonics : int
         Mesh harmonics k = 1 .. harmonics.
     min_mesh_fraction : float
-        Modes with a mesh strain energy share ``>= min_mesh_fraction`` (in [0, 1]) only.
+        Modes with a strain energy share ``>= min_mesh_fraction`` (in [0, 1]) in the mesh.
+    ratios : (n_meshes,) floats, optional
+        Speed of each mesh's driver shaft over the input speed (default 1).
+    meshes : (n_meshes,) str, optional
+        Names of the meshes (default "1", "2", ...).
 
     Returns
     -------
     list of dict
-        Sorted by speed, with keys ``mode`` (1-based position in the arrays), ``frequency_hz``,
-        ``harmonic``, ``speed_rad_s``, ``speed_rpm``, ``damping_ratio``,
-        ``mesh_energy_fraction``.
+        Sorted by speed, with keys ``mode`` (1-based position in the arrays), ``mesh`` (its
+        name), ``frequency_hz``, ``harmonic``, ``order`` (``k z1 ratio``, cycles per input
+        revolution), ``speed_rad_s``, ``speed_rpm`` (the input speed), ``damping_ratio``,
+        ``mesh_energy_fraction`` (the share in that mesh).
 
     Examples
     --------
@@ -242,12 +256,21 @@ def tooth_critical_speeds(frequency_hz, damping_ratio, mesh_energy_fraction, z1:
     >>> rows = tooth_critical_speeds([2000.0], [0.1], [0.8], 26, (200.0, 500.0))
     >>> [(r["harmonic"], round(r["speed_rad_s"], 1)) for r in rows]
     [(2, 241.7), (1, 483.3)]
+
+    Two meshes, the second's 21-tooth pinion at 23/79 of the input speed: its mode meets
+    the second mesh's k = 1 at ``2 pi 2000 / (21 x 23/79)`` = 2055 rad/s.
+
+    >>> rows = tooth_critical_speeds([2000.0], [0.1], [[0.05, 0.6]], [23, 21], (1000.0, 3000.0),
+    ...                              ratios=[1.0, 23 / 79], meshes=["stage1", "stage2"])
+    >>> [(r["mesh"], r["harmonic"], round(r["speed_rad_s"])) for r in rows]
+    [('stage2', 2, 1028), ('stage2', 1, 2055)]
     """
     low, high = (float(v) for v in speed_range)
     if not (math.isfinite(low) and math.isfinite(high) and 0.0 < low < high):
         raise ValueError(f"speed range ({low!r}, {high!r}) rad/s must satisfy 0 < low < high")
-    if int(z1) != z1 or z1 < 1:
-        raise ValueError(f"z1 = {z1!r}: need an integer >= 1")
+    teeth = np.atleast_1d(np.asarray(z1))
+    if teeth.ndim != 1 or any(int(z) != z or z < 1 for z in teeth):
+        raise ValueError(f"z1 = {z1!r}: need an integer >= 1 per mesh")
     if int(harmonics) != harmonics or harmonics < 1:
         raise ValueError(f"harmonics = {harmonics!r}: need an integer >= 1")
     if not 0.0 <= min_mesh_fraction <= 1.0:
@@ -255,18 +278,30 @@ def tooth_critical_speeds(frequency_hz, damping_ratio, mesh_energy_fraction, z1:
     f = np.asarray(frequency_hz, dtype=float)
     zeta = np.asarray(damping_ratio, dtype=float)
     share = np.asarray(mesh_energy_fraction, dtype=float)
-    if not f.shape == zeta.shape == share.shape or f.ndim != 1:
+    if share.ndim == 1:
+        share = share[:, None]
+    if not f.shape == zeta.shape == share.shape[:1] or f.ndim != 1:
         raise ValueError(f"frequency, damping ratio and mesh share shapes {f.shape}, "
-                         f"{zeta.shape}, {share.shape} must be equal and 1-D")
+                         f"{zeta.shape}, {share.shape} must be equal and 1-D (the mesh "
+                         "shares (n,) or (n, n_meshes))")
+    n_meshes = share.shape[1]
+    ratio = np.ones(n_meshes) if ratios is None else np.asarray(ratios, dtype=float)
+    names = [str(m + 1) for m in range(n_meshes)] if meshes is None else list(meshes)
+    if teeth.size != n_meshes or ratio.shape != (n_meshes,) or len(names) != n_meshes:
+        raise ValueError(f"{n_meshes} mesh share column(s), {teeth.size} teeth, "
+                         f"{ratio.size} ratio(s) and {len(names)} name(s): one per mesh")
     rows = []
-    for i in np.flatnonzero((share >= min_mesh_fraction) & (f > 0.0)):
-        for h in range(1, int(harmonics) + 1):
-            w = 2.0 * math.pi * float(f[i]) / (h * int(z1))
-            if low <= w <= high:
-                rows.append({"mode": int(i) + 1, "frequency_hz": float(f[i]), "harmonic": h,
-                             "speed_rad_s": w, "speed_rpm": w * 30.0 / math.pi,
-                             "damping_ratio": float(zeta[i]),
-                             "mesh_energy_fraction": float(share[i])})
+    for m in range(n_meshes):
+        for i in np.flatnonzero((share[:, m] >= min_mesh_fraction) & (f > 0.0)):
+            for h in range(1, int(harmonics) + 1):
+                order = h * int(teeth[m]) * float(ratio[m])
+                w = 2.0 * math.pi * float(f[i]) / order
+                if low <= w <= high:
+                    rows.append({"mode": int(i) + 1, "mesh": names[m],
+                                 "frequency_hz": float(f[i]), "harmonic": h, "order": order,
+                                 "speed_rad_s": w, "speed_rpm": w * 30.0 / math.pi,
+                                 "damping_ratio": float(zeta[i]),
+                                 "mesh_energy_fraction": float(share[i, m])})
     rows.sort(key=lambda r: (r["speed_rad_s"], r["mode"]))
     return rows
 
@@ -289,11 +324,16 @@ def damped_mode_table(modes: DampedModes, n_modes: int | None = None) -> str:
 
 
 def critical_speed_table(rows: list[dict]) -> str:
-    """Text table of :func:`tooth_critical_speeds` rows."""
-    lines = [f"{'mode':>4}  {'f_d [Hz]':>10}  {'k [-]':>5}  {'omega [rad/s]':>13}  "
+    """Text table of :func:`tooth_critical_speeds` rows (with a column naming the mesh when
+    the rows carry several)."""
+    several = len({r.get("mesh") for r in rows}) > 1
+    width = max([9] + [len(str(r.get("mesh"))) for r in rows]) if several else 0
+    head = f"{'mesh name':<{width}}  " if several else ""
+    lines = [head + f"{'mode':>4}  {'f_d [Hz]':>10}  {'k [-]':>5}  {'omega [rad/s]':>13}  "
              f"{'N [rpm]':>8}  {'zeta [-]':>8}  {'mesh [-]':>8}"]
     for r in rows:
-        lines.append(f"{r['mode']:>4}  {r['frequency_hz']:>10.2f}  {r['harmonic']:>5d}  "
+        cell = f"{r.get('mesh')!s:<{width}}  " if several else ""
+        lines.append(cell + f"{r['mode']:>4}  {r['frequency_hz']:>10.2f}  {r['harmonic']:>5d}  "
                      f"{r['speed_rad_s']:>13.2f}  {r['speed_rpm']:>8.1f}  "
                      f"{r['damping_ratio']:>8.4f}  {r['mesh_energy_fraction']:>8.3f}")
     return "\n".join(lines)

@@ -6,19 +6,23 @@ the structure builds the damping C the transient uses
 (:meth:`~orchestrator.coupling.master.Master.exit_initialization`), and computes at X0 (paper Eq.
 20):
 
-* the exact mean mesh stiffness (:func:`gear_fmu.modal.analyses.exact_mean_mesh_stiffness`);
+* the exact mean stiffness of every mesh
+  (:func:`gear_fmu.modal.analyses.exact_mean_mesh_stiffness`);
 * the undamped modes of K0 with the symmetric part of the bearings' Kb
   (:func:`gear_fmu.modal.analyses.modes`);
 * the damped modes of M, C0 = C + Cb(X0), K0 = K_shaft + K_mesh,mean + Kb(X0), the bearings'
-  Kb and Cb full 2x2 (:func:`gear_fmu.modal.damped_modes.damped_modes`).
+  Kb and Cb full 2x2 (:func:`gear_fmu.modal.damped_modes.damped_modes`), and the share of
+  each mode's strain energy in each mesh (:func:`mesh_shares`).
 
-:func:`campbell_data` repeats it over pinion speeds (the bearings' equilibrium, Kb and Cb
+:func:`campbell_data` repeats it over input speeds (the bearings' equilibrium, Kb and Cb
 depend on the speed) on one structure (:class:`Linearisation`: what does not depend on the
-speed is built once); :func:`crossings` finds where a mode crosses the mesh-order lines
-``f = k z1 omega / (2 pi)`` and the 1x line ``f = omega / (2 pi)``, which
-:func:`orchestrator.figures.campbell.plot_campbell` draws. Modes are followed from one speed to
-the next by their shapes (largest modal assurance criterion ``|phi_a^H M phi_b|^2``,
-one-to-one); a crossing is interpolated linearly along such a segment.
+speed is built once); :func:`crossings` finds where a mode crosses the order lines of the
+train (:func:`order_lines`): every mesh's harmonics ``f = k z r omega / (2 pi)`` (z its
+driver's teeth, r the driver shaft's speed over the input speed omega) and every shaft's 1x
+``f = r omega / (2 pi)``, which :func:`orchestrator.figures.campbell.plot_campbell` draws.
+Modes are followed from one speed to the next by their shapes (largest modal assurance
+criterion ``|phi_a^H M phi_b|^2``, one-to-one); a crossing is interpolated linearly along
+such a segment.
 """
 
 from __future__ import annotations
@@ -35,16 +39,50 @@ from fmu_src import description
 from fmu_src.case import Case
 from gear_fmu.modal.analyses import exact_mean_mesh_stiffness, line_of_action_stiffness, modes
 from gear_fmu.modal.damped_modes import MESH_MODE_FRACTION, DampedModes, damped_modes
-from gear_fmu.modal.modes import Modes
+from gear_fmu.modal.modes import Modes, mesh_dofs
 from orchestrator.coupling.master import CouplingError
 from orchestrator.coupling.system import announce_compilation, build_master
 
-__all__ = ["Linearisation", "Linearised", "campbell_data", "crossings", "linearise"]
+__all__ = ["Linearisation", "Linearised", "campbell_data", "crossings", "linearise",
+           "mesh_shares", "order_lines"]
 
 #: mesh harmonics drawn and searched, k = 1 .. HARMONICS
 HARMONICS = 4
 #: a mode is followed to the next speed when the MAC of the two shapes is at least this [-]
 MAC_LIMIT = 0.5
+
+
+def mesh_shares(system, modes: DampedModes, mesh_stiffness) -> np.ndarray:
+    """(n_modes, n_meshes): the share of each mode's strain energy stored in each mesh,
+    ``phi^H K_m phi / phi^H sym(K0) phi`` with ``K_m`` the symmetric part of mesh m's mean
+    stiffness (n_meshes, 12, 12) on its gear nodes (:func:`gear_fmu.modal.modes.mesh_dofs`):
+    they sum to the mode's ``mesh_energy_fraction`` (NaN where that is)."""
+    k = np.asarray(mesh_stiffness, dtype=float).reshape(-1, 12, 12)
+    phi = modes.shapes
+    per = np.empty((phi.shape[1], k.shape[0]))
+    for m in range(k.shape[0]):
+        p = phi[mesh_dofs(system, m)]
+        per[:, m] = np.einsum("ij,ij->j", p.conj(), 0.5 * (k[m] + k[m].T) @ p).real
+    total = per.sum(axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        scale = np.where(total != 0.0, modes.mesh_energy_fraction / total, 0.0)
+    return per * scale[:, None]
+
+
+def order_lines(case: Case) -> dict:
+    """The excitation lines of a case's train in cycles per input revolution (the slopes of
+    the Campbell diagram's lines, times 2 pi): ``meshes`` (names), ``teeth`` (each mesh's
+    driver's teeth), ``ratios`` (each mesh's driver shaft speed over the input speed),
+    ``mesh_orders`` (teeth x ratio: the mesh frequency per input revolution), ``shafts``
+    (names) and ``shaft_ratios`` (each shaft's speed over the input speed)."""
+    lay = description.layout(case)
+    drivers = [lay.gear(d) for d, _ in lay.drivers]
+    ratios = [float(lay.ratios[lay.shaft_index[g.shaft]]) for g in drivers]
+    teeth = [int(g.teeth) for g in drivers]
+    return {"meshes": list(lay.mesh_names), "teeth": teeth, "ratios": ratios,
+            "mesh_orders": [z * r for z, r in zip(teeth, ratios, strict=True)],
+            "shafts": [s.name for s in lay.shafts],
+            "shaft_ratios": [float(r) for r in lay.ratios]}
 
 
 @dataclass
@@ -56,24 +94,27 @@ class Linearised:
     case : Case
     bearings : str
         Where Kb and Cb come from (for printing).
-    kb, cb : (4, 2, 2) arrays
+    kb, cb : (nb, 2, 2) arrays
         Bearing stiffness [N/m] and damping [N s/m] at X0, global frame.
-    mesh_stiffness : (12, 12) array
-        Exact mean mesh stiffness [N/m, N, N m].
-    mesh_stiffness_loa : float
-        Its value along the line of action [N/m]
+    mesh_stiffness : (n_meshes, 12, 12) array
+        Exact mean stiffness of each mesh [N/m, N, N m].
+    mesh_stiffness_loa : (n_meshes,) array
+        Their values along each mesh's line of action [N/m]
         (:func:`gear_fmu.modal.analyses.line_of_action_stiffness`).
-    reference_mesh_stiffness_loa : float or None
-        The same of the 16-angle mean the damping C was built on [N/m] (None without).
-    contact_width : float
-        Common face width [m] (stiffness per unit width = ``mesh_stiffness_loa / width``).
+    reference_mesh_stiffness_loa : (n_meshes,) array or None
+        The same of the 16-angle means the damping C was built on [N/m] (None without).
+    contact_width : (n_meshes,) array
+        Common face width of each mesh [m] (stiffness per unit width =
+        ``mesh_stiffness_loa / contact_width``).
     mass : (n_dof, n_dof) array
         M (to compare mode shapes).
     modes : Modes or None
         Undamped modes of K0 (symmetric part of Kb).
     damped : DampedModes
-    z1 : int
-        Pinion teeth.
+    mesh_shares : (n_modes, n_meshes) array
+        Share of each damped mode's strain energy in each mesh (:func:`mesh_shares`).
+    lines : dict
+        The train's excitation lines (:func:`order_lines`).
     """
 
     case: Case
@@ -81,17 +122,27 @@ class Linearised:
     kb: np.ndarray
     cb: np.ndarray
     mesh_stiffness: np.ndarray
-    mesh_stiffness_loa: float
-    reference_mesh_stiffness_loa: float | None
-    contact_width: float
+    mesh_stiffness_loa: np.ndarray
+    reference_mesh_stiffness_loa: np.ndarray | None
+    contact_width: np.ndarray
     mass: np.ndarray
     modes: Modes | None
     damped: DampedModes
-    z1: int
+    mesh_shares: np.ndarray
+    lines: dict
+
+    @property
+    def mesh_names(self) -> list[str]:
+        return self.lines["meshes"]
+
+    @property
+    def z1(self) -> int:
+        """The first mesh's driver's teeth (the paper's pinion: 26)."""
+        return self.lines["teeth"][0]
 
 
 class Linearisation:
-    """A case linearised about X0 at any pinion speed (module docstring), what does not depend
+    """A case linearised about X0 at any input speed (module docstring), what does not depend
     on the speed built once.
 
     Built once: the structure (shaft and gear matrices, mesh element and its tooth stiffness
@@ -128,10 +179,11 @@ class Linearisation:
         cold = numba_cache.cold()
         self.structure = description.structure(case)
         announce_compilation(cold)
-        self._support_loads = None  # (4, 2) [N], when the first X0 needs them
+        self._support_loads = None  # (nb, 2) [N], when the first X0 needs them
+        self.lines = order_lines(case)
 
     def at(self, speed: float | None = None, undamped: bool = True) -> Linearised:
-        """The case linearised about its X0 at a pinion speed [rad/s] (default the case's).
+        """The case linearised about its X0 at an input speed [rad/s] (default the case's).
 
         Raises the static solution's :class:`~bearing_fmu.base.BearingError` or
         :class:`~orchestrator.coupling.master.CouplingError`.
@@ -159,8 +211,8 @@ class Linearisation:
                       "Kb and Cb full 2x2; undamped modes: symmetric part of Kb)")
         else:
             k = self.bearing_stiffness
-            kb = np.broadcast_to(k * np.eye(2), (4, 2, 2)).copy()
-            cb = np.zeros((4, 2, 2))
+            kb = np.broadcast_to(k * np.eye(2), (st.nb, 2, 2)).copy()
+            cb = np.zeros((st.nb, 2, 2))
             kb_ref = k
             st.set_damping_reference(k)
             source = f"isotropic {k:g} N/m, no bearing damping (Cb = 0)"
@@ -168,16 +220,19 @@ class Linearisation:
         ref = st.reference_mesh_stiffness
         found = modes(st, kb_ref, mesh_stiffness=k_mesh) if undamped else None
         damped = damped_modes(st.system, st.damping_full, k_mesh, kb, cb)
+        meshes = range(len(st.meshes))
         return Linearised(
-            case, source, kb, cb, k_mesh, line_of_action_stiffness(st, k_mesh),
-            None if ref is None else line_of_action_stiffness(st, ref),
-            st.mesh.pair.contact_width, st.system.mass, found, damped,
-            int(st.system.teeth[0]))
+            case, source, kb, cb, k_mesh,
+            np.array([line_of_action_stiffness(st, k_mesh, m) for m in meshes]),
+            None if ref is None else np.array([line_of_action_stiffness(st, ref, m)
+                                               for m in meshes]),
+            np.array([st.meshes[m].pair.contact_width for m in meshes]), st.system.mass,
+            found, damped, mesh_shares(st.system, damped, k_mesh), self.lines)
 
     def campbell(self, speeds, max_frequency: float = 6000.0) -> dict:
         """:func:`campbell_data` on this linearisation."""
         kept, per_speed, skipped = [], [], []
-        mass, z1 = None, None
+        mass = None
         fixed = None  # isotropic bearings: the modes of every speed
         for w in np.asarray(speeds, dtype=float):
             if fixed is None:
@@ -191,16 +246,17 @@ class Linearisation:
                 sel = (~d.overdamped) & (f <= 1.5 * max_frequency)
                 modes_w = {"frequency_hz": f[sel], "damping_ratio": d.damping_ratio[sel],
                            "mesh_energy_fraction": d.mesh_energy_fraction[sel],
-                           "shapes": d.shapes[:, sel]}
-                mass, z1 = lin.mass, lin.z1
+                           "mesh_shares": lin.mesh_shares[sel], "shapes": d.shapes[:, sel]}
+                mass = lin.mass
                 if self.bearing_stiffness is not None:
                     fixed = modes_w
             else:
                 modes_w = {key: v.copy() for key, v in fixed.items()}
             per_speed.append(modes_w)
             kept.append(float(w))
-        data = {"speeds": np.array(kept), "modes": per_speed, "mass": mass, "z1": z1,
-                "skipped": skipped, "max_frequency": float(max_frequency)}
+        data = {"speeds": np.array(kept), "modes": per_speed, "mass": mass,
+                "lines": self.lines, "skipped": skipped,
+                "max_frequency": float(max_frequency)}
         data["segments"] = _segments(data)
         return data
 
@@ -225,7 +281,7 @@ def linearise(case: Case, bearing_stiffness: float | None = None, n_gauss: int =
 
 def campbell_data(case: Case, speeds, bearing_stiffness: float | None = None,
                   n_gauss: int = 8, max_frequency: float = 6000.0) -> dict:
-    """Damped modes at each pinion speed, each with its own static solution X0.
+    """Damped modes at each input speed, each with its own static solution X0.
 
     The structure is built once (:class:`Linearisation`); the bearings, X0, the damping and
     the modes at every speed.
@@ -234,7 +290,7 @@ def campbell_data(case: Case, speeds, bearing_stiffness: float | None = None,
     ----------
     case : Case
     speeds : array_like
-        Pinion speeds [rad/s], > 0.
+        Input speeds [rad/s], > 0.
     bearing_stiffness : float, optional
         Isotropic bearings without damping (:func:`linearise`): the modes then do not depend on
         the speed (computed once).
@@ -246,10 +302,11 @@ def campbell_data(case: Case, speeds, bearing_stiffness: float | None = None,
     -------
     dict
         ``speeds`` (kept speeds, rad/s), ``modes`` (per speed: dict of ``frequency_hz``,
-        ``damping_ratio``, ``mesh_energy_fraction``, ``shapes`` of the oscillating modes
-        below the limit), ``mass``, ``z1``, ``skipped`` (list of (speed, message) where the
-        static solution failed), ``segments`` (``(speed index a, mode at a, mode at a + 1)``:
-        the same mode at neighbouring speeds).
+        ``damping_ratio``, ``mesh_energy_fraction``, ``mesh_shares`` (per mesh),
+        ``shapes`` of the oscillating modes below the limit), ``mass``, ``lines`` (the
+        train's excitation lines, :func:`order_lines`), ``skipped`` (list of (speed,
+        message) where the static solution failed), ``segments`` (``(speed index a, mode at
+        a, mode at a + 1)``: the same mode at neighbouring speeds).
     """
     return Linearisation(case, bearing_stiffness, n_gauss).campbell(speeds, max_frequency)
 
@@ -274,31 +331,46 @@ def crossings(data: dict, harmonics: int = HARMONICS,
               min_mesh_fraction: float = MESH_MODE_FRACTION) -> list[dict]:
     """Where a followed mode crosses an excitation line between two speeds.
 
-    Lines: mesh orders ``f = k z1 omega / (2 pi)``, k = 1 .. harmonics (``order`` k), for modes
-    with a mesh strain energy share ``>= min_mesh_fraction`` at either speed; the 1x line
-    ``f = omega / (2 pi)`` (``order`` 0) for every mode. Linear interpolation along the
-    segment. Returns dicts with ``order``, ``speed_rad_s``, ``speed_rpm``, ``frequency_hz``,
-    ``damping_ratio``, ``mesh_energy_fraction``, sorted by order then speed.
+    Lines (:func:`order_lines`): the harmonics k = 1 .. ``harmonics`` of each mesh,
+    ``f = k z r omega / (2 pi)``, for the modes with a strain energy share
+    ``>= min_mesh_fraction`` in that mesh at either speed; each shaft's 1x
+    ``f = r omega / (2 pi)`` for every mode. Linear interpolation along the segment. Returns
+    dicts with ``harmonic`` (k; 0 for a shaft's 1x), ``mesh`` (its name; None for a 1x line),
+    ``shaft`` (the 1x line's shaft; None for a mesh line), ``order`` (cycles per input
+    revolution), ``speed_rad_s`` and ``speed_rpm`` (the input speed), ``frequency_hz``,
+    ``damping_ratio``, ``mesh_energy_fraction`` (the share in the line's mesh; the total for
+    a 1x line), sorted by mesh (1x lines first), harmonic, then speed.
     """
     out = []
-    w, z1 = data["speeds"], data["z1"]
+    w, lines = data["speeds"], data["lines"]
+    excitations = [(None, shaft, 0, r, None) for shaft, r in
+                   zip(lines["shafts"], lines["shaft_ratios"], strict=True)]
+    for m, (mesh, order) in enumerate(zip(lines["meshes"], lines["mesh_orders"], strict=True)):
+        excitations += [(mesh, None, k, k * order, m) for k in range(1, harmonics + 1)]
     for a, i, j in data["segments"]:
         ma, mb = data["modes"][a], data["modes"][a + 1]
         fa, fb = ma["frequency_hz"][i], mb["frequency_hz"][j]
-        share = max(ma["mesh_energy_fraction"][i], mb["mesh_energy_fraction"][j])
-        orders = [0] + (list(range(1, harmonics + 1)) if share >= min_mesh_fraction else [])
-        for k in orders:
-            slope = (1.0 if k == 0 else k * z1) / (2.0 * math.pi)
+        for mesh, shaft, k, order, m in excitations:
+            if m is None:
+                sa, sb = ma["mesh_energy_fraction"][i], mb["mesh_energy_fraction"][j]
+            else:
+                sa, sb = ma["mesh_shares"][i, m], mb["mesh_shares"][j, m]
+                if not max(sa, sb) >= min_mesh_fraction:
+                    continue
+            slope = order / (2.0 * math.pi)
             ga, gb = fa - slope * w[a], fb - slope * w[a + 1]
             if ga * gb > 0.0 or ga == gb:
                 continue
             s = ga / (ga - gb)
             speed = w[a] + s * (w[a + 1] - w[a])
-            zeta, mesh = ((1 - s) * ma[key][i] + s * mb[key][j]
-                          for key in ("damping_ratio", "mesh_energy_fraction"))
-            out.append({"order": k, "speed_rad_s": float(speed),
+            zeta = (1 - s) * ma["damping_ratio"][i] + s * mb["damping_ratio"][j]
+            share = (1 - s) * sa + s * sb
+            out.append({"harmonic": k, "mesh": mesh, "shaft": shaft, "order": float(order),
+                        "speed_rad_s": float(speed),
                         "speed_rpm": float(speed * 30.0 / math.pi),
                         "frequency_hz": float(slope * speed), "damping_ratio": float(zeta),
-                        "mesh_energy_fraction": float(mesh)})
-    out.sort(key=lambda c: (c["order"], c["speed_rad_s"]))
+                        "mesh_energy_fraction": float(share)})
+    rank = {name: r for r, name in enumerate(lines["meshes"])}
+    out.sort(key=lambda c: (-1 if c["mesh"] is None else rank[c["mesh"]], c["harmonic"],
+                            c["speed_rad_s"]))
     return out

@@ -1,7 +1,8 @@
-"""Post-processing of runs: steady-state window, dynamic tooth load factor, bearing-load
-peak-to-peak, orbit ellipse fit (paper Sec. 4, Figs. 7-11, 14) and the report of ``gsb run``
-(:func:`run_report`, with the order lines of the bearing loads from
-:mod:`orchestrator.analysis.spectrum`).
+"""Post-processing of runs: steady-state window, dynamic tooth load factor of each mesh,
+bearing-load peak-to-peak, orbit ellipse fit (paper Sec. 4, Figs. 7-11, 14) and the report of
+``gsb run`` (:func:`run_report`, with the order lines of the bearing loads from
+:mod:`orchestrator.analysis.spectrum`), for any gear train: the bearings and meshes are those of
+the case stored with the results (:func:`stored_case`), in its order.
 
 Pure functions on arrays from a results file (:func:`orchestrator.run.results.read_results`).
 """
@@ -13,11 +14,11 @@ import math
 import numpy as np
 
 from fmu_src.case import Case
-from fmu_src.description import gear_pairs, layout, mesh_teeth
-from orchestrator.analysis.spectrum import line_amplitudes, pinion_lines
+from fmu_src.description import gear_pairs, layout
+from orchestrator.analysis.spectrum import line_amplitudes, train_lines
 
-__all__ = ["fit_ellipse", "run_metrics", "run_report", "static_mesh_load", "steady_window",
-           "stored_case"]
+__all__ = ["fit_ellipse", "report_window", "run_metrics", "run_report", "static_mesh_load",
+           "static_mesh_loads", "steady_window", "stored_case"]
 
 
 def steady_window(time: np.ndarray, duration: float) -> np.ndarray:
@@ -42,15 +43,37 @@ def stored_case(attrs: dict, source: str | None = None) -> Case:
     return parse_case(parse_toml(str(attrs["case_toml"]), where), where)
 
 
-def _static_load(results: dict) -> float:
-    """Static load [N] of the first mesh of the case stored in a results file
-    (:func:`stored_case`): the torque on its driver's shaft over its base radius.
-    TODO(train): the mesh_force channel of one mesh, the dynamic factor of each."""
-    case = stored_case(results["attrs"])
+def static_mesh_loads(case: Case) -> np.ndarray:
+    """The static load of each mesh [N] (the case's mesh order): the torque its driver's
+    shaft transmits (:meth:`gear_fmu.layout.Layout.torque_on`) over the driver's base radius
+    and the cosine of the base helix angle (:func:`static_mesh_load`)."""
     lay = layout(case)
-    pair = gear_pairs(case)[0]
-    torque = lay.torque_on(lay.gear(lay.drivers[0][0]).shaft)
-    return static_mesh_load(torque, pair.base_radius[0], pair.base_helix_angle)
+    return np.array([static_mesh_load(lay.torque_on(lay.gear(driver).shaft),
+                                      pair.base_radius[0], pair.base_helix_angle)
+                     for (driver, _), pair in zip(lay.drivers, gear_pairs(case), strict=True)])
+
+
+def report_window(case: Case, time_s) -> tuple[float, str]:
+    """The window of the report and the figures of a run ending at ``time_s[-1]`` [s]: the
+    last revolution of the train's slowest shaft (the paper's: the last gear revolution,
+    which holds a whole number of mesh periods of its mesh and of every shaft's 1x of a
+    single stage), or the last half of the run when it is shorter. Returns its duration [s]
+    and its name ("last revolution of the slowest shaft gear_shaft", "last half of the run").
+    """
+    lay = layout(case)
+    k = int(np.argmin(lay.ratios))
+    revolution = 2.0 * math.pi / (abs(lay.drive.speed) * float(lay.ratios[k]))
+    end_s = float(np.asarray(time_s)[-1])
+    if math.isfinite(revolution) and end_s >= revolution * (1.0 - 1e-9):
+        return revolution, f"last revolution of the slowest shaft {lay.shafts[k].name}"
+    return 0.5 * end_s, "last half of the run"
+
+
+def _per_mesh(results: dict, name: str, win) -> np.ndarray:
+    """A mesh channel in the window as (steps, n_meshes) (a file of an earlier version
+    holds one mesh's as (steps,))."""
+    values = np.asarray(results[name], dtype=float)
+    return values.reshape(values.shape[0], -1)[win]
 
 
 def fit_ellipse(x, y) -> dict:
@@ -105,12 +128,14 @@ def fit_ellipse(x, y) -> dict:
 def run_metrics(results: dict, steady: float) -> dict:
     """Figures of one run over its last ``steady`` seconds.
 
-    Returns ``R`` (max dynamic over static mesh load, Sec. 4.2.2), ``force_ptp`` (4,) the
-    peak-to-peak of ||F_b|| [N] (Fig. 8b-c), ``force_mean`` (4,) [N], ``orbit_centre`` (4, 2)
-    [m] (ellipse fit, Fig. 9, 14) and ``orbit_mean`` (4, 2) [m].
+    Returns ``R`` (n_meshes,) the dynamic factor of each mesh (max dynamic over its static
+    load, Sec. 4.2.2), ``transmission_error_ptp`` (n_meshes,) [m], ``force_ptp`` (nb,) the
+    peak-to-peak of ||F_b|| [N] (Fig. 8b-c), ``force_mean`` (nb,) [N], ``orbit_centre``
+    (nb, 2) [m] (ellipse fit, Fig. 9, 14) and ``orbit_mean`` (nb, 2) [m]; bearings and meshes
+    in the order of the stored case.
     """
     win = steady_window(results["time"], steady)
-    w0 = _static_load(results)
+    w0 = static_mesh_loads(stored_case(results["attrs"]))
     fb = np.hypot(results["bearing_force"][win, :, 0], results["bearing_force"][win, :, 1])
     journal = results["journal_position"][win]
     centres = []
@@ -120,7 +145,8 @@ def run_metrics(results: dict, steady: float) -> dict:
         except (ValueError, np.linalg.LinAlgError):
             centres.append(journal[:, b].mean(axis=0))
     return {
-        "R": float(results["mesh_force"][win].max() / w0),
+        "R": _per_mesh(results, "mesh_force", win).max(axis=0) / w0,
+        "transmission_error_ptp": np.ptp(_per_mesh(results, "transmission_error", win), axis=0),
         "force_ptp": np.ptp(fb, axis=0),
         "force_mean": fb.mean(axis=0),
         "orbit_centre": np.array(centres),
@@ -129,42 +155,55 @@ def run_metrics(results: dict, steady: float) -> dict:
 
 
 def run_report(results: dict) -> dict:
-    """Figures of ``gsb run`` over the last gear revolution (the last half of a shorter run).
+    """Figures of ``gsb run`` over the window of :func:`report_window` (the last revolution
+    of the slowest shaft, or the last half of a shorter run), for the train of the stored
+    case (bearings and meshes in its order).
 
-    Returns ``dynamic_factor`` (R, the maximum mesh force in the window over the static load
-    ``T / (r_b1 cos(beta_b))``), ``bearing_force_ptp`` (4,) the peak-to-peak of ||F_b|| [N],
-    ``line_amplitudes`` (4, n) the peak amplitudes [N] of the lines of ||F_b||
-    (:func:`~orchestrator.analysis.spectrum.line_amplitudes`: least squares, NaN for a line
-    the window does not resolve; the scale of the order spectrum of every figure) at
-    ``line_orders`` (n,) pinion orders named ``line_labels``
-    (:func:`~orchestrator.analysis.spectrum.pinion_lines`),
-    ``window_s`` (2,) [s] the window's start and end (it holds the steps ending after the
-    start) and ``window_kind`` ("last gear revolution" or "last half of the run").
+    Returns
+
+    * ``dynamic_factor`` (n_meshes,): R of each mesh, its maximum force in the window over its
+      static load (:func:`static_mesh_loads`);
+    * ``transmission_error_ptp`` (n_meshes,) [m]: the peak-to-peak of each mesh's TE;
+    * ``bearing_force_ptp`` (nb,): the peak-to-peak of ||F_b|| [N];
+    * ``line_amplitudes`` (nb, n): the peak amplitudes [N] of the lines of ||F_b||
+      (:func:`~orchestrator.analysis.spectrum.line_amplitudes`: least squares, NaN for a line
+      the window does not resolve; the scale of the order spectrum of every figure) at every
+      shaft's 1x and every mesh's first harmonics
+      (:func:`~orchestrator.analysis.spectrum.train_lines`), named ``line_labels`` (n,), at
+      ``line_frequencies`` (n,) [Hz], which
+      are ``line_orders`` (nb, n) cycles per revolution of each bearing's own shaft;
+    * ``mesh_names``, ``bearing_names``: the labels of those axes;
+    * ``window_s`` (2,) [s]: the window's start and end (it holds the steps ending after the
+      start) and ``window_kind``, its name.
     """
     time_s = np.asarray(results["time"], dtype=float)
     if time_s.size < 2:
         raise ValueError(f"a report needs at least 2 time steps, got {time_s.size}")
     case = stored_case(results["attrs"])
-    teeth = mesh_teeth(case)[0]  # TODO(train): the lines and window of a single pair
-    pinion_hz = abs(case["drive.speed"]) / (2.0 * np.pi)
-    gear_rev_s = teeth[1] / (teeth[0] * pinion_hz)
+    lay = layout(case)
+    duration, kind = report_window(case, time_s)
     end_s = float(time_s[-1])
-    if end_s >= gear_rev_s * (1.0 - 1e-9):
-        duration, kind = gear_rev_s, "last gear revolution"
-    else:
-        duration, kind = 0.5 * end_s, "last half of the run"
     win = steady_window(time_s, duration)
     force = np.asarray(results["bearing_force"], dtype=float)[win]
     norm = np.hypot(force[..., 0], force[..., 1])
-    orders, labels = pinion_lines(teeth)
+    input_orders, labels = train_lines(lay)
+    input_hz = abs(lay.drive.speed) / (2.0 * np.pi)
+    frequencies = input_orders * input_hz
     dt_s = (end_s - time_s[0]) / (time_s.size - 1)
-    amplitudes = line_amplitudes(time_s[win], norm, orders * pinion_hz, duration, dt_s)
+    amplitudes = line_amplitudes(time_s[win], norm, frequencies, duration, dt_s)
+    ratios = np.array([float(lay.ratios[lay.shaft_index[b.shaft]]) for b in lay.bearings])
     return {
-        "dynamic_factor": float(np.max(results["mesh_force"][win]) / _static_load(results)),
+        "dynamic_factor": _per_mesh(results, "mesh_force", win).max(axis=0)
+        / static_mesh_loads(case),
+        "transmission_error_ptp": np.ptp(_per_mesh(results, "transmission_error", win), axis=0)
+        if "transmission_error" in results else np.full(len(lay.meshes), np.nan),
         "bearing_force_ptp": np.ptp(norm, axis=0),
         "line_amplitudes": np.ascontiguousarray(amplitudes.T),
-        "line_orders": orders,
+        "line_frequencies": frequencies,
+        "line_orders": input_orders[None, :] / ratios[:, None],
         "line_labels": labels,
+        "mesh_names": list(lay.mesh_names),
+        "bearing_names": list(lay.bearing_names),
         "window_s": np.array([end_s - duration, end_s]),
         "window_kind": kind,
     }

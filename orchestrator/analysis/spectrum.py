@@ -5,15 +5,21 @@ sweep point stores) and in :func:`order_lines` (the least-squares line amplitude
 of ``gsb run``). The equation has its home in ``docs/equations.md`` ("Order spectrum").
 
 Orders are cycles per revolution of a reference shaft (``rotation_hz``): for the bearing
-forces of the pinion shaft, 1 is once per pinion revolution and ``z1`` the mesh frequency.
+forces of the paper's pinion shaft, 1 is once per pinion revolution and ``z1`` the mesh
+frequency. The lines a train excites, every shaft's 1x and every mesh's harmonics, are those
+of :func:`train_lines` (in revolutions of the input shaft; a bearing's figures and report read
+them in revolutions of its own shaft).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["PAD", "WINDOWS", "line_amplitudes", "order_lines", "order_spectrum",
-           "pinion_lines", "resolved_lines", "spectral_resolution"]
+__all__ = ["HARMONICS", "PAD", "WINDOWS", "line_amplitudes", "order_lines", "order_spectrum",
+           "resolved_lines", "spectral_resolution", "train_lines"]
+
+#: the mesh harmonics k = 1 .. HARMONICS of every mesh that the report and figures follow
+HARMONICS = 3
 
 #: the tapers :func:`order_spectrum` knows (the first is its default)
 WINDOWS = ("hann", "rectangular")
@@ -213,13 +219,29 @@ def line_amplitudes(time_s, signal, frequencies_hz, duration_s: float,
     return amplitudes
 
 
-def pinion_lines(teeth, harmonics: int = 3) -> tuple[np.ndarray, list[str]]:
-    """Orders (in pinion revolutions) and labels of the reported lines: pinion 1x, gear 1x
-    (``z1 / z2``) and the mesh orders ``k z1``, k = 1 .. ``harmonics``.
+def train_lines(layout, harmonics: int = HARMONICS) -> tuple[np.ndarray, list[str]]:
+    """The lines a gear train excites, in orders of its input shaft (cycles per input
+    revolution) and their labels: each shaft's 1x (``<shaft>_1x``, its speed ratio to the
+    input, :attr:`gear_fmu.layout.Layout.ratios`), then each mesh's harmonics of its mesh
+    frequency (``<mesh>_GMF``, ``<mesh>_2GMF``, ...: ``k z_driver`` times its driver's ratio),
+    k = 1 .. ``harmonics``, in the layout's order. Divide by a shaft's ratio for orders of that
+    shaft.
 
-    >>> pinion_lines([26, 157])[1]
-    ['1x', 'gear_1x', '26x', '52x', '78x']
+    >>> from fmu_src.case import load_case
+    >>> from fmu_src.description import layout
+    >>> orders, labels = train_lines(layout(load_case("baguet2010_spur")))
+    >>> labels
+    ['pinion_shaft_1x', 'gear_shaft_1x', 'mesh_GMF', 'mesh_2GMF', 'mesh_3GMF']
+    >>> [round(float(q), 4) for q in orders]
+    [1.0, 0.1656, 26.0, 52.0, 78.0]
     """
-    z1, z2 = (int(z) for z in teeth)
-    orders = np.array([1.0, z1 / z2] + [float(k * z1) for k in range(1, harmonics + 1)])
-    return orders, ["1x", "gear_1x"] + [f"{k * z1}x" for k in range(1, harmonics + 1)]
+    ratios = layout.ratios
+    orders = [float(r) for r in ratios]
+    labels = [f"{s.name}_1x" for s in layout.shafts]
+    for mesh, (driver, _) in zip(layout.meshes, layout.drivers, strict=True):
+        gear = layout.gear(driver)
+        order = gear.teeth * float(ratios[layout.shaft_index[gear.shaft]])
+        for k in range(1, harmonics + 1):
+            orders.append(k * order)
+            labels.append(f"{mesh.name}_{'' if k == 1 else k}GMF")
+    return np.array(orders), labels

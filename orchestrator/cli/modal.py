@@ -21,9 +21,10 @@ def add_parser(sub) -> None:
                                    "solution X0 (paper Eq. 20): the exact mean mesh stiffness "
                                    "over a mesh period, the undamped modes (symmetric part of "
                                    "the bearings' Kb), the damped modes (structure damping C, "
-                                   "the bearings' Kb and Cb at X0), the pinion speeds where a "
-                                   "mesh harmonic meets a mesh mode, and optionally a Campbell "
-                                   "diagram over a speed range.")
+                                   "the bearings' Kb and Cb at X0), the input speeds where a "
+                                   "harmonic of a mesh meets a mode of that mesh (every mesh of "
+                                   "the train), and optionally a Campbell diagram over a speed "
+                                   "range.")
     add_case_argument(p)
     p.add_argument("--bearing", choices=tuple(MODELS),
                    help="bearing model of every bearing (overrides bearings.*.model)")
@@ -34,11 +35,11 @@ def add_parser(sub) -> None:
                    help="modes listed in each text table (default 20; --json lists all)")
     p.add_argument("--speed-range", nargs=2, type=float, default=[50.0, 1500.0],
                    metavar=("LOW", "HIGH"),
-                   help="pinion speeds [rad/s] of the critical speeds and the Campbell diagram "
+                   help="input speeds [rad/s] of the critical speeds and the Campbell diagram "
                         "(default 50 1500)")
     p.add_argument("--mesh-fraction", type=float, default=0.1,
                    help="mesh modes: share of the strain energy in the mesh >= this "
-                        "(default 0.1)")
+                        "(each mesh's own share; default 0.1)")
     p.add_argument("--json", action="store_true",
                    help="print one JSON object instead of the tables")
     p.add_argument("--campbell", nargs="?", const="", default=None, metavar="PNG",
@@ -98,10 +99,11 @@ def modal(args) -> int:
         lin = system.at()
     except CouplingError as exc:
         raise RunError(f"{case['case.name']}: {exc}") from None
-    found, dm = lin.modes, lin.damped
-    critical = tooth_critical_speeds(dm.frequency_hz, dm.damping_ratio, dm.mesh_energy_fraction,
-                                     lin.z1, (low, high), campbell.HARMONICS,
-                                     args.mesh_fraction)
+    found, dm, lines = lin.modes, lin.damped, lin.lines
+    critical = tooth_critical_speeds(dm.frequency_hz, dm.damping_ratio, lin.mesh_shares,
+                                     lines["teeth"], (low, high), campbell.HARMONICS,
+                                     args.mesh_fraction, ratios=lines["ratios"],
+                                     meshes=lines["meshes"])
     per_width = lin.mesh_stiffness_loa / lin.contact_width / 1e9  # N/(mm um)
     chart = None
     if args.campbell is not None:
@@ -114,8 +116,10 @@ def modal(args) -> int:
         model = (f"isotropic {args.bearing_stiffness:g} N/m bearings, Cb = 0"
                  if args.bearing_stiffness
                  else f"{description.shared_bearing_model(case) or 'mixed'} bearings")
+        teeth = ", ".join(f"{m} z = {z}" for m, z in zip(lines["meshes"], lines["teeth"],
+                                                         strict=True))
         title = (f"{case['case.name']}: Campbell diagram of the damped modes\n"
-                 f"T = {case['drive.torque']:g} N m, {model}, z1 = {lin.z1}")
+                 f"T = {case['drive.torque']:g} N m, {model}, driver teeth: {teeth}")
         chart = {"path": str(plot_campbell(data, path, title,
                                                     min_mesh_fraction=args.mesh_fraction)),
                  "speeds_rad_s": data["speeds"].tolist(),
@@ -125,18 +129,25 @@ def modal(args) -> int:
         out = {
             "case": case["case.name"], "torque_N_m": case["drive.torque"],
             "speed_rad_s": case["drive.speed"], "bearings": lin.bearings,
-            "mean_mesh_stiffness_N_per_m": lin.mesh_stiffness_loa,
-            "mean_mesh_stiffness_N_per_mm_um": per_width,
+            "meshes": [
+                {"mesh": m, "driver_teeth": z, "speed_ratio": r,
+                 "mean_mesh_stiffness_N_per_m": float(k),
+                 "mean_mesh_stiffness_N_per_mm_um": float(kw)}
+                for m, z, r, k, kw in zip(lines["meshes"], lines["teeth"], lines["ratios"],
+                                          lin.mesh_stiffness_loa, per_width, strict=True)],
             "undamped_modes": [
                 {"frequency_hz": float(f), "kind": kd, "mesh_energy_fraction": _finite(s)}
                 for f, kd, s in zip(found.frequency_hz, found.kinds,
                                     found.mesh_strain_fraction, strict=True)],
             "damped_modes": [
                 {"mode": i + 1, "frequency_hz": float(f), "damping_ratio": _finite(z),
-                 "mesh_energy_fraction": _finite(s), "kind": kd, "overdamped": bool(o)}
-                for i, (f, z, s, kd, o) in enumerate(zip(
-                    dm.frequency_hz, dm.damping_ratio, dm.mesh_energy_fraction, dm.kinds,
-                    dm.overdamped, strict=True))],
+                 "mesh_energy_fraction": _finite(s),
+                 "mesh_shares": {m: _finite(v) for m, v in zip(lines["meshes"], per,
+                                                                strict=True)},
+                 "kind": kd, "overdamped": bool(o)}
+                for i, (f, z, s, per, kd, o) in enumerate(zip(
+                    dm.frequency_hz, dm.damping_ratio, dm.mesh_energy_fraction,
+                    lin.mesh_shares, dm.kinds, dm.overdamped, strict=True))],
             "critical_speeds": critical,
             "speed_range_rad_s": [low, high], "mesh_fraction": args.mesh_fraction,
             "campbell": chart}
@@ -145,19 +156,26 @@ def modal(args) -> int:
     print(f"{case['case.name']}: modes with the mean mesh stiffness at T = "
           f"{case['drive.torque']:g} N m; bearings: {lin.bearings}")
     print(mode_table(found, args.modes))
-    ref = lin.reference_mesh_stiffness_loa
-    ref = "" if ref is None else (f"; 16 equally spaced angles (damping reference): "
-                                  f"{ref / lin.contact_width / 1e9:.3f} N/(mm um)")
-    print(f"\nmean mesh stiffness over a mesh period (Gauss-Legendre between the contact "
-          f"events), along the line of action: {lin.mesh_stiffness_loa:.5g} N/m = "
-          f"{per_width:.3f} N/(mm um) per unit width ({lin.contact_width * 1e3:g} mm){ref}")
+    refs = lin.reference_mesh_stiffness_loa
+    print("\nmean mesh stiffness over a mesh period (Gauss-Legendre between the contact "
+          "events), along the line of action, per mesh:")
+    for m, name in enumerate(lines["meshes"]):
+        ref = "" if refs is None else (f"; 16 equally spaced angles (damping reference): "
+                                       f"{refs[m] / lin.contact_width[m] / 1e9:.3f} N/(mm um)")
+        print(f"  {name}: {lin.mesh_stiffness_loa[m]:.5g} N/m = {per_width[m]:.3f} "
+              f"N/(mm um) per unit width ({lin.contact_width[m] * 1e3:g} mm){ref}")
     print("\ndamped modes (Eq. 20: M, C0 = C + Cb(X0), K0 = K_shaft + K_mesh,mean + Kb(X0)); "
           "f_d = |Im lambda| / 2 pi, zeta = -Re lambda / |lambda|, mesh = strain energy share"
           + (f"; {dm.n_rigid // 2} rigid-body motion(s) left out" if dm.n_rigid else ""))
     print(damped_mode_table(dm, args.modes))
-    print(f"\ntooth critical speeds: mesh harmonic k z1 omega / 2 pi (k = 1..{campbell.HARMONICS}"
-          f", z1 = {lin.z1}) = f_d of a mode with mesh >= {args.mesh_fraction:g}, "
-          f"{low:g} <= omega <= {high:g} rad/s")
+    excitation = "; ".join(
+        f"{m}: z = {z}" + ("" if r == 1.0 else f", r = {r:.4g}")
+        for m, z, r in zip(lines["meshes"], lines["teeth"], lines["ratios"], strict=True))
+    print(f"\ntooth critical speeds: harmonic k z r omega / 2 pi of a mesh (k = "
+          f"1..{campbell.HARMONICS}; z its driver's teeth, r the driver shaft's speed over the "
+          f"input speed omega; per mesh {excitation}) = f_d of a mode with a share >= "
+          f"{args.mesh_fraction:g} of its strain energy in that mesh, {low:g} <= omega <= "
+          f"{high:g} rad/s")
     print(critical_speed_table(critical) if critical else "(none)")
     if chart is not None:
         for w, e in data["skipped"]:

@@ -38,7 +38,7 @@ def add_parser(sub) -> None:
     p.add_argument("--in-process", action="store_true",
                    help="run the Python slaves directly, without the FMI layer")
     p.add_argument("--threads", type=int, default=1,
-                   help="in-process: threads that share the four hybrid bearings (default 1; "
+                   help="in-process: threads that share the hybrid bearings (default 1; "
                         "2 made the paper's case 1.1-1.3 x faster with a core to spare, which "
                         "the second thread keeps busy; the same numbers, bit for bit)")
     p.add_argument("--out", default="results", help="output folder (default results/)")
@@ -52,7 +52,7 @@ def add_parser(sub) -> None:
     p.add_argument("--fmu-dir", default=None, help="folder of built FMUs (default: the per-user "
                                                    "cache; built there if missing)")
     p.add_argument("--bearing-fmu", default=None, metavar="FMU",
-                   help="a bearing FMU of your own for all four bearings (inputs s, t, s_dot, "
+                   help="a bearing FMU of your own for every bearing (inputs s, t, s_dot, "
                         "t_dot; outputs F_s, F_t; docs/fmu-variables.md)")
     p.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
     p.add_argument("--quiet", action="store_true",
@@ -78,12 +78,12 @@ def add_parser(sub) -> None:
 
     p = sub.add_parser("export", help="write a results file's channels as CSV",
                        description="One row per time step, one column per channel component, "
-                                   "named by its dimensions and unit, bearings 1-4 and axes s, t "
-                                   "as in the prints and figures (e.g. "
-                                   "`journal_position[bearing=1][axis=t] [m]`, "
-                                   "`gear_nodes[node=gear][direction=u] [m]`, `mesh_force [N]`), "
-                                   "17 significant digits. An existing CSV is kept unless "
-                                   "--overwrite.")
+                                   "named by its dimensions and unit, the bearings, meshes and "
+                                   "gears by the case's names and axes s, t, as in the prints "
+                                   "and figures (e.g. `journal_position[bearing=1][axis=t] "
+                                   "[m]`, `gear_node[gear=pinion][axis=s] [m]`, "
+                                   "`mesh_force[mesh=mesh] [N]`), 17 significant digits. An "
+                                   "existing CSV is kept unless --overwrite.")
     p.add_argument("file", help="results file (.h5) of gsb run")
     p.add_argument("--csv", metavar="OUT", nargs="?", const="", default="",
                    help="CSV file to write (default: the results file with .csv)")
@@ -207,7 +207,7 @@ def run(args) -> int:
         if not path.is_file():
             raise CaseError(f"--bearing-fmu: no such file: {path}")
         gear = fmus["gear"] if fmus else ensure_fmus(["GearShaft"], args.fmu_dir)["GearShaft"]
-        fmus = {"gear": gear, "bearings": [path] * 4}
+        fmus = {"gear": gear, "bearings": [path] * len(case.names("bearings"))}
     try:
         summary = run_case(case, in_process=args.in_process,
                            out_dir=args.out, fmu_dir=args.fmu_dir, progress=not args.quiet,

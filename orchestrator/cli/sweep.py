@@ -28,7 +28,8 @@ from bearing_fmu import MODELS
 from fmu_src.case import CaseError, field_of
 from fmu_src.units import DIMENSIONS, UnitError, parse_quantity
 
-__all__ = ["MAX_POINTS", "SHORTHANDS", "add_parser", "parse_vary", "sweep"]
+__all__ = ["MAX_POINTS", "SHORTHANDS", "add_parser", "parse_vary", "slowest_revolution",
+           "sweep"]
 
 #: ``--vary`` shorthands (``*``: every gear)
 SHORTHANDS = {"speed": "drive.speed", "torque": "drive.torque",
@@ -74,8 +75,9 @@ def add_parser(sub) -> None:
                    help="mesh periods of every run (default: the case's "
                         "simulation.mesh_periods)")
     p.add_argument("--steady-periods", type=int, default=None,
-                   help="mesh periods of the steady window the figures are taken over "
-                        "(default: one gear revolution, z2, or half the run if shorter)")
+                   help="mesh periods (of the fastest mesh) of the steady window the figures "
+                        "are taken over (default: one revolution of the slowest shaft, 157 "
+                        "for the paper's gear, or half the run if shorter)")
     p.add_argument("--scheduler", default=None, metavar="ADDRESS",
                    help="address of a running Dask scheduler (tcp://host:8786); 'none' runs "
                         "the points one after the other in this process (default: a "
@@ -222,10 +224,10 @@ def _plan(args):
                         f"{MAX_POINTS}")
     periods = check_periods(case["simulation.mesh_periods"] if args.periods is None
                             else args.periods)
-    z2 = int(description.mesh_teeth(case)[0][1])  # TODO(train): the slowest shaft's turn
+    turn = slowest_revolution(case)
     steady = args.steady_periods
     if steady is None:
-        steady = z2 if periods >= z2 else max(1, periods // 2)
+        steady = turn if periods >= turn else max(1, periods // 2)
     elif not 1 <= steady <= periods:
         raise CaseError(f"--steady-periods {steady}: must lie in [1, --periods = {periods}]")
     keys = [k for k, _ in vary]
@@ -242,6 +244,16 @@ def _plan(args):
                 raise CaseError(f"point {len(points)} ({label}): {exc}") from None
             points.append(p)
     return case, vary, bearings, points, periods, steady
+
+
+def slowest_revolution(case) -> int:
+    """Periods of the fastest mesh in a revolution of the slowest shaft, rounded up (the
+    paper's: 157, a gear revolution)."""
+    from orchestrator.analysis.campbell import order_lines
+
+    lines = order_lines(case)
+    fastest = max(lines["mesh_orders"] or [1.0])
+    return max(1, math.ceil(fastest / min(lines["shaft_ratios"]) - 1e-9))
 
 
 def _checks(args) -> None:

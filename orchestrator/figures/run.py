@@ -1,34 +1,37 @@
 """Figures of a run: ``gsb run`` draws them at its end, ``gsb plot FILE`` from any results file
-(also an incomplete one, or one still being written).
+(also an incomplete one, or one still being written), for any gear train: the bearings,
+shafts and meshes are those of the case stored in the file, by their names.
 
 :func:`run_figures` writes four PNGs into the folder beside the results file
-(``<file stem>/``), each titled with the case, bearing model, mode, speed, torque and unbalance
-(:func:`orchestrator.figures.base.run_title`):
+(``<file stem>/``), each titled with the case, bearing model, mode, input speed, torque and
+unbalance (:func:`orchestrator.figures.base.run_title`):
 
 ``orbits.png``
-    the journal-centre orbits of bearings 1-4 [um], zoomed on the orbit, the last gear
-    revolution drawn over the whole (faded) trajectory, the static position X0 marked, and an
-    inset with the full clearance circle;
+    the journal-centre orbit of every bearing [um], a row per shaft, each panel titled by the
+    bearing's name and shaft, zoomed on the orbit, the report's window (the last revolution
+    of the slowest shaft) drawn over the whole (faded) trajectory, the static position X0
+    marked, and an inset with the bearing's full clearance circle;
 ``bearing_forces.png``
-    ||F_b|| of the four bearings over the last pinion revolution, one panel per shaft;
+    ||F_b|| of every bearing over the last revolution of the input shaft, a panel per shaft;
 ``spectra.png``
-    order spectra of ||F_b|| over the last gear revolution in peak amplitude
-    (:func:`orchestrator.analysis.spectrum.order_spectrum`, :func:`run_spectrum`) with the 1x,
-    gear-1x and mesh-order lines marked, and their least-squares amplitudes on the same scale
-    (those of the report of ``gsb run``) drawn and listed;
+    order spectra of ||F_b|| over the report's window in peak amplitude, a panel per shaft
+    in orders of that shaft (:func:`orchestrator.analysis.spectrum.order_spectrum`,
+    :func:`run_spectrum`), with every shaft's 1x and every mesh's harmonics marked, and their
+    least-squares amplitudes on the same scale (those of the report of ``gsb run``) drawn
+    and listed;
 ``mesh.png``
-    transmission error and dynamic mesh force over the last pinion revolution and over the
-    whole run (max / min / mean per pinion revolution: :func:`envelope`). The TE is drawn about
-    its mean over the last gear revolution, the mean stated: it holds the static deflection
-    under the torque, the shafts' torsional wind-up included, which the dynamic reading of TE
-    (peak-to-peak, orders) leaves out.
+    per mesh, its transmission error and dynamic mesh force over the last input revolution
+    and over the whole run (max / min / mean per input revolution: :func:`envelope`). The TE
+    is drawn about its mean over the report's window, the mean stated: it holds the static
+    deflection under the torque, the shafts' torsional wind-up included, which the dynamic
+    reading of TE (peak-to-peak, orders) leaves out.
 
-Channels read (:data:`orchestrator.run.channels.CHANNELS`): ``time`` [s],
-``journal_position`` (4, 2)
-[m], ``bearing_force`` (4, 2) [N], ``mesh_force`` [N], ``transmission_error`` [m]; root
-attributes ``case``, ``bearing_model``, ``mode``, ``speed`` [rad/s], ``teeth`` (2,), ``torque``
-[N m], ``unbalance`` (2,) [m], ``clearance`` (4,) [m], ``static_journal`` (4, 2) [m],
-``static_mesh_force`` [N], ``static_transmission_error`` [m], ``complete``.
+Channels read (:func:`orchestrator.run.channels.channels`): ``time`` [s],
+``journal_position`` (nb, 2) [m], ``bearing_force`` (nb, 2) [N], ``mesh_force``
+(n_meshes,) [N], ``transmission_error`` (n_meshes,) [m]; root attributes ``case_toml`` (the
+train), ``case``, ``bearing_model``, ``mode``, ``speed`` [rad/s], ``torque`` [N m],
+``unbalance`` [m], ``static_journal`` (nb, 2) [m], ``static_mesh_force`` [N],
+``static_transmission_error`` [m], ``complete``.
 """
 
 from __future__ import annotations
@@ -40,19 +43,19 @@ import numpy as np
 from matplotlib.ticker import FormatStrFormatter, MaxNLocator
 
 from orchestrator.analysis.spectrum import (
+    HARMONICS,
     PAD,
     line_amplitudes,
     order_spectrum,
-    pinion_lines,
     spectral_resolution,
+    train_lines,
 )
 from orchestrator.figures.base import (
     AMPLITUDE_LABEL,
-    BEARING_STYLE,
     DPI,
-    SHAFTS,
     UM,
     RunData,
+    bearing_style,
     num_attr,
     order_label,
     pyplot,
@@ -118,35 +121,42 @@ def _orbits(plt, run: RunData):
     from matplotlib.lines import Line2D
     from matplotlib.patches import Rectangle
 
-    fig = titled_figure(plt, run, "journal-centre orbits")
-    axes = fig.subplots(2, 2)
+    groups = [(shaft, on) for shaft, on in run.groups() if on]
+    ncols = max(len(on) for _, on in groups)
+    nrows = len(groups)
+    width = max(7.0, 4.2 * ncols + 1.8)
+    fig = titled_figure(plt, run, "journal-centre orbits",
+                        figsize=(width, 3.4 * nrows + 1.9))
+    grid = fig.subplots(nrows, ncols, squeeze=False)
     win, kind, _ = run.long_window()
     span_ms = (run.time[win][-1] - run.time[win][0] + run.dt) * 1e3
     circle = np.linspace(0.0, 2.0 * np.pi, 361)
     insets = []
-    for b, ax in enumerate(axes.flat):
-        colour = BEARING_STYLE[b][0]
-        s, t = run.journal[:, b, 0] * UM, run.journal[:, b, 1] * UM
-        ax.plot(s, t, color="0.6", lw=0.5, alpha=0.6, zorder=1)
-        ax.plot(s[win], t[win], color=colour, lw=1.3, zorder=3)
-        ax.plot(s[-1], t[-1], "o", color=colour, ms=4, zorder=4)
-        xs, ys = list(s[win]), list(t[win])
-        x0 = None if run.static_journal is None else run.static_journal[b] * UM
-        if x0 is not None:
-            ax.plot(*x0, "P", color="k", ms=9, mec="w", mew=0.8, zorder=5)
-            xs.append(x0[0])
-            ys.append(x0[1])
-        c = None if run.clearance is None else float(run.clearance[b]) * UM
-        ax.ticklabel_format(useOffset=False)
-        ax.grid(True, lw=0.4, alpha=0.5)
-        ax.set_xlabel("s [um]")
-        ax.set_ylabel("t [um]")
-        shaft = "pinion" if b < 2 else "gear"
-        title = f"bearing {b + 1} ({shaft} shaft)"
-        if x0 is not None and c:
-            title += f", X0 at e/C = {math.hypot(*x0) / c:.2f}"
-        ax.set_title(title, fontsize=11)
-        insets.append((ax, xs, ys, c, s, t, colour))
+    for row, (shaft, on) in zip(grid, groups, strict=True):
+        for ax in row[len(on):]:
+            ax.set_visible(False)
+        for ax, b in zip(row, on, strict=False):
+            colour = bearing_style(b)[0]
+            s, t = run.journal[:, b, 0] * UM, run.journal[:, b, 1] * UM
+            ax.plot(s, t, color="0.6", lw=0.5, alpha=0.6, zorder=1)
+            ax.plot(s[win], t[win], color=colour, lw=1.3, zorder=3)
+            ax.plot(s[-1], t[-1], "o", color=colour, ms=4, zorder=4)
+            xs, ys = list(s[win]), list(t[win])
+            x0 = None if run.static_journal is None else run.static_journal[b] * UM
+            if x0 is not None:
+                ax.plot(*x0, "P", color="k", ms=9, mec="w", mew=0.8, zorder=5)
+                xs.append(x0[0])
+                ys.append(x0[1])
+            c = float(run.clearance[b]) * UM
+            ax.ticklabel_format(useOffset=False)
+            ax.grid(True, lw=0.4, alpha=0.5)
+            ax.set_xlabel("s [um]")
+            ax.set_ylabel("t [um]")
+            title = f"bearing {run.bearings[b]} (shaft {shaft})"
+            if x0 is not None and c:
+                title += f", X0 at e/C = {math.hypot(*x0) / c:.2f}"
+            ax.set_title(title, fontsize=11)
+            insets.append((ax, xs, ys, c, s, t, colour))
     handles = [Line2D([], [], color="0.6", lw=1, label="whole run (transient from X0)"),
                Line2D([], [], color="C0", lw=1.5,
                       label=f"{kind} ({span_ms:.1f} ms; colour per bearing)"),
@@ -187,7 +197,8 @@ def _orbits(plt, run: RunData):
 
 
 def _angle_axis(ax, run: RunData, t_start: float):
-    """Top axis in ms of run time for a bottom axis in pinion degrees since ``t_start``."""
+    """Top axis in ms of run time for a bottom axis in degrees of the input shaft since
+    ``t_start``."""
     deg_per_s = math.degrees(run.speed)
     top = ax.secondary_xaxis("top", functions=(lambda a: (t_start + a / deg_per_s) * 1e3,
                                                lambda ms: (ms * 1e-3 - t_start) * deg_per_s))
@@ -199,26 +210,28 @@ def _angle_axis(ax, run: RunData, t_start: float):
 
 
 def _bearing_forces(plt, run: RunData):
-    fig = titled_figure(plt, run, "bearing force norms ||F_b||")
-    axes = fig.subplots(2, 1, sharex=True)
+    groups = [(shaft, on) for shaft, on in run.groups() if on]
+    fig = titled_figure(plt, run, "bearing force norms ||F_b||",
+                        figsize=(11, 2.6 * len(groups) + 2.4))
+    axes = fig.subplots(len(groups), 1, sharex=True, squeeze=False)[:, 0]
     win, kind = run.short_window()
     t = run.time[win]
     t_start = t[0] - run.dt
     angle = (t - t_start) * math.degrees(run.speed)
     every = max(1, t.size // 14)
-    for ax, (shaft, pair) in zip(axes, SHAFTS, strict=True):
-        for j, b in enumerate(pair):
-            colour, ls, marker = BEARING_STYLE[b]
+    for ax, (shaft, on) in zip(axes, groups, strict=True):
+        for j, b in enumerate(on):
+            colour, ls, marker = bearing_style(b)
             ax.plot(angle, run.force_norm[win, b], color=colour, ls=ls, marker=marker,
-                    lw=2.0 if j == 0 else 1.4, ms=6, mfc=colour if j == 0 else "none",
-                    markevery=(j * every // 2, every), label=f"bearing {b + 1}",
-                    zorder=2 + j)
+                    lw=2.0 if j % 2 == 0 else 1.4, ms=6, mfc=colour if j % 2 == 0 else "none",
+                    markevery=(j * every // max(len(on), 1), every),
+                    label=f"bearing {run.bearings[b]}", zorder=2 + j)
         ax.set_ylabel("||F_b|| [N]")
         ax.ticklabel_format(axis="y", useOffset=False)
         ax.grid(True, lw=0.4, alpha=0.5)
         ax.legend(loc="upper left", bbox_to_anchor=(1.005, 1.0), fontsize=9, frameon=False,
-                  title=shaft, title_fontsize=9)  # beside the panel: no curve hidden
-    axes[-1].set_xlabel(f"pinion angle [deg] ({kind})")
+                  title=f"shaft {shaft}", title_fontsize=9)  # beside the panel: none hidden
+    axes[-1].set_xlabel(f"angle of the input shaft {run.input_shaft} [deg] ({kind})")
     axes[-1].set_xlim(angle[0], angle[-1])
     if angle[-1] > 300:
         axes[-1].set_xticks(np.arange(0, 361, 45))
@@ -227,26 +240,38 @@ def _bearing_forces(plt, run: RunData):
 
 
 def run_spectrum(run: RunData) -> dict:
-    """What ``spectra.png`` draws: the order spectrum of ||F_b|| over the last gear revolution
-    (the last half of a shorter run), ``orders`` (m,) [1/pinion rev] and ``amplitudes``
-    (m, 4) [N] (:func:`~orchestrator.analysis.spectrum.order_spectrum`), and the least-squares
-    peak amplitudes ``lines`` (4, n) [N] of the pinion lines at ``line_orders`` named
-    ``line_labels`` over the same window, as the report of ``gsb run`` computes them (None
-    without the teeth numbers); ``window`` the mask, ``kind`` its name, ``duration`` [s] and
-    ``resolution`` [orders]."""
+    """What ``spectra.png`` draws: the order spectrum of ||F_b|| of every bearing over the
+    report's window (the last revolution of the slowest shaft, the last half of a shorter
+    run) in orders of its own shaft (:func:`~orchestrator.analysis.spectrum.order_spectrum`
+    with that shaft's rotation frequency): ``orders`` (nb, m) [1/rev of bearing b's shaft]
+    and ``amplitudes`` (m, nb) [N]; the least-squares peak amplitudes ``lines`` (nb, n) [N]
+    of the train's lines (:func:`~orchestrator.analysis.spectrum.train_lines`) named
+    ``line_labels``, at ``line_orders`` (nb, n) of each bearing's shaft, over the same
+    window, as the report of ``gsb run`` computes them; ``window`` the mask, ``kind`` its
+    name, ``duration`` [s] and ``resolution`` (nb,) [orders of each bearing's shaft]."""
     win, kind, duration = run.long_window()
-    orders, amplitudes = order_spectrum(run.force_norm[win], run.dt, run.pinion_hz)
-    out = {"orders": orders, "amplitudes": amplitudes, "window": win, "kind": kind,
-           "duration": duration,
-           "resolution": spectral_resolution(int(win.sum()), run.dt, run.pinion_hz),
-           "lines": None, "line_orders": np.array([1.0]), "line_labels": ["1x"]}
-    if run.teeth is not None:
-        line_orders, labels = pinion_lines(run.teeth)
-        dt_s = (run.time[-1] - run.time[0]) / (run.steps - 1)  # as the report's
-        lines = line_amplitudes(run.time[win], run.force_norm[win], line_orders * run.pinion_hz,
-                                duration, dt_s)
-        out.update(lines=lines.T, line_orders=line_orders, line_labels=labels)
-    return out
+    n = int(win.sum())
+    nb = len(run.bearings)
+    amplitudes = None
+    orders = []
+    for b in range(nb):  # one spectrum per bearing, in orders of its shaft
+        q, amp = order_spectrum(run.force_norm[win, b], run.dt,
+                                run.shaft_hz(run.bearing_shaft[b]))
+        if amplitudes is None:
+            amplitudes = np.empty((amp.size, nb))
+        amplitudes[:, b] = amp
+        orders.append(q)
+    input_orders, labels = train_lines(run.layout)
+    dt_s = (run.time[-1] - run.time[0]) / (run.steps - 1)  # as the report's
+    lines = line_amplitudes(run.time[win], run.force_norm[win], input_orders * run.input_hz,
+                            duration, dt_s)
+    ratios = np.array([run.ratios[s] for s in run.bearing_shaft])
+    return {"orders": np.array(orders), "amplitudes": amplitudes, "window": win, "kind": kind,
+            "duration": duration,
+            "resolution": np.array([spectral_resolution(n, run.dt, run.shaft_hz(s))
+                                    for s in run.bearing_shaft]),
+            "lines": lines.T, "line_orders": input_orders[None, :] / ratios[:, None],
+            "line_labels": labels}
 
 
 def _short(value: float) -> str:
@@ -260,58 +285,71 @@ def _short(value: float) -> str:
 
 
 def _spectra(plt, run: RunData):
-    fig = titled_figure(plt, run, "order spectra of ||F_b||")
-    grid = fig.add_gridspec(2, 2, width_ratios=[3.3, 1])
-    axes = [fig.add_subplot(grid[0, 0])]
-    axes.append(fig.add_subplot(grid[1, 0], sharex=axes[0]))
     spec = run_spectrum(run)
-    q, amp, lines = spec["orders"], spec["amplitudes"], spec["lines"]
-    orders, labels, resolution = spec["line_orders"], spec["line_labels"], spec["resolution"]
+    groups = [(shaft, on) for shaft, on in run.groups() if on]
+    names = run.bearings
+    cell = max(7, *(len(n) + 1 for n in names))
+    labels = spec["line_labels"]
+    label_width = max(len(x) for x in labels) + 1
+    table_chars = label_width + cell * len(names)
+    side_in = max(2.6, 0.075 * table_chars + 0.3)  # monospace 8.5 pt: ~0.075 in a character
+    fig = titled_figure(plt, run, "order spectra of ||F_b||",
+                        figsize=(8.4 + side_in, max(8.0, 3.0 * len(groups) + 2.2)))
+    grid = fig.add_gridspec(len(groups), 2, width_ratios=[8.4, side_in])
+    axes = [fig.add_subplot(grid[0, 0])]
+    axes += [fig.add_subplot(grid[k, 0]) for k in range(1, len(groups))]
+    amp, lines = spec["amplitudes"], spec["lines"]
     win, kind = spec["window"], spec["kind"]
-    z1 = 1 if run.teeth is None else run.teeth[0]
-    q_lo = max(0.6 * min(orders.min(), 1.0), 0.5 * resolution)
-    q_hi = min(3.6 * z1, q[-1])
-    keep = (q >= q_lo * 0.9) & (q <= q_hi)
-    top = max(float(amp[keep].max()), 1e-12) if keep.any() else 1.0
-    for ax, (shaft, pair) in zip(axes, SHAFTS, strict=True):
-        for j, b in enumerate(pair):
-            colour, ls, marker = BEARING_STYLE[b]
-            ax.plot(q[keep], amp[keep, b], color=colour, ls=ls, lw=1.5 if j == 0 else 1.1,
-                    label=f"bearing {b + 1} (spectrum)", zorder=2 + j)
-            if lines is not None:
-                ax.plot(orders, lines[b], ls="", marker=marker, color=colour, ms=8,
-                        mfc=colour if j == 0 else "none", mew=1.5, zorder=5,
-                        label=f"bearing {b + 1} (least-squares line)")
+    top = 1e-12
+    ranges = []
+    for shaft, on in groups:
+        b0 = on[0]
+        q, orders, resolution = spec["orders"][b0], spec["line_orders"][b0], \
+            spec["resolution"][b0]
+        highest = max([1.0] + [HARMONICS * m / run.ratios[shaft] for m in run.mesh_orders])
+        q_lo = max(0.6 * min(orders.min(), 1.0), 0.5 * resolution)
+        q_hi = min(1.2 * highest, q[-1])
+        keep = (q >= q_lo * 0.9) & (q <= q_hi)
+        if keep.any():
+            top = max(top, float(amp[keep][:, on].max()))
+        ranges.append((q, orders, q_lo, q_hi, keep))
+    for ax, (shaft, on), (q, orders, q_lo, q_hi, keep) in zip(axes, groups, ranges,
+                                                               strict=True):
+        for j, b in enumerate(on):
+            colour, ls, marker = bearing_style(b)
+            ax.plot(q[keep], amp[keep, b], color=colour, ls=ls, lw=1.5 if j % 2 == 0 else 1.1,
+                    label=f"bearing {names[b]} (spectrum)", zorder=2 + j)
+            shown = (orders >= q_lo) & (orders <= q_hi)
+            ax.plot(orders[shown], lines[b][shown], ls="", marker=marker, color=colour, ms=8,
+                    mfc=colour if j % 2 == 0 else "none", mew=1.5, zorder=5,
+                    label=f"bearing {names[b]} (least-squares line)")
         for order, label in zip(orders, labels, strict=True):
             if q_lo <= order <= q_hi:
                 ax.axvline(order, color="0.45", ls=":", lw=0.9, zorder=1)
-                ax.text(order, 1.0, " " + label.replace("_", " "), rotation=90, ha="right",
-                        va="top", fontsize=9, color="0.3",
-                        transform=ax.get_xaxis_transform())
+                ax.text(order, 1.0, " " + label, rotation=90, ha="right", va="top",
+                        fontsize=8, color="0.3", transform=ax.get_xaxis_transform())
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_ylim(top * 1e-5, top * 3.0)
         ax.set_xlim(q_lo, q_hi)
         ax.grid(True, which="major", lw=0.4, alpha=0.5)
         ax.set_ylabel(AMPLITUDE_LABEL)
-        ax.set_title(shaft, fontsize=11, loc="left")
-        ticks = sorted({*orders[(orders >= q_lo) & (orders <= q_hi)],
+        ax.set_title(f"shaft {shaft}", fontsize=11, loc="left")
+        ticks = sorted({*np.round(orders[(orders >= q_lo) & (orders <= q_hi)], 9),
                         *[v for v in (0.5, 2, 5, 10) if q_lo <= v <= q_hi]})
-        ax.set_xticks(ticks, [f"{v:.3g}" for v in ticks])
+        ax.set_xticks(ticks, [f"{v:.3g}" for v in ticks], fontsize=8)
         ax.set_xticks([], minor=True)
-    axes[-1].set_xlabel(f"{order_label('pinion')} (f / {run.pinion_hz:.4g} Hz)")
+        ax.set_xlabel(f"{order_label(shaft)} (f / {run.shaft_hz(shaft):.4g} Hz)")
     # the table of least-squares amplitudes beside the panels
-    text = [f"{kind}", f"{spec['duration'] * 1e3:.1f} ms, {win.sum()} steps",
-            f"resolution {resolution:.3g} orders", "",
-            "least-squares peak", "amplitudes [N]", ""]
-    if lines is not None:
-        text.append(f"{'line':<7}" + "".join(f"{'b' + str(b + 1):>7}" for b in range(4)))
-        for k, label in enumerate(labels):
-            cells = "".join(f" {_short(v):>6}" for v in lines[:, k])
-            text.append(f"{label.replace('gear_1x', 'gear1x'):<7}" + cells)
-        text += ["", "- : not resolved by the", "    window", "",
-                 "spectrum: peak amplitude,", f"Hann window, zero-padded x{PAD}",
-                 "(docs/equations.md)"]
+    text = [f"{kind}", f"{spec['duration'] * 1e3:.1f} ms, {win.sum()} steps", "",
+            "least-squares peak amplitudes [N]", ""]
+    text.append(f"{'line':<{label_width}}" + "".join(f"{n:>{cell}}" for n in names))
+    for k, label in enumerate(labels):
+        text.append(f"{label:<{label_width}}"
+                    + "".join(f"{_short(v):>{cell}}" for v in lines[:, k]))
+    text += ["", "- : not resolved by the window", "",
+             "spectrum: peak amplitude,", f"Hann window, zero-padded x{PAD}",
+             "(docs/equations.md)"]
     side = fig.add_subplot(grid[:, 1])
     side.axis("off")
     side.text(0.0, 1.0, "\n".join(text), family="monospace", fontsize=8.5, va="top",
@@ -322,8 +360,8 @@ def _spectra(plt, run: RunData):
     return fig
 
 
-#: the whole-run panels of ``mesh.png`` bin by pinion revolution from this many revolutions on
-#: (fewer: by mesh period)
+#: the whole-run panels of ``mesh.png`` bin by input revolution from this many revolutions on
+#: (fewer: by the mesh's period)
 MIN_REVOLUTIONS = 10
 
 
@@ -332,9 +370,9 @@ def envelope(time, y, span: float) -> dict:
     at the last sample (a partial first bin kept if at least half a span, else merged into
     the next): ``centre`` [s], ``hi``, ``lo``, ``mean`` per bin.
 
-    A bin of one pinion revolution holds every mesh period and every order of the pinion
-    whole, so its max and min do not beat with them (bins of a few mesh periods alias against
-    the revolution: a moire on a long run)."""
+    A bin of one input revolution holds every period of the meshes on the input shaft and
+    every order of that shaft whole, so its max and min do not beat with them (bins of a few
+    mesh periods alias against the revolution: a moire on a long run)."""
     time, y = np.asarray(time, dtype=float), np.asarray(y, dtype=float)
     n_bins = max(1, math.floor((time[-1] - time[0]) / span + 1e-9))
     # a bin holds the samples after its left edge; half a step off the samples: a whole
@@ -353,25 +391,21 @@ def envelope(time, y, span: float) -> dict:
             "mean": np.add.reduceat(y, starts) / (ends - starts)}
 
 
-def _whole_run(ax, run: RunData, y, colour) -> str:
-    """``y`` over the whole run as its envelope per pinion revolution (per mesh period on a
-    run of fewer than :data:`MIN_REVOLUTIONS` revolutions; the line itself under 1200
-    samples); returns the legend label of the envelope ("" for the line)."""
+def _whole_run(ax, run: RunData, y, colour, mesh: int) -> str:
+    """``y`` over the whole run as its envelope per input revolution (per period of mesh
+    ``mesh`` on a run of fewer than :data:`MIN_REVOLUTIONS` revolutions; the line itself
+    under 1200 samples); returns the legend label of the envelope ("" for the line)."""
     if y.size <= 1200:
         ax.plot(run.time * 1e3, y, color=colour, lw=0.7)
         return ""
-    revolutions = (run.time[-1] - run.time[0]) / run.pinion_rev
-    teeth = run.teeth[0] if run.teeth else 1
+    revolutions = (run.time[-1] - run.time[0]) / run.input_rev
     if revolutions >= MIN_REVOLUTIONS:
-        span, what = run.pinion_rev, "pinion revolution"
+        span, what = run.input_rev, "input revolution"
     else:
-        span, what = run.pinion_rev / teeth, "mesh period"
+        span, what = run.input_rev / run.mesh_orders[mesh], "mesh period"
     env = envelope(run.time, y, span)
     x = env["centre"] * 1e3
-    label = f"max / min per {what} ({span * 1e3:.3g} ms"
-    if run.gear_rev is not None and what == "pinion revolution":
-        label += f"; a gear revolution: {run.gear_rev * 1e3:.3g} ms"
-    label += ")"
+    label = f"max / min per {what} ({span * 1e3:.3g} ms)"
     ax.fill_between(x, env["lo"], env["hi"], color=colour, alpha=0.25, lw=0)
     ax.plot(x, env["hi"], color=colour, lw=1.0, label=label)
     ax.plot(x, env["lo"], color=colour, lw=1.0)
@@ -380,77 +414,91 @@ def _whole_run(ax, run: RunData, y, colour) -> str:
 
 
 def _mesh(plt, run: RunData):
-    fig = titled_figure(plt, run, "dynamic transmission error and mesh force")
-    axes = fig.subplots(2, 2, sharex="col", width_ratios=[1, 1.25])
+    n = len(run.meshes)
+    fig = titled_figure(plt, run, "dynamic transmission error and mesh force"
+                        + (" of each mesh" if n > 1 else ""),
+                        figsize=(11, 3.3 * 2 * n + 1.6) if n > 1 else (11, 8))
+    axes = fig.subplots(2 * n, 2, sharex="col", width_ratios=[1, 1.25], squeeze=False)
     win, kind = run.short_window()
     t = run.time[win]
     t_start = t[0] - run.dt
     angle = (t - t_start) * math.degrees(run.speed)
-    w0 = run.static_mesh
-    dyn = run.mesh - (w0 if w0 is not None else 0.0)
-    dyn_label = "W - W0 [N]" if w0 is not None else "mesh force W [N]"
-    te = run.te
-    caption = None
-    if te is not None:
-        # the dynamic part about the steady mean: the mean holds the static deflection under
-        # the torque, most of it the shafts' torsional wind-up, which the NVH reading of TE
-        # (its peak-to-peak, its orders) leaves out
-        steady, steady_kind, _ = run.long_window()
-        mean = float(te[steady].mean())
-        te_dyn = (te - mean) * UM
-        axes[0, 0].plot(angle, te_dyn[win], color="C4", lw=1.0)
-        axes[0, 0].axhline(0.0, color="k", ls=":", lw=0.9)
-        if run.static_te is not None:
-            axes[0, 0].axhline((run.static_te - mean) * UM, color="0.4", ls="--", lw=0.9,
-                               label=f"static TE at X0 ({run.static_te * UM:.4g} um)")
-            axes[0, 0].legend(loc="best", fontsize=9)
-        for ax in axes[0]:
-            ax.set_ylabel("TE - mean [um]")
-        _whole_run(axes[0, 1], run, te_dyn, "C4")
-        axes[0, 1].axhline(0.0, color="k", ls=":", lw=0.9)
-        axes[0, 0].set_title(f"{kind}: TE peak-to-peak {np.ptp(te_dyn[win]):.3g} um",
+    steady, steady_kind, _ = run.long_window()
+    captions = []
+    for m, name in enumerate(run.meshes):
+        te_axes, force_axes = axes[2 * m], axes[2 * m + 1]
+        which = f" ({name})" if n > 1 else ""
+        w0 = None if run.static_mesh is None else float(run.static_mesh[m])
+        dyn = run.mesh[:, m] - (w0 if w0 is not None else 0.0)
+        dyn_label = f"W - W0{which} [N]" if w0 is not None else f"mesh force W{which} [N]"
+        if run.te is not None:
+            # the dynamic part about the steady mean: the mean holds the static deflection
+            # under the torque, most of it the shafts' torsional wind-up, which the NVH
+            # reading of TE (its peak-to-peak, its orders) leaves out
+            te = run.te[:, m]
+            mean = float(te[steady].mean())
+            te_dyn = (te - mean) * UM
+            te_axes[0].plot(angle, te_dyn[win], color="C4", lw=1.0)
+            te_axes[0].axhline(0.0, color="k", ls=":", lw=0.9)
+            if run.static_te is not None:
+                static = float(run.static_te[m])
+                te_axes[0].axhline((static - mean) * UM, color="0.4", ls="--", lw=0.9,
+                                   label=f"static TE at X0 ({static * UM:.4g} um)")
+                te_axes[0].legend(loc="best", fontsize=9)
+            for ax in te_axes:
+                ax.set_ylabel(f"TE - mean{which} [um]")
+            _whole_run(te_axes[1], run, te_dyn, "C4", m)
+            te_axes[1].axhline(0.0, color="k", ls=":", lw=0.9)
+            te_axes[0].set_title(f"{'mesh ' + name + ': ' if n > 1 else ''}TE peak-to-peak "
+                                 f"{np.ptp(te_dyn[win]):.3g} um", fontsize=11)
+            captions.append(f"{'mesh ' + name + ': ' if n > 1 else ''}drawn about its mean "
+                            f"{mean * UM:.1f} um over the {steady_kind}")
+        else:
+            for ax in te_axes:
+                ax.text(0.5, 0.5, "no transmission_error channel", ha="center",
+                        transform=ax.transAxes)
+            te_axes[0].set_title(kind, fontsize=11)
+        force_axes[0].plot(angle, dyn[win], color="C5", lw=1.0)
+        force_axes[0].axhline(0.0, color="k", ls=":", lw=0.9)
+        force_axes[0].set_ylabel(dyn_label)
+        _whole_run(force_axes[1], run, dyn, "C5", m)
+        force_axes[1].axhline(0.0, color="k", ls=":", lw=0.9)
+        force_axes[1].set_ylabel(dyn_label)
+        if w0:
+            for ax in force_axes:
+                ratio = ax.secondary_yaxis("right", functions=(
+                    lambda f, w0=w0: 1.0 + f / w0, lambda r, w0=w0: (r - 1.0) * w0))
+                ratio.set_ylabel("W / W0")
+        te_axes[1].set_title(f"{'mesh ' + name + ', ' if n > 1 else ''}whole run",
                              fontsize=11)
-        torque = num_attr(run.attrs, "torque")
-        under = "" if torque is None else f" under {torque:.4g} N m"
-        caption = (f"TE = r_b1 \u03b81 + r_b2 \u03b82 at the gears, drawn about its mean "
-                   f"{mean * UM:.1f} um over the {steady_kind}.\nThat mean is the static "
-                   f"deflection{under}, the shafts' torsional wind-up included; the part about "
-                   f"it is the dynamic TE.")
-    else:
-        for ax in axes[0]:
-            ax.text(0.5, 0.5, "no transmission_error channel", ha="center",
-                    transform=ax.transAxes)
-        axes[0, 0].set_title(kind, fontsize=11)
-    axes[1, 0].plot(angle, dyn[win], color="C5", lw=1.0)
-    axes[1, 0].axhline(0.0, color="k", ls=":", lw=0.9)
-    axes[1, 0].set_ylabel(dyn_label)
-    _whole_run(axes[1, 1], run, dyn, "C5")
-    axes[1, 1].axhline(0.0, color="k", ls=":", lw=0.9)
-    if w0:
-        for ax in axes[1]:
-            ratio = ax.secondary_yaxis("right", functions=(lambda f: 1.0 + f / w0,
-                                                           lambda r: (r - 1.0) * w0))
-            ratio.set_ylabel("W / W0")
-    axes[1, 0].set_xlabel(f"pinion angle [deg] ({kind})")
-    axes[1, 0].set_xlim(angle[0], angle[-1])
+    axes[-1, 0].set_xlabel(f"angle of the input shaft {run.input_shaft} [deg]\n({kind})")
+    axes[-1, 0].set_xlim(angle[0], angle[-1])
     if angle[-1] > 300:
-        axes[1, 0].set_xticks(np.arange(0, 361, 60))
+        axes[-1, 0].set_xticks(np.arange(0, 361, 60))
     _angle_axis(axes[0, 0], run, t_start)
-    axes[0, 1].set_title("whole run", fontsize=11)
-    axes[1, 1].set_xlabel("time [ms]")
+    axes[-1, 1].set_xlabel("time [ms]")
     for ax in axes[:, 1]:
         if not win.all():
             ax.axvspan(t[0] * 1e3, t[-1] * 1e3, color="0.85", zorder=0,
                        label="left panels' window")
         ax.set_xlim(0.0, run.time[-1] * 1e3)
-    handles, labels = axes[1, 1].get_legend_handles_labels()
+    handles, labels = axes[-1, 1].get_legend_handles_labels()
+    caption = None
+    if captions:
+        torque = num_attr(run.attrs, "torque")
+        under = "" if torque is None else f" under {torque:.4g} N m"
+        import textwrap
+
+        caption = textwrap.fill(
+            "TE = r_b1 \u03b81 + r_b2 \u03b82 at the gears of a mesh, " + "; ".join(captions)
+            + f". That mean is the static deflection{under}, the shafts' torsional wind-up "
+            "included; the part about it is the dynamic TE.", int(11 * fig.get_figwidth()))
     if len(handles) > 1 or caption:
         fig.legend(handles, labels, loc="outside lower center", ncol=3, fontsize=9,
                    frameon=False, title=caption, title_fontsize=9.5)
     for ax in axes.flat:
         ax.grid(True, lw=0.4, alpha=0.5)
         ax.ticklabel_format(axis="y", useOffset=False)
-    axes[1, 1].set_ylabel(dyn_label)
     return fig
 
 

@@ -3,14 +3,17 @@
 :func:`sweep_figures` draws, against the input speed when the sweep varies it (else against
 the first varied field):
 
-* ``R_ptp.png``: the dynamic factor R, one curve per bearing model (and per value of the other
-  varied fields), and the peak-to-peak of ||F_b|| at the four bearings, a panel per curve;
-  bearings 1-4 differ in colour, line style and marker, so bearings that coincide (1 and 2, 3
-  and 4 in the spur case) both stay visible;
-* ``waterfall_bearing1.png``: the order spectrum of ||F_b|| at bearing 1 against the swept
-  value (peak amplitude, the scale of the run figures: the spectra the points stored,
-  :func:`orchestrator.sweeps.runner.point_spectrum`; log colour scale), a panel per curve, with
-  the pinion 1x and mesh orders z1, 2 z1, 3 z1 marked.
+* ``R_ptp.png``: the dynamic factor R of each mesh, one curve per mesh and bearing model (and
+  per value of the other varied fields), and the peak-to-peak of ||F_b|| at every bearing, a
+  panel per curve; the bearings, named as in the case, differ in colour, line style and
+  marker, so bearings that coincide (1 and 2, 3 and 4 in the spur case) both stay visible;
+* ``waterfall_bearing_<name>.png``, one per shaft for its first bearing (a bearing named by
+  a number without the ``_``: the paper's ``waterfall_bearing1.png`` and
+  ``waterfall_bearing3.png``): the order spectrum of ||F_b||
+  at that bearing against the swept value, in orders of its shaft (peak amplitude, the scale
+  of the run figures: the spectra the points stored,
+  :func:`orchestrator.sweeps.runner.point_spectrum`; log colour scale), a panel per curve,
+  with the shaft's 1x and every mesh's first three harmonics marked.
 
 Every figure is titled with the case, the bearing models and the operating values the sweep
 keeps fixed.
@@ -27,9 +30,9 @@ from orchestrator.figures.base import AMPLITUDE_LABEL, BEARING_STYLE, order_labe
 
 __all__ = ["BEARING_STYLES", "sweep_figures", "waterfall_data"]
 
-#: matplotlib styles of bearings 1-4: the colours, lines and markers of the run figures
-#: (:data:`orchestrator.figures.base.BEARING_STYLE`), the second bearing of each shaft with open
-#: markers, so that bearings that coincide both stay visible
+#: matplotlib styles of the bearings in the case's order (in turn): the colours, lines and
+#: markers of the run figures (:data:`orchestrator.figures.base.BEARING_STYLE`), every second
+#: bearing with open markers, so that bearings that coincide both stay visible
 BEARING_STYLES = tuple(
     {"color": colour, "ls": ls, "marker": marker, "ms": 8, "lw": 1.6,
      "mfc": "none" if b % 2 else colour}
@@ -61,12 +64,16 @@ def _fixed(case, keys) -> str:
     parts = []
     if "speed" not in varied:
         w = case["drive.speed"]
-        parts.append(f"speed {w:g} rad/s ({w * 30 / math.pi:.0f} rpm)")
+        parts.append(f"input speed {w:g} rad/s ({w * 30 / math.pi:.0f} rpm)")
     if "torque" not in varied:
         parts.append(f"torque {case['drive.torque']:g} N m")
     if "unbalance" not in varied:
         e = [case[f"gears.{g}.unbalance"] * 1e3 for g in case.names("gears")]
-        parts.append(f"unbalance {' / '.join(f'{x:g}' for x in e)} mm")
+        if len(set(e)) == 1:
+            parts.append(f"unbalance {e[0]:g} mm (every gear)")
+        else:
+            parts.append(f"unbalance {' / '.join(f'{x:g}' for x in e)} mm (gears "
+                         f"{', '.join(case.names('gears'))})")
     return ", ".join(parts)
 
 
@@ -107,15 +114,18 @@ def _grid(plt, n: int, ncols_max: int, width: float, height: float, **kw):
     return fig, flat[:n]
 
 
-def waterfall_data(points, ix: int, bearing: int = 0):
+def waterfall_data(points, ix: int, bearing: int = 0, ratio: float = 1.0):
     """What a waterfall panel draws for one curve of ``points`` (sorted by the swept value,
-    index ``ix`` of ``values``): the swept values (k,), the orders (m,) [1/pinion rev] of the
-    first point's spectrum without order 0 (the mean) and the peak amplitudes (k, m) [N] of
-    ||F_b|| at ``bearing``, each point's stored spectrum read at those orders."""
+    index ``ix`` of ``values``): the swept values (k,), the orders (m,) of the first point's
+    spectrum without order 0 (the mean) and the peak amplitudes (k, m) [N] of ||F_b|| at
+    ``bearing`` (its place in the case's order), each point's stored spectrum read at those
+    orders. The points store orders of the input shaft; ``ratio``, the speed of the
+    bearing's shaft over the input speed, turns them into orders of that shaft
+    (``input order / ratio``)."""
     orders = np.asarray(points[0]["spectrum_orders"], dtype=float)
     amp = np.array([np.interp(orders, p["spectrum_orders"], p["spectrum"][bearing])
                     for p in points])
-    return np.array([p["values"][ix] for p in points]), orders[1:], amp[:, 1:]
+    return np.array([p["values"][ix] for p in points]), orders[1:] / ratio, amp[:, 1:]
 
 
 def sweep_figures(path, out_dir=None) -> list[Path]:
@@ -124,7 +134,8 @@ def sweep_figures(path, out_dir=None) -> list[Path]:
     succeeded)."""
     from matplotlib.colors import LogNorm
 
-    from fmu_src.description import mesh_teeth
+    from fmu_src.description import layout
+    from orchestrator.analysis.campbell import order_lines
     from orchestrator.analysis.metrics import stored_case
     from orchestrator.figures.base import pyplot
     from orchestrator.sweeps.file import read_sweep, read_sweep_attrs
@@ -139,7 +150,10 @@ def sweep_figures(path, out_dir=None) -> list[Path]:
     if not keys:
         raise ValueError(f"{path}: the sweep varies no field")
     case = stored_case(attrs, str(path))
-    z1 = int(mesh_teeth(case)[0][0])  # TODO(train): the orders of the input shaft's pinion
+    lay = layout(case)
+    lines = order_lines(case)
+    names = list(lay.bearing_names)
+    meshes = list(lay.mesh_names)
     ix = next((keys.index(k) for k in _SPEEDS if k in keys), 0)
     points = read_sweep(path)
     groups = _groups(points, keys, units, ix)
@@ -160,15 +174,21 @@ def sweep_figures(path, out_dir=None) -> list[Path]:
         window += f"; {failed} failed point{'s' * (failed > 1)} left out"
     paths = []
 
-    # (1) R and the bearing-force peak-to-peak
+    # (1) R of each mesh and the bearing-force peak-to-peak
     fig, axes = _grid(plt, 1 + len(groups), 3, 5.0, 4.0)
     ax = axes[0]
-    for k, (label, pts) in enumerate(groups.items()):
+    k = 0
+    for label, pts in groups.items():
         x = [p["values"][ix] for p in pts]
-        ax.plot(x, [float(p["R"]) for p in pts], "o-", color=f"C{k % 10}", label=label)
+        r = np.array([np.atleast_1d(p["R"]) for p in pts])
+        for m in range(r.shape[1]):
+            name = label + (f", mesh {meshes[m]}" if len(meshes) > 1 else "")
+            ax.plot(x, r[:, m], ["o-", "s--", "^-.", "v:"][m % 4], color=f"C{k % 10}",
+                    label=name)
+            k += 1
     ax.set_xlabel(xlabel)
     ax.set_ylabel("R = max dynamic / static mesh load [1]")
-    ax.set_title("dynamic factor R")
+    ax.set_title("dynamic factor R" + (" of each mesh" if len(meshes) > 1 else ""))
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
     ptp_axes = axes[1:]
@@ -176,49 +196,65 @@ def sweep_figures(path, out_dir=None) -> list[Path]:
         x = [p["values"][ix] for p in pts]
         ptp = np.array([p["force_ptp"] for p in pts])
         for b in range(ptp.shape[1]):
-            ax.plot(x, ptp[:, b], label=f"bearing {b + 1}", **BEARING_STYLES[b % 4])
+            ax.plot(x, ptp[:, b], label=f"bearing {names[b]}",
+                    **BEARING_STYLES[b % len(BEARING_STYLES)])
         ax.set_xlabel(xlabel)
         ax.set_ylabel("peak-to-peak ||F_b|| [N]")
         ax.set_title(f"bearing forces: {label}", fontsize=10)
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
+        ax.legend(fontsize=8, ncol=1 + (ptp.shape[1] > 4))
     top = max(float(np.max([p["force_ptp"] for p in pts])) for pts in groups.values())
     for ax in ptp_axes:
         ax.set_ylim(0.0, 1.08 * top if top > 0 else 1.0)
     _suptitle(fig, f"{head}\nR and bearing-force peak-to-peak; {window}")
     paths.append(_save(fig, out_dir / "R_ptp.png", plt))
 
-    # (2) waterfall: order spectrum of ||F_b|| at bearing 1 against the swept value
-    fig, axes = _grid(plt, len(groups), 2, 6.5, 4.6)
-    spectra = {}
-    for label, pts in groups.items():
-        spectra[label] = waterfall_data(pts, ix)
-    peak = max((float(a.max()) for _, _, a in spectra.values() if a.size), default=0.0)
-    norm = LogNorm(vmin=peak * 1e-4, vmax=peak) if peak > 0 else None
-    mesh = None
-    for ax, (label, (x, orders, amp)) in zip(axes, spectra.items(), strict=True):
-        if orders.size == 0:
-            ax.set_title(f"{label}: no spectrum (window too short)", fontsize=10)
+    # (2) waterfalls: order spectrum of ||F_b|| at each shaft's first bearing against the
+    # swept value, in orders of that shaft
+    for shaft, ratio in zip(lines["shafts"], lines["shaft_ratios"], strict=True):
+        on = [b for b, spec in enumerate(lay.bearings) if spec.shaft == shaft]
+        if not on:
             continue
-        top = orders[-1] + 0.5 * (orders[1] - orders[0] if orders.size > 1 else 1.0)
-        orders, amp = _pool(orders, amp, 300)  # lines narrower than a pixel would vanish
-        mesh = ax.pcolormesh(_edges(orders), _edges(x), np.maximum(amp, peak * 1e-6),
-                             norm=norm, cmap="viridis", shading="flat")
-        marks = [(q, name) for q, name in [(1.0, "1x")] + [(k * z1, f"{k} z1 = {k * z1}")
-                                                          for k in (1, 2, 3)] if q <= top]
-        sec = ax.secondary_xaxis("top")
-        sec.set_xticks([q for q, _ in marks], [name for _, name in marks], fontsize=8)
-        sec.tick_params(direction="inout", length=8)
-        ax.set_xlim(0.0, top)
-        ax.set_xlabel(order_label("pinion"))
-        ax.set_ylabel(xlabel)
-        ax.set_title(label, fontsize=10)
-    if mesh is not None:
-        fig.colorbar(mesh, ax=axes, label=f"bearing 1: ||F_b|| {AMPLITUDE_LABEL}")
-    _suptitle(fig, f"{head}\norder spectrum of the bearing-1 force norm (peak amplitude, "
-              f"Hann window); {window}")
-    paths.append(_save(fig, out_dir / "waterfall_bearing1.png", plt))
+        b = on[0]
+        fig, axes = _grid(plt, len(groups), 2, 6.5, 4.6)
+        spectra = {label: waterfall_data(pts, ix, b, ratio) for label, pts in groups.items()}
+        peak = max((float(a.max()) for _, _, a in spectra.values() if a.size), default=0.0)
+        norm = LogNorm(vmin=peak * 1e-4, vmax=peak) if peak > 0 else None
+        mesh = None
+        marks = [(1.0, "1x")]
+        for mesh_name, order in zip(lines["meshes"], lines["mesh_orders"], strict=True):
+            q = order / ratio
+            tag = f"{mesh_name} " if len(meshes) > 1 else ""
+            marks += [(kq * q, f"{tag}{kq}x mesh = {kq * q:.4g}") for kq in (1, 2, 3)]
+        for ax, (label, (x, orders, amp)) in zip(axes, spectra.items(), strict=True):
+            if orders.size == 0:
+                ax.set_title(f"{label}: no spectrum (window too short)", fontsize=10)
+                continue
+            top = orders[-1] + 0.5 * (orders[1] - orders[0] if orders.size > 1 else 1.0)
+            orders, amp = _pool(orders, amp, 300)  # lines narrower than a pixel would vanish
+            mesh = ax.pcolormesh(_edges(orders), _edges(x), np.maximum(amp, peak * 1e-6),
+                                 norm=norm, cmap="viridis", shading="flat")
+            shown = [(q, text) for q, text in marks if q <= top]
+            sec = ax.secondary_xaxis("top")
+            sec.set_xticks([q for q, _ in shown], [text for _, text in shown], fontsize=8,
+                           rotation=30 if len(shown) > 4 else 0, ha="left")
+            sec.tick_params(direction="inout", length=8)
+            ax.set_xlim(0.0, top)
+            ax.set_xlabel(order_label(shaft))
+            ax.set_ylabel(xlabel)
+            ax.set_title(label, fontsize=10)
+        if mesh is not None:
+            fig.colorbar(mesh, ax=axes, label=f"bearing {names[b]}: ||F_b|| {AMPLITUDE_LABEL}")
+        _suptitle(fig, f"{head}\norder spectrum of the force norm of bearing {names[b]} "
+                  f"(shaft {shaft}; peak amplitude, Hann window); {window}")
+        paths.append(_save(fig, out_dir / _waterfall_name(names[b]), plt))
     return paths
+
+
+def _waterfall_name(bearing: str) -> str:
+    """``waterfall_bearing1.png`` for a bearing numbered as the paper's, else
+    ``waterfall_bearing_<name>.png``."""
+    return f"waterfall_bearing{'' if bearing.isdigit() else '_'}{bearing}.png"
 
 
 def _pool(orders: np.ndarray, amp: np.ndarray, cells: int):

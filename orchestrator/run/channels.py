@@ -5,46 +5,75 @@ datasets of a results file (HDF5 dimension scales, so that ``xarray.open_dataset
 engine="h5netcdf")`` reads it labelled) and the variables of
 :meth:`~orchestrator.run.result.Result.to_xarray`.
 
-Dimensions: ``time`` [s] (the end of each step), ``bearing`` (1-4: 1, 2 on the pinion shaft,
-3, 4 on the gear shaft), ``axis`` (``s``, ``t``: the global frame of the gear system),
-``node`` (``pinion``, ``gear``: the two gear nodes) and ``direction`` (``u``, ``v``: their
-lateral displacements).
+Dimensions: ``time`` [s] (the end of each step); ``bearing``, ``mesh`` and ``gear``, labelled
+by the names the case gives them (:class:`gear_fmu.layout.Layout`, the case's order: the
+paper's bearings ``1`` .. ``4``, its mesh ``mesh``, its gears ``pinion`` and ``gear``); ``axis``
+(``s``, ``t``: the global frame of the gear train). :func:`coordinates` derives the labels from
+a case or its layout; nothing here counts bearings or meshes on its own.
+
+>>> from fmu_src.case import load_case
+>>> c = coordinates(load_case("two_stage_reducer"))
+>>> c["bearing"], c["mesh"]
+(('in_a', 'in_b', 'mid_a', 'mid_b', 'out_a', 'out_b'), ('stage1', 'stage2'))
+>>> channels(c)["gear_node"][0], dims("gear_node")
+((4, 2), ('time', 'gear', 'axis'))
 """
 
 from __future__ import annotations
 
 from fmu_src.units import symbol
 
-__all__ = ["CHANNELS", "COORDS", "dims"]
+__all__ = ["AXES", "DESCRIPTIONS", "UNITS", "channels", "coordinates", "dims"]
 
-#: the labels of every dimension but time
-COORDS = {
-    "bearing": (1, 2, 3, 4),
-    "axis": ("s", "t"),
-    "node": ("pinion", "gear"),
-    "direction": ("u", "v"),
-}
+#: the labels of the ``axis`` dimension: the global frame's lateral axes
+AXES = ("s", "t")
 
-#: channel name -> (dimensions after time, unit, description)
+#: channel name -> (dimensions after time, unit's dimension, description)
 _TABLE = {
     "journal_position": (("bearing", "axis"), "length",
-                         "journal-centre displacement [s, t] at bearings 1-4, global frame"),
+                         "journal-centre displacement [s, t] at each bearing, global frame"),
     "journal_velocity": (("bearing", "axis"), "velocity",
-                         "journal-centre velocity [s_dot, t_dot] at bearings 1-4, global frame"),
+                         "journal-centre velocity [s_dot, t_dot] at each bearing, global frame"),
     "bearing_force": (("bearing", "axis"), "force",
-                      "film force on the journal [F_s, F_t] at bearings 1-4"),
-    "mesh_force": ((), "force", "total normal mesh force (sum of slice loads)"),
-    "transmission_error": ((), "length",
-                           "r_b1 theta1 + r_b2 theta2 (elastic torsion at the gears)"),
-    "gear_nodes": (("node", "direction"), "length", "[u, v] of the pinion and gear nodes"),
+                      "film force on the journal [F_s, F_t] at each bearing, global frame"),
+    "mesh_force": (("mesh",), "force", "total normal force of each mesh (sum of slice loads)"),
+    "transmission_error": (("mesh",), "length",
+                           "r_b1 theta1 + r_b2 theta2 of each mesh (elastic torsion at its "
+                           "gears, driver first)"),
+    "gear_node": (("gear", "axis"), "length",
+                  "lateral displacement [s, t] of each gear's node, global frame"),
     "iterations": ((), "dimensionless", "coupled master iterations of the step"),
 }
 
-#: results channels: name -> (shape per step, unit, description), as the results writer takes
-CHANNELS = {name: (tuple(len(COORDS[d]) for d in ds), symbol(dim), text)
+#: channel name -> unit symbol (``time``: s)
+UNITS = {"time": "s"} | {name: symbol(dim) for name, (_, dim, _) in _TABLE.items()}
+#: channel name -> description
+DESCRIPTIONS = {"time": "end of the step"} | {name: text for name, (_, _, text) in
+                                               _TABLE.items()}
+
+
+def coordinates(train) -> dict[str, tuple]:
+    """The labels of every dimension but time: ``bearing``, ``mesh`` and ``gear`` names (the
+    case's order) and ``axis`` (:data:`AXES`), of a :class:`~fmu_src.case.Case` or a
+    :class:`~gear_fmu.layout.Layout`."""
+    from gear_fmu.layout import Layout
+
+    if not isinstance(train, Layout):
+        from fmu_src.description import layout
+
+        train = layout(train)
+    return {"bearing": train.bearing_names, "mesh": train.mesh_names,
+            "gear": tuple(g.name for g in train.gears), "axis": AXES}
+
+
+def channels(coords: dict) -> dict[str, tuple]:
+    """The results channels of a train with these :func:`coordinates`: name -> (shape per
+    step, unit, description), as the results writer and the memory recorder take them."""
+    return {name: (tuple(len(coords[d]) for d in ds), symbol(dim), text)
             for name, (ds, dim, text) in _TABLE.items()}
 
 
 def dims(name: str) -> tuple[str, ...]:
-    """The dimensions of a channel, ``time`` first (``time`` itself: ``("time",)``)."""
+    """The dimensions of a channel, ``time`` first (``time`` itself: ``("time",)``);
+    KeyError for a name that is no channel."""
     return ("time",) if name == "time" else ("time", *_TABLE[name][0])

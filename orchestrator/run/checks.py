@@ -29,13 +29,18 @@ from fmu_src import description
 from fmu_src.case import Case
 from gear_fmu.modal.analyses import exact_mean_mesh_stiffness
 from gear_fmu.modal.damped_modes import damped_modes, under_resolved
+from orchestrator.analysis.campbell import mesh_shares
 
-__all__ = ["EPS_LIMIT", "PERIOD_ERROR_LIMIT", "film_capacities", "newmark_period_error",
-           "newmark_resonance_response", "overload_message", "reference_step",
+__all__ = ["EPS_LIMIT", "FIRST_GUESS_EPS", "PERIOD_ERROR_LIMIT", "film_capacities",
+           "newmark_period_error", "newmark_resonance_response", "overload_message",
+           "reference_step", "shaft_unbalance",
            "steps_for_period_error", "time_step_findings", "unbalance_warnings"]
 
 #: eccentricity ratio up to which the static solution searches (bearing_fmu.static)
 EPS_LIMIT = 0.995
+#: eccentricity ratio within which the master's first guess of X0 keeps each journal
+#: (:meth:`orchestrator.coupling.master.BearingSet.static_position`: 0.95 C)
+FIRST_GUESS_EPS = 0.95
 #: eccentricity ratio of the load capacity the unbalance warning compares with (minimum film
 #: thickness 0.1 C, a common design limit; the film force grows without bound towards 1)
 EPS_DESIGN = 0.9
@@ -73,7 +78,7 @@ def film_capacities(case: Case, eps: float = EPS_LIMIT) -> tuple[np.ndarray, str
     return out, name
 
 
-def _shaft_unbalance(lay, shaft: str) -> tuple[float, list[str]]:
+def shaft_unbalance(lay, shaft: str) -> tuple[float, list[str]]:
     """``|sum M e_mu exp(i phase)|`` of the unbalanced gears and discs on a shaft [kg m] (M
     each body's ``unbalance_mass``, Eq. 10), and their unbalance fields."""
     total, keys = 0j, []
@@ -94,7 +99,7 @@ def unbalance_warnings(case: Case) -> list[str]:
     capacity, model = film_capacities(case, EPS_DESIGN)
     out = []
     for shaft, speed in zip(lay.shafts, lay.speeds, strict=True):
-        me, keys = _shaft_unbalance(lay, shaft.name)
+        me, keys = shaft_unbalance(lay, shaft.name)
         force = me * speed**2
         on = [j for j, b in enumerate(lay.bearings) if b.shaft == shaft.name]
         cap = float(sum(capacity[j] for j in on))
@@ -109,22 +114,29 @@ def unbalance_warnings(case: Case) -> list[str]:
     return out
 
 
-def overload_message(case: Case) -> str | None:
+def overload_message(case: Case, eps: float = EPS_LIMIT) -> str | None:
     """Why a static solution cannot exist, in the case's terms, if a bearing's static load
-    (the structure on stiff supports) exceeds its film's capacity; None otherwise."""
+    (the structure on stiff supports) exceeds its film's capacity at the eccentricity ratio
+    ``eps`` (:data:`EPS_LIMIT`, or :data:`FIRST_GUESS_EPS` where the master's first guess of
+    X0 stops); None otherwise."""
     from gear_fmu.modal.analyses import support_loads
 
     loads = np.hypot(*support_loads(description.structure(case)).T)
-    capacity, model = film_capacities(case)
+    capacity, model = film_capacities(case, eps)
     over = [b for b in range(len(loads)) if loads[b] > capacity[b]]
     if not over:
         return None
-    names = case.names("bearings")
+    lay = description.layout(case)
+    names = lay.bearing_names
+    speeds = description.bearing_speeds(case)
     what = "; ".join(f"bearing {names[b]} carries {loads[b]:.4g} N, its film at most "
-                     f"{capacity[b]:.4g} N" for b in over)
-    return (f"{what} (static loads with T = {case['drive.torque']:g} N m, {model} film at "
-            f"eccentricity {EPS_LIMIT}, {case['drive.speed']:g} rad/s): raise "
-            f"{', '.join(RAISE_CAPACITY)}, or lower {LOWER_LOAD}")
+                     f"{capacity[b]:.4g} N (shaft {lay.bearings[b].shaft} at {speeds[b]:.4g} "
+                     "rad/s)" for b in over)
+    fields = ", ".join(f.replace("*", names[over[0]] if len(over) == 1 else "*")
+                       for f in RAISE_CAPACITY)
+    return (f"{what} (static loads with an input torque of {case['drive.torque']:g} N m, "
+            f"{model} film at eccentricity {eps:g}): raise {fields}, or lower "
+            f"{LOWER_LOAD}")
 
 
 def newmark_period_error(steps_per_period):
@@ -181,6 +193,16 @@ def reference_step(case: Case) -> Path | None:
     return path if shipped[key] == case[key] else None
 
 
+def _strain_in(meshes, shares) -> str:
+    """``"53 % of its strain energy in the mesh"`` (a train of one mesh) or ``"21 % of its
+    strain energy in the meshes: stage1 15 %, stage2 6 %"``."""
+    total = float(np.nansum(shares))
+    if len(meshes) == 1:
+        return f"{100 * total:.0f} % of its strain energy in the mesh"
+    return (f"{100 * total:.0f} % of its strain energy in the meshes: " + ", ".join(
+        f"{name} {100 * v:.0f} %" for name, v in zip(meshes, shares, strict=True)))
+
+
 def time_step_findings(case: Case, laws: AffineLaws, dt: float,
                        structure=None) -> tuple[list[str], list[str]]:
     """Warnings and notes on the damped mesh modes whose period Newmark lengthens by more than
@@ -211,6 +233,8 @@ def time_step_findings(case: Case, laws: AffineLaws, dt: float,
         st = description.structure(case, damping_bearing_stiffness=sym)
     k_mesh = exact_mean_mesh_stiffness(st, sym)  # as gsb modal: the same modes
     modes = damped_modes(st.system, st.damping_full, k_mesh, kb, cb)
+    shares = mesh_shares(st.system, modes, k_mesh)
+    meshes = description.layout(case).mesh_names
     steps = case["simulation.steps_per_mesh_period"]
     enough = steps_for_period_error()
     costs = []
@@ -218,8 +242,8 @@ def time_step_findings(case: Case, laws: AffineLaws, dt: float,
         n = m["steps_per_period"]
         need = int(np.ceil(steps * enough / n))
         text = (f"the damped mesh mode at {m['frequency_hz']:.0f} Hz (damping ratio "
-             f"{m['damping_ratio']:.3f}, {100 * m['mesh_energy_fraction']:.0f} % of its strain "
-             f"energy in the mesh) gets {n:.1f} time steps per period (dt = {dt:.3e} s): "
+             f"{m['damping_ratio']:.3f}, {_strain_in(meshes, shares[m['mode'] - 1])}) gets "
+             f"{n:.1f} time steps per period (dt = {dt:.3e} s): "
              f"Newmark's rule lengthens its period by {100 * newmark_period_error(n):.1f} % "
              f"(it adds no numerical damping): its resonances fall as much lower and a forcing at "
              f"{m['frequency_hz']:.0f} Hz gets "
@@ -234,8 +258,8 @@ def time_step_findings(case: Case, laws: AffineLaws, dt: float,
         return [f"{text}; set simulation.steps_per_mesh_period >= {need} (now {steps}) for a "
                 f"period error below {limit}" for text, need in costs], []
     need = max(n for _, n in costs)
-    return [], [f"time step: {steps} steps per mesh period, the paper's, which the shipped "
-                f"case {case.name} keeps on purpose: "
+    return [], [f"time step: {steps} steps per period of the fastest mesh, which the shipped "
+                f"case {case.name} keeps on purpose (its file says why): "
                 + "; ".join(text for text, _ in costs)
                 + f"; simulation.steps_per_mesh_period >= {need} keeps every mesh mode's period "
                 f"error below {limit}"]

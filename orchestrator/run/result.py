@@ -2,15 +2,16 @@
 
 :func:`orchestrator.api.simulate` returns a :class:`Result`; :meth:`Result.from_file` reads one
 from a results file. The channels and their dimensions are those of
-:mod:`orchestrator.run.channels` (``time``, ``bearing`` 1-4, ``axis`` s/t, ...), and
-:meth:`Result.to_xarray` labels them:
+:mod:`orchestrator.run.channels` (``time``, ``bearing``, ``mesh`` and ``gear`` by the case's
+names, ``axis`` s/t), and :meth:`Result.to_xarray` labels them:
 
 >>> import numpy as np
 >>> r = Result({"time": np.array([1e-4, 2e-4]),
-...             "mesh_force": np.array([2250.0, 2260.0])}, {"case": "demo"})
+...             "mesh_force": np.array([[2250.0], [2260.0]])}, {"case": "demo"},
+...            coords={"mesh": ("mesh",)})
 >>> float(r["mesh_force"].max())
 2260.0
->>> r.to_xarray().mesh_force.sel(time=2e-4).item()
+>>> r.to_xarray().mesh_force.sel(time=2e-4, mesh="mesh").item()
 2260.0
 """
 
@@ -20,7 +21,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from orchestrator.run.channels import CHANNELS, COORDS, dims
+from orchestrator.run.channels import DESCRIPTIONS, UNITS, coordinates, dims
 
 __all__ = ["MemoryRecorder", "Result"]
 
@@ -29,12 +30,15 @@ __all__ = ["MemoryRecorder", "Result"]
 class Result:
     """The channels of a run (``time`` [s] first; arrays with ``time`` as first axis), the run's
     settings and report (``attrs``: the root attributes a results file would hold, numbers in
-    SI units, each unit in ``<name>_unit``) and, for a run of this process, its
-    :class:`~orchestrator.run.runner.RunSummary` (``summary``; None when read from a file)."""
+    SI units, each unit in ``<name>_unit``), for a run of this process its
+    :class:`~orchestrator.run.runner.RunSummary` (``summary``; None when read from a file) and
+    ``coords``, the labels of the dimensions (:func:`orchestrator.run.channels.coordinates`;
+    None: those of the case stored in ``attrs["case_toml"]``)."""
 
     channels: dict[str, np.ndarray]
     attrs: dict = field(default_factory=dict)
     summary: object = None
+    coords: dict | None = None
 
     def __getitem__(self, name: str) -> np.ndarray:
         try:
@@ -56,25 +60,34 @@ class Result:
     def as_dict(self) -> dict:
         """The form :func:`orchestrator.run.results.read_results` gives (channels, ``units``,
         ``attrs``), which the analysis functions take."""
-        units = {n: CHANNELS[n][1] if n in CHANNELS else "s" for n in self.channels}
-        return {**self.channels, "units": units, "attrs": dict(self.attrs)}
+        units = {n: UNITS.get(n, "") for n in self.channels}
+        return {**self.channels, "units": units, "attrs": dict(self.attrs),
+                "coords": self.coordinates()}
+
+    def coordinates(self) -> dict:
+        """The labels of the dimensions (``coords``, else those of the stored case)."""
+        if self.coords is None:
+            from orchestrator.analysis.metrics import stored_case
+
+            self.coords = coordinates(stored_case(self.attrs))
+        return self.coords
 
     def to_xarray(self):
         """An :class:`xarray.Dataset`: one variable per channel on its named dimensions,
-        the labels of ``bearing``, ``axis``, ``node`` and ``direction`` as coordinates, the
-        units in each variable's ``units`` attribute and the settings as its attributes."""
+        the labels of ``bearing``, ``mesh``, ``gear`` and ``axis`` as coordinates, the units in
+        each variable's ``units`` attribute and the settings as its attributes."""
         import xarray as xr
 
         variables = {}
         for name, values in self.channels.items():
             if name == "time":
                 continue
-            unit, text = CHANNELS[name][1:]
             variables[name] = (dims(name), np.asarray(values),
-                               {"units": unit, "description": text})
+                               {"units": UNITS[name], "description": DESCRIPTIONS[name]})
         used = {d for name in variables for d in dims(name)}
         coords = {"time": ("time", self.time, {"units": "s", "description": "end of the step"})}
-        coords |= {d: (d, list(labels)) for d, labels in COORDS.items() if d in used}
+        coords |= {d: (d, [str(x) for x in labels]) for d, labels in self.coordinates().items()
+                   if d in used}
         return xr.Dataset(variables, coords=coords, attrs=_netcdf_attributes(self.attrs))
 
     @classmethod
@@ -84,8 +97,9 @@ class Result:
 
         data = read_results(path)
         attrs = data.pop("attrs")
+        coords = data.pop("coords")
         data.pop("units")
-        return cls(data, attrs)
+        return cls(data, attrs, coords=coords or None)
 
 
 def _netcdf_attributes(attrs: dict) -> dict:
@@ -105,10 +119,11 @@ class MemoryRecorder:
     """Keeps the rows of a run in memory; the same ``append``/``close`` as
     :class:`orchestrator.run.results.ResultsWriter`, so the runner writes to either."""
 
-    def __init__(self, channels: dict = CHANNELS, attrs: dict | None = None):
+    def __init__(self, channels: dict, attrs: dict | None = None, coords: dict | None = None):
         self.channel_shapes = {"time": ()} | {n: shape for n, (shape, _, _) in channels.items()}
         self._rows: dict[str, list] = {n: [] for n in self.channel_shapes}
         self.attrs = dict(attrs or {})
+        self.coords = coords
         self.rows = 0
 
     def append(self, **row) -> None:
@@ -130,4 +145,4 @@ class MemoryRecorder:
     def result(self, summary=None) -> Result:
         channels = {n: (np.array(rows) if rows else np.empty((0, *self.channel_shapes[n])))
                     for n, rows in self._rows.items()}
-        return Result(channels, self.attrs, summary)
+        return Result(channels, self.attrs, summary, self.coords)

@@ -42,7 +42,7 @@ from pathlib import Path
 import numpy as np
 
 from fmu_src.state_codec import FORMAT_VERSION, StateFormatError
-from orchestrator.run.channels import COORDS, dims
+from orchestrator.run.channels import dims
 
 __all__ = ["ResultsWriter", "add_attributes", "attribute_value", "clear_write_flags",
            "csv_column_labels", "export_csv", "live_writer", "open_results", "read_attributes",
@@ -388,8 +388,10 @@ def read_attributes(path) -> dict:
 
 
 def read_results(path) -> dict:
-    """All channels as numpy arrays, plus ``attrs`` (root) and ``units``; works while the
-    file is being written (the rows flushed so far)."""
+    """All channels as numpy arrays, plus ``attrs`` (root), ``units`` and ``coords`` (the
+    labels of the dimensions but time, as strings: ``{"bearing": ("1", ...), ...}``, from the
+    file's dimension scales; empty for a file without them); works while the file is being
+    written (the rows flushed so far)."""
     with open_results(path) as f:
         names = [n for n in f if _is_channel(f[n])]
         out = {name: f[name][()] for name in names}
@@ -397,6 +399,21 @@ def read_results(path) -> dict:
         out = {name: v[:rows] for name, v in out.items()}  # channels flushed one by one
         out["units"] = {name: _unit(f[name]) for name in names}
         out["attrs"] = _attributes(f)
+        out["coords"] = _labels(f, names)
+    return out
+
+
+def _labels(f, names) -> dict:
+    """The labels of the dimension scales attached to the channels ``names`` (time aside)."""
+    out = {}
+    for name in names:
+        proxies = f[name].dims
+        for axis in range(1, len(proxies)):
+            for scale in proxies[axis].values():
+                dim = scale.name.lstrip("/")
+                if dim not in out:
+                    out[dim] = tuple(v.decode() if isinstance(v, bytes) else str(v)
+                                     for v in scale[()])
     return out
 
 
@@ -431,32 +448,36 @@ def read_checkpoint(path) -> tuple[int, bytes] | None:
         return rows, f[f"resume/slot{slot}"][:nbytes].tobytes()
 
 
-def csv_column_labels(name: str, shape: tuple) -> list[str]:
+def csv_column_labels(name: str, shape: tuple, coords: dict | None = None) -> list[str]:
     """The CSV labels of a channel's components in C order: ``name[dimension=label]...``
-    with the dimensions and labels of :mod:`orchestrator.run.channels` (bearings 1-4 as in
-    the prints and figures, axes s and t), e.g. ``journal_position[bearing=1][axis=t]``; a
-    channel not described there numbers its components from 1 (``name[1][2]``). No comma
-    inside a label, so any CSV reader splits the header right."""
+    with the dimensions of :mod:`orchestrator.run.channels` and the labels ``coords`` (the
+    case's names of its bearings, meshes and gears, as in the prints and figures; axes s and
+    t), e.g. ``journal_position[bearing=in_a][axis=t]``; a channel not described there, or
+    whose labels are not given, numbers its components from 1 (``name[1][2]``). Labels are
+    made of letters, digits and ``_`` (:func:`gear_fmu.layout.check_name`): no comma inside
+    a label, so any CSV reader splits the header right."""
+    coords = coords or {}
     try:
         names = dims(name)[1:]
     except KeyError:
         names = ()
-    if len(names) != len(shape) or any(len(COORDS[d]) != n for d, n in zip(names, shape,
-                                                                            strict=True)):
+    if len(names) != len(shape) or any(len(coords.get(d, ())) != n
+                                       for d, n in zip(names, shape, strict=True)):
         return [name + "".join(f"[{i + 1}]" for i in idx) for idx in np.ndindex(*shape)]
-    return [name + "".join(f"[{d}={COORDS[d][i]}]" for d, i in zip(names, idx, strict=True))
+    return [name + "".join(f"[{d}={coords[d][i]}]" for d, i in zip(names, idx, strict=True))
             for idx in np.ndindex(*shape)]
 
 
 def export_csv(path, csv_path, channels=None, overwrite: bool = False) -> Path:
     """Write the chosen channels (default: all) as CSV: one row per time step, a column per
-    component labelled by :func:`csv_column_labels` and its unit (e.g.
-    ``journal_position[bearing=1][axis=t] [m]``), 17 significant digits. Raises
+    component labelled by :func:`csv_column_labels` with the file's own labels and its unit
+    (e.g. ``journal_position[bearing=1][axis=t] [m]``), 17 significant digits. Raises
     FileExistsError if ``csv_path`` exists unless ``overwrite``."""
     csv_path = Path(csv_path)
     if csv_path.exists() and not overwrite:
         raise FileExistsError(f"{csv_path} exists")
     data = read_results(path)
+    coords = data.pop("coords")
     chosen = channels or [n for n in data if n not in ("units", "attrs")]
     unknown = [n for n in chosen if n not in data or n in ("units", "attrs")]
     if unknown:
@@ -470,7 +491,7 @@ def export_csv(path, csv_path, channels=None, overwrite: bool = False) -> Path:
         arr = np.asarray(data[name])
         shape = arr.shape[1:]
         flat = arr.reshape(n_rows, -1)
-        for j, label in enumerate(csv_column_labels(name, shape)):
+        for j, label in enumerate(csv_column_labels(name, shape, coords)):
             heads.append(f"{label} [{data['units'][name]}]")
             cols.append(flat[:, j])
     np.savetxt(csv_path, np.column_stack(cols), delimiter=",", header=",".join(heads),

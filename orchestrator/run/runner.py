@@ -22,20 +22,23 @@ that observes the steps: a results file (:class:`~orchestrator.run.results.Resul
    continues it). The file's name and what happens to an existing one:
    :mod:`orchestrator.run.files`.
 
-Channels (:data:`~orchestrator.run.channels.CHANNELS`, with named dimensions):
-``journal_position`` (4, 2) [s, t] and ``journal_velocity`` (4, 2) of the journal centres,
-``bearing_force`` (4, 2),
-``mesh_force``, ``transmission_error``, ``gear_nodes`` (2, 2) (u, v of the pinion and gear
-nodes), ``iterations`` (coupled iterations of the step).
+Channels (:func:`orchestrator.run.channels.channels`, with named dimensions, labelled by the
+case's names of its nb bearings, its meshes and its gears): ``journal_position`` (nb, 2)
+[s, t] and ``journal_velocity`` (nb, 2) of the journal centres, ``bearing_force`` (nb, 2),
+``mesh_force`` (n_meshes,), ``transmission_error`` (n_meshes,), ``gear_node`` (n_gears, 2)
+(s, t of each gear's node), ``iterations`` (coupled iterations of the step).
 
-Report (:func:`orchestrator.analysis.metrics.run_report`, over the last gear revolution or the
-last half of a shorter run; :meth:`RunSummary.report_text`), stored as numeric root attributes
-of the results file once the transient stops (complete, failed or interrupted; at least 2 steps):
-``dynamic_factor`` [1] (R, max mesh force over the static load), ``bearing_force_ptp`` (4,) [N]
-(peak-to-peak of ||F_b||), ``line_amplitudes`` (4, n) [N] (peak amplitudes of the lines of
-||F_b||, NaN where the window does not resolve a line), ``line_orders`` (n,) [1] (pinion orders),
-``line_labels`` (n,) (strings: "1x", "gear_1x", "26x", ...) and ``report_window`` (2,) [s]
-(start and end of the window); each numeric attribute with a unit has it in ``<name>_unit``
+Report (:func:`orchestrator.analysis.metrics.run_report`, over the last revolution of the
+slowest shaft or the last half of a shorter run; :meth:`RunSummary.report_text`), stored as
+numeric root attributes of the results file once the transient stops (complete, failed or
+interrupted; at least 2 steps): ``dynamic_factor`` (n_meshes,) [1] (R of each mesh, its max
+force over its static load), ``transmission_error_ptp`` (n_meshes,) [m],
+``bearing_force_ptp`` (nb,) [N] (peak-to-peak of ||F_b||), ``line_amplitudes`` (nb, n) [N]
+(peak amplitudes of the lines of ||F_b||, NaN where the window does not resolve a line),
+``line_frequencies`` (n,) [Hz], ``line_orders`` (nb, n) [1] (cycles per revolution of each
+bearing's shaft), ``line_labels`` (n,) (strings: "pinion_shaft_1x", "mesh_GMF", ...),
+``report_window`` (2,) [s] (start and end of the window) and ``report_window_kind`` (its
+name); each numeric attribute with a unit has it in ``<name>_unit``
 (:data:`~orchestrator.run.spec.ATTRIBUTE_UNITS`).
 """
 
@@ -52,13 +55,20 @@ from pathlib import Path
 import numpy as np
 
 from bearing_fmu.blas_threads import one_blas_thread
+from fmu_src import description
 from fmu_src.case import Case
 from fmu_src.state_codec import StateFormatError
 from orchestrator.coupling.master import StepReport, decode_checkpoint
 from orchestrator.coupling.system import build_master
 from orchestrator.run import files as run_files
-from orchestrator.run.channels import CHANNELS, COORDS, dims
-from orchestrator.run.checks import overload_message, time_step_findings, unbalance_warnings
+from orchestrator.run.channels import channels, coordinates, dims
+from orchestrator.run.checks import (
+    FIRST_GUESS_EPS,
+    overload_message,
+    shaft_unbalance,
+    time_step_findings,
+    unbalance_warnings,
+)
 from orchestrator.run.progress import Progress, RunInterrupted, deferred_signals
 from orchestrator.run.result import MemoryRecorder, Result
 from orchestrator.run.results import (
@@ -91,9 +101,9 @@ class RunSummary:
     wall_time: float  # s, transient only
     static_time: float  # s
     iterations: int  # coupled iterations of the transient
-    bearing_evaluations: int  # calls of the bearing set (4 bearings each)
+    bearing_evaluations: int  # calls of the bearing set (every bearing each)
     static_iterations: int
-    static_positions: np.ndarray  # (4, 2) m
+    static_positions: np.ndarray  # (nb, 2) m
     report: dict | None = None  # orchestrator.analysis.metrics.run_report, None below 2 steps
     warnings: list = field(default_factory=list)  # sentences of the checks before the transient
     notes: list = field(default_factory=list)  # what the checks state once (a deliberate step)
@@ -116,42 +126,72 @@ class RunSummary:
                     f"them again")
         return (f"{self.steps} steps in {self.wall_time:.1f} s ({self.steps_per_second:.0f} "
                 f"steps/s), {self.iterations_per_step:.2f} coupled iterations per step, "
-                f"{4 * self.bearing_evaluations} bearing evaluations; static solution in "
+                f"{len(self.static_positions) * self.bearing_evaluations} bearing "
+                f"evaluations; static solution in "
                 f"{self.static_iterations} iterations ({self.static_time:.2f} s)"
                 + (f"; {self.relaxed_steps} step(s) relaxed at a kink of a bearing law"
                    if self.relaxed_steps else ""))
 
     def report_text(self) -> str:
-        """The report (``report``) in a few lines: R, bearing-force peak-to-peak [N] and a
-        table of the line amplitudes of ||F_b|| [N] per bearing."""
+        """The report (``report``) in a few lines: R and the transmission-error peak-to-peak
+        of each mesh, the bearing-force peak-to-peak [N] and a table of the line amplitudes
+        of ||F_b|| [N] per bearing, each named as in the case."""
         r = self.report
         if r is None:
             return f"no report: {self.steps} step(s), at least 2 needed"
-        t0, t1 = r["window_s"]
-        ptp = ", ".join(f"{b + 1}: {v:.0f}" for b, v in enumerate(r["bearing_force_ptp"]))
-        lines = [f"dynamic factor R = {r['dynamic_factor']:.3f} ({r['window_kind']}, "
-                 f"t = {t0:.6g} - {t1:.6g} s)",
-                 f"bearing force peak-to-peak [N]: {ptp}",
-                 "line amplitudes of ||F_b|| [N]:",
-                 "bearing" + "".join(f"{label:>9}" for label in r["line_labels"])]
-        amplitudes = np.asarray(r["line_amplitudes"])
-        for b, row in enumerate(amplitudes):
-            lines.append(f"{b + 1:>7}" + "".join("        -" if np.isnan(v) else f"{v:9.1f}"
-                                                for v in row))
-        if np.isnan(amplitudes).any():
-            lines.append("(-: a line the window does not resolve)")
-        return "\n".join(lines)
+        return report_text(r)
+
+
+def report_text(r: dict) -> str:
+    """:meth:`RunSummary.report_text` of a report
+    (:func:`orchestrator.analysis.metrics.run_report`)."""
+    t0, t1 = r["window_s"]
+    meshes, bearings = list(r["mesh_names"]), list(r["bearing_names"])
+    R, te = np.atleast_1d(r["dynamic_factor"]), np.atleast_1d(r["transmission_error_ptp"])
+    lines = [f"report over the {r['window_kind']} (t = {t0:.6g} - {t1:.6g} s):"]
+    if len(meshes) == 1:
+        which = "" if meshes[0] == "mesh" else f" (mesh {meshes[0]})"  # a pair's usual name
+        lines.append(f"dynamic factor R = {R[0]:.3f}, transmission error peak-to-peak "
+                     f"{te[0] * 1e6:.3g} um{which}")
+    else:
+        lines.append("dynamic factor R, transmission error peak-to-peak per mesh: "
+                     + "; ".join(f"{m}: R = {v:.3f}, TE {e * 1e6:.3g} um"
+                                 for m, v, e in zip(meshes, R, te, strict=True)))
+    lines.append("bearing force peak-to-peak [N]: " + ", ".join(
+        f"{b}: {v:.0f}" for b, v in zip(bearings, r["bearing_force_ptp"], strict=True)))
+    amplitudes = np.asarray(r["line_amplitudes"])
+    width = max(8, *(len(b) + 1 for b in bearings))
+    label_width = max(len(s) for s in r["line_labels"]) + 1
+    lines.append("line amplitudes of ||F_b|| [N] per bearing:")
+    lines.append(f"{'line':<{label_width}}{'f [Hz]':>9}"
+                 + "".join(f"{b:>{width}}" for b in bearings))
+    for k, label in enumerate(r["line_labels"]):
+        lines.append(f"{label:<{label_width}}{r['line_frequencies'][k]:9.4g}" + "".join(
+            f"{'-':>{width}}" if np.isnan(v) else f"{v:{width}.1f}" for v in amplitudes[:, k]))
+    orders = np.asarray(r["line_orders"])
+    lines.append("orders of the lines, cycles per revolution of each bearing's shaft:")
+    seen: dict[tuple, list] = {}
+    for b, name in enumerate(bearings):
+        key = tuple(np.round(orders[b], 9))
+        seen.setdefault(key, []).append(name)
+    for key, names in seen.items():
+        lines.append(f"  bearing{'s' * (len(names) > 1)} {', '.join(names)}: " + ", ".join(
+            f"{label} {q:.4g}" for label, q in zip(r["line_labels"], key, strict=True)))
+    if np.isnan(amplitudes).any():
+        lines.append("(-: a line the window does not resolve)")
+    return "\n".join(lines)
 
 
 @dataclass
 class Static:
-    """What the static step leaves: the master's report, X0 (4, 2) [m], the static mesh force
-    [N] and transmission error [m], the checks' warnings and notes and the wall time [s]."""
+    """What the static step leaves: the master's report, X0 (nb, 2) [m], the static force [N]
+    and transmission error [m] of each mesh, the checks' warnings and notes and the wall time
+    [s]."""
 
     report: StepReport
     x0: np.ndarray
-    mesh_force: float
-    transmission_error: float
+    mesh_force: np.ndarray
+    transmission_error: np.ndarray
     warnings: list
     seconds: float
     notes: list = field(default_factory=list)
@@ -202,23 +242,27 @@ class StepFailed(Exception):
 
 def failure_text(case: Case, cause: BaseException) -> str:
     """What failed in a step, for the user: for a bearing that carries where it failed
-    (``bearing``, 1-based, and ``state``, the global s, t [m] and their rates [m/s], as the
-    in-process bearing set and the FMU transport attach them), the bearing, its journal's
-    position in um and eccentricity ratio against the clearance, and what to change; else the
-    cause's own message."""
-    bearing, state = getattr(cause, "bearing", None), getattr(cause, "state", None)
-    if bearing is None or state is None or len(state) != 4:
+    (``bearing``, its name, or ``bearing_index``, its 0-based place in the case's order, and
+    ``state``, the global s, t [m] and their rates [m/s], as the in-process bearing set and
+    the FMU transport attach them), the bearing by name, its journal's position in um and
+    eccentricity ratio against the clearance, and what to change; else the cause's own
+    message."""
+    name, state = _failed_bearing(case, cause), getattr(cause, "state", None)
+    if name is None or state is None or len(state) != 4:
         return str(cause)
     s, t, sd, td = (float(v) for v in state)
-    name = case.names("bearings")[bearing - 1]
     clearance = float(case[f"bearings.{name}.clearance"])
     eps = math.hypot(s, t) / clearance
     where = (f"s = {s * 1e6:.1f} um, t = {t * 1e6:.1f} um (radial clearance "
              f"{clearance * 1e6:.1f} um)")
     if eps >= 1.0:
-        if unbalance_warnings(case):
-            todo = ("the unbalance force exceeds the bearings' load capacity (the warning "
-                    "above): lower gears.*.unbalance (--unbalance) or drive.speed (--speed)")
+        lay = description.layout(case)
+        shaft = lay.bearings[case.names("bearings").index(name)].shaft
+        if any(f"shaft {shaft}," in w for w in unbalance_warnings(case)):
+            keys = " or ".join(shaft_unbalance(lay, shaft)[1])
+            todo = (f"the unbalance force of shaft {shaft} exceeds its bearings' load capacity "
+                    f"(the warning above): lower {keys} (--unbalance sets every gear's) or "
+                    "drive.speed (--speed)")
         else:
             todo = ("lower the load (--torque, --unbalance) or the speed (--speed), or give "
                     f"the film more capacity (bearings.{name}.viscosity, "
@@ -228,6 +272,21 @@ def failure_text(case: Case, cause: BaseException) -> str:
     reason = str(getattr(cause, "reason", "")) or str(cause)
     return (f"bearing {name} failed at {where}, eccentricity ratio {eps:.4g}, velocity "
             f"s_dot = {sd:.4g} m/s, t_dot = {td:.4g} m/s: {reason}")
+
+
+def _failed_bearing(case: Case, cause: BaseException) -> str | None:
+    """The name of the bearing a step's error carries (module :func:`failure_text`), None if
+    it carries none the case knows."""
+    names = case.names("bearings")
+    bearing = getattr(cause, "bearing", None)
+    if isinstance(bearing, str) and bearing in names:
+        return bearing
+    index = getattr(cause, "bearing_index", None)
+    if isinstance(index, (int, np.integer)) and 0 <= index < len(names):
+        return names[int(index)]
+    if isinstance(bearing, (int, np.integer)) and 1 <= bearing <= len(names):
+        return names[int(bearing) - 1]  # a 1-based number (transports of earlier versions)
+    return None
 
 
 class Runner:
@@ -263,12 +322,14 @@ class Runner:
             static = master.solve_static()
         except Exception as exc:
             try:
-                why = overload_message(case)
+                why = overload_message(case) or overload_message(case, FIRST_GUESS_EPS)
             except Exception:  # the explanation must not hide the failure
                 why = None
             if why is not None:
                 raise RunError(f"{case.source}: no static solution: {why}") from None
-            raise RunError(f"{case.source}: static solution failed: {exc}") from exc
+            name = _failed_bearing(case, exc)
+            at = "" if name is None else f" at bearing {name}"
+            raise RunError(f"{case.source}: static solution failed{at}: {exc}") from exc
         x0 = static.states[:, :2].copy()
         self.stop_if_asked("after the static solution")
         # leave initialisation: linear bearings freeze, the structure builds its modal
@@ -277,7 +338,7 @@ class Runner:
         master.exit_initialization()
         # read after leaving initialisation: a gear-shaft FMU in initialisation mode would
         # solve its static problem again for outputs read after the final laws were set
-        mesh_force, te = structure.mesh_force(), structure.transmission_error()
+        mesh_force, te, _ = structure.step_outputs()
         try:
             warnings, notes = time_step_findings(case, master.laws, self.spec.dt,
                                                  structure.physics)
@@ -314,7 +375,7 @@ class Runner:
                 recorder.append(time=(i + 1) * dt, journal_position=report.states[:, :2],
                                 journal_velocity=report.states[:, 2:],
                                 bearing_force=report.bearing_force, mesh_force=mesh_force,
-                                transmission_error=te, gear_nodes=gear_nodes,
+                                transmission_error=te, gear_node=gear_nodes,
                                 iterations=report.iterations)
                 last, i = i, i + 1
             else:
@@ -346,7 +407,7 @@ class Runner:
                 time=np.arange(first + 1, first + 1 + block.count) * dt,
                 journal_position=states[:, :, :2], journal_velocity=states[:, :, 2:],
                 bearing_force=block.bearing_force, mesh_force=block.mesh_force,
-                transmission_error=block.transmission_error, gear_nodes=block.gear_nodes,
+                transmission_error=block.transmission_error, gear_node=block.gear_nodes,
                 iterations=block.iterations)
 
     def finish(self) -> None:
@@ -377,7 +438,8 @@ def simulate_case(spec: RunSpec, progress: bool = False, echo_warnings: bool = T
     from orchestrator.analysis.metrics import run_report
 
     attrs = with_units(spec.attributes())
-    recorder = MemoryRecorder(CHANNELS, attrs)
+    coords = coordinates(spec.case)
+    recorder = MemoryRecorder(channels(coords), attrs, coords)
     with deferred_signals() as received:
         runner = Runner(spec, received, echo_warnings)
         try:
@@ -576,13 +638,14 @@ def _run_to_file(spec: RunSpec, attrs: dict, where, first: int = 0, blob=None,
                 attrs |= _static_attributes(static)
             runner.stop_if_asked("after the static solution")
             try:
+                coords = coordinates(spec.case)
                 if blob is None:
-                    writer = ResultsWriter(path, CHANNELS, with_units(attrs),
+                    writer = ResultsWriter(path, channels(coords), with_units(attrs),
                                            flush_seconds=flush_seconds,
                                            checkpoint=runner.master.checkpoint, dims=dims,
-                                           coords=COORDS)
+                                           coords=coords)
                 else:
-                    writer = ResultsWriter.resume(path, CHANNELS, first, attrs,
+                    writer = ResultsWriter.resume(path, channels(coords), first, attrs,
                                                   flush_seconds=flush_seconds,
                                                   checkpoint=runner.master.checkpoint)
             except OSError as exc:
@@ -631,9 +694,12 @@ def _rows_in(path: Path) -> int | str:
 
 def _report_attributes(report: dict) -> dict:
     return {"dynamic_factor": report["dynamic_factor"],
+            "transmission_error_ptp": report["transmission_error_ptp"],
             "bearing_force_ptp": report["bearing_force_ptp"],
             "line_amplitudes": report["line_amplitudes"], "line_orders": report["line_orders"],
-            "line_labels": report["line_labels"], "report_window": report["window_s"]}
+            "line_frequencies": report["line_frequencies"],
+            "line_labels": report["line_labels"], "report_window": report["window_s"],
+            "report_window_kind": report["window_kind"]}
 
 
 def _store_report(path: Path) -> dict | None:

@@ -108,13 +108,13 @@ class RunSpec:
 
     def attributes(self) -> dict:
         """The settings stored as root attributes of the results file (numbers in SI units;
-        :func:`with_units` adds the units): ``speed`` the input speed, ``speeds`` and
-        ``clearance`` per bearing, ``unbalance`` per gear, ``teeth`` of the first mesh's gears
-        (driver first)."""
+        :func:`with_units` adds the units): ``speed`` the input speed, ``speeds``,
+        ``bearing_shafts`` and ``clearance`` per bearing (the case's bearing order),
+        ``unbalance`` per gear, ``mesh_teeth`` (n_meshes, 2) the teeth of each mesh's gears,
+        driver first. The names of the bearings, meshes and gears label the file's
+        dimensions (:mod:`orchestrator.run.channels`)."""
         case = self.case
         lay = description.layout(case)
-        # TODO(train): the figures read the first mesh's teeth as the pinion's and the gear's
-        teeth = [lay.gear(g).teeth for g in lay.drivers[0]] if lay.meshes else []
         return {
             "kind": "run", "case": case["case.name"], "case_file": str(case.source),
             "case_toml": case.to_toml(), "bearing_model": self.label,
@@ -126,7 +126,9 @@ class RunSpec:
             "dt": self.dt, "steps_per_mesh_period": case["simulation.steps_per_mesh_period"],
             "mesh_periods": case["simulation.mesh_periods"], "steps_total": self.n_steps,
             "speed": case["drive.speed"], "speeds": description.bearing_speeds(case),
-            "teeth": teeth, "torque": case["drive.torque"],
+            "bearing_shafts": [b.shaft for b in lay.bearings],
+            "mesh_teeth": np.array(description.mesh_teeth(case), dtype=np.int64).reshape(-1, 2),
+            "torque": case["drive.torque"],
             "unbalance": [case[f"gears.{g}.unbalance"] for g in case.names("gears")],
             "clearance": [float(case[f"bearings.{b}.clearance"])
                           for b in case.names("bearings")],
@@ -142,8 +144,9 @@ ATTRIBUTE_UNITS = {
     "static_journal": symbol("length"), "static_bearing_force": symbol("force"),
     "static_mesh_force": symbol("force"), "static_transmission_error": symbol("length"),
     "wall_time": symbol("time"), "dynamic_factor": symbol("dimensionless"),
-    "bearing_force_ptp": symbol("force"), "line_amplitudes": symbol("force"),
-    "line_orders": symbol("dimensionless"), "report_window": symbol("time"),
+    "bearing_force_ptp": symbol("force"), "transmission_error_ptp": symbol("length"),
+    "line_amplitudes": symbol("force"), "line_orders": symbol("dimensionless"),
+    "line_frequencies": symbol("frequency"), "report_window": symbol("time"),
 }
 
 

@@ -97,9 +97,13 @@ def run_point(case_name: str, overrides: dict, periods: int) -> dict:
         if not math.isnan(e) and e >= 0.25 and f > 0.0]
     cb = np.array([lin.cb[j][1, 1] for j in range(4)])
     r = summary.report
-    return {"R": float(r["dynamic_factor"]), "ptp": np.asarray(r["bearing_force_ptp"]).tolist(),
+    # the page names the lines by bearing 1's (pinion) orders: 1x, gear_1x, 26x, 52x, 78x
+    labels = ["1x" if q == 1.0 else f"{q:.0f}x" if label.endswith("GMF") else "gear_1x"
+              for label, q in zip(r["line_labels"], r["line_orders"][0], strict=True)]
+    return {"R": float(r["dynamic_factor"][0]),
+            "ptp": np.asarray(r["bearing_force_ptp"]).tolist(),
             "lines": np.asarray(r["line_amplitudes"]).tolist(),
-            "labels": [str(x) for x in r["line_labels"]], "mesh_modes": mesh,
+            "labels": labels, "mesh_modes": mesh,
             "cb_tt": cb.tolist(), "wall_s": wall, "steps": summary.steps,
             "iterations_per_step": summary.iterations_per_step}
 

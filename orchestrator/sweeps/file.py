@@ -11,7 +11,8 @@ attributes (:data:`DATASETS`).
   strings), ``periods``, ``steady_periods`` (mesh periods of the run and of its steady window),
   ``n_points``, ``n_failed``, ``status`` ("running", "complete", "failed points",
   "worker timeout", "scheduler lost", "interrupted"), ``complete`` (true only when every point
-  succeeded) and ``wall_time`` [s];
+  succeeded), ``wall_time`` [s], and the names that label the points' datasets:
+  ``bearing_names``, ``bearing_shafts`` (each bearing's shaft), ``mesh_names``;
 * a group per point, ``points/<index>``: attributes ``values`` (the varied values in SI units,
   in ``vary_keys`` order; the first entry of a list field), ``bearing``, ``label``,
   ``overrides`` (JSON text, as given), ``error`` and ``traceback`` if it failed, ``warnings``
@@ -40,29 +41,37 @@ __all__ = ["DATASETS", "field_unit", "finish", "point_values", "read_sweep", "re
 #:
 #: :meta hide-value:
 DATASETS = {
-    "R": (symbol("dimensionless"), "dynamic tooth load factor: max mesh force over the static "
-                                   "mesh load, steady window"),
-    "force_ptp": (symbol("force"), "peak-to-peak of ||F_b|| at bearings 1-4, steady window"),
-    "force_mean": (symbol("force"), "mean of ||F_b|| at bearings 1-4, steady window"),
+    "R": (symbol("dimensionless"), "dynamic tooth load factor of each mesh (attribute "
+                                   "mesh_names): its max force over its static load, steady "
+                                   "window"),
+    "transmission_error_ptp": (symbol("length"), "peak-to-peak of each mesh's transmission "
+                                                 "error, steady window"),
+    "force_ptp": (symbol("force"), "peak-to-peak of ||F_b|| at each bearing (attribute "
+                                   "bearing_names), steady window"),
+    "force_mean": (symbol("force"), "mean of ||F_b|| at each bearing, steady window"),
     "orbit_centre": (symbol("length"), "centre of the ellipse fitted to the orbit [s, t] at "
-                                       "bearings 1-4, steady window"),
-    "orbit_mean": (symbol("length"), "mean journal position [s, t] at bearings 1-4, steady "
+                                       "each bearing, steady window"),
+    "orbit_mean": (symbol("length"), "mean journal position [s, t] at each bearing, steady "
                                      "window"),
     "time": (symbol("time"), "time of the decimated steady-window samples"),
-    "orbit": (symbol("length"), "journal position [s, t] at bearings 1-4, steady window, "
+    "orbit": (symbol("length"), "journal position [s, t] at each bearing, steady window, "
                                 "decimated"),
-    "bearing_force": (symbol("force"), "film force [F_s, F_t] at bearings 1-4, steady window, "
+    "bearing_force": (symbol("force"), "film force [F_s, F_t] at each bearing, steady window, "
                                        "decimated"),
-    "mesh_force": (symbol("force"), "total normal mesh force, steady window, decimated"),
-    "static_journal": (symbol("length"), "static journal positions X0 [s, t] at bearings 1-4"),
+    "mesh_force": (symbol("force"), "total normal force of each mesh, steady window, "
+                                    "decimated"),
+    "transmission_error": (symbol("length"), "transmission error of each mesh, steady window, "
+                                             "decimated"),
+    "static_journal": (symbol("length"), "static journal positions X0 [s, t] at each bearing"),
     "wall_time": (symbol("time"), "wall time of the point on its worker"),
     "iterations_per_step": (symbol("dimensionless"), "coupled iterations per time step"),
     "spectrum_orders": (symbol("dimensionless"), "orders of the spectrum bins (cycles per "
-                                                 "pinion revolution), 0 to 3.5 z1"),
-    "spectrum": (symbol("force"), "peak amplitude of ||F_b|| at bearings 1-4 per order, "
+                                                 "revolution of the input shaft), 0 to 3.5 "
+                                                 "times the fastest mesh's"),
+    "spectrum": (symbol("force"), "peak amplitude of ||F_b|| at each bearing per order, "
                                   f"order 0 the mean (Hann window zero-padded {PAD} times over "
                                   "the full-resolution steady window, a whole number of "
-                                  "pinion revolutions when it holds one; docs/equations.md)"),
+                                  "input revolutions when it holds one; docs/equations.md)"),
     "spectrum_window": (symbol("time"), "start and end of the spectrum's window"),
 }
 
@@ -156,6 +165,10 @@ def write_header(path: Path, base: Case, vary_keys, bearings, periods: int,
         f.attrs["status"] = "running"
         f.attrs["complete"] = False
         f.attrs["wall_time"] = 0.0
+        lay = description.layout(base)
+        f.attrs["bearing_names"] = _strings(lay.bearing_names)
+        f.attrs["bearing_shafts"] = _strings(b.shaft for b in lay.bearings)
+        f.attrs["mesh_names"] = _strings(lay.mesh_names)
         f.create_group("points")
 
 

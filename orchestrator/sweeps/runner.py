@@ -47,7 +47,7 @@ __all__ = ["DATASETS", "SweepInterrupted", "SweepPoint", "SweepResult", "as_case
            "check_point", "field_unit", "point_spectrum", "read_sweep", "read_sweep_attrs",
            "run_point", "run_sweep"]
 
-#: the highest order kept in a point's spectrum, in mesh orders (z1)
+#: the highest order kept in a point's spectrum, in orders of the fastest mesh
 MAX_MESH_ORDER = 3.5
 
 
@@ -97,29 +97,31 @@ def as_case(case) -> Case:
 
 
 def point_spectrum(case: Case, results: dict, steady_periods: int) -> dict:
-    """Order spectrum of ||F_b|| (bearings 1-4) of a run, from its full-resolution samples, in
-    peak amplitude (:func:`orchestrator.analysis.spectrum.order_spectrum`, the scale of every
-    figure), orders 0 to 3.5 z1 [1/pinion rev].
+    """Order spectrum of ||F_b|| (every bearing) of a run, from its full-resolution samples,
+    in peak amplitude (:func:`orchestrator.analysis.spectrum.order_spectrum`, the scale of
+    every figure), in orders of the input shaft (cycles per input revolution; divide by a
+    shaft's speed ratio for that shaft's orders), 0 to 3.5 times the fastest mesh's order.
 
-    The window is the last whole number of pinion revolutions of the steady window (the last
-    ``steady_periods`` mesh periods), or the whole steady window if it is shorter than one
-    revolution; so the pinion orders 1, z1, 2 z1, ... fall on bins when it holds a revolution
-    and read their amplitudes exactly."""
-    from fmu_src.description import mesh_teeth, time_step
+    The window is the last whole number of input revolutions of the steady window (the last
+    ``steady_periods`` periods of the fastest mesh), or the whole steady window if it is
+    shorter than one revolution; so the input shaft's orders (the paper's pinion orders 1, z1,
+    2 z1, ...) fall on bins when it holds a revolution and read their amplitudes exactly."""
+    from fmu_src.description import layout, time_step
+    from orchestrator.analysis.campbell import order_lines
     from orchestrator.analysis.spectrum import order_spectrum
 
-    z1 = int(mesh_teeth(case)[0][0])  # TODO(train): the orders of the input shaft's pinion
+    fastest = max(order_lines(case)["mesh_orders"] or [1.0])  # mesh periods per input rev
     per_mesh = int(case["simulation.steps_per_mesh_period"])
     steady = max(1, int(steady_periods))
-    revolutions = steady // z1
-    n = (revolutions * z1 if revolutions >= 1 else steady) * per_mesh
+    revolutions = int(steady // fastest)
+    n = round(revolutions * fastest * per_mesh) if revolutions >= 1 else steady * per_mesh
     time_s = np.asarray(results["time"], dtype=float)
     n = min(n, time_s.size)
     force = np.asarray(results["bearing_force"][-n:], dtype=float)
     norm = np.hypot(force[..., 0], force[..., 1])
-    pinion_hz = abs(case["drive.speed"]) / (2.0 * math.pi)
-    orders, amp = order_spectrum(norm, time_step(case), pinion_hz,
-                                 max_order=MAX_MESH_ORDER * z1)
+    input_hz = abs(layout(case).drive.speed) / (2.0 * math.pi)
+    orders, amp = order_spectrum(norm, time_step(case), input_hz,
+                                 max_order=MAX_MESH_ORDER * fastest)
     step = time_s[1] - time_s[0] if time_s.size > 1 else 0.0
     return {"spectrum_orders": orders, "spectrum": amp.T,
             "spectrum_window": np.array([time_s[-n] - step, time_s[-1]])}
@@ -158,6 +160,7 @@ def run_point(case, point: SweepPoint, periods: int, steady_periods: int,
         out["orbit"] = r["journal_position"][win][::stride]
         out["bearing_force"] = r["bearing_force"][win][::stride]
         out["mesh_force"] = r["mesh_force"][win][::stride]
+        out["transmission_error"] = r["transmission_error"][win][::stride]
         out["static_journal"] = np.asarray(s.static_positions)
         out.update(point_spectrum(case, r, steady_n))
         out["wall_time"] = np.asarray(time.perf_counter() - t0)

@@ -279,7 +279,9 @@ def test_tooth_critical_speeds_against_hand_made_modes():
 def test_gsb_modal_json_is_one_object_with_the_damped_modes(capsys):
     assert main(["modal", SPUR, "--bearing", "linear", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)  # the whole stdout is one JSON object
-    assert out["mean_mesh_stiffness_N_per_m"] == pytest.approx(20.33e9 * 0.04, rel=1e-3)
+    [mesh] = out["meshes"]  # the pair's one mesh
+    assert mesh["mesh"] == "mesh" and mesh["driver_teeth"] == 26 and mesh["speed_ratio"] == 1.0
+    assert mesh["mean_mesh_stiffness_N_per_m"] == pytest.approx(20.33e9 * 0.04, rel=1e-3)
     damped = out["damped_modes"]
     assert {"frequency_hz", "damping_ratio", "mesh_energy_fraction", "kind"} <= set(damped[0])
     osc = [d["frequency_hz"] for d in damped if not d["overdamped"]]
@@ -354,8 +356,11 @@ def test_gsb_modal_campbell_at_three_speeds(tmp_path, capsys):
     chart = out["campbell"]
     assert chart["path"] == str(png) and chart["speeds_rad_s"] == [100.0, 500.0, 900.0]
     for c in chart["crossings"]:
-        slope = 1.0 if c["order"] == 0 else c["order"] * 26
+        # order: cycles per input revolution, k z1 on the mesh lines, each shaft's ratio on 1x
+        slope = c["harmonic"] * 26 if c["harmonic"] else {"pinion_shaft": 1.0,
+                                                          "gear_shaft": 26 / 157}[c["shaft"]]
+        assert c["order"] == pytest.approx(slope, rel=1e-12)
         assert c["frequency_hz"] == pytest.approx(slope * c["speed_rad_s"] / (2 * math.pi))
         assert 100.0 <= c["speed_rad_s"] <= 900.0
-    # the mesh modes near 2.2 and 4.4 kHz meet the orders k >= 2 inside 100-900 rad/s
-    assert any(c["order"] >= 2 for c in chart["crossings"])
+    # the mesh modes near 2.2 and 4.4 kHz meet the harmonics k >= 2 inside 100-900 rad/s
+    assert any(c["harmonic"] >= 2 and c["mesh"] == "mesh" for c in chart["crossings"])

@@ -22,12 +22,12 @@ def fmu_report(out_dir: str, fmu_dir: str) -> dict:
     a = r["attrs"]
     fb = np.hypot(r["bearing_force"][128:, :, 0], r["bearing_force"][128:, :, 1])
     return {
-        "mode": a["mode"], "steps": len(r["time"]), "R": float(a["dynamic_factor"]),
+        "mode": a["mode"], "steps": len(r["time"]), "R": float(a["dynamic_factor"][0]),
         "max_mesh": float(r["mesh_force"][128:].max()),
         "ptp": a["bearing_force_ptp"].tolist(), "ptp_data": np.ptp(fb, axis=0).tolist(),
         "lines": np.nan_to_num(a["line_amplitudes"], nan=-1.0).tolist(),
         "labels": [str(x) for x in a["line_labels"]],
-        "summary_R": s.report["dynamic_factor"]}
+        "summary_R": float(s.report["dynamic_factor"][0])}
 
 
 PROBES = probes_of(fmu_report)

@@ -204,8 +204,8 @@ def test_resume_extends_a_run(tmp_path, capsys):
     assert len(lines) == 1 + 160 and head[0] == "time [s]"
     assert ("journal_position[bearing=1][axis=t] [m]" in head
             and "bearing_force[bearing=4][axis=s] [N]" in head)
-    col = head.index("mesh_force [N]")
-    assert [float(line.split(",")[col]) for line in lines[1:]] == r["mesh_force"].tolist()
+    col = head.index("mesh_force[mesh=mesh] [N]")
+    assert [float(line.split(",")[col]) for line in lines[1:]] == r["mesh_force"][:, 0].tolist()
 
 
 class _WritesAFile:

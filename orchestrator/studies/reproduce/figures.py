@@ -24,7 +24,7 @@ def _attrs(results):
     a = results["attrs"]
     return {"dt": float(a["dt"]), "speeds": np.asarray(a["speeds"], dtype=float).tolist(),
             "clearance": np.asarray(a["clearance"], dtype=float),
-            "teeth": [int(z) for z in a["teeth"]],
+            "teeth": [int(z) for z in np.asarray(a["mesh_teeth"]).reshape(-1, 2)[0]],
             "static": np.asarray(a["static_journal"], dtype=float)}
 
 
@@ -43,6 +43,8 @@ def _curve(points, model, key, index=None, **match):
             continue
         x = p["overrides"]["drive.speed"]
         y = p[key] if index is None else p[key][index]
+        if np.ndim(y):  # R: one per mesh, the paper's one
+            y = np.asarray(y).ravel()[0]
         xs.append(float(x))
         ys.append(float(y))
     order = np.argsort(xs)
@@ -108,7 +110,7 @@ def _fig_orbits(runs, fig_dir, plt) -> tuple[Path, dict]:
             c = a["clearance"][b]
             ax.plot(pos[win, b, 0] / c, pos[win, b, 1] / c, lw=0.7, label=f"bearing {b + 1}")
         c = a["clearance"][2 * shaft]
-        ax.plot(r["gear_nodes"][win, shaft, 0] / c, r["gear_nodes"][win, shaft, 1] / c, lw=0.7,
+        ax.plot(r["gear_node"][win, shaft, 0] / c, r["gear_node"][win, shaft, 1] / c, lw=0.7,
                 label="pinion" if shaft == 0 else "gear")
         ax.plot(np.cos(circle), np.sin(circle), "k-", lw=0.6)
         ax.set_aspect("equal")
@@ -127,7 +129,7 @@ def _fig_orbits(runs, fig_dir, plt) -> tuple[Path, dict]:
     path = _save(fig, fig_dir / "fig05_06_orbits.png", plt)
     j = pos[win]
     sym = max(np.abs(j[:, 0] - j[:, 1]).max(), np.abs(j[:, 2] - j[:, 3]).max()) / np.abs(j).max()
-    bend = [np.ptp(r["gear_nodes"][win, 0, k]) / np.ptp(j[:, 0, k]) for k in (0, 1)]
+    bend = [np.ptp(r["gear_node"][win, 0, k]) / np.ptp(j[:, 0, k]) for k in (0, 1)]
     return path, {"symmetry": sym, "pinion_over_bearing_ptp": bend}
 
 
@@ -344,8 +346,8 @@ def _fig_face_load(fig_dir, plt) -> tuple[Path, dict]:
         master = build_master(case, in_process=True)
         master.solve_static()
         st = master.structure.structure
-        ms = st.mesh_state
-        mesh = st.mesh
+        ms = st.mesh_states[0]  # the paper's one mesh
+        mesh = st.meshes[0]
         loads = ms.load.reshape(mesh.n_lines, mesh.n_slices) / mesh.dl / 1e3  # N/mm
         z = mesh.z_slices * 1e3
         spreads = []

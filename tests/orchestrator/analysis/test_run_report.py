@@ -1,6 +1,7 @@
 """The report of ``gsb run``: order lines by least squares, R and the bearing-force
-peak-to-peak over the last gear revolution (or the last half of a shorter run), stored as
-numeric root attributes of the results file."""
+peak-to-peak over the last revolution of the slowest shaft (the paper's gear; or the last half
+of a shorter run), stored as numeric root attributes of the results file; the same for a
+two-stage train, per mesh and per bearing by name."""
 
 import math
 
@@ -126,17 +127,25 @@ def test_run_report_over_the_last_gear_revolution():
     results, amps = hand_built_results(n)
     r = run_report(results)
     t_end = n * DT
-    assert r["window_kind"] == "last gear revolution"
+    assert r["window_kind"] == "last revolution of the slowest shaft gear_shaft"
     np.testing.assert_allclose(r["window_s"], [t_end - 2 * math.pi * Z2 / (Z1 * OMEGA), t_end],
                                rtol=1e-14)
     print(f"\nR = {r['dynamic_factor']!r}, ptp = {r['bearing_force_ptp']}")
     # 1.75 W0 / W0 and hypot(n cos, n sin) of planted values: round-off only
-    assert r["dynamic_factor"] == pytest.approx(1.75, rel=1e-15)
+    assert r["dynamic_factor"].shape == (1,) and r["mesh_names"] == ["mesh"]
+    assert r["dynamic_factor"][0] == pytest.approx(1.75, rel=1e-15)
+    assert r["bearing_names"] == ["1", "2", "3", "4"]
     assert r["bearing_force_ptp"][0] == pytest.approx(1800.0, rel=1e-13)
     assert r["bearing_force_ptp"][2] == pytest.approx(600.0, rel=1e-12)
     assert r["bearing_force_ptp"][3] < 1e-9 * 1500
-    assert r["line_labels"] == ["1x", "gear_1x", "26x", "52x", "78x"]
-    np.testing.assert_allclose(r["line_orders"], [1, Z1 / Z2, 26, 52, 78], rtol=1e-15)
+    assert r["line_labels"] == ["pinion_shaft_1x", "gear_shaft_1x", "mesh_GMF", "mesh_2GMF",
+                                "mesh_3GMF"]
+    np.testing.assert_allclose(r["line_frequencies"], paper_lines()[0], rtol=1e-15)
+    # in orders of each bearing's shaft: the pinion's for bearings 1, 2, the gear's for 3, 4
+    pinion = [1, Z1 / Z2, 26, 52, 78]
+    np.testing.assert_allclose(r["line_orders"], [pinion, pinion] + [
+        [q * Z2 / Z1 for q in pinion]] * 2, rtol=1e-14)
+    assert r["line_orders"][2].tolist()[1:] == pytest.approx([1, 157, 314, 471], rel=1e-14)
     assert r["line_amplitudes"].shape == (4, 5)
     np.testing.assert_allclose(r["line_amplitudes"][1], amps, rtol=TOL)
     np.testing.assert_allclose(r["line_amplitudes"][2], [0, 0, 300.0, 0, 0], rtol=TOL,
@@ -152,7 +161,7 @@ def test_run_report_over_the_last_half_of_a_short_run():
     r = run_report(results)
     assert r["window_kind"] == "last half of the run"
     np.testing.assert_allclose(r["window_s"], [n * DT / 2, n * DT], rtol=1e-15)
-    assert r["dynamic_factor"] == pytest.approx(1.75, rel=1e-15)
+    assert r["dynamic_factor"] == pytest.approx([1.75], rel=1e-15)
     assert r["bearing_force_ptp"][0] == pytest.approx(1800.0, rel=1e-13)
     assert np.isnan(r["line_amplitudes"][:, :2]).all()
     # bearing 3 holds only the 26x line and its mean: exact over the 4 periods
@@ -160,7 +169,7 @@ def test_run_report_over_the_last_half_of_a_short_run():
     # 2 steps: the last one alone, no line resolved
     two = {k: v if k == "attrs" else v[:2] for k, v in results.items()}
     r2 = run_report(two)
-    assert r2["dynamic_factor"] == results["mesh_force"][1] / static_load()
+    assert r2["dynamic_factor"] == [results["mesh_force"][1] / static_load()]
     assert (r2["bearing_force_ptp"] == 0).all() and np.isnan(r2["line_amplitudes"]).all()
     with pytest.raises(ValueError, match="at least 2 time steps, got 1"):
         run_report({k: v if k == "attrs" else v[:1] for k, v in results.items()})
@@ -171,24 +180,33 @@ def test_gsb_run_stores_the_report_as_numeric_attributes(tmp_path):
     case = load_case(SPUR, {"bearings.*.model": "linear"})
     s = run_case(case.with_overrides({"simulation.mesh_periods": 8}), in_process=True,
                  out_dir=tmp_path, progress=False)
+    keys = ("dynamic_factor", "transmission_error_ptp", "bearing_force_ptp", "line_amplitudes",
+            "line_orders", "line_frequencies", "line_labels", "report_window",
+            "report_window_kind")
     with h5py.File(s.results, "r") as f:
-        a = {k: f.attrs[k] for k in ("dynamic_factor", "bearing_force_ptp", "line_amplitudes",
-                                     "line_orders", "line_labels", "report_window")}
-        units = {k: f.attrs[f"{k}_unit"] for k in a if k != "line_labels"}
-    assert isinstance(a["dynamic_factor"], np.floating)
+        a = {k: f.attrs[k] for k in keys}
+        units = {k: f.attrs[f"{k}_unit"] for k in a if k not in ("line_labels",
+                                                                  "report_window_kind")}
     shapes = {k: np.shape(v) for k, v in a.items()}
-    assert shapes == {"dynamic_factor": (), "bearing_force_ptp": (4,), "line_amplitudes": (4, 5),
-                      "line_orders": (5,), "line_labels": (5,), "report_window": (2,)}
-    for k in ("bearing_force_ptp", "line_amplitudes", "line_orders", "report_window"):
+    assert shapes == {"dynamic_factor": (1,), "transmission_error_ptp": (1,),
+                      "bearing_force_ptp": (4,), "line_amplitudes": (4, 5),
+                      "line_orders": (4, 5), "line_frequencies": (5,), "line_labels": (5,),
+                      "report_window": (2,), "report_window_kind": ()}
+    for k in ("dynamic_factor", "transmission_error_ptp", "bearing_force_ptp",
+              "line_amplitudes", "line_orders", "line_frequencies", "report_window"):
         assert a[k].dtype == np.float64, k
-    assert [str(x) for x in a["line_labels"]] == ["1x", "gear_1x", "26x", "52x", "78x"]
-    assert units == {"dynamic_factor": "1", "bearing_force_ptp": "N", "line_amplitudes": "N",
-                     "line_orders": "1", "report_window": "s"}
+    assert [str(x) for x in a["line_labels"]] == ["pinion_shaft_1x", "gear_shaft_1x",
+                                                  "mesh_GMF", "mesh_2GMF", "mesh_3GMF"]
+    assert str(a["report_window_kind"]) == "last half of the run"
+    assert units == {"dynamic_factor": "1", "transmission_error_ptp": "m",
+                     "bearing_force_ptp": "N", "line_amplitudes": "N", "line_orders": "1",
+                     "line_frequencies": "Hz", "report_window": "s"}
     # independent recomputation from the datasets
     r = read_results(s.results)
-    assert r["time"].shape == (256,)
+    assert r["time"].shape == (256,) and r["mesh_force"].shape == (256, 1)
     win = slice(128, None)  # the last half of the run
-    assert a["dynamic_factor"] == r["mesh_force"][win].max() / static_load()
+    assert a["dynamic_factor"][0] == r["mesh_force"][win].max() / static_load()
+    assert a["transmission_error_ptp"][0] == np.ptp(r["transmission_error"][win])
     fb = np.hypot(r["bearing_force"][win, :, 0], r["bearing_force"][win, :, 1])
     np.testing.assert_array_equal(a["bearing_force_ptp"], np.ptp(fb, axis=0))
     np.testing.assert_array_equal(a["report_window"], [r["time"][-1] / 2, r["time"][-1]])
@@ -199,9 +217,12 @@ def test_gsb_run_stores_the_report_as_numeric_attributes(tmp_path):
     assert s.report["dynamic_factor"] == a["dynamic_factor"]
     text = s.report_text()
     print("\n" + text)
-    assert text.startswith(f"dynamic factor R = {a['dynamic_factor']:.3f} (last half of the run")
+    assert text.startswith("report over the last half of the run (t = ")
+    assert f"dynamic factor R = {a['dynamic_factor'][0]:.3f}, transmission error " in text
     assert f"1: {a['bearing_force_ptp'][0]:.0f}, 2: " in text
-    assert "      1        -        -" in text
+    row = next(line for line in text.splitlines() if line.startswith("pinion_shaft_1x"))
+    assert row.split()[2:] == ["-"] * 4  # not resolved by 4 mesh periods, at any bearing
+    assert "bearings 3, 4: pinion_shaft_1x 6.038, gear_shaft_1x 1, mesh_GMF 157" in text
     assert s.describe().startswith("256 steps in ")
 
 
@@ -214,7 +235,7 @@ def test_a_failing_run_stores_the_report_of_what_it_kept(tmp_path, monkeypatch):
     r = read_results(next(tmp_path.glob("baguet2010_spur_linear_inprocess_*.h5")))
     assert r["time"].shape == (200,) and not r["attrs"]["complete"]
     win = slice(100, None)
-    assert r["attrs"]["dynamic_factor"] == r["mesh_force"][win].max() / static_load()
+    assert r["attrs"]["dynamic_factor"] == [r["mesh_force"][win].max() / static_load()]
 
 
 def test_a_single_step_has_no_report(tmp_path):
@@ -233,6 +254,7 @@ def test_the_fmu_transport_stores_the_report(fmu_dir, tmp_path):
     assert r["mode"] == "fmu" and r["steps"] == 256
     assert r["R"] == r["summary_R"] == r["max_mesh"] / static_load()
     assert r["ptp"] == r["ptp_data"]
-    assert r["labels"] == ["1x", "gear_1x", "26x", "52x", "78x"]
+    assert r["labels"] == ["pinion_shaft_1x", "gear_shaft_1x", "mesh_GMF", "mesh_2GMF",
+                           "mesh_3GMF"]
     lines = np.array(r["lines"])
     assert (lines[:, :2] == -1.0).all() and (lines[:, 2:] > 0).all()

@@ -172,7 +172,7 @@ def synthetic_run():
     attrs = {"case": SPUR, "bearing_model": "hybrid", "mode": "in-process", "dt": DT,
              "speed": 325.0, "speeds": np.array([325.0, 325.0, 325.0 * Z1 / Z2,
                                                  325.0 * Z1 / Z2]),
-             "teeth": np.array([Z1, Z2]), "torque": 220.0,
+             "mesh_teeth": np.array([[Z1, Z2]]), "torque": 220.0,
              "clearance": np.array([150e-6, 150e-6, 110e-6, 110e-6]),
              "static_journal": np.zeros((4, 2)), "complete": True,
              "case_toml": case.to_toml(), "case_file": SPUR}
@@ -183,13 +183,15 @@ def synthetic_run():
 
 def test_every_figure_path_shows_the_same_amplitude_at_the_same_order(synthetic_run):
     """The arrays each figure plots, from the same signal over the window each path takes:
-    spectra.png (last gear revolution, 6.04 pinion revolutions), the sweep worker's stored
-    spectrum through the waterfall's reader (6 whole pinion revolutions), Figs. 7/15 (the last
-    revolution of the bearing's shaft: pinion for bearing 1, gear for bearing 3, orders of that
-    shaft), and the least-squares lines of the report and of spectra.png: at its order every
-    line reads its amplitude within TOL on each, so any two paths agree within 2 TOL. The
-    spectra are checked on the lines three resolutions or more from order 0 in their window
-    (closer: test_a_line_near_order_zero_overlaps_its_image), the least squares on all."""
+    spectra.png (last gear revolution, 6.04 pinion revolutions, each bearing in orders of its
+    own shaft), the sweep worker's stored spectrum (6 whole pinion revolutions, in pinion
+    orders) through the waterfall's reader in orders of the bearing's shaft, Figs. 7/15 (the
+    last revolution of the bearing's shaft: pinion for bearing 1, gear for bearing 3, orders of
+    that shaft), and the least-squares lines of the report and of spectra.png: at its order
+    every line reads its amplitude within TOL on each, so any two paths agree within 2 TOL.
+    The spectra are checked on the lines three resolutions or more from order 0 in their
+    window (closer: test_a_line_near_order_zero_overlaps_its_image), the least squares on
+    all."""
     case, results = synthetic_run
     run = run_spectrum(RunData(results))
     stored = point_spectrum(case, results, steady_periods=Z2)
@@ -203,11 +205,15 @@ def test_every_figure_path_shows_the_same_amplitude_at_the_same_order(synthetic_
     for b in (0, 2):
         fig = force_spectrum(results, b, 1.0)  # Fig. 7 / 15 panel of bearing b + 1
         to_shaft = 1.0 if b == 0 else Z2 / Z1  # pinion orders -> that shaft's orders
-        _, q_sweep, a_sweep = waterfall_data([point], 0, bearing=b)
-        paths = {"spectra.png": (run["orders"], run["amplitudes"][:, b], 1.0,
-                                 run["resolution"]),
-                 "sweep": (q_sweep, a_sweep[0], 1.0, 1 / 6),
+        _, q_sweep, a_sweep = waterfall_data([point], 0, bearing=b, ratio=1.0 / to_shaft)
+        paths = {"spectra.png": (run["orders"][b], run["amplitudes"][:, b], to_shaft,
+                                 run["resolution"][b]),
+                 "sweep": (q_sweep, a_sweep[0], to_shaft, to_shaft / 6),
                  "reproduce": (fig[0], fig[1], to_shaft, fig[2])}
+        # the report's lines in orders of the bearing's shaft: 1x, gear 1x, 26x, 52x, 78x
+        np.testing.assert_allclose(run["line_orders"][b],
+                                   np.array([1.0, Z1 / Z2, Z1, 2 * Z1, 3 * Z1]) * to_shaft,
+                                   rtol=1e-14)
         for k, (order, amps) in enumerate(LINES.items()):
             if amps[b] == 0.0:
                 continue

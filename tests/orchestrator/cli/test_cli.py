@@ -55,17 +55,22 @@ def _gsb(*args, cwd):
 
 
 def test_gsb_export_names_columns_as_printed_and_keeps_an_existing_csv(tmp_path):
-    """``gsb export --csv``: columns named by bearing 1-4 and axis s / t (as the prints and
-    figures), each holding that component; a second export refuses to replace the CSV (exit
-    2, one line naming it and --overwrite) and leaves it as it was; --overwrite replaces it."""
-    from orchestrator.run.channels import CHANNELS
+    """``gsb export --csv``: columns named by the file's labels of its bearings, gears and
+    meshes and by axis s / t (as the prints and figures), each holding that component; a
+    second export refuses to replace the CSV (exit 2, one line naming it and --overwrite)
+    and leaves it as it was; --overwrite replaces it."""
+    from orchestrator.run.channels import channels, dims
     from orchestrator.run.results import ResultsWriter
 
     path = tmp_path / "run.h5"
-    names = ("journal_position", "bearing_force", "gear_nodes", "mesh_force")
+    coords = {"bearing": ("in_a", "in_b", "out_a"), "gear": ("pinion", "wheel"),
+              "mesh": ("stage1",), "axis": ("s", "t")}
+    table = channels(coords)
+    names = ("journal_position", "bearing_force", "gear_node", "mesh_force")
     rng = np.random.default_rng(3)
-    rows = {n: rng.normal(size=(5, *CHANNELS[n][0])) for n in names}
-    with ResultsWriter(path, {n: CHANNELS[n] for n in names}, attrs={"kind": "run"}) as w:
+    rows = {n: rng.normal(size=(5, *table[n][0])) for n in names}
+    with ResultsWriter(path, {n: table[n] for n in names}, attrs={"kind": "run"}, dims=dims,
+                       coords=coords) as w:
         for k in range(5):
             w.append(time=1e-4 * (k + 1), **{n: rows[n][k] for n in names})
     csv = tmp_path / "run.csv"
@@ -73,14 +78,16 @@ def test_gsb_export_names_columns_as_printed_and_keeps_an_existing_csv(tmp_path)
     assert done.returncode == 0, done.stderr
     lines = csv.read_text().splitlines()
     head = lines[0].split(",")
-    first = head.index("journal_position[bearing=1][axis=s] [m]")
-    assert head[0] == "time [s]" and head[first + 1] == "journal_position[bearing=1][axis=t] [m]"
+    first = head.index("journal_position[bearing=in_a][axis=s] [m]")
+    assert head[0] == "time [s]"
+    assert head[first + 1] == "journal_position[bearing=in_a][axis=t] [m]"
     values = np.array([[float(x) for x in line.split(",")] for line in lines[1:]])
-    column = head.index("bearing_force[bearing=4][axis=t] [N]")
-    assert values[:, column].tolist() == rows["bearing_force"][:, 3, 1].tolist()
-    column = head.index("gear_nodes[node=gear][direction=u] [m]")
-    assert values[:, column].tolist() == rows["gear_nodes"][:, 1, 0].tolist()
-    assert "mesh_force [N]" in head and not any("[0]" in h or "=0]" in h for h in head)
+    column = head.index("bearing_force[bearing=out_a][axis=t] [N]")
+    assert values[:, column].tolist() == rows["bearing_force"][:, 2, 1].tolist()
+    column = head.index("gear_node[gear=wheel][axis=s] [m]")
+    assert values[:, column].tolist() == rows["gear_node"][:, 1, 0].tolist()
+    assert "mesh_force[mesh=stage1] [N]" in head
+    assert not any("[0]" in h or "=0]" in h or "[1]" in h for h in head)
     csv.write_text("kept\n")
     again = _gsb("export", path, "--csv", csv, cwd=tmp_path)
     assert again.returncode == 2 and csv.read_text() == "kept\n"

@@ -153,7 +153,7 @@ def test_threads_for_other_bearings_are_said_once_on_one_line(tmp_path, capsys):
                            "--out", tmp_path)
     assert code == 0, err
     lines = [ln for ln in err.splitlines() if "thread" in ln]
-    assert lines == ["gsb run: warning: threads = 2: the linear bearings run on one thread "
+    assert lines == ["gsb run: warning: threads = 2: bearings other than hybrid run on one thread "
                      "(threads share hybrid bearings only)"], err
 
 

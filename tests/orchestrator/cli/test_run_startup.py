@@ -1,5 +1,5 @@
 """What ``gsb run`` says before and around its run: the time step's cost (a warning when it
-is material, a note once when the shipped case keeps the paper's step on purpose) and the
+is material, a note once when the shipped case keeps its step on purpose) and the
 one-off start-up work of a first run (FMU build, native layer, numba compilation)."""
 
 import os
@@ -29,7 +29,7 @@ def test_shipped_case_states_its_step_once_and_does_not_warn(tmp_path):
     assert "warning" not in proc.stderr
     notes = [line for line in proc.stdout.splitlines() if line.startswith("note: time step")]
     assert len(notes) == 1, proc.stdout
-    assert "32 steps per mesh period, the paper's" in notes[0]
+    assert "32 steps per period of the fastest mesh, which the shipped case" in notes[0]
     assert "4366 Hz" in notes[0] and "9.9 time steps per period" in notes[0]
     assert "lengthens its period by 3.3 %" in notes[0]
     assert "simulation.steps_per_mesh_period >= 59" in notes[0]

@@ -16,6 +16,7 @@ import h5py
 import numpy as np
 import pytest
 
+from fmu_src.case import load_case
 from orchestrator.cli import main
 from orchestrator.figures.base import pyplot, run_title
 from orchestrator.figures.run import RUN_FIGURES, make_run_figures
@@ -36,13 +37,14 @@ def _attrs(complete: bool) -> dict:
     return {"kind": "run", "case": "baguet2010_spur", "bearing_model": "hybrid",
             "mode": "in-process", "dt": DT, "dt_unit": "s", "speed": SPEED,
             "speed_unit": "rad/s", "speeds": np.array([SPEED, SPEED, 53.8, 53.8]),
-            "teeth": np.array(TEETH), "torque": TORQUE, "torque_unit": "N.m",
+            "mesh_teeth": np.array([TEETH]), "torque": TORQUE, "torque_unit": "N.m",
             "unbalance": np.array([6e-4, 6e-4]), "unbalance_unit": "m",
             "clearance": np.array([150e-6, 150e-6, 110e-6, 110e-6]), "clearance_unit": "m",
             "static_journal": X0, "static_journal_unit": "m",
-            "static_bearing_force": np.full((4, 2), 1500.0), "static_mesh_force": 4502.3,
-            "static_transmission_error": 140.3e-6, "complete": complete, "stopped_by": "",
-            "case_toml": "[case]\nname = 'baguet2010_spur'\n"}
+            "static_bearing_force": np.full((4, 2), 1500.0),
+            "static_mesh_force": np.array([4502.3]),
+            "static_transmission_error": np.array([140.3e-6]), "complete": complete,
+            "stopped_by": "", "case_toml": load_case("baguet2010_spur").to_toml()}
 
 
 def _channels(steps: int) -> dict:
@@ -62,9 +64,10 @@ def _channels(steps: int) -> dict:
     mesh = 4502.3 + 1500.0 * np.sin(TEETH[0] * w) + 300.0 * np.sin(w)
     return {"time": (t, "s"), "journal_position": (journal, "m"),
             "journal_velocity": (np.gradient(journal, DT, axis=0), "m/s"),
-            "bearing_force": (force, "N"), "mesh_force": (mesh, "N"),
-            "transmission_error": (140.3e-6 + 5e-6 * np.sin(w) + 1e-6 * np.sin(26 * w), "m"),
-            "gear_nodes": (np.zeros((steps, 2, 2)), "m"), "iterations": (np.full(steps, 3), "1")}
+            "bearing_force": (force, "N"), "mesh_force": (mesh[:, None], "N"),
+            "transmission_error": ((140.3e-6 + 5e-6 * np.sin(w) + 1e-6 * np.sin(26 * w))[:, None],
+                                   "m"),
+            "gear_node": (np.zeros((steps, 2, 2)), "m"), "iterations": (np.full(steps, 3), "1")}
 
 
 def _write(path, steps: int, complete: bool):
@@ -84,8 +87,8 @@ def run_file(tmp_path_factory):
 
 def test_run_title_names_case_model_speed_torque():
     title = run_title(_attrs(False), 300, "orbits")
-    for text in ("baguet2010_spur", "hybrid", "in-process", "325 rad/s", "3104 rpm",
-                 "220 N m", "0.6 / 0.6 mm", "(incomplete run: 300 steps)"):
+    for text in ("baguet2010_spur", "hybrid", "in-process", "input speed 325 rad/s", "3104 rpm",
+                 "220 N m", "unbalance 0.6 mm (every gear)", "(incomplete run: 300 steps)"):
         assert text in title
     assert "incomplete" not in run_title(_attrs(True), 6000)
 
@@ -98,21 +101,34 @@ def test_figures_show_the_run_and_its_lines(run_file):
             title = fig.get_suptitle()
             assert all(s in title for s in ("baguet2010_spur", "hybrid", "325", "220"))
             assert "incomplete" not in title
-        # the spectra's axes state their units: peak amplitude in N against pinion orders
+        # the spectra's axes state their units: peak amplitude in N against the orders of
+        # each panel's shaft (the pinion's, then the gear's)
         spectra = [ax for ax in figures["spectra.png"].axes if ax.get_ylabel()]
         assert [ax.get_ylabel() for ax in spectra] == ["amplitude [N] (peak)"] * 2
-        assert spectra[-1].get_xlabel().startswith("order [1/pinion rev]")
+        assert [ax.get_title(loc="left") for ax in spectra] == ["shaft pinion_shaft",
+                                                                "shaft gear_shaft"]
+        assert spectra[0].get_xlabel().startswith("order [1/pinion_shaft rev]")
+        assert spectra[-1].get_xlabel().startswith("order [1/gear_shaft rev]")
+        # the gear shaft's panel marks the mesh line at its order 157, the pinion's at 26
+        marks = [{round(line.get_xdata()[0], 6) for line in ax.get_lines()
+                  if line.get_linestyle() == ":"} for ax in spectra]
+        assert 26.0 in marks[0] and 157.0 in marks[1]
         # the least-squares amplitudes listed beside the spectra: 150, 80, 40, 120 N
         table = "\n".join(t.get_text() for ax in figures["spectra.png"].axes
                           for t in ax.texts)
-        assert "last gear revolution" in table
+        assert "last revolution of the slowest shaft gear_shaft" in table
+        assert ["line", "1", "2", "3", "4"] in [row.split() for row in table.splitlines()]
         rows = {line.split()[0]: line.split()[1:] for line in table.splitlines()
-                if line.split() and line.split()[0] in ("1x", "gear1x", "26x")}
-        np.testing.assert_allclose(np.array([rows["1x"], rows["gear1x"], rows["26x"]],
-                                            dtype=float)[:, 2], [5, 40, 120], rtol=2e-3)
-        assert rows["1x"][0] == "150" and rows["26x"][0] == "80"
-        # orbits zoomed: the last gear revolution of bearing 1 fills most of its panel
+                if line.split() and line.split()[0] in ("pinion_shaft_1x", "gear_shaft_1x",
+                                                        "mesh_GMF")}
+        np.testing.assert_allclose(np.array([rows["pinion_shaft_1x"], rows["gear_shaft_1x"],
+                                             rows["mesh_GMF"]], dtype=float)[:, 2],
+                                   [5, 40, 120], rtol=2e-3)
+        assert rows["pinion_shaft_1x"][0] == "150" and rows["mesh_GMF"][0] == "80"
+        # orbits zoomed: the last gear revolution of bearing 1 fills most of its panel,
+        # titled by the bearing's name and shaft
         ax = figures["orbits.png"].axes[0]
+        assert ax.get_title().startswith("bearing 1 (shaft pinion_shaft), X0 at e/C = ")
         assert np.ptp(ax.get_xlim()) < 40  # um, against a 300 um clearance diameter
     finally:
         for fig in figures.values():
@@ -174,7 +190,8 @@ def _whole_run_lines(fig, ylabel_start: str) -> dict:
 
 def test_mesh_figure_of_a_long_run_bins_by_pinion_revolution(tmp_path):
     """A 2048-mesh-period run (65536 steps, 78.8 pinion revolutions): ``gsb plot`` draws it
-    (exit 0), the whole-run TE envelope has a point per pinion revolution and is flat for a
+    (exit 0), the whole-run TE envelope has a point per input (pinion) revolution and is flat
+    for a
     TE made of pinion orders (bins of 4 mesh periods alias against the 26-period revolution:
     their max swings with the 1x), the TE is drawn about its mean with the mean and the
     shafts' wind-up stated, and the top time labels do not run into each other."""
@@ -191,7 +208,7 @@ def test_mesh_figure_of_a_long_run_bins_by_pinion_revolution(tmp_path):
     try:
         fig = figures["mesh.png"]
         lines = _whole_run_lines(fig, "TE - mean")
-        label = next(k for k in lines if k.startswith("max / min per pinion revolution"))
+        label = next(k for k in lines if k.startswith("max / min per input revolution"))
         hi = lines[label].get_ydata()
         centres = lines[label].get_xdata()
         assert len(hi) == 79  # 78 whole revolutions ending at the last step, 0.77 kept

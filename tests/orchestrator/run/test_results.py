@@ -93,10 +93,10 @@ def test_killed_process_keeps_flushed_blocks(tmp_path):
 
 def test_xarray_opens_a_run_file_with_the_names_and_dimensions_of_the_api(tmp_path):
     """A results file of a run (4 mesh periods in-process) opened by xarray through h5netcdf:
-    every channel on its named dimensions (time, bearing 1-4, axis s/t, node, direction), the
-    labels as coordinates, the units in ``units``, the values those h5py reads, and the same
-    Dataset (variables, dimensions, coordinates) as the in-memory result's ``to_xarray()`` of
-    the same run."""
+    every channel on its named dimensions (time, bearing, mesh, gear labelled by the case's
+    names, axis s/t), the labels as coordinates, the units in ``units``, the values those h5py
+    reads, and the same Dataset (variables, dimensions, coordinates) as the in-memory
+    result's ``to_xarray()`` of the same run; the CSV export's columns carry the same labels."""
     import xarray as xr
 
     import orchestrator as gsb
@@ -105,21 +105,24 @@ def test_xarray_opens_a_run_file_with_the_names_and_dimensions_of_the_api(tmp_pa
                            results_dir=tmp_path)
     path = written.summary.results
     raw = read_results(path)
+    assert raw["coords"] == {"bearing": ("1", "2", "3", "4"), "axis": ("s", "t"),
+                             "mesh": ("mesh",), "gear": ("pinion", "gear")}
     with xr.open_dataset(path, engine="h5netcdf") as ds:
-        assert dict(ds.sizes) == {"time": 128, "bearing": 4, "axis": 2, "node": 2,
-                                  "direction": 2}
+        assert dict(ds.sizes) == {"time": 128, "bearing": 4, "axis": 2, "mesh": 1, "gear": 2}
         assert ds.journal_position.dims == ("time", "bearing", "axis")
-        assert ds.gear_nodes.dims == ("time", "node", "direction")
-        assert ds.mesh_force.dims == ("time",)
-        assert list(ds.bearing.values) == [1, 2, 3, 4]
+        assert ds.gear_node.dims == ("time", "gear", "axis")
+        assert ds.mesh_force.dims == ("time", "mesh")
+        assert ds.transmission_error.dims == ("time", "mesh")
+        assert list(ds.bearing.values) == ["1", "2", "3", "4"]
         assert list(ds.axis.values) == ["s", "t"]
+        assert list(ds.gear.values) == ["pinion", "gear"]
         assert ds.bearing_force.attrs["units"] == "N"
         assert ds.journal_position.attrs["units"] == "m"
-        for name in ("journal_position", "bearing_force", "mesh_force", "gear_nodes"):
+        for name in ("journal_position", "bearing_force", "mesh_force", "gear_node"):
             assert np.array_equal(ds[name].values, raw[name]), name
         assert np.array_equal(ds.time.values, raw["time"])
         # bearing 3, t: the labelled selection is the raw array's [:, 2, 1]
-        assert np.array_equal(ds.journal_position.sel(bearing=3, axis="t").values,
+        assert np.array_equal(ds.journal_position.sel(bearing="3", axis="t").values,
                               raw["journal_position"][:, 2, 1])
         memory = gsb.simulate("baguet2010_spur", periods=4, in_process=True,
                               progress=False).to_xarray()
@@ -127,6 +130,12 @@ def test_xarray_opens_a_run_file_with_the_names_and_dimensions_of_the_api(tmp_pa
         for name in memory.data_vars:
             assert memory[name].dims == ds[name].dims, name
             assert np.array_equal(memory[name].values, ds[name].values), name
+        for dim in ("bearing", "mesh", "gear", "axis"):
+            assert list(memory[dim].values) == list(ds[dim].values), dim
+    head = export_csv(path, tmp_path / "r.csv").read_text().splitlines()[0].split(",")
+    assert "journal_position[bearing=3][axis=t] [m]" in head
+    assert "gear_node[gear=pinion][axis=s] [m]" in head
+    assert "mesh_force[mesh=mesh] [N]" in head
 
 
 def test_read_result_names_a_missing_or_foreign_file(tmp_path):

@@ -57,12 +57,12 @@ def test_cosimulation_equals_the_monolithic_newton_solution(refined):
 
     models = description.bearing_models(case)  # a second, independent set for the reference
     speeds = description.bearing_speeds(case)
-    for model, frame, pos, om in zip(models, description.BEARING_FRAMES, static.states, speeds,
-                                     strict=True):
+    frames = description.bearing_frames(case)
+    for model, frame, pos, om in zip(models, frames, static.states, speeds, strict=True):
         model.end_initialization(*frame.to_local(pos[:2]), om)  # linear: frozen at X0
 
     def film_law(j, x, v):
-        fr = description.BEARING_FRAMES[j]
+        fr = frames[j]
         r = models[j].evaluate(*fr.to_local(x), *fr.to_local(v), speeds[j])
         return fr.to_global(r.force), fr.matrix_to_global(r.stiffness), \
             fr.matrix_to_global(r.damping)
@@ -178,7 +178,7 @@ def test_results_file_is_self_describing_and_complete(tmp_path, capsys):
     assert math.isclose(r["attrs"]["dt"], 2 * math.pi / (325 * 26) / 32)
     # the static bearing forces carry half the tooth force each on the pinion shaft
     f0 = r["attrs"]["static_bearing_force"]
-    w = 220.0 / description.gear_pair(paper_case()).base_radius[0]
+    w = 220.0 / description.gear_pairs(paper_case())[0].base_radius[0]
     assert np.hypot(*f0[0]) == pytest.approx(w / 2, rel=1e-4)
     assert [p.name for p in figures] == ["orbits.png", "bearing_forces.png", "spectra.png",
                                          "mesh.png"]
@@ -227,7 +227,7 @@ def test_linear_model_freezes_the_hybrid_law_at_the_static_position():
     models = master.bearings.models
     speeds = description.bearing_speeds(case)
     worst = worst_nonlinear = 0.0
-    for b, (model, frame, data) in enumerate(zip(models, description.BEARING_FRAMES,
+    for b, (model, frame, data) in enumerate(zip(models, description.bearing_frames(case),
                                                  description.bearing_data(case), strict=True)):
         x0 = frame.to_local(static.states[b, :2])
         ref = type(model.film)(data, tol=1e-12).evaluate(*x0, 0.0, 0.0, speeds[b])

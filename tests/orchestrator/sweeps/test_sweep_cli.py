@@ -290,8 +290,9 @@ def test_serial_sweep_refuses_to_overwrite_without_the_option(capsys, tmp_path):
 
 
 def test_sweep_figures_of_a_two_speed_sweep(dask_sweep, tmp_path, monkeypatch):
-    """R / peak-to-peak and the waterfall, titled with the case, the bearing model and the
-    fixed operating values, axes labelled with units."""
+    """R / peak-to-peak and a waterfall per shaft (its first bearing, in orders of that
+    shaft), titled with the case, the bearing model and the fixed operating values, axes
+    labelled with units."""
     from orchestrator.figures import sweep as sf
 
     _, files, _, _ = dask_sweep
@@ -305,15 +306,20 @@ def test_sweep_figures_of_a_two_speed_sweep(dask_sweep, tmp_path, monkeypatch):
 
     monkeypatch.setattr(sf, "_save", spy)
     paths = sf.sweep_figures(files[0], tmp_path / "figs")
-    assert [p.name for p in paths] == ["R_ptp.png", "waterfall_bearing1.png"]
+    assert [p.name for p in paths] == ["R_ptp.png", "waterfall_bearing1.png",
+                                       "waterfall_bearing3.png"]
     assert all(p.is_file() and p.stat().st_size > 10_000 for p in paths)
     for title, labels in seen.values():
         assert SPUR in title and "linear" in title and "torque 220 N m" in title
-        assert "unbalance 0.6 / 0.6 mm" in title and "speed" not in title.split(";")[1]
+        assert "unbalance 0.6 mm (every gear)" in title
+        assert "speed" not in title.split(";")[1]
         assert ("input speed [rad/s]", "peak-to-peak ||F_b|| [N]") in labels or \
-            ("order [1/pinion rev]", "input speed [rad/s]") in labels
+            ("order [1/pinion_shaft rev]", "input speed [rad/s]") in labels or \
+            ("order [1/gear_shaft rev]", "input speed [rad/s]") in labels
     # the waterfall's colour scale: the peak amplitude of every spectrum, in N
     assert ("", "bearing 1: ||F_b|| amplitude [N] (peak)") in seen["waterfall_bearing1.png"][1]
+    assert ("order [1/gear_shaft rev]", "input speed [rad/s]") in \
+        seen["waterfall_bearing3.png"][1]
     # default folder: beside the file, named after its stem
     default = sf.sweep_figures(files[0])
     assert default[0].parent == files[0].with_suffix("")
