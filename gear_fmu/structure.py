@@ -12,9 +12,9 @@ by the caller in the global (s, t) frame at the bearing nodes (X_j = (u, v) of b
 the layout's order), re-set by the master at every iteration: the Newton tangent is
 ``c0 M + c1 C + K + sum K_mesh + Kb + c1 Cb`` (Eq. 14, 16; c0 = 4/dt^2, c1 = 2/dt). External
 loads ``F0(t)`` (:mod:`gear_fmu.loads`): input torque, mass unbalances of Eq. (10), optional
-gravity. Each mesh element works in its pair's own frame (:func:`gear_fmu.mesh.element
-.pair_frame`) and is driven by the rigid-body angle of its driver's shaft, the input angle
-times that shaft's speed ratio.
+gravity. Each mesh element works in its pair's own frame
+(:func:`gear_fmu.mesh.element.pair_frame`) and is driven by the rigid-body angle of its
+driver's shaft, the input angle times that shaft's speed ratio.
 
 Time integration refinements (switched on by the case file, :mod:`fmu_src.description`):
 
@@ -127,7 +127,7 @@ class Structure:
         Assembled shafts and discs of a layout.
     meshes : sequence of MeshElement
         One per mesh of the layout (its order), each in its pair's own frame
-        (:func:`fmu_src.description.mesh_elements`).
+        (:func:`fmu_src.description.mesh_elements_of`).
     loads : StructureLoads
     zeta : float or DampingModel
         The damping model (:mod:`gear_fmu.modal.damping`); a float is the modal damping factor on

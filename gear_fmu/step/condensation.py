@@ -49,8 +49,8 @@ class CondensationSlots:
     steps (:meth:`gear_fmu.structure.Structure.steps_plan`): slot k holds ``(g, g_const, s0,
     w)`` of one length h [s] as the structure's ``_dynamic(h)`` gives them (copies: the same
     numbers). At most ``CAPACITY`` lengths (the sub-steps of a step commensurate with the
-    mesh period recur: at most :data:`gear_fmu.structure.MAX_PIECES` per step of a period, 128
-    at the paper's 32 steps; the helical case has 54); a full set starts again empty."""
+    mesh periods recur: the paper's spur case has at most 128 at its 32 steps per period,
+    its helical case 54, the two-stage reducer about 120); a full set starts again empty."""
 
     CAPACITY = 128
 

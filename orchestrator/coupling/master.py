@@ -103,7 +103,7 @@ class PythonStructure:
     """A structure slave stepped from the compiled coupled step through call-backs into
     Python (numba's object mode; :meth:`StructureSlave.compiled_block`'s default): the
     operations of :mod:`orchestrator.coupling.step` on the slave's own methods, step k from
-    ``times[k]`` [s]. An exception is kept in :attr:`error` (the compiled loop gets a failure
+    ``times[k]`` [s]. An exception is kept in ``error`` (the compiled loop gets a failure
     code, the slave raises it)."""
 
     def __init__(self, slave, times, dt: float):
@@ -281,7 +281,8 @@ class BearingSet(ABC):
     def compiled_groups(self) -> tuple:
         """The bearings as groups of one kind each for the compiled loop
         (:func:`orchestrator.coupling.step.evaluate_set`): ``((arguments, indices), ...)``.
-        By default one group called back in Python (:class:`PythonGroup`) through
+        By default one group called back in Python
+        (:class:`orchestrator.coupling.master.PythonGroup`) through
         :meth:`evaluate`; the in-process models and the bearing FMUs give compiled groups."""
         group = getattr(self, "_default_group", None)
         if group is None:

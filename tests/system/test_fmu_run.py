@@ -16,7 +16,7 @@ from bearing_fmu import MODELS
 from tests.helpers import run_isolated
 
 CHANNELS = ("journal_position", "journal_velocity", "bearing_force", "mesh_force",
-            "transmission_error", "gear_nodes", "iterations")
+            "transmission_error", "gear_node", "iterations")
 
 
 def compare(fmu_dir, model, periods, tmp, steps=None, overrides=None) -> dict:

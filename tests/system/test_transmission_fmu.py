@@ -48,7 +48,8 @@ def gsb_run_rows(case, steps: int) -> np.ndarray:
     r = gsb.simulate(case, in_process=True, steps=steps, progress=False)
     journals = np.concatenate([r["journal_position"], r["journal_velocity"]], axis=2)
     return np.hstack([journals.reshape(steps, 16), r["bearing_force"].reshape(steps, 8),
-                      r["mesh_force"][:, None], r["transmission_error"][:, None]])
+                      r["mesh_force"].reshape(steps, -1),
+                      r["transmission_error"].reshape(steps, -1)])
 
 
 def master_rows(case, h, steps: int) -> np.ndarray:

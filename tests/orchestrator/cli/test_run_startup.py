@@ -59,7 +59,8 @@ def test_the_cli_shows_an_fmu_build_unless_quiet(show, tmp_path, monkeypatch, ca
     from orchestrator.coupling.fmi.cache import ensure_fmus
 
     built = []
-    monkeypatch.setattr(fmu_src.build.fmus, "build_fmus", lambda dest, names: built.append(names))
+    monkeypatch.setattr(fmu_src.build.fmus, "build_fmus",
+                        lambda dest, names, **kw: built.append(names))
     _show_startup(show)
     try:
         ensure_fmus(["GearShaft"], tmp_path)
