@@ -256,7 +256,8 @@ def test_full_bearing_blocks_enter_unsymmetrised():
     # and dggev pass a residual ratio ||A z - lambda z|| / (n eps ||A|| ||z||) below the
     # threshold 30 of their input files): 30 n eps with n = 2 x 107, the size of the
     # first-order system damped_eigen hands to LAPACK, 1.4e-12. Measured largest: 1.2e-15
-    # (5.6 eps; numpy 2.4, scipy 1.17), a thousandth of it. (The earlier check scaled each
+    # (5.6 eps; numpy 2.4, scipy 1.17) and 1.4e-15 (numpy 1.26, scipy 1.11), a thousandth of
+    # it. (The earlier check scaled each
     # residual by the mode's largest term, which is not what the solver's error scales with:
     # 7.6e-11 here, 2.9e-10 with numpy 1.26 and scipy 1.11, against a bound of 4e-10.) A
     # misplaced or symmetrised block leaves a backward error of the order of the skew parts
