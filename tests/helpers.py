@@ -12,7 +12,6 @@ import subprocess
 import sys
 import tempfile
 import textwrap
-import types
 from pathlib import Path
 
 import numpy as np
@@ -176,81 +175,79 @@ def fail_master_step(monkeypatch, at: int) -> None:
     before_step(monkeypatch, at, fail)
 
 
-# ----------------------------------------------------------------- structure stand-ins
+# ----------------------------------------------------------------- the structure written out
 T_IN = 220.0  # N m
 OMEGA = 325.0  # rad/s
-ALPHA = math.radians(20.0)
-R1, R2 = 0.052, 0.314  # pitch radii (x1 + x2 = 0: operating = standard)
-RB1 = R1 * math.cos(ALPHA)
 
 
-class LineMesh:
-    """Stand-in mesh element: ``evaluate(pinion_angle, q12)`` as
-    gear_fmu.mesh.element.MeshElement."""
+def monolithic_structure(st, bearing_law, meshes=None):
+    """Full (reduced) M, C, K, load and nonlinear callback for the generic Newmark step: the
+    structure ``st``'s train written out apart from its condensed step.
 
-    def __init__(self, width=0.040, n_slices=10, k_per_length=1.4e10, deviation=None,
-                 modulation=0.0, teeth=26):
-        n = np.array([math.sin(ALPHA), math.cos(ALPHA), 0.0])
-        o2 = np.array([R1 + R2, 0.0, 0.0])
-        zs = ((np.arange(n_slices) + 0.5) / n_slices - 0.5) * width
-        self.v = np.array([
-            np.concatenate([n, np.cross([R1, 0.0, z], n), -n, -np.cross(np.array([R1, 0.0, z]) - o2,
-                                                                         n)])
-            for z in zs
-        ])
-        self.kdl = k_per_length * width / n_slices
-        self.e = np.zeros(n_slices) if deviation is None else np.asarray(deviation, float)
-        self.modulation = modulation
-        self.teeth = teeth
+    The load: the input torque and the unbalances of Eq. (10) (each body's force turning with
+    its shaft's signed speed). The nonlinear force: every mesh, evaluated at the structure's
+    kinematics (each mesh's driver angle at t) on its gear nodes' DOFs, and the bearings
+    ``bearing_law(j, x_j, v_j) -> (force, Kb, Cb)``. ``meshes``: the mesh elements (default:
+    copies of the structure's, whose caches are then their own). Its ``active`` is the contact
+    sets of all meshes, one after the other."""
+    import copy
 
-    def evaluate(self, pinion_angle, q12):
-        k = self.kdl * (1.0 + self.modulation * math.cos(self.teeth * pinion_angle))
-        delta = self.v @ q12 - self.e
-        active = delta > 0.0
-        load = np.where(active, k * delta, 0.0)
-        va = self.v[active]
-        return types.SimpleNamespace(
-            force=-(self.v.T @ load), stiffness=k * va.T @ va, delta=delta, load=load,
-            active=active, total_load=float(load.sum()), transmission_error=0.0)
+    from gear_fmu.dofs import U, V, dof
+    from gear_fmu.modal.modes import mesh_dofs
 
-
-def monolithic_structure(st, bearing_law):
-    """Full (reduced) M, C, K, load and nonlinear callback for the generic Newmark step."""
     sys_ = st.system
+    lay = sys_.layout
+    if sys_.load_dof is not None:
+        raise ValueError("monolithic_structure: an output clamped (no load torque) only")
     red = sys_.reduced_index
     m, c, k = (sys_.reduce(a) for a in (sys_.mass, st.damping_full, sys_.stiffness))
-    gear = red[sys_.gear_dofs]
+    meshes = copy.deepcopy(st.meshes) if meshes is None else tuple(meshes)
+    gears = [red[mesh_dofs(sys_, i)] for i in range(len(meshes))]
     brg = red[sys_.bearing_dofs]
     n = m.shape[0]
-    z1, z2 = sys_.teeth
-    masses = sys_.shaft_masses
-    e = st.loads.unbalance
-    w1 = st.loads.input_speed
-    w2 = w1 * z1 / z2
+    speeds = st.loads.input_speed * lay.ratios * lay.directions  # signed, per shaft
+    bodies = [*zip(lay.gears, sys_.gear_nodes, strict=True),
+              *zip(lay.discs, sys_.disc_nodes, strict=True)]
+    unbalances = []
+    for body, node in bodies:
+        if body.unbalance > 0.0:
+            mass = body.mass if body.unbalance_mass == "body" else lay.carried_mass(body.shaft)
+            w = speeds[lay.shaft_index[body.shaft]]
+            unbalances.append((red[dof(node, U)], red[dof(node, V)],
+                               mass * body.unbalance * w * w, w, body.unbalance_phase))
+    gravity = np.zeros(n)
+    if st.loads.gravity is not None:
+        g = np.zeros(sys_.n_dof)
+        g[U:6 * sys_.n_nodes:6], g[V:6 * sys_.n_nodes:6] = st.loads.gravity
+        gravity = sys_.reduce(sys_.mass @ g)
 
     def force(t):  # Eq. (10) written out here independently
-        f = np.zeros(n)
-        f[red[sys_.input_dof]] = st.loads.torque
-        f[gear[0]] += masses[0] * e[0] * w1**2 * math.cos(w1 * t)
-        f[gear[1]] += masses[0] * e[0] * w1**2 * math.sin(w1 * t)
-        f[gear[6]] += masses[1] * e[1] * w2**2 * math.cos(-w2 * t)
-        f[gear[7]] += masses[1] * e[1] * w2**2 * math.sin(-w2 * t)
+        f = gravity.copy()
+        f[red[sys_.torque_dof]] += st.loads.torque
+        for iu, iv, amplitude, w, phase in unbalances:
+            f[iu] += amplitude * math.cos(w * t + phase)
+            f[iv] += amplitude * math.sin(w * t + phase)
         return f
 
     def nonlinear_at(t):
+        angles = st.mesh_angles(st.input_angle(t))
+
         def nl(x, v):
-            ms = st.mesh.evaluate(st.pinion_angle(t), x[gear])
             f = np.zeros(n)
             dx = np.zeros((n, n))
             dv = np.zeros((n, n))
-            f[gear] += ms.force
-            dx[np.ix_(gear, gear)] -= ms.stiffness
-            for j in range(4):
+            active = []
+            for mesh, gear, angle in zip(meshes, gears, angles, strict=True):
+                ms = mesh.evaluate(float(angle), x[gear])
+                f[gear] += ms.force
+                dx[np.ix_(gear, gear)] -= ms.stiffness
+                active.append(ms.active)
+            for j in range(len(brg)):
                 fb, kb, cb = bearing_law(j, x[brg[j]], v[brg[j]])
                 f[brg[j]] += fb
                 dx[np.ix_(brg[j], brg[j])] -= kb
                 dv[np.ix_(brg[j], brg[j])] -= cb
-            return NonlinearForce(f, dx, dv, ms.active)
+            return NonlinearForce(f, dx, dv, np.concatenate(active))
         return nl
 
     return m, c, k, force, nonlinear_at

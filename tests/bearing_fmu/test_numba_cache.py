@@ -14,7 +14,7 @@ ROOT = Path(__file__).resolve().parents[2]
 
 def _locator(root: Path):
     """The locator numba would use for the master's compiled step in the code under root."""
-    path = root / "orchestrator" / "coupling" / "fused.py"
+    path = root / "orchestrator" / "coupling" / "step.py"
     namespace: dict = {}
     code = compile("def coupled_steps():\n    pass\n", str(path), "exec")
     exec(code, namespace)
@@ -23,10 +23,10 @@ def _locator(root: Path):
 
 def test_a_kernel_calling_the_packages_is_cached_with_their_version_and_its_own_content(
         tmp_path, monkeypatch):
-    """The master's compiled step (orchestrator) calls the structure's and the bearings'
-    kernels: cached in the folder of their code version (a change of a callee: a new folder),
-    with its own file's content in the stamp (a change of the file: another stamp, so numba
-    compiles it again). Under numba's own locator it was cached beside its source and checked
+    """The master's compiled step (orchestrator.coupling.step) calls the structure's and the
+    bearings' kernels: cached in the folder of their code version (a change of a callee: a new
+    folder), with its own file's content in the stamp (a change of the file: another stamp, so
+    numba compiles it again). Under numba's own locator it was cached beside its source and checked
     against that file only, so a changed callee left it stale."""
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "numba"))
     from numba.core import config
@@ -41,8 +41,8 @@ def test_a_kernel_calling_the_packages_is_cached_with_their_version_and_its_own_
     version = numba_cache.PREFIX + numba_cache.code_hash(str(root))
     folder = tmp_path / "numba" / version / "orchestrator" / "coupling"
     assert Path(first.get_cache_path()) == folder
-    fused = root / "orchestrator" / "coupling" / "fused.py"
-    fused.write_text(fused.read_text() + "\n# changed\n")
+    step = root / "orchestrator" / "coupling" / "step.py"
+    step.write_text(step.read_text() + "\n# changed\n")
     second = _locator(root)
     assert second.get_cache_path() == first.get_cache_path()
     assert second.get_source_stamp() != first.get_source_stamp()

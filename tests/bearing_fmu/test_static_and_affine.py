@@ -74,16 +74,18 @@ def test_lumped_spring():
 
 def test_relinearise_is_the_mismatch_and_linearisation_of_the_master():
     """``AffineLaws.relinearise`` (one compiled call) against the numpy expressions the master
-    used before it: the law of ``linearise`` and the mismatch
+    used before it: the law of ``linearise`` and the mismatch, the 2-norm ratio
     ``sqrt(np.sum(d * d)) / sqrt(np.sum(F * F))``, ``d = F - law.force(X)``, both bit for bit
-    over 2,000 draws (four bearings, as in the gear system); and the 2-norm ratio itself to
-    6e-16 for any number of bearings (measured 4.6e-16: a few roundings in each norm)."""
+    over 2,000 draws of 1 to 6 bearings (four, as in the gear system, in three draws of four)
+    and 200 of up to 80 (the sums of squares past numpy's 8-value blocks). (It was compared
+    with ``np.linalg.norm``'s ratio within 6e-16 for other counts than four, 4.6e-16 measured:
+    a bound on the round-off of BLAS's dot against numpy's pairwise sum, not argued; the
+    ratio of the same sums, bit for bit for every count, is what the master computed.)"""
     from bearing_fmu.affine import AffineLaws
 
     rng = np.random.default_rng(7)
-    worst = 0.0
-    for i in range(2000):
-        nb = 4 if i % 4 else int(rng.integers(1, 7))
+    for i in range(2200):
+        nb = (4 if i % 4 else int(rng.integers(1, 7))) if i < 2000 else int(rng.integers(1, 81))
         states = rng.normal(size=(nb, 4)) * [1e-5, 1e-5, 1e-3, 1e-3]
         old = AffineLaws.linearise(rng.normal(size=(nb, 4)) * 1e-5,
                                    rng.normal(size=(nb, 2)) * 1e3,
@@ -97,13 +99,8 @@ def test_relinearise_is_the_mismatch_and_linearisation_of_the_master():
                           (new.force_at, force)):
             assert np.array_equal(got, want)
         diff = force - old.force(states)
-        if nb == 4:
-            assert mismatch == (math.sqrt(float(np.sum(diff * diff)))
-                                / math.sqrt(float(np.sum(force * force))))
-        expected = np.linalg.norm(diff) / np.linalg.norm(force)
-        worst = max(worst, abs(mismatch - expected) / expected)
-    print(f"\nrelinearise: largest relative difference to the 2-norm ratio {worst:.2e}")
-    assert worst <= 6e-16, worst
+        assert mismatch == (math.sqrt(float(np.sum(diff * diff)))
+                            / math.sqrt(float(np.sum(force * force)))), nb
 
 
 def test_the_gear_fmu_inputs_carry_the_masters_laws_bit_for_bit():

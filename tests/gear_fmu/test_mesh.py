@@ -5,6 +5,7 @@ for the stiffness, central differences for the tangent, static equilibrium for t
 """
 
 import math
+from fractions import Fraction
 
 import numpy as np
 import pytest
@@ -147,34 +148,54 @@ def test_tangent_is_minus_the_derivative_of_the_force(pair):
     np.testing.assert_allclose(st.stiffness, st.stiffness.T, atol=0)
 
 
+def _exact_cross(x, y):
+    """x cross y of 3-vectors in exact rational arithmetic."""
+    return [x[1] * y[2] - x[2] * y[1], x[2] * y[0] - x[0] * y[2], x[0] * y[1] - x[1] * y[0]]
+
+
 @pytest.mark.parametrize("pair", [SPUR, HELICAL], ids=["spur", "helical"])
 def test_the_structure_vector_is_affine_in_the_contact_point(pair):
-    """V = [n; O1M x n; -n; -(O2M x n)] (module docstring) built from the pair's geometry with
-    numpy's cross products, at points along the path of contact and across the face, equals
-    P (1, xi, z), the form through which the kernel computes the approach, the force and the
-    tangent; its rotation entries are the lever arms r_b cos(beta_b) of both wheels, and the
-    line of action is tangent to both base circles. The gear nodes sit off the face centre."""
+    """V = [n; O1M x n; -n; -(O2M x n)] (module docstring) at points along the path of contact
+    and across the face equals P (1, xi, z), the form through which the kernel computes the
+    approach, the force and the tangent: exactly, both evaluated in rational arithmetic from
+    the element's own inputs (the kernel's code, ``_structure_matrix``, run on fractions; no
+    round-off, so no tolerance). Those inputs are the pair's: T1 on the pinion base circle,
+    the line of action u tangent to both base circles, the flank normal n at beta_b; V's
+    rotation entries are the lever arms r_b cos(beta_b) of both wheels. The gear nodes sit off
+    the face centre."""
     zg = (0.004, -0.003)  # m
     mesh = mesh_for(pair, gear_node_z=zg)
-    p = np.empty((12, 3))
-    _structure_matrix.py_func(mesh._geo, p)
+    geo = np.array([Fraction(g) for g in mesh._geo], dtype=object)
+    p = np.empty((12, 3), dtype=object)
+    _structure_matrix.py_func(geo, p)
+    p = [[Fraction(v) for v in row] for row in p]
     rb1, rb2 = pair.base_radius
     ap, bb, a = pair.operating_pressure_angle, pair.base_helix_angle, pair.centre_distance
+    # the element's inputs are the pair's geometry (1e-12: a wrong geometry is off by far
+    # more, the round-off of these few operations is a few 1e-16)
     t1 = np.array([rb1 * math.cos(ap), -rb1 * math.sin(ap), 0.0])  # on the pinion base circle
     u = np.array([math.sin(ap), math.cos(ap), 0.0])  # along the line of action
-    o1, o2 = np.array([0.0, 0.0, zg[0]]), np.array([a, 0.0, zg[1]])
+    np.testing.assert_allclose(mesh._geo[5:9], [*t1[:2], *u[:2]], rtol=1e-12)
+    np.testing.assert_allclose(mesh._geo[9:14], [math.cos(bb), math.sin(bb), a, *zg],
+                               rtol=1e-12)
     assert np.dot(t1, u) == pytest.approx(0.0, abs=1e-15)
-    assert abs(np.cross(o2 - t1, u)[2]) == pytest.approx(rb2, rel=1e-12)
-    n = math.cos(bb) * u + math.sin(bb) * np.array([0.0, 0.0, 1.0])
+    assert abs(np.cross(np.array([a, 0.0, 0.0]) - t1, u)[2]) == pytest.approx(rb2, rel=1e-12)
+    # V from its definition, in fractions of the element's inputs
+    t1_e = [geo[5], geo[6], Fraction(0)]
+    u_e = [geo[7], geo[8], Fraction(0)]
+    n_e = [geo[9] * u_e[0], geo[9] * u_e[1], geo[10]]
+    o1, o2 = [Fraction(0), Fraction(0), geo[12]], [geo[11], Fraction(0), geo[13]]
     xi_a, xi_e = pair.path_of_contact
     for xi in np.linspace(xi_a, xi_e, 5):
         for z in (-0.01, 0.0, 0.012):
-            m = t1 + xi * u + np.array([0.0, 0.0, z])
-            v = np.concatenate([n, np.cross(m - o1, n), -n, -np.cross(m - o2, n)])
-            # measured within 1.2e-16 (one ulp of the largest entries, 0.92)
-            np.testing.assert_allclose(p @ [1.0, xi, z], v, rtol=0, atol=5e-16)
-            assert v[5] == pytest.approx(rb1 * math.cos(bb), rel=1e-12)
-            assert v[11] == pytest.approx(rb2 * math.cos(bb), rel=1e-12)
+            xi_r, z_r = Fraction(float(xi)), Fraction(z)
+            m = [t1_e[c] + xi_r * u_e[c] + (z_r if c == 2 else 0) for c in range(3)]
+            v = [*n_e, *_exact_cross([m[c] - o1[c] for c in range(3)], n_e),
+                 *(-x for x in n_e), *(-x for x in _exact_cross([m[c] - o2[c] for c in range(3)],
+                                                                 n_e))]
+            assert [row[0] + row[1] * xi_r + row[2] * z_r for row in p] == v
+            assert float(v[5]) == pytest.approx(rb1 * math.cos(bb), rel=1e-12)
+            assert float(v[11]) == pytest.approx(rb2 * math.cos(bb), rel=1e-12)
 
 
 @pytest.mark.parametrize("pair", [SPUR, HELICAL], ids=["spur", "helical"])
@@ -253,8 +274,8 @@ def test_load_along_the_face_width_spur_uniform_helical_skewed():
         st = structure(pair, helix=helix)
         r = quasi_static(st, [0.37 * PERIOD], 1e9)
         w = T_IN / (pair.base_radius[0] * math.cos(pair.base_helix_angle))
-        assert r["mesh_load"][0] == pytest.approx(w, rel=1e-9)
-        loads = r["slice_load"][0].reshape(st.mesh.n_lines, -1)
+        assert r["mesh_load"][0, 0] == pytest.approx(w, rel=1e-9)  # angle 0, mesh 0
+        loads = r["slice_load"][0][0].reshape(st.meshes[0].n_lines, -1)
         spread = [np.ptp(line[line > 0]) / line[line > 0].mean() for line in loads
                   if (line > 0).sum() > 2]
         if helix == 0.0:
@@ -294,7 +315,7 @@ def test_static_newton_with_partial_contact_terminates_at_round_off():
     that ends in a few passes with the residual at round-off once the set is right."""
     st = structure(SPUR, ToothDeviations(lead_slope=15e-6))
     info = st.static(np.zeros((4, 2)), np.broadcast_to(1e9 * np.eye(2), (4, 2, 2)).copy())
-    ms = st.mesh_state
+    (ms,) = st.mesh_states
     assert 0 < ms.active.sum() < ms.inside.sum()
     assert info.iterations <= 6
     assert info.residuals[-1] < 1e-12

@@ -9,14 +9,22 @@ import scipy.linalg
 from fmu_src.examples import paper_system
 from gear_fmu.modal.modes import (
     bearing_stiffness_matrix,
+    mesh_dofs,
     modal_damping_matrix,
     mode_table,
     natural_modes,
 )
-from gear_fmu.system import Shaft
+from gear_fmu.system import gear_inertias
 
 SYSTEM = paper_system(n_elements=8)
+LAYOUT = SYSTEM.layout
 STIFF = 1e13  # N/m: practically rigid bearings
+
+
+def gear_polar_inertia(i):
+    """Polar inertia of gear i of the paper's layout (pinion 0, gear 1) [kg m^2]."""
+    gear = LAYOUT.gears[i]
+    return gear_inertias(gear, LAYOUT.shaft(gear.shaft).density)[1]
 
 
 def test_modes_are_mass_normalised_eigenpairs_with_energy_shares():
@@ -39,10 +47,10 @@ def test_gear_shaft_torsion_mode_against_lumped_inertia_formula():
     round_off = math.sqrt(np.finfo(float).eps) * modes.omega[-1]
     assert modes.omega[0] < round_off < 1e-3 * modes.omega[1]
     assert modes.kinds[0] == "torsion"
-    shaft = SYSTEM.shafts[1]
-    s = shaft.section
+    shaft = LAYOUT.shafts[1]
+    s = shaft.section(0)
     half = shaft.length / 2
-    _, _, ip = SYSTEM.gears[1].inertias
+    ip = gear_polar_inertia(1)
     rho_j = s.density * s.polar_moment
     w = math.sqrt(s.shear_modulus * s.polar_moment / half / (ip + rho_j * half * (1 + 1 / 3)))
     tors = [om for om, kd in zip(modes.omega, modes.kinds, strict=True) if kd == "torsion"]
@@ -55,16 +63,16 @@ def test_gear_shaft_bending_mode_against_rayleigh_estimate():
     """Stiff bearings: gear disc at mid-span of a simply supported Timoshenko shaft;
     k = 1 / (L^3 / 48 EI + L / 4 kGA), m = M_gear + 17/35 m_shaft (Rayleigh)."""
     modes = natural_modes(SYSTEM, STIFF)
-    shaft = SYSTEM.shafts[1]
-    s = shaft.section
+    shaft = LAYOUT.shafts[1]
+    s = shaft.section(0)
     L = shaft.length
     k = 1 / (L**3 / (48 * s.young * s.second_moment)
              + L / (4 * s.shear_coefficient * s.shear_modulus * s.area))
-    w = math.sqrt(k / (SYSTEM.gears[1].mass + 17 / 35 * shaft.mass))
+    w = math.sqrt(k / (LAYOUT.gears[1].mass + 17 / 35 * shaft.mass))
     # lowest modes where the gear's translation holds most of the kinetic energy (the gear's
     # rocking mode, rotation about a diameter, comes first and is not this one)
-    g = SYSTEM.gear_dofs[6:8]
-    share = SYSTEM.gears[1].mass * (modes.shapes[g] ** 2).sum(axis=0)
+    g = mesh_dofs(SYSTEM, 0)[6:8]  # the gear's u, v
+    share = LAYOUT.gears[1].mass * (modes.shapes[g] ** 2).sum(axis=0)
     trans = modes.omega[share > 0.5]
     assert trans[0] == pytest.approx(w, rel=1e-2)
     assert trans[1] == pytest.approx(trans[0], rel=1e-9)  # s and t planes
@@ -87,7 +95,7 @@ def test_modal_damping_gives_the_damping_factor_on_every_mode():
     f = SYSTEM.free
     m_r, c_r = SYSTEM.reduce(SYSTEM.mass), SYSTEM.reduce(c)
     k_r = SYSTEM.reduce(SYSTEM.stiffness + bearing_stiffness_matrix(SYSTEM, 1e8))
-    k_r[np.ix_(*[np.searchsorted(f, SYSTEM.gear_dofs)] * 2)] += mesh_k
+    k_r[np.ix_(*[np.searchsorted(f, mesh_dofs(SYSTEM, 0))] * 2)] += mesh_k
     nr = f.size
     a = np.block([[np.zeros((nr, nr)), np.eye(nr)],
                   [-np.linalg.solve(m_r, k_r), -np.linalg.solve(m_r, c_r)]])
@@ -114,5 +122,20 @@ def test_bad_input():
         bearing_stiffness_matrix(SYSTEM, np.zeros((3, 2, 2)))
     with pytest.raises(ValueError, match="zeta"):
         modal_damping_matrix(SYSTEM, natural_modes(SYSTEM, 1e8), 1.5)
-    with pytest.raises(ValueError, match="n_elements"):
-        Shaft(SYSTEM.shafts[0].section, 0.16, n_elements=7)
+    with pytest.raises(ValueError, match="mesh stiffness shape"):
+        natural_modes(SYSTEM, 1e8, np.zeros((2, 12, 12)))  # one mesh in the paper's train
+
+
+def test_the_nodes_follow_the_layout_whatever_the_element_length():
+    """The shafts' nodes follow the layout: with elements no longer than L/7 (the old
+    two-shaft model took an element count, and refused an odd one: its gears sat on the mid
+    node), each of the paper's shafts still gets a node under its gear at mid-span and at each
+    bearing, each half cut into 4 equal elements (9 nodes a shaft)."""
+    sys_ = paper_system(n_elements=7)
+    for g, node in zip(sys_.layout.gears, sys_.gear_nodes, strict=True):
+        assert sys_.node_position[node] == pytest.approx(g.position, abs=1e-12)
+    for b, node in zip(sys_.layout.bearings, sys_.bearing_nodes, strict=True):
+        assert sys_.node_position[node] == pytest.approx(b.position, abs=1e-12)
+    for shaft, nodes in zip(sys_.layout.shafts, sys_.shaft_nodes, strict=True):
+        assert nodes.size == 9
+        assert np.diff(sys_.node_position[nodes]).max() <= shaft.length / 7

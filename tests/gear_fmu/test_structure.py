@@ -1,9 +1,12 @@
 """The gear-shaft Structure: statics, condensed Newmark step, rollback, master emulation.
 
-``tests.helpers.LineMesh`` stands in for the distributed mesh element (same ``evaluate`` API):
-unilateral springs spread over the face width on the line of action through the pitch point of
-the paper's spur pair, with an optional stiffness modulation at the mesh frequency and a lead
-deviation.
+The structure is the paper's train (Fig. 1, Tables 1-2) with its distributed mesh element
+(:mod:`gear_fmu.mesh.element`): unilateral springs spread over the face width on the contact
+lines, whose number changes with the angle (one or two tooth pairs), with an optional lead
+slope that opens part of the face. The generic Newmark step of
+:mod:`tests.gear_fmu.reference_newmark` on the full system (``tests.helpers
+.monolithic_structure``: the same mesh elements, the loads written out) is the independent
+reference of the condensed, compiled step.
 """
 
 import math
@@ -11,20 +14,37 @@ import math
 import numpy as np
 import pytest
 
-from fmu_src.examples import paper_system
+from fmu_src import description
+from fmu_src.examples import paper_case, paper_gear_pair
+from gear_fmu.mesh.train import mesh_elements
 from gear_fmu.modal.analyses import support_loads
 from gear_fmu.step.newmark import NewmarkConvergenceError
 from gear_fmu.structure import Structure, StructureLoads
 from tests.gear_fmu.reference_newmark import newmark_step
-from tests.helpers import ALPHA, OMEGA, R1, R2, RB1, T_IN, LineMesh, affine, monolithic_structure
+from tests.helpers import OMEGA, T_IN, affine, monolithic_structure
+
+PAIR = paper_gear_pair()
+#: the paper's pair: operating pressure angle (x1 + x2 = 0: the standard 20 deg), base and
+#: pitch radii
+ALPHA = PAIR.operating_pressure_angle
+RB1, RB2 = PAIR.base_radius
+#: no unbalance (the structure's own loads only), and the paper's (0.6 mm on both shafts)
+BALANCED = {"gears.*.unbalance": 0.0}
 
 
 def iso(value, n=4):
     return np.broadcast_to(value * np.eye(2), (n, 2, 2)).copy()
 
 
-def make(mesh=None, loads=None, **kw):
-    return Structure(paper_system(), LineMesh() if mesh is None else mesh,
+def system(**overrides):
+    """The paper's system (8 elements a shaft) with case overrides."""
+    return description.gear_shaft_system(paper_case(0.0, **overrides))
+
+
+def make(loads=None, overrides=BALANCED, **kw):
+    """The paper's structure, its case with ``overrides`` (default: no unbalance)."""
+    sys_ = system(**overrides)
+    return Structure(sys_, mesh_elements(sys_.layout),
                      StructureLoads() if loads is None else loads, **kw)
 
 
@@ -36,7 +56,7 @@ def test_static_reactions_balance_the_mesh_force_and_are_symmetric():
     reac = -np.einsum("bij,bj->bi", kb, st.journal_states()[:, :2])
     # the bearings carry no torque: the mesh load balances the input torque alone
     w = T_IN / RB1
-    assert st.mesh_state.total_load == pytest.approx(w, rel=1e-9)
+    assert st.mesh_forces()[0] == pytest.approx(w, rel=1e-9)
     n = np.array([math.sin(ALPHA), math.cos(ALPHA)])
     np.testing.assert_allclose(reac[0] + reac[1], w * n, rtol=1e-9)  # pinion shaft
     np.testing.assert_allclose(reac[2] + reac[3], -w * n, rtol=1e-9)  # gear shaft
@@ -45,7 +65,8 @@ def test_static_reactions_balance_the_mesh_force_and_are_symmetric():
     # resisting torque = reaction of the clamped output: T z2 / z1 about +z on the structure
     sys_ = st.system
     moment = (sys_.stiffness @ st.full_vector("x"))[sys_.output_dof]
-    assert -moment == pytest.approx(-T_IN * R2 / R1, rel=1e-9)
+    assert -moment == pytest.approx(-T_IN * RB2 / RB1, rel=1e-9)
+    assert RB2 / RB1 == pytest.approx(157 / 26, rel=1e-14)
     # loads on stiff supports (first guess for the master)
     np.testing.assert_allclose(support_loads(st), -reac, rtol=1e-3)
 
@@ -61,27 +82,28 @@ def test_gravity_is_carried_by_the_bearings():
     np.testing.assert_allclose(reac.sum(axis=0), -total_mass * g, rtol=1e-9, atol=1e-9)
     # the pinion shaft's bearings carry its weight plus the mesh force
     n = np.array([math.sin(ALPHA), math.cos(ALPHA)])
-    w_mesh = st.mesh_state.total_load
+    w_mesh = st.mesh_forces()[0]
     np.testing.assert_allclose(reac[0] + reac[1], w_mesh * n - st.system.shaft_masses[0] * g,
                                rtol=1e-9)
 
 
 def test_condensed_step_equals_generic_newmark_on_the_full_system():
-    """Time-varying, partially open mesh (lead slope), unbalance, anisotropic bearing laws."""
-    mesh = LineMesh(deviation=np.linspace(0.0, 40e-6, 10), modulation=0.3)
-    st = make(mesh, StructureLoads(T_IN, OMEGA, (0.6e-3, 0.6e-3)))
+    """Time-varying (one or two tooth pairs), partially open mesh (a lead slope of 40 um
+    across the face), the paper's unbalance, anisotropic bearing laws."""
+    st = make(StructureLoads(T_IN, OMEGA), overrides={"meshes.mesh.lead_slope": "40 um"})
     rng = np.random.default_rng(1)
     kb = iso(1e8) + 2e7 * rng.standard_normal((4, 2, 2))
     cb = iso(1e5) + 2e4 * rng.standard_normal((4, 2, 2))
     f0 = 100.0 * rng.standard_normal((4, 2))
     st.static(f0, kb, cb)
-    assert 0 < np.count_nonzero(st.mesh_state.active) < 10  # partial contact
+    (ms,) = st.mesh_states
+    assert 0 < np.count_nonzero(ms.active) < np.count_nonzero(ms.inside)  # partial contact
     m, c, k, force, nl_at = monolithic_structure(st, affine(f0, kb, cb))
     sys_ = st.system
     x = sys_.reduce(st.full_vector("x"))
     v = np.zeros_like(x)
     a = np.zeros_like(x)
-    act = st.mesh_state.active
+    act = ms.active
     dt = st.mesh_period / 32
     changes = 0
     for i in range(96):
@@ -90,7 +112,7 @@ def test_condensed_step_equals_generic_newmark_on_the_full_system():
                                     active0=act, tol=1e-9)
         changes += not np.array_equal(ref.active, act)
         act = ref.active
-        np.testing.assert_array_equal(st.mesh_state.active, act)
+        np.testing.assert_array_equal(st.mesh_states[0].active, act)
         assert info.residual <= st.tol
         np.testing.assert_allclose(sys_.reduce(st.full_vector("x")), x, rtol=0,
                                    atol=1e-8 * np.abs(x).max())
@@ -100,7 +122,7 @@ def test_condensed_step_equals_generic_newmark_on_the_full_system():
 
 
 def test_state_rollback_is_exact():
-    st = make(loads=StructureLoads(T_IN, OMEGA, (0.6e-3, 0.3e-3)))
+    st = make(loads=StructureLoads(T_IN, OMEGA), overrides={"gears.gear.unbalance": "0.3 mm"})
     kb, cb, f0 = iso(1e8), iso(1e5), np.zeros((4, 2))
     st.static(f0, kb, cb)
     dt = st.mesh_period / 32
@@ -154,9 +176,7 @@ def mismatch(states, laws):
 def test_master_emulation_converges_to_the_monolithic_newton_solution():
     """Save -> affine law at last iterate -> step -> re-linearise -> restore, against Newton with
     the cubic bearings inside the residual (Eq. 14, 16)."""
-    loads = StructureLoads(T_IN, OMEGA, (0.6e-3, 0.6e-3))
-    mesh = LineMesh(modulation=0.3)
-    st = make(mesh, loads)
+    st = make(loads=StructureLoads(T_IN, OMEGA), overrides={})  # the paper's unbalance
     # static: iterate laws (what the master does for X0)
     states = np.zeros((4, 4))
     for _ in range(30):
@@ -172,7 +192,7 @@ def test_master_emulation_converges_to_the_monolithic_newton_solution():
     sys_ = st.system
     x = sys_.reduce(st.full_vector("x"))
     v, a = np.zeros_like(x), np.zeros_like(x)
-    act = st.mesh_state.active
+    act = st.mesh_states[0].active
     dt = st.mesh_period / 32
     iters = []
     for i in range(64):
@@ -245,10 +265,10 @@ def test_a_new_torque_acts_as_if_built_with_it(name):
 
     case = load_case(name)
     new = 1.5 * case["drive.torque"]
-    pair = d.gear_pair(case)
+    (pair,) = d.gear_pairs(case)
 
     def build(torque):
-        return Structure(d.gear_shaft_system(case, pair), d.mesh_element(case, pair),
+        return Structure(d.gear_shaft_system(case), d.mesh_elements_of(case),
                          replace(d.structure_loads(case), torque=torque), zeta=d.damping(case))
 
     kb, cb = iso(2e8), iso(1e4)
@@ -263,7 +283,7 @@ def test_a_new_torque_acts_as_if_built_with_it(name):
     changed.static(f0, kb)  # the damping and the step's factorisation kept
     built.static(f0, kb)
     built.set_damping_reference(kb)
-    assert changed.mesh_state.total_load == pytest.approx(new / pair.base_radius[0], rel=1e-6)
+    assert changed.mesh_forces()[0] == pytest.approx(new / pair.base_radius[0], rel=1e-6)
     assert np.array_equal(changed.x, built.x)
     for _ in range(4):
         built.step(dt, f0, kb, cb)

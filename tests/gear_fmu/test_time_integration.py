@@ -111,12 +111,13 @@ def test_event_schedule_repeats_the_events_of_one_mesh_period(helix):
     from gear_fmu.step.events import ContactEvents
 
     st = paper_structure(helix)
-    events = ContactEvents(st.mesh, st.pinion_angle)
-    period = st.mesh.event_period
+    (mesh,) = st.meshes
+    events = ContactEvents(mesh, lambda t: float(st.mesh_angles(st.input_angle(t))[0]))
+    period = mesh.event_period
     rng = np.random.default_rng(3)
     for lo in rng.uniform(0.0, 500.0, 200):
         hi = lo + rng.uniform(0.0, 2.5) * period
-        direct = st.mesh.event_angles(lo, hi)
+        direct = mesh.event_angles(lo, hi)
         scheduled = np.array(events.between(lo, hi))
         assert scheduled.size == direct.size
         np.testing.assert_allclose(scheduled, direct, rtol=0, atol=1e-12)
@@ -202,9 +203,9 @@ def _nanosecond_run(case, steps, monkeypatch):
         rows = []
         for k in range(steps):
             r = master.step(k * h, h)
+            forces, errors, _ = master.structure.step_outputs()
             rows.append((r.states[:, :2].copy(), r.states[:, 2:].copy(),
-                         np.array(r.bearing_force), master.structure.mesh_force(),
-                         master.structure.transmission_error()))
+                         np.array(r.bearing_force), forces[0], errors[0]))
     finally:
         master.close()
     return [np.array(channel) for channel in zip(*rows, strict=True)], len(made)
@@ -224,8 +225,14 @@ def test_a_step_that_does_not_recur_with_the_mesh_period_cuts_on_a_coarser_grain
     dt = description.time_step(case)
     cut = build_master(case, in_process=True)
     try:
-        ev = events.ContactEvents(cut.structure.physics.mesh, cut.structure.physics.pinion_angle)
-        angle = cut.structure.physics.pinion_angle(dt) - cut.structure.physics.pinion_angle(0.0)
+        st = cut.structure.physics
+        (mesh,) = st.meshes
+
+        def pinion_angle(t):
+            return float(st.mesh_angles(st.input_angle(t))[0])
+
+        ev = events.ContactEvents(mesh, pinion_angle)
+        angle = pinion_angle(dt) - pinion_angle(0.0)
         h = round(dt * 1e9) * 1e-9
         assert ev.fraction_grain(angle) == events.FRACTION
         assert ev.fraction_grain(angle * h / dt) == events.DRIFT_FRACTION
