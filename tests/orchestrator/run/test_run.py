@@ -10,6 +10,7 @@ import pytest
 
 from fmu_src import description
 from fmu_src.case import CaseError, load_case, shipped_cases
+from gear_fmu.modal.modes import mesh_dofs
 from gear_fmu.step.events import EVENT_SIDE, FRACTION
 from orchestrator.cli import main
 from orchestrator.coupling.inprocess import ModelBearings
@@ -73,14 +74,15 @@ def test_cosimulation_equals_the_monolithic_newton_solution(refined):
     v, a = np.zeros_like(x), np.zeros_like(x)
     if refined:  # M a0 = F(0) + F_nl(X0, 0) - K X0
         a = np.linalg.solve(m, force(0.0) + nl_at(0.0)(x, v).force - k @ x)
-    act = st.mesh_state.active
+    act = np.concatenate([ms.active for ms in st.mesh_states])
     dt = st.mesh_period / 32
     omega = st.loads.input_speed
-    side = EVENT_SIDE * st.mesh.pair.base_pitch / st.mesh.pair.base_radius[0] / omega  # [s]
-    gear = sys_.reduced_index[sys_.gear_dofs]
+    (mesh,) = st.meshes  # the paper's one mesh, its pinion on the input shaft
+    side = EVENT_SIDE * mesh.pair.base_pitch / mesh.pair.base_radius[0] / omega  # [s]
+    gear = sys_.reduced_index[mesh_dofs(sys_, 0)]
 
     def inside(t, q):
-        return st.mesh.evaluate(st.pinion_angle(t), q).inside
+        return mesh.evaluate(float(st.mesh_angles(st.input_angle(t))[0]), q).inside
 
     def events(t0, t1, q):
         """``{cut time: event time}`` in (t0, t1] by bisection on the contact set (one per
