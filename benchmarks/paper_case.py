@@ -1,7 +1,10 @@
 """Wall time of the paper's spur case (Table 4): 2048 mesh periods, 65,536 steps.
 
 Usage: ``python benchmarks/paper_case.py [--periods N] [--skip-fmu] [--contact-location]
-[--threads N] [--breakdown]``
+[--threads N] [--breakdown] [--case NAME]``
+
+``--case NAME`` times another shipped case the same way (``two_stage_reducer``: its periods are
+those of its fastest mesh), and also with its bearings as the case gives them ("as given").
 
 Runs, in one process and in this order: hybrid bearings in-process, the linear 8-coefficient
 model in-process (Table 4 case 0), hybrid through the FMUs (fmpy), and prints wall time,
@@ -95,10 +98,10 @@ def timed_calls(targets=TIMED, counts: dict | None = None):
             setattr(owner, name, raw)
 
 
-def breakdown(periods: int, in_process: bool) -> None:
+def breakdown(periods: int, in_process: bool, name: str = CASE) -> None:
     """Per coupled iteration: the timed calls (:data:`TIMED`) and the rest."""
     kw = dict(in_process=in_process, progress=False)
-    case = load_case(CASE, {"bearings.*.model": "hybrid"})
+    case = load_case(name, {"bearings.*.model": "hybrid"})
     with tempfile.TemporaryDirectory() as tmp:
         run_case(case.with_overrides({"simulation.mesh_periods": 2}), out_dir=tmp + "/w",
                  **kw)  # warm-up
@@ -123,6 +126,9 @@ def breakdown(periods: int, in_process: bool) -> None:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--periods", type=int, default=2048)
+    parser.add_argument("--case", default=CASE,
+                        help="another shipped case (e.g. two_stage_reducer): its own bearing "
+                             "models are timed too ('as given')")
     parser.add_argument("--skip-fmu", action="store_true")
     parser.add_argument("--contact-location", action="store_true",
                         help="also time the runs with simulation.locate_contact off")
@@ -131,14 +137,17 @@ def main() -> None:
     parser.add_argument("--breakdown", action="store_true",
                         help="only the per-iteration breakdown (hybrid, in-process and FMUs)")
     args = parser.parse_args()
+    steps = args.periods * load_case(args.case)["simulation.steps_per_mesh_period"]
     if args.breakdown:
-        print(f"machine: {platform.machine()}, CPython {platform.python_version()}; {CASE}, "
-              f"{args.periods} mesh periods ({args.periods * 32} steps)")
-        breakdown(args.periods, True)
+        print(f"machine: {platform.machine()}, CPython {platform.python_version()}; "
+              f"{args.case}, {args.periods} mesh periods ({steps} steps)")
+        breakdown(args.periods, True, args.case)
         if not args.skip_fmu:
-            breakdown(args.periods, False)
+            breakdown(args.periods, False, args.case)
         return
     configs = [("hybrid", True), ("linear", True)]
+    if args.case != CASE:
+        configs.append(("as given", True))
     if not args.skip_fmu:
         configs.append(("hybrid", False))
     if args.threads > 1:
@@ -146,8 +155,8 @@ def main() -> None:
     if args.contact_location:
         configs += [("hybrid", True, "no-location"), ("hybrid", True, "helical"),
                     ("hybrid", True, "helical-no-location")]
-    print(f"machine: {platform.machine()}, CPython {platform.python_version()}; {CASE}, "
-          f"{args.periods} mesh periods ({args.periods * 32} steps)")
+    print(f"machine: {platform.machine()}, CPython {platform.python_version()}; {args.case}, "
+          f"{args.periods} mesh periods of the fastest mesh ({steps} steps)")
     rows = {}
     with tempfile.TemporaryDirectory() as tmp:
         for model, in_process, *variant in configs:
@@ -156,15 +165,16 @@ def main() -> None:
             if name == "threads":  # the same results file name: another folder
                 kw |= dict(threads=args.threads, out_dir=f"{tmp}/threads")
                 name = f"{args.threads} threads"
-            run = load_case("baguet2010_helical" if "helical" in name else CASE,
-                            {"simulation.locate_contact": "no-location" not in name,
-                             "bearings.*.model": model})
+            overrides = {"simulation.locate_contact": "no-location" not in name}
+            if model != "as given":
+                overrides["bearings.*.model"] = model
+            run = load_case("baguet2010_helical" if "helical" in name else args.case, overrides)
             run_case(run.with_overrides({"simulation.mesh_periods": 2}),
                      **kw)  # warm-up: numba, FMU extraction
             s = run_case(run.with_overrides({"simulation.mesh_periods": args.periods}), **kw)
             label = f"{model:7s} {'in-process' if in_process else 'FMUs (fmpy)'} {name}"
             rows[(model, in_process, *variant)] = s
-            solves = 4 * s.bearing_evaluations
+            solves = len(run.names("bearings")) * s.bearing_evaluations
             print(f"{label:28s} {s.wall_time:7.1f} s  {s.steps_per_second:7.0f} steps/s  "
                   f"{s.iterations_per_step:5.2f} it/step  {solves:9d} bearing evaluations  "
                   f"static {s.static_time * 1e3:.0f} ms")
