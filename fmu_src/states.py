@@ -107,7 +107,7 @@ def structure_state_from_arrays(arrays: StateArrays, structure=None) -> Structur
     if slices is not None and states and len(states) != len(slices):
         raise StateFormatError(f"{arrays.what}: {len(states)} mesh states for "
                                f"{len(slices)} meshes")
-    return StructureState(t, n_steps, x, v, a, tuple(states) if states else None)
+    return StructureState.of(t, n_steps, x, v, a, tuple(states) if states else None)
 
 
 # --- bearing models ----------------------------------------------------------------------------

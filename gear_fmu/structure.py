@@ -108,14 +108,37 @@ class StepsPlan:
 class StructureState:
     """Everything needed to roll a step back exactly (copies): the time and step count, X,
     Xd, Xdd (internal order), and each mesh's evaluation at that state (None before a
-    solution)."""
+    solution): per mesh its force, stiffness, contact set, inside, approach, load, abscissa
+    and z arrays, then its total load [N], contact length [m] and transmission error [m]
+    (the fields of :class:`gear_fmu.mesh.element.MeshState`, kept as arrays: a master saves
+    a state at every step)."""
 
     t: float
     n_steps: int
     x: np.ndarray
     v: np.ndarray
     a: np.ndarray
-    mesh_states: tuple | None
+    meshes: tuple | None
+
+    @property
+    def mesh_states(self) -> tuple[MeshState, ...] | None:
+        """Each mesh's evaluation as a :class:`gear_fmu.mesh.element.MeshState`."""
+        if self.meshes is None:
+            return None
+        return tuple(MeshState(f, k, act, delta, load, inside, xi, z, total, te,
+                               {"contact_length": length})
+                     for f, k, act, inside, delta, load, xi, z, total, length, te
+                     in self.meshes)
+
+    @classmethod
+    def of(cls, t, n_steps, x, v, a, mesh_states) -> StructureState:
+        """The state of these arrays and :class:`~gear_fmu.mesh.element.MeshState` s (None
+        before a solution)."""
+        meshes = None if mesh_states is None else tuple(
+            (ms.force, ms.stiffness, ms.active, ms.inside, ms.delta, ms.load, ms.xi, ms.z,
+             float(ms.total_load), float(ms.contact_length), float(ms.transmission_error))
+            for ms in mesh_states)
+        return cls(t, n_steps, x, v, a, meshes)
 
 
 class Structure:
@@ -344,6 +367,11 @@ class Structure:
         self._f_const = f  # static part of F0(t)
         self._f_c = np.ascontiguousarray(f[:self.nc])
         self._speeds = shaft_speeds(self.layout, ld.input_speed)
+        w = ld.input_speed * self._driver_ratio
+        z = np.array([m.pair.teeth[0] for m in self.meshes], dtype=float)
+        with np.errstate(divide="ignore"):
+            self._mesh_periods = np.where(w > 0.0, 2.0 * math.pi / (w * z), math.inf)
+        self._mesh_period = float(np.min(self._mesh_periods))
         self._events = None  # the mesh angles move with the speeds
         # [M e omega^2, signed omega, phase] per unbalance: Eq. (10) inside the compiled step
         self._unb_coef = unbalance_coefficients(sys_.unbalances, self._speeds)
@@ -382,15 +410,12 @@ class Structure:
     @property
     def mesh_periods(self) -> np.ndarray:
         """Each mesh's period ``2 pi / (omega_driver z_driver)`` [s] (inf at zero speed)."""
-        w = self.loads.input_speed * self._driver_ratio
-        z = np.array([m.pair.teeth[0] for m in self.meshes], dtype=float)
-        with np.errstate(divide="ignore"):
-            return np.where(w > 0.0, 2.0 * math.pi / (w * z), math.inf)
+        return self._mesh_periods.copy()
 
     @property
     def mesh_period(self) -> float:
         """The shortest mesh period [s]: the case's time step is a fraction of it."""
-        return float(np.min(self.mesh_periods))
+        return self._mesh_period
 
     def _dynamic(self, dt: float):
         hit = self._dyn_cache.get(dt)
@@ -674,19 +699,25 @@ class Structure:
 
     def get_state(self) -> StructureState:
         """A copy of everything a step changes (for the master's rollback)."""
+        meshes = None
+        if self.solved:
+            meshes = tuple((*(b.copy() for b in w.kept), float(total), float(length),
+                            w.mesh.transmission_error(self.x[w.idx]))
+                           for w, total, length in zip(self._work, self._totals, self._lengths,
+                                                       strict=True))
         return StructureState(self.t, self.n_steps, self.x.copy(), self.v.copy(), self.a.copy(),
-                              self.mesh_states)
+                              meshes)
 
     def set_state(self, state: StructureState) -> None:
         """Restore a state from :meth:`get_state` exactly."""
         self.t, self.n_steps = state.t, state.n_steps
         self.x, self.v, self.a = state.x.copy(), state.v.copy(), state.a.copy()
-        self.solved = state.mesh_states is not None
+        self.solved = state.meshes is not None
         if self.solved:
-            for m, (w, ms) in enumerate(zip(self._work, state.mesh_states, strict=True)):
-                w.put(w.kept, ms)
-                self._totals[m] = ms.total_load
-                self._lengths[m] = ms.contact_length
+            for m, (w, saved) in enumerate(zip(self._work, state.meshes, strict=True)):
+                for buffer, value in zip(w.kept, saved[:8], strict=True):
+                    np.copyto(buffer, value)
+                self._totals[m], self._lengths[m] = saved[8], saved[9]
 
     # ------------------------------------------------------------------ outputs
     def journal_states(self) -> np.ndarray:

@@ -98,12 +98,6 @@ class MeshWork:
         return MeshState(force, stiff, active, delta, load, inside, xi, z, float(total),
                          self.mesh.transmission_error(q), {"contact_length": float(length)})
 
-    def put(self, buffers, state: MeshState) -> None:
-        """Write a mesh state into ``buffers`` (``out`` or ``kept``)."""
-        for b, v in zip(buffers, (state.force, state.stiffness, state.active, state.inside,
-                                  state.delta, state.load, state.xi, state.z), strict=True):
-            b[...] = v
-
 
 @njit(cache=True, _nrt=False)
 def evaluate_train(meshes, xc, angles, errs, has_err, fc, kc, totals, lengths, q):

@@ -159,7 +159,7 @@ def test_the_step_follows_the_exact_forced_response_at_order_2():
     for n in steps:
         st = linear_structure(speed)
         x0, v0, a0 = internal(st, *exact.periodic(0.0))
-        st.set_state(StructureState(0.0, 0, x0, v0, a0, st.mesh_states))
+        st.set_state(StructureState.of(0.0, 0, x0, v0, a0, st.mesh_states))
         dt = period / n
         solves, closed = set(), True
         for _ in range(n):
@@ -192,7 +192,7 @@ def test_the_step_conserves_the_energy_of_the_undamped_structure():
     assert not c.any()
     x_static = st.system.reduce(st.full_vector("x"))
     (v0,) = internal(st, 1e-3 * np.random.default_rng(5).standard_normal(x_static.size))
-    st.set_state(StructureState(0.0, 0, st.x, v0, np.zeros_like(v0), st.mesh_states))
+    st.set_state(StructureState.of(0.0, 0, st.x, v0, np.zeros_like(v0), st.mesh_states))
 
     def energies():
         x = st.system.reduce(st.full_vector("x")) - x_static
