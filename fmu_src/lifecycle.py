@@ -30,7 +30,7 @@ import enum
 import numpy as np
 from numba import njit
 
-__all__ = ["Phase", "StructureCycle", "step_output_row", "step_outputs",
+__all__ = ["Phase", "StructureCycle", "output_row", "step_output_row", "step_outputs",
            "transmission_error_terms"]
 
 
@@ -53,6 +53,18 @@ def step_output_row(te_idx, te_coef, gear_uv, totals, x, row):
     for g in range(gear_uv.shape[0]):
         row[2 * n_meshes + 2 * g] = x[gear_uv[g, 0]]
         row[2 * n_meshes + 2 * g + 1] = x[gear_uv[g, 1]]
+
+
+@njit(cache=True)
+def output_row(journal_idx, nc, te_idx, te_coef, gear_uv, totals, x, v, row, first):
+    """Everything a gear-shaft FMU outputs, in one call: the journal states into
+    ``row[:journal_idx.size]`` (``journal_idx`` their indices in ``[x[:nc], v[:nc]]``: u, v,
+    udot, vdot per bearing [m, m/s]) and :func:`step_output_row` into ``row[first:]``; the
+    entries between (the shaft speeds) are left as they are."""
+    for i in range(journal_idx.size):
+        j = journal_idx[i]
+        row[i] = x[j] if j < nc else v[j - nc]
+    step_output_row(te_idx, te_coef, gear_uv, totals, x, row[first:])
 
 
 def transmission_error_terms(structure) -> tuple[np.ndarray, np.ndarray]:

@@ -71,6 +71,7 @@ from gear_fmu.step.contact_loop import (
     MeshWork,
     StepInfo,
     contact_newton,
+    kept_views,
 )
 from gear_fmu.step.events import ContactEvents, train_pieces
 from gear_fmu.step.kernel import advance_step, keep_evaluation
@@ -108,10 +109,12 @@ class StepsPlan:
 class StructureState:
     """Everything needed to roll a step back exactly (copies): the time and step count, X,
     Xd, Xdd (internal order), and each mesh's evaluation at that state (None before a
-    solution): per mesh its force, stiffness, contact set, inside, approach, load, abscissa
-    and z arrays, then its total load [N], contact length [m] and transmission error [m]
-    (the fields of :class:`gear_fmu.mesh.element.MeshState`, kept as arrays: a master saves
-    a state at every step)."""
+    solution): per mesh its force, stiffness, approach, load, abscissa and z arrays in one
+    float block and its contact set and inside flags in one bool block
+    (:func:`gear_fmu.step.contact_loop.kept_views`), then its total load [N], contact
+    length [m] and transmission error [m] (the fields of
+    :class:`gear_fmu.mesh.element.MeshState`, kept as two blocks: a master saves a state at
+    every step)."""
 
     t: float
     n_steps: int
@@ -122,20 +125,24 @@ class StructureState:
 
     @property
     def mesh_states(self) -> tuple[MeshState, ...] | None:
-        """Each mesh's evaluation as a :class:`gear_fmu.mesh.element.MeshState`."""
+        """Each mesh's evaluation as a :class:`gear_fmu.mesh.element.MeshState` (views)."""
         if self.meshes is None:
             return None
-        return tuple(MeshState(f, k, act, delta, load, inside, xi, z, total, te,
-                               {"contact_length": length})
-                     for f, k, act, inside, delta, load, xi, z, total, length, te
-                     in self.meshes)
+        states = []
+        for floats, bools, total, length, te in self.meshes:
+            f, k, act, inside, delta, load, xi, z = kept_views(floats, bools)
+            states.append(MeshState(f, k, act, delta, load, inside, xi, z, total, te,
+                                    {"contact_length": length}))
+        return tuple(states)
 
     @classmethod
     def of(cls, t, n_steps, x, v, a, mesh_states) -> StructureState:
         """The state of these arrays and :class:`~gear_fmu.mesh.element.MeshState` s (None
         before a solution)."""
         meshes = None if mesh_states is None else tuple(
-            (ms.force, ms.stiffness, ms.active, ms.inside, ms.delta, ms.load, ms.xi, ms.z,
+            (np.concatenate([np.ravel(b) for b in (ms.force, ms.stiffness, ms.delta, ms.load,
+                                                    ms.xi, ms.z)]).astype(float),
+             np.concatenate((ms.active, ms.inside)).astype(np.bool_),
              float(ms.total_load), float(ms.contact_length), float(ms.transmission_error))
             for ms in mesh_states)
         return cls(t, n_steps, x, v, a, meshes)
@@ -701,7 +708,7 @@ class Structure:
         """A copy of everything a step changes (for the master's rollback)."""
         meshes = None
         if self.solved:
-            meshes = tuple((*(b.copy() for b in w.kept), float(total), float(length),
+            meshes = tuple((w.kept_f.copy(), w.kept_b.copy(), float(total), float(length),
                             w.mesh.transmission_error(self.x[w.idx]))
                            for w, total, length in zip(self._work, self._totals, self._lengths,
                                                        strict=True))
@@ -715,9 +722,9 @@ class Structure:
         self.solved = state.meshes is not None
         if self.solved:
             for m, (w, saved) in enumerate(zip(self._work, state.meshes, strict=True)):
-                for buffer, value in zip(w.kept, saved[:8], strict=True):
-                    np.copyto(buffer, value)
-                self._totals[m], self._lengths[m] = saved[8], saved[9]
+                np.copyto(w.kept_f, saved[0])
+                np.copyto(w.kept_b, saved[1])
+                self._totals[m], self._lengths[m] = saved[2], saved[3]
 
     # ------------------------------------------------------------------ outputs
     def journal_states(self) -> np.ndarray:

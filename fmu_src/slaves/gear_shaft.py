@@ -62,7 +62,7 @@ from fmu_src.contract import (
     support_load_names,
     unpack_law_arrays,
 )
-from fmu_src.lifecycle import Phase, StructureCycle, step_outputs, transmission_error_terms
+from fmu_src.lifecycle import Phase, StructureCycle, output_row, transmission_error_terms
 from fmu_src.slaves.support import (
     FMI_ERROR,
     ContractSlave,
@@ -137,7 +137,7 @@ class GearShaftSlave(ContractSlave):
         self._laws = self._io[:n_laws]  # never rebound: setters hold it
         self._laws[:] = [float(starts[n]) for n in self._law_names]
         self._outputs = list(self._nan_outputs)
-        self._te_terms = None  # the structure's transmission_error_terms
+        self._row = None  # output_row's constant arguments and its row, speeds filled
         self._iterations = 0
         self._support: list | None = None
         self._cycle = StructureCycle(self._build_structure)  # phases shared with in-process
@@ -255,7 +255,7 @@ class GearShaftSlave(ContractSlave):
         self._cycle.reset()
         self._arm_laws()
         self._support = None
-        self._te_terms = None
+        self._row = None
         self._dirty = True
         self._error = None
 
@@ -332,14 +332,23 @@ class GearShaftSlave(ContractSlave):
     def _outputs_of(self, st) -> list:
         """The outputs of the structure's current state, in the order of its output names
         (journal states, shaft speeds, then the step outputs of
-        :func:`fmu_src.lifecycle.step_outputs`: the in-process transport's arithmetic); raises
+        :func:`fmu_src.lifecycle.output_row`: the in-process transport's arithmetic); raises
         when it has no solution or an output is not finite."""
         if not st.solved:
             raise RuntimeError("the structure has no solution yet (no static solution)")
-        if self._te_terms is None:
-            self._te_terms = transmission_error_terms(st)
-        journals = st.journal_states().ravel().tolist()
-        outputs = [*journals, *self._speeds, *step_outputs(st, self._te_terms).tolist()]
+        if self._row is None or self._row[-1] is not st:  # (built per structure)
+            nj, ns = 4 * st.nb, len(self._speeds)
+            row = np.empty(len(self._output_names))
+            row[nj:nj + ns] = self._speeds
+            self._row = (st._state_outputs[:nj].copy(), st.nc, *transmission_error_terms(st),
+                         st._gear_uv, nj + ns, row, st)
+            if row.size != nj + ns + 2 * len(st.meshes) + 2 * st._gear_uv.shape[0]:
+                raise RuntimeError(f"{row.size} outputs named for {nj} journal states, {ns} "
+                                   f"speeds, {len(st.meshes)} meshes and "
+                                   f"{st._gear_uv.shape[0]} gears")
+        journal_idx, nc, te_idx, te_coef, gear_uv, first, row, _ = self._row
+        output_row(journal_idx, nc, te_idx, te_coef, gear_uv, st._totals, st.x, st.v, row, first)
+        outputs = row.tolist()
         if not math.isfinite(sum(outputs)):  # finite terms may overflow the sum
             bad = [n for n, x in zip(self._output_names, outputs, strict=True)
                    if not math.isfinite(x)]

@@ -99,8 +99,10 @@ class CondensationSlots:
         return k
 
     def arrays(self) -> tuple:
-        """``(g, g_const, s0, w)`` of every slot, stacked along the first axis."""
-        return tuple(s[:self._n] for s in self._stacks)
+        """``(g, g_const, s0, w)`` of every slot, stacked along the first axis (rows past
+        the filled slots hold nothing: a slot number indexes them; no views, a compiled step
+        takes them at every call)."""
+        return self._stacks
 
 
 @njit(cache=True)

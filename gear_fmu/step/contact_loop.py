@@ -57,6 +57,18 @@ class StepInfo:
     residuals: list = field(default_factory=list)
 
 
+def kept_views(floats: np.ndarray, bools: np.ndarray) -> tuple:
+    """A mesh evaluation's buffers (force (12,), stiffness (12, 12), contact set, inside,
+    approach, load, abscissa, z (n,)) as contiguous views of a float block (156 + 4 n,)
+    and a bool block (2 n,) of a mesh of n slices."""
+    n = bools.size // 2
+    if floats.size != 156 + 4 * n:
+        raise ValueError(f"mesh evaluation block of {floats.size} floats for {n} slices "
+                         f"(expected 156 + 4 n = {156 + 4 * n})")
+    d = [floats[156 + i * n:156 + (i + 1) * n] for i in range(4)]
+    return (floats[:12], floats[12:156].reshape(12, 12), bools[:n], bools[n:], *d)
+
+
 class MeshWork:
     """A mesh element in a structure: its kernel's arrays, where its 12 DOFs sit in the
     condensed vector (``idx``) and the buffers its evaluations fill (module docstring).
@@ -71,20 +83,18 @@ class MeshWork:
     def __init__(self, mesh, idx):
         self.mesh = mesh
         self.idx = np.ascontiguousarray(idx, dtype=np.int64)
-        self.out = self._buffers()
-        self.used = np.zeros(self.n, dtype=np.bool_)
-        self.kept = self._buffers()
+        n = self.n
+        self.out = kept_views(np.zeros(156 + 4 * n), np.zeros(2 * n, dtype=np.bool_))
+        self.used = np.zeros(n, dtype=np.bool_)
+        # the state's evaluation as views of two blocks: a master saves and restores it at
+        # every step, two copies per mesh
+        self.kept_f, self.kept_b = np.zeros(156 + 4 * n), np.zeros(2 * n, dtype=np.bool_)
+        self.kept = kept_views(self.kept_f, self.kept_b)
 
     @property
     def n(self) -> int:
         """Slices of all contact lines."""
         return self.mesh.n_lines * self.mesh.n_slices
-
-    def _buffers(self) -> tuple:
-        n = self.n
-        return (np.zeros(12), np.zeros((12, 12)), np.zeros(n, dtype=np.bool_),
-                np.zeros(n, dtype=np.bool_), np.zeros(n), np.zeros(n), np.zeros(n),
-                np.zeros(n))
 
     def arrays(self) -> tuple:
         """The workspace tuple of the compiled loop (module docstring)."""
