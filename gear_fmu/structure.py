@@ -269,7 +269,8 @@ class Structure:
         self._pending_reference = None
         self._damping_full = damping_full
         self._c = self._permute(damping_full)
-        self._mc = np.hstack([self._m, self._c])  # b = [M C] @ [p; q] (prepare_step)
+        # b = [M C] [p; q] (prepare_step), transposed for the compiled step's products
+        self._mc_t = np.ascontiguousarray(np.hstack([self._m, self._c]).T)
         self._memo = history_memo(self._m.shape[0])
         self._dyn_cache.clear()
         self._condensations.clear()
@@ -557,7 +558,7 @@ class Structure:
         g_k, gc_k, s0_k, w_k = self._condensations.arrays()
         fc, kc, totals, lengths, residuals, x1, v1, a1 = self._step_work
         status, piece, k = advance_step(
-            counts, slots, self._mc, g_k, gc_k, s0_k, w_k, table, angles, after, errs, errs_a,
+            counts, slots, self._mc_t, g_k, gc_k, s0_k, w_k, table, angles, after, errs, errs_a,
             self.x, self.v, self.a, self._f_c, self._unb_coef, self._unb_idx, f0, kb, cb,
             self._has_err, self._mesh_tuple, fc, kc, totals, lengths, self._f_scale, self.tol,
             self.max_iter, self._m_inv_g, residuals, x1, v1, a1, self._memo, self._totals,
@@ -668,7 +669,7 @@ class Structure:
                     errs_after[i, p] = self._errors(np.where(np.isnan(aft), before, aft))
         ng, size = self.ng, self.x.size
         return StepsPlan(
-            (counts, index, self._mc, *slots.arrays(), table, angles, after, errs, errs_after),
+            (counts, index, self._mc_t, *slots.arrays(), table, angles, after, errs, errs_after),
             (self.x.copy(), self.v.copy(), self.a.copy()),
             (self._unb_coef, self._unb_idx, self._f_c, self._has_err, self._mesh_tuple,
              self._f_scale, self.tol, self.max_iter,

@@ -4,7 +4,8 @@ With the history terms of Eq. (12) (:func:`gear_fmu.step.newmark.newmark_history
 part of the tangent condensed onto the gear and bearing DOFs (:mod:`gear_fmu.step.condensation`),
 :func:`prepare_step` adds the external loads (the unbalances of Eq. 10) and the affine bearing
 laws F0 - Kb X - Cb Xdot (Eq. 17) of every bearing to the right-hand side and ``Kb + c1 Cb``
-to the tangent (Eq. 14, 16); after the Newton/contact loop :func:`finish_step` recovers the
+to the tangent (Eq. 14, 16); after the Newton/contact loop
+:func:`gear_fmu.step.kernel.advance` recovers the
 eliminated DOFs and updates velocities and accelerations (Eq. 12). :func:`check_laws` validates
 the laws.
 """
@@ -16,9 +17,9 @@ import math
 import numpy as np
 from numba import njit
 
-from gear_fmu.step.newmark import newmark_coefficients, newmark_history, newmark_kinematics
+from gear_fmu.step.newmark import newmark_coefficients, newmark_history
 
-__all__ = ["check_laws", "check_laws_fast", "finish_step", "history_memo", "history_products",
+__all__ = ["check_laws", "check_laws_fast", "history_memo", "history_products", "matvec_t",
            "prepare_step"]
 
 
@@ -36,10 +37,31 @@ def _same_bits(u, w):
 
 
 @njit(cache=True)
-def history_products(mc, g, x, v, a, dt, nc, memo):
+def matvec_t(at, x):
+    """``at.T @ x``: ``out[i] = sum_j at[j, i] x[j]``, summed in the order of j.
+
+    The compiled step's products, in a fixed order: BLAS (``@``) shares a product of a
+    hundred rows among its threads and takes rows by kernels that depend on the CPU, which
+    changed the last bits of a step between two calls of one machine (a step alone against
+    the same step in the master's loop, only on the CI machine). Column by column, over a
+    transposed matrix stored C-contiguous, every entry is a sequence of multiplications
+    and additions whatever the vector width, and about as fast as BLAS on one thread
+    (4.2 against 3.5 us for 107 x 214 on the development machine)."""
+    k, n = at.shape
+    out = np.zeros(n)
+    for j in range(k):
+        xj = x[j]
+        for i in range(n):
+            out[i] += at[j, i] * xj
+    return out
+
+
+@njit(cache=True)
+def history_products(mc_t, g_t, x, v, a, dt, nc, memo):
     """``b = [M C] [p; q]``, the history terms of Eq. (12)
     (:func:`gear_fmu.step.newmark.newmark_history`), and ``out = g b_r`` (the condensation
-    of its r part), memoised.
+    of its r part), memoised; ``mc_t`` = [M C]^T (2n, n) and ``g_t`` = g^T
+    (:class:`gear_fmu.step.condensation.Condensation`) as :func:`matvec_t` takes them.
 
     The master computes a step again at each of its iterations from the same (X, Xd, Xdd)
     and dt, and these two products (107 x 214 and 107 x 87 in the paper's case) do not
@@ -61,8 +83,8 @@ def history_products(mc, g, x, v, a, dt, nc, memo):
         if hit:
             return memo[1 + 3 * n:1 + 4 * n], memo[1 + 4 * n:]
     pq = newmark_history(x, v, a, dt)
-    b = mc @ pq
-    out = g @ b[nc:]  # -W^T b_r, then A_rr^-1 b_r
+    b = matvec_t(mc_t, pq)
+    out = matvec_t(g_t, b[nc:])  # -W^T b_r, then A_rr^-1 b_r
     if memo.shape[0] == 5 * n + 1:
         memo[0] = dt
         memo[1:1 + n] = x
@@ -74,12 +96,12 @@ def history_products(mc, g, x, v, a, dt, nc, memo):
 
 
 @njit(cache=True)
-def prepare_step(mc, g, g_const, x, v, a, f_c, unb, unb_idx, f0, kb, cb, s0, dt, ng, memo):
+def prepare_step(mc_t, g_t, g_const, x, v, a, f_c, unb, unb_idx, f0, kb, cb, s0, dt, ng, memo):
     """Right-hand side and condensed tangent of one Newmark step (Eq. 12, 14, 16).
 
-    ``mc`` = [M C] (n, 2n) turns the Newmark history [p; q] into b = M p + C q; ``g``
+    ``mc_t`` = [M C]^T (2n, n) turns the Newmark history [p; q] into b = M p + C q; ``g_t``
     (:class:`gear_fmu.step.condensation.Condensation`) condenses its r part
-    (:func:`history_products`, with its ``memo``). Only ``g`` depends on the step's length:
+    (:func:`history_products`, with its ``memo``). Only ``g_t`` depends on the step's length:
     a new length costs its condensation, not a product with [M C] (what a step that does
     not recur with the mesh period asks at most cut steps). ``unb`` (nu, 2): the unbalance
     forces of Eq. (10) [N] on the condensed DOFs ``unb_idx`` (nu, 2); bearing j's law (Eq. 17)
@@ -88,7 +110,7 @@ def prepare_step(mc, g, g_const, x, v, a, f_c, unb, unb_idx, f0, kb, cb, s0, dt,
     """
     nc = s0.shape[0]
     _, c1, _ = newmark_coefficients(dt)
-    b, out = history_products(mc, g, x, v, a, dt, nc, memo)
+    b, out = history_products(mc_t, g_t, x, v, a, dt, nc, memo)
     z0 = np.empty(nc)
     for i in range(nc):
         z0[i] = b[i] + out[i] + g_const[i] + f_c[i]
@@ -112,18 +134,6 @@ def prepare_step(mc, g, g_const, x, v, a, f_c, unb, unb_idx, f0, kb, cb, s0, dt,
 def _all_finite(f0, kb, cb):
     """True when every entry of the bearing laws is finite."""
     return np.isfinite(f0).all() and np.isfinite(kb).all() and np.isfinite(cb).all()
-
-
-@njit(cache=True)
-def finish_step(x, v, a, xc, y, w, dt):
-    """X_r = y - W X_c, then Newmark velocities and accelerations (Eq. 12)."""
-    n = x.size
-    nc = xc.size
-    x1 = np.empty(n)
-    x1[:nc] = xc
-    x1[nc:] = y - w @ xc
-    v1, a1 = newmark_kinematics(x1, x, v, a, dt)
-    return x1, v1, a1
 
 
 def check_laws(f0, kb, cb, nb: int):

@@ -30,6 +30,9 @@ class Condensation:
     g : (nc + n_r, n_r) array
         ``(-W^T; A_rr^-1)``: applied to ``b_r`` it gives the correction of the condensed
         right-hand side and ``A_rr^-1 b_r``.
+    g_t, w_t : arrays
+        ``g`` and ``w`` transposed, C-contiguous, as the compiled step's products take them
+        (:func:`gear_fmu.step.assembly.matvec_t`).
     """
 
     def __init__(self, a: np.ndarray, nc: int):
@@ -38,16 +41,16 @@ class Condensation:
         arr_inv = scipy.linalg.cho_solve(cho, np.eye(arr.shape[0]))
         self.w = arr_inv @ acr.T  # A_rr^-1 A_rc
         self.s0 = acc - acr @ self.w
-        # rows: (-W^T, A_rr^-1) applied to b_r gives (z correction, y); C order, as the
-        # compiled steps' slots hold it: a product's rounding follows the layout (BLAS
-        # takes an F-order matrix by columns, a C-order one by rows)
+        # rows: (-W^T, A_rr^-1) applied to b_r gives (z correction, y)
         self.g = np.ascontiguousarray(np.vstack([-self.w.T, arr_inv]))
+        self.g_t = np.ascontiguousarray(self.g.T)
+        self.w_t = np.ascontiguousarray(self.w.T)
 
 
 class CondensationSlots:
     """The condensations of the sub-step lengths of a run, stacked for a compiled loop over
-    steps (:meth:`gear_fmu.structure.Structure.steps_plan`): slot k holds ``(g, g_const, s0,
-    w)`` of one length h [s] as the structure's ``_dynamic(h)`` gives them (copies: the same
+    steps (:meth:`gear_fmu.structure.Structure.steps_plan`): slot k holds ``(g_t, g_const, s0,
+    w_t)`` of one length h [s] as the structure's ``_dynamic(h)`` gives them (copies: the same
     numbers). At most ``CAPACITY`` lengths (the sub-steps of a step commensurate with the
     mesh periods recur: the paper's spur case has at most 128 at its 32 steps per period,
     its helical case 54, the two-stage reducer about 120); a full set starts again empty."""
@@ -84,7 +87,7 @@ class CondensationSlots:
         k = self._index.get(h)
         if k is None:
             cond, g_const = dynamic(h)
-            parts = (cond.g, g_const, cond.s0, cond.w)
+            parts = (cond.g_t, g_const, cond.s0, cond.w_t)
             if self._stacks is None or self._n == len(self._stacks[0]):
                 size = min(self.CAPACITY, max(4, 2 * self._n))
                 stacks = tuple(np.empty((size, *p.shape)) for p in parts)
@@ -99,7 +102,7 @@ class CondensationSlots:
         return k
 
     def arrays(self) -> tuple:
-        """``(g, g_const, s0, w)`` of every slot, stacked along the first axis (rows past
+        """``(g_t, g_const, s0, w_t)`` of every slot, stacked along the first axis (rows past
         the filled slots hold nothing: a slot number indexes them; no views, a compiled step
         takes them at every call)."""
         return self._stacks

@@ -164,6 +164,15 @@ def use_sets(meshes, kept):
 
 
 @njit(cache=True)
+def _dot(u, w):
+    """``u . w`` summed in index order (not BLAS's, whose order depends on the CPU)."""
+    acc = 0.0
+    for i in range(u.size):
+        acc += u[i] * w[i]
+    return acc
+
+
+@njit(cache=True)
 def _residual_norm(s_lin, z0, xc, mesh_force):
     """2-norm of the condensed residual G_c = S X_c - z0 - F_mesh (gear-node rows first)."""
     nc = z0.size
@@ -211,7 +220,7 @@ def contact_newton(s_lin, z0, xc, angles, errs, has_err, meshes, fc, kc, totals,
     q = np.empty(12)
     for k in range(max_iter + 1):
         evaluate_train(meshes, xc, angles, errs, has_err, fc, kc, totals, lengths, q)
-        ff = np.dot(fc, fc)
+        ff = _dot(fc, fc)
         scale = max(f_scale, math.sqrt(ff))
         scale = scale if scale > 0.0 else 1.0
         r = _residual_norm(s_lin, z0, xc, fc) / scale
@@ -219,7 +228,7 @@ def contact_newton(s_lin, z0, xc, angles, errs, has_err, meshes, fc, kc, totals,
         limit = tol
         if r > tol:  # the round-off floor at this iterate (module docstring)
             if z_norm < 0.0:
-                z_norm = math.sqrt(np.dot(z0, z0))
+                z_norm = math.sqrt(_dot(z0, z0))
             limit = max(tol, ROUNDOFF * (z_norm + math.sqrt(ff)) / scale)
         if r <= limit and has_used and _same_sets(meshes):
             return CONVERGED, k, xc

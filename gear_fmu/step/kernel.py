@@ -24,7 +24,7 @@ from numba import njit
 from bearing_fmu.affine import pairwise_sum
 from gear_fmu.loads import unbalance_into
 from gear_fmu.mesh.element import _mesh_kernel
-from gear_fmu.step.assembly import prepare_step
+from gear_fmu.step.assembly import matvec_t, prepare_step
 from gear_fmu.step.contact_loop import (
     _ACTIVE,
     _DELTA,
@@ -58,17 +58,18 @@ def sum_squares(f0):
 
 
 @njit(cache=True)
-def advance(mc, g, g_const, s0, w, x, v, a, f_c, unb_coef, unb_idx, t1, f0, kb, cb, h,  # Eq. 12-16
-            angles, errs, has_err, meshes, fc, kc, totals, lengths, has_used, f_scale, tol,
+def advance(mc_t, g_t, g_const, s0, w_t, x, v, a, f_c, unb_coef, unb_idx, t1, f0, kb, cb,
+            h, angles, errs, has_err, meshes, fc, kc, totals, lengths, has_used, f_scale, tol,
             max_iter, residuals, x1, v1, a1, memo):
     """One Newmark step of length ``h`` [s] to ``t1`` [s], the meshes at their pinion angles
     ``angles`` [rad]: Eq. (12), (14), (16) assembled, Newton-Raphson with the contact loop,
     Eq. (13), (15).
 
-    Inputs as :func:`gear_fmu.step.assembly.prepare_step` (``g``, ``g_const``, ``s0``, ``w``
-    from the condensation at h, ``memo`` that of its history products; the unbalances of
-    Eq. (10) at ``t1`` from ``unb_coef``, :func:`gear_fmu.loads.unbalance_into`, on the
-    condensed DOFs ``unb_idx``) and :func:`gear_fmu.step.contact_loop.contact_newton`
+    Inputs as :func:`gear_fmu.step.assembly.prepare_step` (``g_t``, ``g_const``, ``s0``,
+    ``w_t`` from the condensation at h, :class:`gear_fmu.step.condensation.Condensation`,
+    ``memo`` that of its history products; the unbalances of Eq. (10) at ``t1`` from
+    ``unb_coef``, :func:`gear_fmu.loads.unbalance_into`, on the condensed DOFs ``unb_idx``)
+    and :func:`gear_fmu.step.contact_loop.contact_newton`
     (``errs`` (n_meshes, 12) the error displacements when ``has_err``; ``f_scale`` the largest
     external load [N], raised to the norm of the bearing forces ``f0`` when larger). Writes
     the residual of each pass into ``residuals`` and the new state into ``x1, v1, a1``.
@@ -78,7 +79,7 @@ def advance(mc, g, g_const, s0, w, x, v, a, f_c, unb_coef, unb_idx, t1, f0, kb, 
     unb = np.empty((unb_coef.shape[0], 2))
     unbalance_into(unb_coef, t1, unb)
     ng = fc.size
-    s_lin, z0, y = prepare_step(mc, g, g_const, x, v, a, f_c, unb, unb_idx, f0, kb, cb, s0, h,
+    s_lin, z0, y = prepare_step(mc_t, g_t, g_const, x, v, a, f_c, unb, unb_idx, f0, kb, cb, s0, h,
                                  ng, memo)
     f_scale = max(f_scale, math.sqrt(sum_squares(f0)))
     nc = s0.shape[0]
@@ -88,7 +89,7 @@ def advance(mc, g, g_const, s0, w, x, v, a, f_c, unb_coef, unb_idx, t1, f0, kb, 
     if status == CONVERGED:
         # X_r = y - W X_c, then Newmark velocities and accelerations (Eq. 12)
         x1[:nc] = xc
-        x1[nc:] = y - w @ xc
+        x1[nc:] = y - matvec_t(w_t, xc)
         vv, aa = newmark_kinematics(x1, x, v, a, h)
         v1[:] = vv
         a1[:] = aa
@@ -162,7 +163,7 @@ def keep_evaluation(meshes):
 
 
 @njit(cache=True)
-def advance_pieces(n_pieces, slots, mc, g_k, g_const_k, s0_k, w_k, table, angles, after, errs,
+def advance_pieces(n_pieces, slots, mc_t, g_k, g_const_k, s0_k, w_k, table, angles, after, errs,
                    errs_after, x, v, a, f_c, unb_coef, unb_idx, f0, kb, cb, has_err, meshes,
                    fc, kc, totals, lengths, f_scale, tol, max_iter, m_inv_g, residuals, x1,
                    v1, a1, memo):
@@ -187,7 +188,7 @@ def advance_pieces(n_pieces, slots, mc, g_k, g_const_k, s0_k, w_k, table, angles
     for p in range(n_pieces):
         memo_p = memo if p == 0 else memo[:0]
         s = slots[p]
-        status, k = advance(mc, g_k[s], g_const_k[s], s0_k[s], w_k[s], xs, vs, as_, f_c,
+        status, k = advance(mc_t, g_k[s], g_const_k[s], s0_k[s], w_k[s], xs, vs, as_, f_c,
                             unb_coef, unb_idx, table[p, 1], f0, kb, cb, table[p, 0], angles[p],
                             errs[p], has_err, meshes, fc, kc, totals, lengths, True, f_scale,
                             tol, max_iter, residuals, x1, v1, a1, memo_p)
@@ -202,7 +203,7 @@ def advance_pieces(n_pieces, slots, mc, g_k, g_const_k, s0_k, w_k, table, angles
 
 
 @njit(cache=True)
-def advance_step(n_pieces, slots, mc, g_k, g_const_k, s0_k, w_k, table, angles, after, errs,
+def advance_step(n_pieces, slots, mc_t, g_k, g_const_k, s0_k, w_k, table, angles, after, errs,
                  errs_after, x, v, a, f_c, unb_coef, unb_idx, f0, kb, cb, has_err, meshes, fc,
                  kc, totals, lengths, f_scale, tol, max_iter, m_inv_g, residuals, x1, v1, a1,
                  memo, kept_totals, kept_lengths):
@@ -211,7 +212,7 @@ def advance_step(n_pieces, slots, mc, g_k, g_const_k, s0_k, w_k, table, angles, 
     contact lengths in ``kept_totals``, ``kept_lengths``, in the same call. Returns as
     :func:`advance_pieces`."""
     status, piece, k = advance_pieces(
-        n_pieces, slots, mc, g_k, g_const_k, s0_k, w_k, table, angles, after, errs,
+        n_pieces, slots, mc_t, g_k, g_const_k, s0_k, w_k, table, angles, after, errs,
         errs_after, x, v, a, f_c, unb_coef, unb_idx, f0, kb, cb, has_err, meshes, fc, kc,
         totals, lengths, f_scale, tol, max_iter, m_inv_g, residuals, x1, v1, a1, memo)
     if status == CONVERGED:

@@ -368,7 +368,7 @@ def test_the_history_memo_answers_only_inputs_of_the_same_bits():
 
     def products(inputs, memo):
         x, v, a, h = inputs
-        return [p.copy() for p in history_products(st._mc, cond.g, x, v, a, h, st.nc, memo)]
+        return [p.copy() for p in history_products(st._mc_t, cond.g_t, x, v, a, h, st.nc, memo)]
 
     plain = products(base, no_memo)
     for which in range(4):
