@@ -23,9 +23,9 @@ from tests.helpers import probe_command, probe_env
 ROOT = Path(__file__).resolve().parents[1]
 
 #: what the xdist controller runs before the workers start, in two processes at once
-#: (:mod:`tests.probes.warm_up`): every bearing model's kernels; the native layer, the
-#: structure's and the master's kernels (short in-process runs)
-WARM_UP = ("bearing_kernels", "native_and_structure")
+#: (:mod:`tests.probes.warm_up`): every bearing model's kernels, then a two-stage train's; the
+#: native layer, the structure's and the master's kernels (short in-process runs)
+WARM_UP = ("bearing_and_train_kernels", "native_and_structure")
 #: the environment variable that names, in the workers, the folder of the warm-up's cold run
 #: (:func:`tests.probes.warm_up.cold_paper_case`): its numba cache and result
 COLD_RUN = "GSB_TEST_COLD_RUN"

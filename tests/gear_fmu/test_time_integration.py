@@ -270,13 +270,15 @@ def two_stage_state(n, periods=2):
     return master.structure.journal_states()[:, :2].copy()
 
 
+@pytest.mark.slow
 def test_two_stage_reducer_keeps_order_two():
     """The shipped two-stage reducer (a helical and a spur stage, the second's events not
-    commensurate with the step): order 2 once the steps resolve its helical stage. Its error
-    against a run at 4096 steps per period of the faster mesh falls by 2^p from 256 to 512
-    steps with p = 1.93 measured (>= 1.8 asserted). Coarser ladders are not asymptotic yet,
-    as on the paper's helical case alone (local orders 1.0, 1.4, 1.8, 2.0 from 64 to 1024
-    steps; the two-stage case 1.2, 1.3, 1.9 from 64 to 512)."""
+    commensurate with the step; ``-m slow``, 30 s: tests/gear_fmu/test_train.py checks the
+    order on two stages in the default run): order 2 once the steps resolve its helical
+    stage. Its error against a run at 4096 steps per period of the faster mesh falls by 2^p
+    from 256 to 512 steps with p = 1.93 measured (>= 1.8 asserted). Coarser ladders are not
+    asymptotic yet, as on the paper's helical case alone (local orders 1.0, 1.4, 1.8, 2.0
+    from 64 to 1024 steps; the two-stage case 1.2, 1.3, 1.9 from 64 to 512)."""
     ref = two_stage_state(4096)
     errors = [np.abs(two_stage_state(n) - ref).max() for n in (256, 512)]
     order = math.log2(errors[0] / errors[1])

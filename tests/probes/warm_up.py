@@ -12,9 +12,10 @@ import tempfile
 from tests.probes import dispatch, probes_of
 
 
-def bearing_kernels() -> None:
+def bearing_and_train_kernels() -> None:
     """Every bearing model's kernels, in-process and through the bearing set, and the static
-    equilibrium."""
+    equilibrium; then the kernels of a train of two meshes and mixed bearing models
+    (:func:`train_kernels`)."""
     import numpy as np
 
     from bearing_fmu import MODELS, BearingData, model_class
@@ -27,6 +28,31 @@ def bearing_kernels() -> None:
         model.evaluate(6e-5, -6e-5, 1e-3, -1e-3, 325.0)
         ModelBearings([model], [(0.3, -1)], [325.0]).evaluate(np.array([[6e-5, -6e-5, 0.0, 0.0]]))
     static_equilibrium(model_class("hybrid").from_parameters(b), (0.0, -2251.0), 325.0)
+    train_kernels()
+
+
+def train_kernels() -> None:
+    """The compiled step of the shipped two-stage reducer (two meshes, hybrid and short
+    bearings), in-process and as its gear-shaft FMU takes it (a structure's step alone).
+
+    numba compiles the step again for each number of meshes and each set of bearing models
+    (both are in the types of its arguments): about 70 s from an empty cache, which every
+    worker that meets the train first would otherwise spend at once."""
+    import numpy as np
+
+    from fmu_src import description
+    from fmu_src.case import load_case
+    from orchestrator.run.runner import run_case
+
+    case = load_case("two_stage_reducer")
+    with tempfile.TemporaryDirectory() as tmp:
+        run_case(case, steps=2, in_process=True, out_dir=tmp, progress=False)
+    st = description.structure(case)
+    kb = np.broadcast_to(2e8 * np.eye(2), (st.nb, 2, 2)).copy()
+    cb = np.broadcast_to(2e4 * np.eye(2), (st.nb, 2, 2)).copy()
+    f0 = np.zeros((st.nb, 2))
+    st.static(f0, kb, cb)
+    st.step(description.time_step(case), f0, kb, cb)
 
 
 def native_and_structure() -> None:
@@ -74,7 +100,7 @@ def cold_paper_case(folder: str, periods: int, default_cache: str) -> None:
         os.replace(part, target)
 
 
-PROBES = probes_of(bearing_kernels, native_and_structure, cold_paper_case)
+PROBES = probes_of(bearing_and_train_kernels, native_and_structure, cold_paper_case)
 
 
 def main(argv: list[str] | None = None) -> None:
