@@ -149,6 +149,8 @@ def _orbits(plt, run: RunData):
                 ys.append(x0[1])
             c = float(run.clearance[b]) * UM
             ax.ticklabel_format(useOffset=False)
+            # at most 5 ticks: values such as 39.925 overlap at the default count
+            ax.xaxis.set_major_locator(MaxNLocator(nbins=5))
             ax.grid(True, lw=0.4, alpha=0.5)
             ax.set_xlabel("s [um]")
             ax.set_ylabel("t [um]")
