@@ -432,21 +432,32 @@ class Structure:
         if not (dt > 0.0 and math.isfinite(dt)):
             raise ValueError(f"time step dt = {dt!r} s must be finite and > 0")
         self._require_damping()
-        c0, c1 = 4.0 / dt**2, 2.0 / dt
-        cond = Condensation(c0 * self._m + c1 * self._c + self._k, self.nc)
-        entry = (cond, cond.g @ self._f_const[self.nc:])
+        entry = self._condensation(dt)
         if len(self._dyn_cache) > 256:
             self._dyn_cache.clear()
         self._dyn_cache[dt] = entry
         return entry
+
+    @one_blas_thread
+    def _condensation(self, dt: float) -> tuple:
+        """``(Condensation, g f_const_r)`` of the Newmark tangent at dt [s] (Eq. 12, 14).
+        On one BLAS thread whoever asks (a step alone, a plan of steps, a test): LAPACK's
+        factors and BLAS's products change their last bits with the thread count, and a
+        step alone once differed from the same step of a plan by them (numpy 1.26's
+        OpenBLAS here, the CI machine with the newest)."""
+        c0, c1 = 4.0 / dt**2, 2.0 / dt
+        cond = Condensation(c0 * self._m + c1 * self._c + self._k, self.nc)
+        return cond, cond.g @ self._f_const[self.nc:]
 
     def check_laws(self, f0, kb, cb):
         """The laws as checked arrays of this structure's bearings
         (:func:`gear_fmu.step.assembly.check_laws`)."""
         return check_laws(f0, kb, cb, self.nb)
 
+    @one_blas_thread
     def _m_inv_columns(self) -> np.ndarray:
-        """``M^-1`` restricted to the condensed columns, (n, nc) (internal order)."""
+        """``M^-1`` restricted to the condensed columns, (n, nc) (internal order; on one
+        BLAS thread, as :meth:`_condensation`)."""
         if self._m_inv is None:
             cho = scipy.linalg.cho_factor(self._m)
             self._m_inv = np.ascontiguousarray(
