@@ -41,12 +41,12 @@ def matvec_t(at, x):
     """``at.T @ x``: ``out[i] = sum_j at[j, i] x[j]``, summed in the order of j.
 
     The compiled step's products, in a fixed order: BLAS (``@``) shares a product of a
-    hundred rows among its threads and takes rows by kernels that depend on the CPU, which
-    changed the last bits of a step between two calls of one machine (a step alone against
-    the same step in the master's loop, only on the CI machine). Column by column, over a
-    transposed matrix stored C-contiguous, every entry is a sequence of multiplications
-    and additions whatever the vector width, and about as fast as BLAS on one thread
-    (4.2 against 3.5 us for 107 x 214 on the development machine)."""
+    hundred rows among its threads and takes rows by kernels that depend on the CPU, so its
+    last bits would depend on the caller's BLAS thread setting
+    (:mod:`bearing_fmu.blas_threads`). Column by column, over a transposed matrix stored
+    C-contiguous, every entry is a sequence of multiplications and additions whatever the
+    vector width, and about as fast as BLAS on one thread (4.2 against 3.5 us for
+    107 x 214 on the development machine)."""
     k, n = at.shape
     out = np.zeros(n)
     for j in range(k):
