@@ -189,13 +189,19 @@ def _python_structure(structure, op, i, f0, kb, cb, x0, force0, expanded, out):
     return code
 
 
+@njit(cache=True)
+def _python_operation(structure, op, i, out):
+    """:func:`_python_structure` for an operation that takes no laws (begin, retry, accept,
+    end): placeholder laws; ``out`` accept's row (a placeholder for the others)."""
+    z2, z22 = np.zeros((1, 2)), np.zeros((1, 2, 2))
+    return _python_structure(structure, op, i, z2, z22, z22, np.zeros((1, 4)), z2, False, out)
+
+
 @overload(structure_begin)
 def _begin(structure, i):
     if len(structure) == PYTHON_STRUCTURE:
         def python(structure, i):
-            z2, z22 = np.zeros((1, 2)), np.zeros((1, 2, 2))
-            return _python_structure(structure, 0, i, z2, z22, z22, np.zeros((1, 4)), z2,
-                                     False, np.zeros((1, 4)))
+            return _python_operation(structure, 0, i, np.zeros((1, 4)))
         return python
     if len(structure) == IN_PROCESS:
         return lambda structure, i: 0
@@ -227,9 +233,7 @@ def _solve(structure, i, f0, kb, cb, x0, force0, expanded, states):
 def _retry(structure, i):
     if len(structure) == PYTHON_STRUCTURE:
         def python(structure, i):
-            z2, z22 = np.zeros((1, 2)), np.zeros((1, 2, 2))
-            return _python_structure(structure, 2, i, z2, z22, z22, np.zeros((1, 4)), z2,
-                                     False, np.zeros((1, 4)))
+            return _python_operation(structure, 2, i, np.zeros((1, 4)))
         return python
     if len(structure) == IN_PROCESS:
         return lambda structure, i: 0
@@ -242,9 +246,7 @@ def _retry(structure, i):
 def _accept(structure, i, row):
     if len(structure) == PYTHON_STRUCTURE:
         def python(structure, i, row):
-            z2, z22 = np.zeros((1, 2)), np.zeros((1, 2, 2))
-            return _python_structure(structure, 3, i, z2, z22, z22, np.zeros((1, 4)), z2,
-                                     False, row)
+            return _python_operation(structure, 3, i, row)
         return python
     if len(structure) == IN_PROCESS:
         return lambda structure, i, row: _in_process_accept(structure, row)
@@ -257,9 +259,7 @@ def _accept(structure, i, row):
 def _end(structure):
     if len(structure) == PYTHON_STRUCTURE:
         def python(structure):
-            z2, z22 = np.zeros((1, 2)), np.zeros((1, 2, 2))
-            _python_structure(structure, 4, 0, z2, z22, z22, np.zeros((1, 4)), z2, False,
-                              np.zeros((1, 4)))
+            _python_operation(structure, 4, 0, np.zeros((1, 4)))
         return python
     if len(structure) == IN_PROCESS:
         return lambda structure: None
