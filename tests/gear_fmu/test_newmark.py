@@ -27,7 +27,7 @@ from fmu_src.examples import paper_case
 from gear_fmu.dofs import U, V, dof
 from gear_fmu.mesh.train import mesh_elements
 from gear_fmu.modal.modes import mesh_dofs
-from gear_fmu.step.assembly import history_memo, history_products
+from gear_fmu.step.assembly import history_memo, history_products, matvec_t
 from gear_fmu.step.contact_loop import CONVERGED
 from gear_fmu.step.kernel import advance_pieces, keep_evaluation
 from gear_fmu.step.newmark import NewmarkConvergenceError
@@ -411,3 +411,17 @@ def test_non_convergence_names_the_step_the_time_and_the_residual(mesh):
                        match=r"Newmark step 7 at t = 0\.000\d+ s did not converge: relative "
                              r"residual \S+ \(tol 1\.0e-15\) after 0 iterations"):
         st.step(dt, F0, KB, CB)
+
+
+@pytest.mark.parametrize("k", [1, 3, 4, 7, 8, 13])
+def test_the_steps_product_sums_in_the_order_of_its_rows(k):
+    """``matvec_t`` takes four rows at a time but must add each entry's terms one by one in
+    the order of j (its docstring): Python's own floats summed that way give the same bits,
+    for row counts below, at and between multiples of four."""
+    at = RNG.standard_normal((k, 5)) * np.logspace(0, 12, k)[:, None]
+    x = RNG.standard_normal(k)
+    expected = [0.0] * 5
+    for j in range(k):
+        for i in range(5):
+            expected[i] = expected[i] + float(at[j, i]) * float(x[j])
+    assert matvec_t(at, x).tolist() == expected
