@@ -36,7 +36,7 @@ from bearing_fmu.hybrid._workspace import (
     Z,
     kernel,
 )
-from bearing_fmu.hybrid.axial import T_MAX, axial_integrals
+from bearing_fmu.hybrid.axial import T_LOW, T_MAX, axial_integrals
 from bearing_fmu.reynolds import nodal_force, source, source_coefficients
 
 #: bound of the corrector's relative force error per squared relative step on t: a last Newton
@@ -86,6 +86,12 @@ def solve_t(ws, active, order, runs, g, coef, lam, t, tol, maxit, pinned, adjoin
     solved at each pass with z (:func:`bearing_fmu.hybrid._lcp.substitute3`): the pass that
     converges needs them, and the others (0.2 per call) waste less than a separate solve
     costs. Returns ``(t, Newton passes, active-set passes, status, J*'', last step)``.
+
+    Safeguarded (docs/hybrid-method.md, section 5): the sign of J*' at each iterate narrows
+    the bracket ``(lo, hi)`` of the root; a Newton step that leaves it, or a pass where
+    J*'' <= 0, is replaced by the bisection of the bracket once both of its ends are found,
+    and before that by a step of max(2, |t|/2) downhill. Where the plain Newton stays in
+    the bracket with J*'' > 0, which is every pass near the root, the steps are its steps.
     """
     n = active.shape[0]
     a = ws[A]
@@ -98,6 +104,10 @@ def solve_t(ws, active, order, runs, g, coef, lam, t, tol, maxit, pinned, adjoin
     nr = 0
     dt = 0.0
     nt = 0
+    lo = -T_LOW  # the bracket of the root of J*': J*' < 0 at lo, > 0 at hi once found
+    hi = T_MAX
+    found_lo = False
+    found_hi = False
     for _ in range(maxit):
         nt += 1
         axial_integrals(t, lam, coef, g)
@@ -118,14 +128,26 @@ def solve_t(ws, active, order, runs, g, coef, lam, t, tol, maxit, pinned, adjoin
             substitute(ws, active, order, runs, nr, cv, z)
         for i in range(n):
             jss -= cv[i] * z[i]
-        if jss > 0.0:
-            dt = -js / jss
+        if js > 0.0:
+            hi = min(hi, t)
+            found_hi = True
         else:
-            dt = -2.0 if js > 0.0 else 2.0
+            lo = max(lo, t)
+            found_lo = True
+        lim = max(2.0, 0.5 * abs(t))
+        newton = jss > 0.0
+        if newton:
+            dt = -js / jss
+            newton = lo < t + dt < hi or abs(dt) <= tol * (1.0 + abs(t))
+        if not newton:
+            if found_lo and found_hi:
+                dt = 0.5 * (lo + hi) - t
+            else:
+                dt = -lim if js > 0.0 else lim
         if abs(dt) <= tol * (1.0 + abs(t)):
             status = 0  # (a, t) converged; c, z and J*'' belong to them
             break
-        if abs(dt) <= corrector * (1.0 + abs(t)):
+        if newton and abs(dt) <= corrector * (1.0 + abs(t)):
             # last Newton step without a new solve: a(t + dt) = a - z dt + O(dt^2), kept only
             # if it leaves P unchanged (force error below tol, Jacobian error O(dt))
             ok = True
@@ -140,9 +162,8 @@ def solve_t(ws, active, order, runs, g, coef, lam, t, tol, maxit, pinned, adjoin
                 axial_integrals(t, lam, coef, g)
                 status = 0
                 break
-        lim = max(2.0, 0.5 * abs(t))
         dt = min(max(dt, -lim), lim)
-        t = min(max(t + dt, -9.0), T_MAX)
+        t = min(max(t + dt, -T_LOW), T_MAX)
     return t, nt, lcp_total, status, jss, dt
 
 
@@ -308,7 +329,7 @@ def hybrid_kernel(state, x0, y0, xd0, yd0, want_jac, active, ws, iws, trig, coef
             qp = st.q_prev
             t += (dq[0] * (x0 - qp[0]) + dq[1] * (y0 - qp[1]) + dq[2] * (xd0 - qp[2])
                   + dq[3] * (yd0 - qp[3]))
-            t = min(max(t, -9.0), T_MAX)
+            t = min(max(t, -T_LOW), T_MAX)
             pc, ps = source_coefficients(qp[0], qp[1], qp[2], qp[3])
             _turn_set(active, ws, math.atan2(srcs, srcc) - math.atan2(ps, pc), delta)
         st.predict = False

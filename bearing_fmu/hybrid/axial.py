@@ -36,8 +36,10 @@ __all__ = ["AXIAL_COEF", "axial_coefficients", "axial_integrals", "axial_shape"]
 
 #: number of Taylor terms kept (enough for ``|t| <= T_MAX`` to round-off)
 N_TERMS = 60
-#: largest ``|t|`` the kernels use
+#: largest ``t`` the kernels use
 T_MAX = 150.0
+#: largest ``-t`` the kernels use (t < 0: k imaginary, the axial shape a cosine)
+T_LOW = 9.0
 #: ``|t|`` limits below which 16, 26 and 40 terms reach round-off (the term-count switches)
 T_SWITCH = (6.0, 20.0, 60.0)
 

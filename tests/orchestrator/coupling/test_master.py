@@ -330,6 +330,24 @@ def test_a_two_cycle_at_a_kink_is_relaxed_onto_the_root(monkeypatch):
         _kinked_master(tol).step(0.0, 1e-5)
 
 
+@pytest.mark.parametrize("transport", ["in-process",
+                                       pytest.param("fmu", marks=pytest.mark.slow)])  # 20 s
+def test_the_spur_case_at_200_rad_s_and_2_4_mm_passes_the_state_where_k_was_lost(
+        tmp_path, fmu_dir, transport):
+    """At 200 rad/s with e_mu 2.4 mm on both gears (a point of the paper's unbalance sweep),
+    step 1512 put bearing 1 at e 0.79 with a squeeze velocity xbar_dot 0.25; the predictor
+    started the hybrid solver's Newton on t at a t far above the root, where J*'' <= 0, and
+    its steps of 2 did not reach the root in 30 passes: the run failed, through either
+    transport. With the safeguarded iteration (a bracket on the sign of J*'), the run
+    goes on (tests/bearing_fmu/test_hybrid.py checks the state itself)."""
+    from tests.helpers import run_paper_case
+
+    _, summary = run_paper_case(tmp_path, periods=50, in_process=transport == "in-process",
+                                fmu_dir=fmu_dir, **{"drive.speed": 200.0,
+                                                    "gears.*.unbalance": "2.4 mm"})
+    assert summary.steps == 50 * 32
+
+
 @pytest.mark.parametrize("transport", ["in-process", "fmu"])
 def test_the_paper_case_at_300_rad_s_passes_the_step_newton_cycled_on(tmp_path, fmu_dir,
                                                                          transport):
