@@ -63,7 +63,7 @@ from orchestrator.coupling.fmi.steps import (
     fmu_structure_solve,
 )
 from orchestrator.coupling.master import (
-    CouplingError,
+    NotConvergedError,
     not_converged,
     python_evaluate,
     python_structure_call,
@@ -277,7 +277,7 @@ def evaluate_group(args, states, out):
     raise NotImplementedError("compiled code only")
 
 
-@overload(evaluate_group, inline="always")
+@overload(evaluate_group)
 def _evaluate_group(args, states, out):
     n = len(args)
     if n == HYBRID:
@@ -530,4 +530,5 @@ class CoupledSteps:
         if outcome == BEARING_FAILED:
             self.bearings.raise_failure(bad, b_status, states)
         self.bearings.record_states(states)
-        raise CouplingError(not_converged(t, dt, master.max_iterations, mismatch, master.tol))
+        raise NotConvergedError(not_converged(t, dt, master.max_iterations, mismatch,
+                                              master.tol))
