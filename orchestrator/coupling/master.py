@@ -39,9 +39,11 @@ from fmu_src.states import laws_arrays, laws_from_arrays
 
 __all__ = [
     "CHECKPOINT_KIND",
+    "SUBSTEPS",
     "BearingSet",
     "CouplingError",
     "Master",
+    "NotConvergedError",
     "PythonGroup",
     "PythonStructure",
     "StepReport",
@@ -51,6 +53,13 @@ __all__ = [
 
 #: the kind tag of :meth:`Master.checkpoint` states (:mod:`fmu_src.state_codec`)
 CHECKPOINT_KIND = "gsb.master_checkpoint"
+#: the last resort for a step whose coupled iteration does not converge
+#: (:class:`NotConvergedError`): taken again from its start as 2, then 4, then 8 equal
+#: sub-steps (the floor: dt / 8). A shorter step shrinks the bearings' share of the
+#: interface's Jacobian (the film's damping enters as Cb gamma / (beta dt), the structure's
+#: mass as M / (beta dt^2)), which is what the iteration lacks at a kink or near an unloaded
+#: film (docs/design.md section 4); the step's row is the last sub-step's.
+SUBSTEPS = (2, 4, 8)
 
 
 #: the Python evaluations of the bearing groups without a compiled form, by key
@@ -159,6 +168,11 @@ def python_structure_call(key, op, i, f0, kb, cb, x0, force0, expanded, out) -> 
 
 class CouplingError(RuntimeError):
     """The coupled iteration did not converge (step, time and mismatch in the message)."""
+
+
+class NotConvergedError(CouplingError):
+    """A step whose coupled iteration ran out of iterations with the mismatch above ``tol``
+    (every slave's own solve succeeded): the case :data:`SUBSTEPS` retries."""
 
 
 class StructureSlave(ABC):
@@ -381,6 +395,8 @@ class Master:
     total_iterations: int = 0
     total_bearing_evaluations: int = 0
     relaxed_steps: int = 0  # steps that needed the relaxation (orchestrator.coupling.step)
+    #: the steps taken in sub-steps (:data:`SUBSTEPS`): (t [s], sub-steps) of each
+    substepped: list = field(default_factory=list)
     #: takes blocks of coupled steps: ``stepper.block(master, t, dt, n, time_of)``
     #: (:class:`orchestrator.coupling.step.CoupledSteps`, given by
     #: :func:`orchestrator.coupling.system.build_master`)
@@ -473,7 +489,40 @@ class Master:
         if self.stepper is None:
             raise CouplingError("the master has no stepper (build it with "
                                 "orchestrator.coupling.system.build_master)")
-        return self.stepper.block(self, t, dt, n, time_of)
+        block = self.stepper.block(self, t, dt, n, time_of)
+        if isinstance(block.error, NotConvergedError):
+            block = self._in_substeps(block, dt, time_of)
+        return block
+
+    def _in_substeps(self, block, dt: float, time_of):
+        """``block``, whose step ``block.count`` did not converge, with that step taken again
+        from its start in :data:`SUBSTEPS` sub-steps (the first count that converges): the
+        rows before it and the last sub-step's; its iterations those of all its sub-steps.
+        If none converges, the state and ``block`` as they were, the error saying so."""
+        t = time_of(block.count)
+        try:
+            saved = self.checkpoint()
+        except NotImplementedError as exc:  # a slave of the user's own, without states
+            block.error = NotConvergedError(f"{block.error}; not retried in sub-steps: {exc}")
+            return block
+        for m in SUBSTEPS:
+            self.restore(saved)
+            h, done, iterations, last = dt / m, 0, 0, None
+            while done < m:
+                sub = self.stepper.block(self, t + done * h, h, m - done,
+                                         lambda j, first=done, h=h: t + (first + j) * h)
+                done += sub.count
+                iterations += int(sub.iterations.sum())
+                last = sub if sub.count else last
+                if sub.error is not None:
+                    break
+            if done == m:
+                self.substepped.append((t, m))
+                return _joined(block, last, iterations)
+        self.restore(saved)
+        block.error = NotConvergedError(f"{block.error}; nor in {', '.join(map(str, SUBSTEPS))}"
+                                        f" sub-steps ({sub.error})")
+        return block
 
     @one_blas_thread
     def step(self, t: float, dt: float) -> StepReport:
@@ -499,6 +548,25 @@ class Master:
         are not whole multiples of dt (an FMU's communication steps cut into equal steps):
         the messages of a failed step k give t + k dt."""
         return self._block(t, dt, n, lambda k: t + k * dt)
+
+
+def _joined(block, last, iterations: int):
+    """``block``'s rows and the row of ``last`` (a block ending where ``block``'s failed step
+    ends) as one block of ``block.count + 1`` steps, without an error."""
+    def rows(a, b):
+        return np.concatenate([a[:block.count], b[-1:]])
+
+    block.states = rows(block.states, last.states)
+    block.bearing_force = rows(block.bearing_force, last.bearing_force)
+    block.mesh_force = rows(block.mesh_force, last.mesh_force)
+    block.transmission_error = rows(block.transmission_error, last.transmission_error)
+    block.gear_nodes = rows(block.gear_nodes, last.gear_nodes)
+    block.iterations = np.concatenate([block.iterations[:block.count],
+                                       np.array([iterations], dtype=block.iterations.dtype)])
+    block.count += 1
+    block.mismatch = last.mismatch
+    block.error = None
+    return block
 
 
 def not_converged(t, dt, max_iterations, mismatch, tol) -> str:

@@ -108,6 +108,8 @@ class RunSummary:
     warnings: list = field(default_factory=list)  # sentences of the checks before the transient
     notes: list = field(default_factory=list)  # what the checks state once (a deliberate step)
     relaxed_steps: int = 0  # steps whose coupled iteration was relaxed (coupling.master)
+    #: (t [s], sub-steps) of each step taken again in sub-steps (coupling.master.SUBSTEPS)
+    substeps: list = field(default_factory=list)
     stored: bool = False  # read from the complete results file of the same inputs, not computed
 
     @property
@@ -130,7 +132,7 @@ class RunSummary:
                 f"evaluations; static solution in "
                 f"{self.static_iterations} iterations ({self.static_time:.2f} s)"
                 + (f"; {self.relaxed_steps} step(s) relaxed at a kink of a bearing law"
-                   if self.relaxed_steps else ""))
+                   if self.relaxed_steps else "") + substeps_text(self.substeps))
 
     def report_text(self) -> str:
         """The report (``report``) in a few lines: R and the transmission-error peak-to-peak
@@ -357,7 +359,7 @@ class Runner:
         master, dt, n_steps = self.master, self.spec.dt, self.spec.n_steps
         structure = master.structure
         start = (master.total_iterations, master.total_bearing_evaluations,
-                 master.relaxed_steps)
+                 master.relaxed_steps, len(master.substepped))
         t_start = time.perf_counter()
         if bar is not None:
             bar.update(first)
@@ -390,7 +392,8 @@ class Runner:
         done = {"wall_time": time.perf_counter() - t_start,
                 "iterations": master.total_iterations - start[0],
                 "bearing_evaluations": master.total_bearing_evaluations - start[1],
-                "relaxed_steps": master.relaxed_steps - start[2]}
+                "relaxed_steps": master.relaxed_steps - start[2],
+                "substeps": master.substepped[start[3]:]}
         if bar is not None:
             bar.update(n_steps, f"{done['iterations'] / max(n_steps - first, 1):.2f} it/step")
         return done
@@ -419,7 +422,18 @@ class Runner:
         return RunSummary(path, steps, done["wall_time"], static.seconds, done["iterations"],
                           done["bearing_evaluations"], static.report.iterations, static.x0,
                           warnings=static.warnings, notes=static.notes,
-                          relaxed_steps=done["relaxed_steps"])
+                          relaxed_steps=done["relaxed_steps"], substeps=done["substeps"])
+
+
+def substeps_text(substeps) -> str:
+    """``"; N step(s) ... "`` for the steps taken in sub-steps, ``(t [s], count)`` each
+    (:data:`orchestrator.coupling.master.SUBSTEPS`), or ``""``: the first five times."""
+    if not substeps:
+        return ""
+    at = ", ".join(f"{t:.6g} s ({m})" for t, m in substeps[:5])
+    more = f" and {len(substeps) - 5} more" if len(substeps) > 5 else ""
+    return (f"; {len(substeps)} step(s) whose coupled iteration did not converge taken again "
+            f"in sub-steps, at t = {at}{more}")
 
 
 def _static_attributes(static: Static) -> dict:
@@ -652,7 +666,9 @@ def _run_to_file(spec: RunSpec, attrs: dict, where, first: int = 0, blob=None,
                 raise RunError(f"cannot write {path}: {exc}") from None
             bar = Progress(spec.n_steps, name, enabled=progress)
             done = runner.transient(writer, first, bar)
-            writer.close(complete=True, wall_time=done["wall_time"])
+            writer.close(complete=True, wall_time=done["wall_time"],
+                         **({"substeps": substeps_text(done["substeps"])[2:]}
+                            if done["substeps"] else {}))
             path = where.finish(True)
         except Stop as stop:
             if writer is None:
