@@ -176,7 +176,8 @@ class HybridBearing(FilmBearingModel):
         self.reset()
         raise HybridConvergenceError(
             f"hybrid solver (n = {self.n}, L/D = {self.bearing.lambda_:.6g}) at state "
-            f"(xbar, ybar, xbar_dot, ybar_dot) = {state}: {_STATUS.get(code, code)}")
+            f"(xbar, ybar, xbar_dot, ybar_dot) = ({', '.join(f'{float(v):.6g}' for v in state)})"
+            f": {_STATUS.get(code, code)}")
 
     def pressure_field(self, xbar, ybar, xbar_dot=0.0, ybar_dot=0.0, n_xi=33):
         """Dimensionless pressure p(theta, xi) of Eq. (6)-(7) for plotting.
