@@ -436,6 +436,16 @@ def substeps_text(substeps) -> str:
             f"in sub-steps, at t = {at}{more}")
 
 
+def _substep_attributes(substeps) -> dict:
+    """The results file's record of the steps taken in sub-steps: the sentence, and every
+    one's start time [s] and sub-step count; nothing when there are none."""
+    if not substeps:
+        return {}
+    return {"substeps": substeps_text(substeps)[2:],
+            "substep_times": np.array([t for t, _ in substeps]),
+            "substep_counts": np.array([m for _, m in substeps], dtype=np.int64)}
+
+
 def _static_attributes(static: Static) -> dict:
     return {"static_journal": static.x0, "static_bearing_force": static.report.bearing_force,
             "static_iterations": static.report.iterations,
@@ -667,8 +677,7 @@ def _run_to_file(spec: RunSpec, attrs: dict, where, first: int = 0, blob=None,
             bar = Progress(spec.n_steps, name, enabled=progress)
             done = runner.transient(writer, first, bar)
             writer.close(complete=True, wall_time=done["wall_time"],
-                         **({"substeps": substeps_text(done["substeps"])[2:]}
-                            if done["substeps"] else {}))
+                         **_substep_attributes(done["substeps"]))
             path = where.finish(True)
         except Stop as stop:
             if writer is None:

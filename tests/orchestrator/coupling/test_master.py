@@ -351,7 +351,9 @@ def test_the_spur_case_at_1000_rad_s_takes_the_step_that_cycled_in_two_sub_steps
     assert count == 2 and t == pytest.approx(3255 * dt, rel=1e-12)
     assert "1 step(s) whose coupled iteration did not converge taken again in sub-steps, at "\
         f"t = {t:.6g} s (2)" in summary.describe()
-    assert read_results(summary.results)["attrs"]["substeps"].startswith("1 step(s) whose")
+    attrs = read_results(summary.results)["attrs"]
+    assert attrs["substeps"].startswith("1 step(s) whose")
+    assert list(attrs["substep_times"]) == [t] and list(attrs["substep_counts"]) == [2]
 
 
 @pytest.mark.parametrize("transport", ["in-process",
