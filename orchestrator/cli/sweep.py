@@ -269,7 +269,7 @@ def _checks(args) -> None:
 
 
 def sweep(args) -> int:
-    from orchestrator.sweeps.runner import run_sweep
+    from orchestrator.sweeps.runner import run_sweep, stopped_on_physics
 
     _checks(args)
     case, vary, bearings, points, periods, steady = _plan(args)
@@ -282,10 +282,13 @@ def sweep(args) -> int:
                     n_workers=args.workers or 2, progress=not args.quiet, name=path.stem,
                     vary_keys=[k for k, _ in vary], worker_timeout=args.worker_timeout)
     ok = res.n_points - len(res.failed)
+    physics = sum(stopped_on_physics(error) for _, error in res.failed)
     print(f"sweep: {res.path}")
     print(f"{res.n_points} points ({len(bearings)} bearing model{'s' * (len(bearings) > 1)} x "
-          f"{' x '.join(str(len(v)) for _, v in vary)}), {ok} succeeded, {len(res.failed)} "
-          f"failed, {res.wall_time:.1f} s")
+          f"{' x '.join(str(len(v)) for _, v in vary)}), {ok} succeeded, "
+          f"{len(res.failed) - physics} failed"
+          + (f", {physics} stopped on physics (a journal touched its bearing)" if physics
+             else "") + f", {res.wall_time:.1f} s")
     for i, error in res.failed[:LISTED]:
         print(f"failed: points/{i:04d} ({points[i].label}): {error.splitlines()[0]}")
     if len(res.failed) > LISTED:

@@ -170,7 +170,34 @@ def run_point(case, point: SweepPoint, periods: int, steady_periods: int,
         raise
     except Exception as exc:  # reported, the sweep goes on
         text = f"{type(exc).__name__}: {exc}"
+        if _touched(exc):
+            text = f"{PHYSICS_STOP}: {text}"
         return {"ok": False, "error": text, "traceback": traceback.format_exc()}
+
+
+#: how the error of a point whose run stopped on physics starts: a journal touched its
+#: bearing (:class:`bearing_fmu.base.EccentricityError` among the causes), which no solver
+#: can take it past, unlike a solver giving up
+PHYSICS_STOP = "stopped on physics (a journal touched its bearing)"
+
+
+def _touched(exc: BaseException) -> bool:
+    """Whether an :class:`~bearing_fmu.base.EccentricityError` is ``exc`` or among its causes."""
+    from bearing_fmu.base import EccentricityError
+
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, EccentricityError):
+            return True
+        seen.add(id(exc))
+        exc = exc.__cause__ or exc.__context__
+    return False
+
+
+def stopped_on_physics(error: str) -> bool:
+    """Whether a failed point's ``error`` (a :class:`SweepResult`'s) is a physics stop
+    (:data:`PHYSICS_STOP`), to be counted apart from the solver's failures."""
+    return error.startswith(PHYSICS_STOP)
 
 
 def check_point(case: Case, point: SweepPoint) -> Case:

@@ -9,6 +9,8 @@ from pathlib import Path
 
 import numpy as np
 
+from orchestrator.sweeps.runner import stopped_on_physics
+
 __all__ = ["json_default", "write_report"]
 
 
@@ -252,7 +254,11 @@ def write_report(out, plan, meta, figs) -> Path:
         "",
     ]
     failed = [(k, i, m) for k, v in meta["failed"].items() for i, m in v]
-    lines += [f"- {k} point {i}: {m}" for k, i, m in failed] or ["none"]
+    lines += [f"- {k} point {i}: {m}" for k, i, m in failed
+              if not stopped_on_physics(m)] or ["none"]
+    lines += ["", "## Sweep points stopped on physics (a journal touching its bearing)", ""]
+    lines += [f"- {k} point {i}: {m}" for k, i, m in failed
+              if stopped_on_physics(m)] or ["none"]
     path = out / "report.md"
     path.write_text("\n".join(lines) + "\n")
     return path

@@ -63,3 +63,31 @@ def test_sweep_gathers_points_and_reports_a_failed_one(scheduler, tmp_path):
         assert d["R"] > 1.0 and d["force_ptp"].shape == (4,)
         assert d["orbit"].shape[1:] == (4, 2)
         assert d["spectrum"].shape == (4, d["spectrum_orders"].size)
+
+
+def test_a_point_whose_journal_touched_its_bearing_is_told_apart_from_a_solver_failure():
+    """A run that ended because a journal reached its clearance circle (the check's own
+    EccentricityError, somewhere among the run error's causes) is a physics stop, counted
+    apart (gsb sweep, gsb reproduce); a coupled iteration or a solver giving up is not."""
+    from bearing_fmu.base import check_state
+    from orchestrator.coupling.master import NotConvergedError
+    from orchestrator.run.spec import RunError
+    from orchestrator.sweeps.runner import _touched, stopped_on_physics
+
+    def run_error(cause):
+        try:
+            try:
+                cause()
+            except Exception as exc:
+                raise RunError("step 40 of 64 (t = 0.001 s) failed: ...") from exc
+        except RunError as exc:
+            return exc
+
+    def not_converged():
+        raise NotConvergedError("did not converge in 30 iterations")
+
+    touched = run_error(lambda: check_state(0.6, 0.9, 0.0, 0.0))
+    assert "the journal touches the bearing" in str(touched.__cause__)
+    assert _touched(touched) and not _touched(run_error(not_converged))
+    assert stopped_on_physics("stopped on physics (a journal touched its bearing): RunError: x")
+    assert not stopped_on_physics("RunError: step 3 failed: did not converge")
