@@ -168,15 +168,20 @@ def test_blocks_through_the_relaxed_step_at_300_rad_s_give_the_same_bits():
 
 
 def test_a_step_that_does_not_converge_in_a_block_fails_alike():
-    """Two coupled iterations allowed: step 39, the first that needs three, fails inside a
-    block with the message of a single step, after the steps before it."""
+    """Two coupled iterations allowed: step 39, the first that needs three, is taken in 4
+    sub-steps (SUBSTEPS), and step 40 fails even in 8, inside a block, with the message of a
+    single step, after the steps before it."""
     def two(m):
         m.max_iterations = 2
 
     blocked, single, error, in_blocks, _ = _compare(load_case("baguet2010_spur"), 96,
                                                     change=two)
     assert isinstance(error, CouplingError) and "did not converge in 2 iterations" in str(error)
-    assert in_blocks == 38 and 38 % BLOCK != 0  # inside a block
+    assert "; nor in 2, 4, 8 sub-steps (" in str(error)
+    assert in_blocks == 39 and 39 % BLOCK != 0  # inside a block
+    dt = time_step(load_case("baguet2010_spur"))
+    assert [(round(t / dt), m) for t, m in blocked.substepped] == [(38, 4)]
+    assert blocked.substepped == single.substepped
     _same_state(blocked, single)
 
 

@@ -26,7 +26,7 @@ from bearing_fmu.base import BearingError
 from fmu_src.case import load_case
 from fmu_src.description import time_step
 from orchestrator.coupling.fmi import FmuError
-from orchestrator.coupling.master import CouplingError
+from orchestrator.coupling.master import NotConvergedError
 from orchestrator.coupling.system import build_master
 from tests.conftest import TRAIN_CASE
 from tests.orchestrator.coupling.test_blocks import RUNOUT
@@ -210,7 +210,7 @@ def test_a_step_that_does_not_converge_fails_alike(fmu_dir):
         m.tol, m.max_iterations = 0.0, 4
 
     (ea, ca, na), (eb, cb, nb) = _fail_both(load_case("baguet2010_spur"), never, fmu_dir)
-    assert type(ea) is type(eb) is CouplingError and str(ea) == str(eb)
+    assert type(ea) is type(eb) is NotConvergedError and str(ea) == str(eb)
     assert "did not converge in 4 iterations" in str(ea)
     assert ca == cb and na == nb == 0
 

@@ -19,7 +19,7 @@ from bearing_fmu.base import BearingError
 from fmu_src.case import load_case
 from fmu_src.description import time_step
 from gear_fmu.step.newmark import NewmarkConvergenceError
-from orchestrator.coupling.master import CouplingError
+from orchestrator.coupling.master import SUBSTEPS, CouplingError
 from orchestrator.coupling.system import build_master
 
 
@@ -54,7 +54,8 @@ def test_the_counters_are_what_the_iteration_did():
     of the bearing set each, every bearing once); a step that does not converge in 4 adds 4 of
     each; a structure that fails at its first solve adds none; a bearing set that fails at the
     first evaluation adds the evaluation of the set but no iteration and no bearing's
-    evaluation (it is not accepted)."""
+    evaluation (it is not accepted). The step that does not converge is taken again from its
+    start in 2, 4 and 8 sub-steps (SUBSTEPS), whose first fails alike: 4 more each."""
     case = load_case("baguet2010_spur", {"bearings.*.model": "short"})
     m = _master(case)
     nb, dt = m.bearings.count, time_step(case)
@@ -71,8 +72,10 @@ def test_the_counters_are_what_the_iteration_did():
         before = _counters(m)
         block = m.steps(16, dt, 3)
         assert isinstance(block.error, CouplingError) and block.count == 0
-        assert _delta(m, before) == (4, 4, 0, 4 * nb)
+        tries = 1 + len(SUBSTEPS)
+        assert _delta(m, before) == (4 * tries, 4 * tries, 0, 4 * nb * tries)
         assert "did not converge in 4 iterations" in str(block.error)
+        assert "; nor in 2, 4, 8 sub-steps (" in str(block.error)
         # the structure fails at its first solve (no Newton pass allowed)
         m.structure.set_state(state)
         m.laws, m.tol, m.max_iterations = laws, case["simulation.tolerance"], 30
