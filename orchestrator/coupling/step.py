@@ -138,7 +138,7 @@ def structure_end(structure):
     raise NotImplementedError("compiled code only")
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _in_process_solve(structure, i, f0, kb, cb, states):
     head, state, tail, work, _ = structure
     counts, slots, mc, g_k, gc_k, s0_k, w_k, table, angles, after, errs, errs_after = head
@@ -161,17 +161,16 @@ def _in_process_solve(structure, i, f0, kb, cb, states):
     return 0, 0, 0, 0
 
 
-@njit(cache=True, _nrt=False)
+@njit(cache=True)
 def _in_process_accept(structure, row):
     _, state, tail, work, rec = structure
     x, v, a = state
     meshes = tail[4]
     totals, lengths, x1, v1, a1 = work[2], work[3], work[5], work[6], work[7]
     gear_uv, kept_totals, kept_lengths, te_idx, te_coef = rec
-    for j in range(x.size):
-        x[j] = x1[j]
-        v[j] = v1[j]
-        a[j] = a1[j]
+    x[:] = x1
+    v[:] = v1
+    a[:] = a1
     keep_evaluation(meshes)
     for m in range(totals.size):
         kept_totals[m] = totals[m]
@@ -211,7 +210,7 @@ def _begin(structure, i):
     return None
 
 
-@overload(structure_solve, inline="always")
+@overload(structure_solve)
 def _solve(structure, i, f0, kb, cb, x0, force0, expanded, states):
     if len(structure) == PYTHON_STRUCTURE:
         def python(structure, i, f0, kb, cb, x0, force0, expanded, states):
@@ -243,7 +242,7 @@ def _retry(structure, i):
     return None
 
 
-@overload(structure_accept, inline="always")
+@overload(structure_accept)
 def _accept(structure, i, row):
     if len(structure) == PYTHON_STRUCTURE:
         def python(structure, i, row):
