@@ -14,6 +14,16 @@ from orchestrator.run.progress import RunInterrupted
 from orchestrator.run.spec import RunError
 
 
+def _version() -> str:
+    """The installed distribution's version (pyproject.toml), or what is missing."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("gear-shaft-bearing")
+    except PackageNotFoundError:
+        return "(not installed: pip install -e . gives the version)"
+
+
 def make_parser() -> argparse.ArgumentParser:
     from orchestrator.cli import bearing, doctor, fmus, modal, plot, reproduce, run, sweep
 
@@ -21,6 +31,7 @@ def make_parser() -> argparse.ArgumentParser:
         prog="gsb",
         description="Gear-shaft-bearing nonlinear dynamics (Baguet & Jacquenot 2010).",
     )
+    parser.add_argument("--version", action="version", version=f"gsb {_version()}")
     sub = parser.add_subparsers(dest="command", required=True)
     for command_group in (bearing, run, reproduce, fmus, modal, sweep, plot, doctor):
         command_group.add_parser(sub)

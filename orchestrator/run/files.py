@@ -57,7 +57,9 @@ def describe_file(path: Path) -> str:
         return f"not a readable results file ({exc})"
     if complete:
         return f"complete, {n} steps"
-    return f"incomplete, {n} steps" + (f", stopped by {why}" if why else "")
+    if why and not why.startswith("interrupted"):  # "interrupted by SIGINT after ..."
+        why = f"stopped by {why}"
+    return f"incomplete, {n} steps" + (f", {why}" if why else "")
 
 
 #: the root attributes that, with the case, say what a results file was computed from

@@ -46,6 +46,7 @@ from __future__ import annotations
 
 import contextlib
 import math
+import shlex
 import signal
 import sys
 import time
@@ -130,7 +131,8 @@ class RunSummary:
                 f"steps/s), {self.iterations_per_step:.2f} coupled iterations per step, "
                 f"{len(self.static_positions) * self.bearing_evaluations} bearing "
                 f"evaluations; static solution in "
-                f"{self.static_iterations} iterations ({self.static_time:.2f} s)"
+                f"{self.static_iterations} iteration{'s' * (self.static_iterations != 1)} "
+                f"({self.static_time:.2f} s)"
                 + (f"; {self.relaxed_steps} step(s) relaxed at a kink of a bearing law"
                    if self.relaxed_steps else "") + substeps_text(self.substeps))
 
@@ -685,7 +687,8 @@ def _run_to_file(spec: RunSpec, attrs: dict, where, first: int = 0, blob=None,
             into = give_up(stopped_by=stop.stopped_by, interrupted=stop.signame)
             with contextlib.suppress(Exception):
                 _store_report(into)
-            raise stop.message(f"{_rows_in(into)} steps kept in {into}") from None
+            raise stop.message(f"{_rows_in(into)} steps kept in {into}; `gsb run --resume "
+                               f"{shlex.quote(str(into))}` continues it") from None
         except StepFailed as failed:
             into = give_up(checkpoint=False, stopped_by=failed.stopped_by)
             with contextlib.suppress(Exception):

@@ -151,7 +151,8 @@ def test_signals_and_a_kill_keep_the_steps_and_the_run_resumes_exactly(transport
             assert proc.returncode == 128 + int(sig), proc.stderr[-2000:]
             assert "Traceback" not in proc.stderr and f"interrupted by {sig.name}" in proc.stderr
             # the count it announces is the rows the file holds
-            assert f"; {kept} steps kept in {path}" in proc.stderr, (kept, proc.stderr[-500:])
+            assert f"; {kept} steps kept in {path}; `gsb run --resume {path}` continues it" \
+                in proc.stderr, (kept, proc.stderr[-500:])
             assert r["attrs"]["interrupted"] == sig.name and sig.name in r["attrs"]["stopped_by"]
         np.testing.assert_array_equal(r["journal_position"], reference["journal_position"][:kept])
         if transport == "fmu" and sig == signal.SIGINT:

@@ -13,6 +13,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from orchestrator.run.results import add_attributes, read_attributes, read_results
@@ -96,6 +97,29 @@ def test_a_file_of_other_inputs_is_never_reused_nor_replaced(tmp_path, capsys):
     assert main(args) == 2
     err = capsys.readouterr().err
     assert "exists (incomplete, 32 steps)" in err and f"--resume {path}" in err, err
+
+    # how it stopped, in words: an interruption as recorded, a failure after "stopped by"
+    from orchestrator.run.files import describe_file
+
+    add_attributes(path, stopped_by="interrupted by SIGINT after step 32 of 64")
+    assert describe_file(path) == "incomplete, 32 steps, interrupted by SIGINT after step 32 of 64"
+    add_attributes(path, stopped_by="RunError: step 33 failed")
+    assert describe_file(path) == "incomplete, 32 steps, stopped by RunError: step 33 failed"
+
+
+def test_the_version_and_a_static_solution_of_one_iteration_read_as_english(capsys):
+    """``gsb --version`` prints the installed version; a count of one is singular."""
+    from importlib.metadata import version
+
+    from orchestrator.cli import main
+    from orchestrator.run.runner import RunSummary
+
+    with pytest.raises(SystemExit) as stop:
+        main(["--version"])
+    assert stop.value.code == 0
+    assert capsys.readouterr().out.strip() == f"gsb {version('gear-shaft-bearing')}"
+    one = RunSummary(None, 32, 1.0, 0.1, 64, 64, 1, np.zeros((4, 2)))
+    assert "static solution in 1 iteration (0.10 s)" in one.describe()
 
 
 def test_a_failed_step_names_the_bearing_in_units(tmp_path, capsys):
