@@ -76,6 +76,7 @@ class Progress:
         self.start = time.perf_counter()
         self._last = -math.inf
         self._first: tuple[float, int] | None = None  # (time [s], done) of the first work shown
+        self._finished = False  # the last line (done >= total) was written
 
     def update(self, done: int, extra: str = "") -> None:
         if not self.enabled:
@@ -83,6 +84,10 @@ class Progress:
         now = time.perf_counter()
         if now - self._last < self.every and done < self.total:
             return
+        if done >= self.total:  # the last line once, however many callers reach the end
+            if self._finished:
+                return
+            self._finished = True
         self._last = now
         elapsed = now - self.start
         frac = done / self.total if self.total else 1.0

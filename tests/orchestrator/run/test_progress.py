@@ -26,3 +26,15 @@ def test_the_time_left_counts_from_the_first_work_shown(monkeypatch):
     assert lines[0].rstrip().endswith("20.0 s,      ? s left")
     assert lines[1].rstrip().endswith("40.0 s,  625.4 s left")
     assert lines[2].rstrip().endswith("70.0 s,    0.0 s left")
+
+
+def test_the_last_line_is_written_once():
+    """The run's loop and its end both report the last step: one line says so, in a log
+    (not a terminal) as on a terminal."""
+    for tty in (False, True):
+        out = io.StringIO()
+        out.isatty = lambda tty=tty: tty
+        bar = Progress(64, "run", stream=out)
+        bar.update(64, "2.00 it/step")
+        bar.update(64, "2.00 it/step")
+        assert out.getvalue().count("64/64") == 1, out.getvalue()
