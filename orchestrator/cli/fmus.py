@@ -3,6 +3,7 @@ as an SSP archive, or the whole transmission as one FMU."""
 
 from __future__ import annotations
 
+import shlex
 from pathlib import Path
 
 from bearing_fmu import MODELS
@@ -81,6 +82,8 @@ def export_fmu(args) -> int:
     if args.bearing_fmu is not None and not Path(args.bearing_fmu).is_file():
         raise CaseError(f"--bearing-fmu {args.bearing_fmu}: no such file")
     path = build_transmission_fmu(case, args.dest, args.bearing_fmu)
-    print(f"{path} (step {time_step(case)!r} s or a multiple of it; e.g. fmpy simulate {path} "
-          f"--step-size {time_step(case)!r})")
+    dt = time_step(case)
+    # fmpy steps at its output interval; 1,024 steps (32 mesh periods at the paper's step)
+    print(f"{path} (step {dt!r} s or a multiple of it; e.g. python -m fmpy simulate "
+          f"{shlex.quote(str(path))} --output-interval {dt!r} --stop-time {1024 * dt:.3g})")
     return 0

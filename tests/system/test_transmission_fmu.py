@@ -278,6 +278,16 @@ def test_a_bearing_fmu_of_your_own_carried_inside(fmu_dir, tmp_path):
                           timeout=600, cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr[-2000:]
     fmu = tmp_path / f"{CASE}.fmu"
+    # the command its hint gives (the README's): fmpy at the case's step, 1,024 steps
+    import shlex
+
+    hint = shlex.split(proc.stdout.split("e.g. ", 1)[1].rsplit(")", 1)[0])
+    assert hint[:4] == ["python", "-m", "fmpy", "simulate"] and hint[4] == str(fmu), hint
+    assert float(hint[hint.index("--output-interval") + 1]) == _dt(_case())
+    sim = subprocess.run([sys.executable, *hint[1:], "--output-file", str(tmp_path / "o.csv")],
+                         capture_output=True, text=True, timeout=600, cwd=tmp_path)
+    assert sim.returncode == 0, sim.stderr[-2000:]
+    assert len((tmp_path / "o.csv").read_text().splitlines()) >= 1024
     missing = subprocess.run([sys.executable, "-m", "orchestrator.cli", "export-fmu", CASE,
                               "--bearing-fmu", str(tmp_path / "nowhere.fmu")],
                              capture_output=True, text=True, timeout=600, cwd=tmp_path)
