@@ -104,6 +104,19 @@ def describe(dimension: str) -> str:
     return f"{'an' if words[0] in 'aeiou' else 'a'} {words}"
 
 
+def _form(dimension: str) -> str:
+    """How a value of ``dimension`` is written, for messages: no number is suggested, since
+    the one the user meant may be in any of the units (160 meant in mm is not '160 m').
+
+    >>> _form("mass"), _form("dimensionless")
+    ("a number and one of the units kg, g, e.g. '0.5 kg'", "a number, e.g. '0.5'")
+    """
+    if dimension == "dimensionless":
+        return "a number, e.g. '0.5'"
+    units = ", ".join(DIMENSIONS[dimension].aliases)
+    return f"a number and one of the units {units}, e.g. '0.5 {symbol(dimension)}'"
+
+
 def parse_quantity(value, dimension: str, field: str) -> float:
     """A case-file value as a float in SI units.
 
@@ -126,7 +139,7 @@ def parse_quantity(value, dimension: str, field: str) -> float:
     elif isinstance(value, str):
         m = _QUANTITY.match(value)
         if not m:
-            raise UnitError(f"{field}: cannot read {value!r} as 'number unit' (e.g. '4 {si}')")
+            raise UnitError(f"{field}: cannot read {value!r} as {_form(dimension)}")
         number, unit = m.groups()
         unit = unit or si
         if unit not in _SPELLINGS:
@@ -134,8 +147,8 @@ def parse_quantity(value, dimension: str, field: str) -> float:
                             f"of the units {', '.join(DIMENSIONS[dimension].aliases)}")
         factor, dim = _SPELLINGS[unit]
         if dim != dimension:
-            raise UnitError(f"{field}: {value!r} is {describe(dim)}, expected {expected} "
-                            f"(e.g. '{number} {si}')")
+            raise UnitError(f"{field}: {value!r} is {describe(dim)}, expected {expected}: "
+                            f"{_form(dimension)}")
         out = float(number) * factor
     else:
         raise UnitError(f"{field}: expected {expected} (a number in {si} or 'number unit'), "

@@ -222,7 +222,10 @@ TWO = shipped_cases()["two_stage_reducer"]
 @pytest.mark.parametrize("edit,match", [
     # a unit of the wrong kind, an unknown unit
     (dict(replace=[('clearance = "150 um"', 'clearance = "150 N"')]),
-     r"bearings\.1\.clearance: '150 N' is a force, expected a length"),
+     r"bearings\.1\.clearance: '150 N' is a force, expected a length: a number and one of "
+     r"the units m, mm, um, µm, cm, e\.g\. '0\.5 m'$"),  # not '150 m': 150 meant in um
+    (dict(replace=[("tolerance = 1e-5", 'tolerance = "abc"')]),
+     r"simulation\.tolerance: cannot read 'abc' as a number, e\.g\. '0\.5'$"),
     (dict(replace=[('"325 rad/s"', '"325 furlongs"')]), r"drive\.speed: unknown unit"),
     # unknown keys and choices, the closest as a hint
     (dict(replace=[('model = "hybrid"', 'model = "magic"')]),
