@@ -74,10 +74,17 @@ def _case_body(toml: str) -> str:
     return "\n".join(lines)
 
 
-def input_difference(path: Path, expected: dict) -> str | None:
+def _plain(value) -> str:
+    """An attribute's value as a message shows it: numbers as numbers (not numpy reprs),
+    text quoted."""
+    value = value.item() if hasattr(value, "item") else value
+    return f"'{value}'" if isinstance(value, str) else str(value)
+
+
+def input_difference(path: Path, expected: dict, ignore=()) -> str | None:
     """None if the results file ``path`` was computed from the inputs of ``expected`` (the
     root attributes of the run about to start: :meth:`orchestrator.run.spec.RunSpec.attributes`),
-    else what differs, in a few words."""
+    else what differs, in a few words; the :data:`INPUTS` in ``ignore`` are not compared."""
     from orchestrator.run.results import read_attributes
 
     try:
@@ -90,8 +97,8 @@ def input_difference(path: Path, expected: dict) -> str | None:
         return "another case (some field of the stored case differs)"
     for key in INPUTS:
         a, b = stored.get(key, ""), expected.get(key, "")
-        if str(a) != str(b):
-            return f"{key} {a!r}, this run's {b!r}"
+        if key not in ignore and str(a) != str(b):
+            return f"{key} {_plain(a)}, this run's {_plain(b)}"
     return None
 
 
@@ -152,6 +159,13 @@ def target(out_dir: Path | str, name: str, overwrite: bool, expected: dict | Non
     state = describe_file(final)
     readable = state.startswith(("complete", "incomplete"))
     differ = input_difference(final, expected) if readable and expected is not None else None
+    if differ is not None and input_difference(final, expected, ("steps_total",)) is None:
+        # the same inputs over another length: a run resumed with another --periods
+        if not overwrite:
+            raise TargetError(f"{final} exists ({state}): a run of the same inputs but of "
+                              f"another length ({differ}; a run resumed with another "
+                              "--periods); --overwrite replaces it, or another --out")
+        differ = None
     if differ is not None:
         raise TargetError(f"{final} exists ({state}) but holds a run of other inputs "
                           f"({differ}): it is neither reused nor replaced; move it away or "

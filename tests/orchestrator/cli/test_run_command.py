@@ -162,3 +162,24 @@ def test_a_run_of_bearing_fmus_is_named_by_their_model(tmp_path, stems, model, l
     spec = RunSpec.of(case, fmus={"gear": Path("GearShaft.fmu"),
                                   "bearings": [tmp_path / f"{s}.fmu" for s in stems]})
     assert spec.label == label
+
+
+def test_a_run_resumed_longer_is_replaced_only_with_overwrite(tmp_path, capsys):
+    """A one-period run resumed to two periods keeps its file name; the one-period run asked
+    again finds a run of the same inputs but of another length: it says so in numbers (no
+    numpy reprs) and names --overwrite, which then replaces it."""
+    from orchestrator.cli import main
+
+    out = tmp_path / "results"
+    args = ["run", *ONE_PERIOD, "--out", str(out), "--no-figures", "--quiet"]
+    assert main(args) == 0
+    [path] = out.glob("*.h5")
+    assert main(["run", "--resume", str(path), "--periods", "2", "--no-figures", "--quiet"]) == 0
+    assert len(read_results(path)["time"]) == 64
+    capsys.readouterr()
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert "a run of the same inputs but of another length (steps_total 64, this run's 32" in err
+    assert "--overwrite replaces it" in err and "np." not in err, err
+    assert main([*args, "--overwrite"]) == 0
+    assert len(read_results(path)["time"]) == 32
