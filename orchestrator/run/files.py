@@ -23,8 +23,13 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
-__all__ = ["Target", "TargetError", "describe_file", "input_difference", "results_name",
-           "target"]
+__all__ = ["PartialFileWarning", "Target", "TargetError", "describe_file", "input_difference",
+           "results_name", "target"]
+
+
+class PartialFileWarning(UserWarning):
+    """A ``<name>.partial.h5`` beside a run's complete file: the steps of an ``--overwrite``
+    that did not complete, which the run names (kept, or replaced by a new ``--overwrite``)."""
 
 
 class TargetError(RuntimeError):
@@ -171,6 +176,15 @@ def target(out_dir: Path | str, name: str, overwrite: bool, expected: dict | Non
                           f"({differ}): it is neither reused nor replaced; move it away or "
                           "use another --out")
     complete = state.startswith("complete")
+    partial = out_dir / f"{name}.partial.h5"
+    if complete and partial.exists():
+        import warnings
+
+        fate = ("this --overwrite replaces it" if overwrite else
+                "kept; the next --overwrite replaces it")
+        warnings.warn(f"{partial} ({describe_file(partial)}) holds the steps of an --overwrite "
+                      f"of {final.name} that did not complete: {fate}", PartialFileWarning,
+                      stacklevel=2)
     if complete and not overwrite and expected is not None:
         return Target(final, final, stored=True)
     if not overwrite:
@@ -178,7 +192,6 @@ def target(out_dir: Path | str, name: str, overwrite: bool, expected: dict | Non
         raise TargetError(f"{final} exists ({state}): this run would overwrite it; "
                           f"--overwrite to replace it{hint}, or another --out")
     if complete:
-        partial = out_dir / f"{name}.partial.h5"
         partial.unlink(missing_ok=True)
         return Target(partial, final)
     final.unlink()

@@ -61,9 +61,10 @@ def test_runs_with_other_overrides_keep_their_own_files(tmp_path, capsys):
     assert (files[0].stat().st_mtime_ns, files[1].stat().st_mtime_ns) == before
 
 
-def test_a_failing_run_leaves_a_complete_file_untouched(tmp_path):
+def test_a_failing_run_leaves_a_complete_file_untouched(tmp_path, capsys):
     """--overwrite over a complete file, and the new run fails at step 40: the complete file
-    stays as it was, the failed run's 39 steps are in <name>.partial.h5."""
+    stays as it was, the failed run's 39 steps are in <name>.partial.h5, which the next runs
+    name (kept when answered from the complete file, replaced by an --overwrite)."""
     from orchestrator.cli import main
 
     out = tmp_path / "results"
@@ -81,6 +82,14 @@ def test_a_failing_run_leaves_a_complete_file_untouched(tmp_path):
     r = read_results(partial)
     assert len(r["time"]) == 39 and not r["attrs"]["complete"]
     assert "forced failure" in r["attrs"]["stopped_by"]
+    capsys.readouterr()
+    assert main(args[:-1]) == 0  # answered from the complete file
+    err = capsys.readouterr().err
+    assert f"gsb run: warning: {partial} (incomplete, 39 steps, stopped by " in err, err
+    assert "holds the steps of an --overwrite" in err and "kept; the next --overwrite" in err
+    assert main(args) == 0
+    assert "this --overwrite replaces it" in capsys.readouterr().err
+    assert not partial.exists() and complete.is_file()
 
 
 def _interrupt(cmd, out: Path, sig, cwd) -> tuple[subprocess.CompletedProcess, dict]:
