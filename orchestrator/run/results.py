@@ -37,6 +37,7 @@ import json
 import os
 import socket
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -44,9 +45,9 @@ import numpy as np
 from fmu_src.state_codec import FORMAT_VERSION, StateFormatError
 from orchestrator.run.channels import dims
 
-__all__ = ["ResultsWriter", "add_attributes", "attribute_value", "clear_write_flags",
-           "csv_column_labels", "export_csv", "live_writer", "open_results", "read_attributes",
-           "read_checkpoint", "read_results"]
+__all__ = ["OlderFileWarning", "ResultsWriter", "add_attributes", "attribute_value",
+           "clear_write_flags", "csv_column_labels", "export_csv", "live_writer", "open_results",
+           "read_attributes", "read_checkpoint", "read_results"]
 
 #: rows buffered at most between two writes (the time bound usually flushes first)
 CAPACITY = 4096
@@ -468,11 +469,44 @@ def csv_column_labels(name: str, shape: tuple, coords: dict | None = None) -> li
             for idx in np.ndindex(*shape)]
 
 
+class OlderFileWarning(UserWarning):
+    """A results file written by an older version lacks something this version adds."""
+
+
+#: a run's channels at t = 0, from the static solution its file stores (X0: at rest)
+_STATIC_ROW = {"journal_position": "static_journal", "bearing_force": "static_bearing_force",
+               "mesh_force": "static_mesh_force",
+               "transmission_error": "static_transmission_error",
+               "gear_node": "static_gear_node", "iterations": "static_iterations"}
+
+
+def _static_row(data: dict) -> dict | None:
+    """The row at t = 0 of a run's file (the static solution X0, velocities zero), or None
+    for a file that is not a run's; a run's file that lacks part of it (written before the
+    gear nodes' static positions were stored) is said once."""
+    attrs = data["attrs"]
+    have = [k for k in _STATIC_ROW.values() if k in attrs]
+    if not have or "journal_position" not in data:
+        return None
+    if len(have) < len(_STATIC_ROW):
+        missing = ", ".join(k for k in _STATIC_ROW.values() if k not in attrs)
+        warnings.warn(f"no row at t = 0 (X0) in the CSV: the results file stores no {missing} "
+                      "(written by an older version); the rows start at the first step",
+                      OlderFileWarning, stacklevel=3)
+        return None
+    row = {name: np.asarray(attrs[key], dtype=float) for name, key in _STATIC_ROW.items()}
+    row["journal_velocity"] = np.zeros_like(row["journal_position"])
+    row["time"] = np.asarray(0.0)
+    return row
+
+
 def export_csv(path, csv_path, channels=None, overwrite: bool = False) -> Path:
     """Write the chosen channels (default: all) as CSV: one row per time step, a column per
     component labelled by :func:`csv_column_labels` with the file's own labels and its unit
-    (e.g. ``journal_position[bearing=1][axis=t] [m]``), 17 significant digits. Raises
-    FileExistsError if ``csv_path`` exists unless ``overwrite``."""
+    (e.g. ``journal_position[bearing=1][axis=t] [m]``), 17 significant digits. A run's file
+    starts at t = 0 with the static solution X0 (journal velocities zero, the iterations
+    those of the static solution). Raises FileExistsError if ``csv_path`` exists unless
+    ``overwrite``."""
     csv_path = Path(csv_path)
     if csv_path.exists() and not overwrite:
         raise FileExistsError(f"{csv_path} exists")
@@ -485,11 +519,16 @@ def export_csv(path, csv_path, channels=None, overwrite: bool = False) -> Path:
         raise ValueError(f"unknown channel(s) {', '.join(unknown)}; the file has "
                          f"{', '.join(known)}")
     names = ["time"] + [n for n in chosen if n != "time"]
-    n_rows = len(data["time"])
+    first = _static_row(data)
+    if first is not None and any(n not in first for n in names):
+        first = None  # a channel without a value at t = 0
+    n_rows = len(data["time"]) + (first is not None)
     cols, heads = [], []
     for name in names:
         arr = np.asarray(data[name])
         shape = arr.shape[1:]
+        if first is not None:
+            arr = np.concatenate([first[name].reshape(1, *shape).astype(arr.dtype), arr])
         flat = arr.reshape(n_rows, -1)
         for j, label in enumerate(csv_column_labels(name, shape, coords)):
             heads.append(f"{label} [{data['units'][name]}]")

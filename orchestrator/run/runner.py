@@ -189,8 +189,8 @@ def report_text(r: dict) -> str:
 @dataclass
 class Static:
     """What the static step leaves: the master's report, X0 (nb, 2) [m], the static force [N]
-    and transmission error [m] of each mesh, the checks' warnings and notes and the wall time
-    [s]."""
+    and transmission error [m] of each mesh, the checks' warnings and notes, the wall time
+    [s] and the gear nodes' u, v (n_gears, 2) [m]."""
 
     report: StepReport
     x0: np.ndarray
@@ -199,6 +199,7 @@ class Static:
     warnings: list
     seconds: float
     notes: list = field(default_factory=list)
+    gear_node: np.ndarray | None = None
 
 
 class Stop(Exception):
@@ -342,7 +343,7 @@ class Runner:
         master.exit_initialization()
         # read after leaving initialisation: a gear-shaft FMU in initialisation mode would
         # solve its static problem again for outputs read after the final laws were set
-        mesh_force, te, _ = structure.step_outputs()
+        mesh_force, te, gear_node = structure.step_outputs()
         try:
             warnings, notes = time_step_findings(case, master.laws, self.spec.dt,
                                                  structure.physics)
@@ -351,7 +352,8 @@ class Runner:
         warnings = unbalance_warnings(case) + warnings
         for text in warnings if self.echo else ():
             print(f"warning: {text}", file=sys.stderr, flush=True)
-        return Static(static, x0, mesh_force, te, warnings, time.perf_counter() - t0, notes)
+        return Static(static, x0, mesh_force, te, warnings, time.perf_counter() - t0, notes,
+                      np.array(gear_node, dtype=float))
 
     @one_blas_thread
     def transient(self, recorder, first: int = 0, bar: Progress | None = None) -> dict:
@@ -453,6 +455,7 @@ def _static_attributes(static: Static) -> dict:
             "static_iterations": static.report.iterations,
             "static_mesh_force": static.mesh_force,
             "static_transmission_error": static.transmission_error,
+            **({} if static.gear_node is None else {"static_gear_node": static.gear_node}),
             "warnings": "\n".join(static.warnings), "notes": "\n".join(static.notes)}
 
 

@@ -154,3 +154,38 @@ def test_read_result_names_a_missing_or_foreign_file(tmp_path):
         w.append(time=0.0, x=1.0)
     with pytest.raises(ValueError, match=r"other\.h5: not the results file of a run"):
         gsb.read_result(other)
+
+
+def test_a_runs_csv_starts_at_rest_at_x0(tmp_path):
+    """The CSV of a run starts at t = 0 with the static solution X0 the file stores (the
+    journals at their static positions at rest, the static bearing and mesh forces, the
+    gear nodes at X0), then one row per step; a file without the gear nodes' static
+    positions (an older version's) starts at the first step and says so once."""
+    import h5py
+
+    from orchestrator.run.results import OlderFileWarning
+    from tests.helpers import run_paper_case
+
+    results, summary = run_paper_case(tmp_path, periods=1)
+    attrs = results["attrs"]
+    lines = export_csv(summary.results, tmp_path / "r.csv").read_text().splitlines()
+    head = lines[0].split(",")
+    rows = np.array([[float(x) for x in line.split(",")] for line in lines[1:]])
+    assert len(rows) == 32 + 1 and rows[0, 0] == 0.0 and rows[1, 0] == results["time"][0]
+
+    def at_rest(label):
+        return rows[0, head.index(label)]
+
+    assert at_rest("journal_position[bearing=3][axis=t] [m]") == attrs["static_journal"][2, 1]
+    assert at_rest("journal_velocity[bearing=3][axis=t] [m/s]") == 0.0
+    assert at_rest("bearing_force[bearing=1][axis=s] [N]") == \
+        attrs["static_bearing_force"][0, 0]
+    assert at_rest("mesh_force[mesh=mesh] [N]") == attrs["static_mesh_force"][0]
+    assert at_rest("gear_node[gear=pinion][axis=t] [m]") == attrs["static_gear_node"][0, 1]
+    assert rows[1, head.index("journal_position[bearing=3][axis=t] [m]")] == \
+        results["journal_position"][0, 2, 1]
+    with h5py.File(summary.results, "a") as f:
+        del f.attrs["static_gear_node"]
+    with pytest.warns(OlderFileWarning, match="no row at t = 0 .*static_gear_node"):
+        older = export_csv(summary.results, tmp_path / "old.csv").read_text().splitlines()
+    assert len(older) == 32 + 1  # the header and the steps
