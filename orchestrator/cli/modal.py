@@ -46,8 +46,8 @@ def add_parser(sub) -> None:
                    help="draw a Campbell diagram (default file <case>_campbell.png in --out)")
     p.add_argument("--campbell-speeds", type=int, default=16,
                    help="speeds of the Campbell diagram over the speed range (default 16)")
-    p.add_argument("--out", default=".", help="folder of the default Campbell file "
-                                              "(default: the current folder)")
+    p.add_argument("--out", default="results", help="folder of the default Campbell file "
+                                                    "(default: results, as gsb run's)")
     p.set_defaults(func=modal)
 
 
@@ -108,6 +108,10 @@ def modal(args) -> int:
     chart = None
     if args.campbell is not None:
         path = Path(args.campbell or Path(args.out) / f"{case['case.name']}_campbell.png")
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise CaseError(f"--campbell {path}: cannot create its folder ({exc})") from None
         speeds = np.linspace(low, high, args.campbell_speeds)
         data = system.campbell(speeds)
         if not data["modes"]:
@@ -180,5 +184,8 @@ def modal(args) -> int:
     if chart is not None:
         for w, e in data["skipped"]:
             print(f"campbell: {w:g} rad/s skipped: {e}")
-        print(f"\ncampbell: {chart['path']} ({len(chart['speeds_rad_s'])} speeds)")
+        print(f"\ncampbell: {chart['path']} ({len(chart['speeds_rad_s'])} speeds; the "
+              f"crossings it marks follow each mode with the bearings linearised at every "
+              f"speed, so they differ from the table above, whose modes are those at the "
+              f"case's {case['drive.speed']:g} rad/s)")
     return 0

@@ -388,3 +388,17 @@ def test_gsb_modal_campbell_at_three_speeds(tmp_path, capsys):
         assert 100.0 <= c["speed_rad_s"] <= 900.0
     # the mesh modes near 2.2 and 4.4 kHz meet the harmonics k >= 2 inside 100-900 rad/s
     assert any(c["harmonic"] >= 2 and c["mesh"] == "mesh" for c in chart["crossings"])
+
+
+def test_gsb_modal_campbell_writes_into_results_and_says_why_its_crossings_differ(
+        tmp_path, capsys, monkeypatch):
+    """Without a file name the diagram goes into --out, by default ``results`` (gsb run's
+    folder), never the current folder itself; the line naming it says that its crossings
+    follow the speed-dependent modes, unlike the table of the modes at the case's speed."""
+    monkeypatch.chdir(tmp_path)
+    assert main(["modal", SPUR, "--bearing", "linear", "--campbell", "--campbell-speeds", "3",
+                 "--speed-range", "100", "900"]) == 0
+    printed = capsys.readouterr().out
+    assert (tmp_path / "results" / f"{SPUR}_campbell.png").is_file()
+    assert not list(tmp_path.glob("*.png"))
+    assert "whose modes are those at the case's 325 rad/s" in printed
