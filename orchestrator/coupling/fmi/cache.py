@@ -2,11 +2,11 @@
 
 :func:`ensure_fmus` returns the FMU files of a folder, building those that are missing or stale
 (built from other code, or with other variables); by default the folder is in the per-user
-cache, one per code version (:func:`default_fmu_dir`), so runs from any working directory share
-one build. Builds into one folder are serialised by a lock file: two runs that start at once
-build once and both use the result. :func:`system_from_case` gives the gear-shaft FMU and one
-bearing FMU instance per bearing (of the bearing's own model) of a case behind the master's
-interfaces.
+cache, one per code version and interpreter (:func:`default_fmu_dir`), so runs from any
+working directory share one build. Builds into one folder are serialised by a lock file: two
+runs that start at once build once and both use the result. :func:`system_from_case` gives
+the gear-shaft FMU and one bearing FMU instance per bearing (of the bearing's own model) of a
+case behind the master's interfaces.
 
 The gear-shaft FMU's variables are those of a gear train (its ports per bearing, mesh and gear,
 its parameters per case key: :func:`fmu_src.contract.gear_variables`): for a case whose train
@@ -35,12 +35,22 @@ GEAR = "GearShaft"
 
 
 def default_fmu_dir() -> Path:
-    """``<user cache>/fmus/<code hash>``: where ``gsb run`` builds and finds its FMUs unless
-    told otherwise (:func:`fmu_src.slaves.bootstrap.cache_dir`; ``GSB_CACHE_DIR`` moves it)."""
+    """``<user cache>/fmus/<code hash>-<interpreter key>``: where ``gsb run`` builds and finds
+    its FMUs unless told otherwise (:func:`fmu_src.slaves.bootstrap.cache_dir`;
+    ``GSB_CACHE_DIR`` moves it). One folder per interpreter too: an FMU's loader names the
+    Python that built it (``resources/gsb_python.txt``), so an FMU built by another virtual
+    environment would start that one's Python (or one removed since) in a C host."""
     from fmu_src.build.fmus import code_hash
     from fmu_src.slaves.bootstrap import cache_dir
 
-    return cache_dir() / "fmus" / code_hash()
+    return cache_dir() / "fmus" / f"{code_hash()}-{interpreter_key()}"
+
+
+def interpreter_key() -> str:
+    """8 hex digits of the running interpreter's path and version (:func:`default_fmu_dir`)."""
+    import sys
+
+    return hashlib.sha256(f"{sys.executable}\n{sys.version}".encode()).hexdigest()[:8]
 
 
 def _signature(variables) -> list[tuple]:

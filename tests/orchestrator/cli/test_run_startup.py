@@ -104,3 +104,18 @@ def test_modal_says_once_that_it_compiles_on_an_empty_cache(tmp_path):
     assert proc.returncode == 0, proc.stderr
     assert proc.stderr.count("gsb: compiling the numba kernels into ") == 1, proc.stderr
     assert "bending" in proc.stdout
+
+
+def test_each_python_environment_has_its_own_fmu_folder(monkeypatch, tmp_path):
+    """An FMU's loader names the Python that built it: the per-user FMU folder is one per
+    code version and interpreter, so another virtual environment builds its own FMUs instead
+    of running the first one's Python in a C host."""
+    from fmu_src.build.fmus import code_hash
+    from orchestrator.coupling.fmi.cache import default_fmu_dir
+
+    monkeypatch.setenv("GSB_CACHE_DIR", str(tmp_path))
+    mine = default_fmu_dir()
+    monkeypatch.setattr(sys, "executable", str(tmp_path / "other-venv" / "bin" / "python"))
+    other = default_fmu_dir()
+    assert mine != other and mine.parent == other.parent == tmp_path / "fmus"
+    assert mine.name.startswith(f"{code_hash()}-") and other.name.startswith(f"{code_hash()}-")
