@@ -7,7 +7,7 @@ shafts and meshes are those of the case stored in the file, by their names.
 unbalance (:func:`orchestrator.figures.base.run_title`):
 
 ``orbits.png``
-    the journal-centre orbit of every bearing [um], a row per shaft, each panel titled by the
+    the journal-centre orbit of every bearing [µm], a row per shaft, each panel titled by the
     bearing's name and shaft, zoomed on the orbit, the report's window (the last revolution
     of the slowest shaft) drawn over the whole (faded) trajectory, the static position X0
     marked, and an inset with the bearing's full clearance circle;
@@ -152,8 +152,8 @@ def _orbits(plt, run: RunData):
             # at most 5 ticks: values such as 39.925 overlap at the default count
             ax.xaxis.set_major_locator(MaxNLocator(nbins=5))
             ax.grid(True, lw=0.4, alpha=0.5)
-            ax.set_xlabel("s [um]")
-            ax.set_ylabel("t [um]")
+            ax.set_xlabel("s [µm]")
+            ax.set_ylabel("t [µm]")
             title = f"bearing {run.bearings[b]} (shaft {shaft})"
             if x0 is not None and c:
                 title += f", X0 at e/C = {math.hypot(*x0) / c:.2f}"
@@ -193,7 +193,7 @@ def _orbits(plt, run: RunData):
             ins.set_xticks([])
             ins.set_yticks([])
             ins.patch.set_alpha(0.92)
-            ins.text(0.5, 0.03, f"C = {c:.0f} um", transform=ins.transAxes, ha="center",
+            ins.text(0.5, 0.03, f"C = {c:.0f} µm", transform=ins.transAxes, ha="center",
                      va="bottom", fontsize=7)
     return fig
 
@@ -220,14 +220,21 @@ def _bearing_forces(plt, run: RunData):
     t = run.time[win]
     t_start = t[0] - run.dt
     angle = (t - t_start) * math.degrees(run.speed)
-    every = max(1, t.size // 14)
+    every = max(1, t.size // 28)
     for ax, (shaft, on) in zip(axes, groups, strict=True):
         for j, b in enumerate(on):
             colour, ls, marker = bearing_style(b)
-            ax.plot(angle, run.force_norm[win, b], color=colour, ls=ls, marker=marker,
+            force = run.force_norm[win, b]
+            label = f"bearing {run.bearings[b]}"
+            for other in on[:j]:  # a curve drawn over an equal one: say so, it hides it
+                gap = float(np.abs(force - run.force_norm[win, other]).max())
+                if gap <= 1e-3 * float(np.abs(force).max()):
+                    label += f"\n(on bearing {run.bearings[other]}: within {gap:.2g} N)"
+                    break
+            ax.plot(angle, force, color=colour, ls=ls, marker=marker,
                     lw=2.0 if j % 2 == 0 else 1.4, ms=6, mfc=colour if j % 2 == 0 else "none",
-                    markevery=(j * every // max(len(on), 1), every),
-                    label=f"bearing {run.bearings[b]}", zorder=2 + j)
+                    markevery=(j * every // max(len(on), 1), every), label=label,
+                    zorder=2 + j)
         ax.set_ylabel("||F_b|| [N]")
         ax.ticklabel_format(axis="y", useOffset=False)
         ax.grid(True, lw=0.4, alpha=0.5)
@@ -445,16 +452,17 @@ def _mesh(plt, run: RunData):
             if run.static_te is not None:
                 static = float(run.static_te[m])
                 te_axes[0].axhline((static - mean) * UM, color="0.4", ls="--", lw=0.9,
-                                   label=f"static TE at X0 ({static * UM:.4g} um)")
+                                   label=f"static TE at X0: {static * UM:.4g} µm "
+                                         f"({(static - mean) * UM:+.3g} µm from the mean)")
                 te_axes[0].legend(loc="best", fontsize=9)
             for ax in te_axes:
-                ax.set_ylabel(f"TE - mean{which} [um]")
+                ax.set_ylabel(f"TE - mean{which} [µm]")
             _whole_run(te_axes[1], run, te_dyn, "C4", m)
             te_axes[1].axhline(0.0, color="k", ls=":", lw=0.9)
             te_axes[0].set_title(f"{'mesh ' + name + ': ' if n > 1 else ''}TE peak-to-peak "
-                                 f"{np.ptp(te_dyn[win]):.3g} um", fontsize=11)
+                                 f"{np.ptp(te_dyn[win]):.3g} µm", fontsize=11)
             captions.append(f"{'mesh ' + name + ': ' if n > 1 else ''}drawn about its mean "
-                            f"{mean * UM:.1f} um over the {steady_kind}")
+                            f"{mean * UM:.1f} µm over the {steady_kind}")
         else:
             for ax in te_axes:
                 ax.text(0.5, 0.5, "no transmission_error channel", ha="center",
@@ -486,6 +494,11 @@ def _mesh(plt, run: RunData):
         ax.set_xlim(0.0, run.time[-1] * 1e3)
     handles, labels = axes[-1, 1].get_legend_handles_labels()
     caption = None
+    w0_text = ""
+    if run.static_mesh is not None:
+        w0_text = " W0: the mesh force at X0 (" + ", ".join(
+            f"{name + ' ' if n > 1 else ''}{float(w):.4g} N"
+            for name, w in zip(run.meshes, run.static_mesh, strict=True)) + ")."
     if captions:
         torque = num_attr(run.attrs, "torque")
         under = "" if torque is None else f" under {torque:.4g} N m"
@@ -493,8 +506,9 @@ def _mesh(plt, run: RunData):
 
         caption = textwrap.fill(
             "TE = r_b1 \u03b81 + r_b2 \u03b82 at the gears of a mesh, " + "; ".join(captions)
-            + f". That mean is the static deflection{under}, the shafts' torsional wind-up "
-            "included; the part about it is the dynamic TE.", int(11 * fig.get_figwidth()))
+            + f". That mean holds the deflection{under}, the shafts' torsional wind-up "
+            "included (the dashed line: the TE at the static solution X0); the part about it "
+            "is the dynamic TE." + w0_text, int(11 * fig.get_figwidth()))
     if len(handles) > 1 or caption:
         fig.legend(handles, labels, loc="outside lower center", ncol=3, fontsize=9,
                    frameon=False, title=caption, title_fontsize=9.5)

@@ -206,16 +206,18 @@ def test_resume_extends_a_run(tmp_path, capsys):
     r, ref = read_results(short), read_results(long)
     assert r["attrs"]["complete"] and r["attrs"]["mesh_periods"] == 5
     np.testing.assert_array_equal(r["journal_position"], ref["journal_position"])
-    # gsb export: one row per step, columns named with their units, values to the last digit
+    # gsb export: X0 at t = 0, then one row per step, columns named with their units, values
+    # to the last digit
     capsys.readouterr()
     assert main(["export", str(short), "--csv", str(tmp_path / "short.csv")]) == 0
     lines = (tmp_path / "short.csv").read_text().splitlines()
     head = lines[0].split(",")
-    assert len(lines) == 1 + 160 and head[0] == "time [s]"
+    assert len(lines) == 1 + 1 + 160 and head[0] == "time [s]"
     assert ("journal_position[bearing=1][axis=t] [m]" in head
             and "bearing_force[bearing=4][axis=s] [N]" in head)
     col = head.index("mesh_force[mesh=mesh] [N]")
-    assert [float(line.split(",")[col]) for line in lines[1:]] == r["mesh_force"][:, 0].tolist()
+    assert float(lines[1].split(",")[col]) == r["attrs"]["static_mesh_force"][0]
+    assert [float(line.split(",")[col]) for line in lines[2:]] == r["mesh_force"][:, 0].tolist()
 
 
 class _WritesAFile:

@@ -138,7 +138,7 @@ def test_figures_are_written_with_a_panel_per_bearing_shaft_and_mesh(run):
         assert [ax.get_xlabel().split(" (")[0] for ax in spectra] == [
             "order [1/input rev]", "order [1/intermediate rev]", "order [1/output rev]"]
         labels = [ax.get_ylabel() for ax in drawn["mesh.png"].axes if ax.get_ylabel()]
-        assert "TE - mean (stage1) [um]" in labels and "W - W0 (stage2) [N]" in labels
+        assert "TE - mean (stage1) [µm]" in labels and "W - W0 (stage2) [N]" in labels
         forces = drawn["bearing_forces.png"].axes
         assert sum(ax.get_legend() is not None for ax in forces) == 3  # a panel per shaft
     finally:

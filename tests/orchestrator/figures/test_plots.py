@@ -217,7 +217,7 @@ def test_mesh_figure_of_a_long_run_bins_by_pinion_revolution(tmp_path):
         assert np.ptp(hi[1:]) < 1e-6
         assert hi[-1] == pytest.approx((te[-32 * TEETH[0]:].max() - mean) * 1e6, rel=1e-12)
         caption = fig.legends[0].get_title().get_text()
-        assert "wind-up" in caption and "mean 140.3 um" in caption
+        assert "wind-up" in caption.replace("-\n", "-") and "mean 140.3 µm" in caption
         te_left = fig.axes[0].get_lines()[0].get_ydata()
         assert abs(te_left.mean()) < 0.05 and np.ptp(te_left) > 10.0  # about the mean, um
         fig.canvas.draw()
