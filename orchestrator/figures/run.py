@@ -166,7 +166,8 @@ def _orbits(plt, run: RunData):
                Line2D([], [], color="k", marker="P", ls="", ms=8, label="static position X0"),
                Rectangle((0, 0), 1, 1, fill=False, ec="r",
                          label="inset: clearance circle, red box = zoomed region")]
-    fig.legend(handles=handles, loc="outside lower center", ncol=3, fontsize=9, frameon=False)
+    # two columns: three ran wider than the figure
+    fig.legend(handles=handles, loc="outside lower center", ncol=2, fontsize=9, frameon=False)
     fig.draw_without_rendering()  # the layout: the panels' shape sets the zoom limits
     for ax, xs, ys, c, s, t, colour in insets:  # zoom on the steady orbit and X0
         box = ax.get_position()
