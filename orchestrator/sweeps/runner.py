@@ -258,7 +258,52 @@ def dask_client(scheduler, n_workers: int, timeout: float):
     return Client(cluster), cluster
 
 
+def unguarded_main_call() -> str | None:
+    """``"<script>:<line>"`` when the sweep was called from a script's top-level code outside
+    an ``if __name__ == "__main__":`` block, else None. A LocalCluster starts its workers as
+    new Python processes, which import the script again: unguarded, each would start a sweep
+    of its own before it is running (multiprocessing's "bootstrapping phase" error, 255
+    lines, then "Nanny failed to start"). Found from the outermost frame of ``__main__`` and
+    the script's syntax tree; None when there is no script file (an interactive session, a
+    notebook: their workers do not import it)."""
+    import ast
+    import inspect
+
+    main = sys.modules.get("__main__")
+    script = getattr(main, "__file__", None)
+    frame, line = inspect.currentframe(), None
+    while frame is not None:
+        if frame.f_globals is getattr(main, "__dict__", None) and frame.f_code.co_name == \
+                "<module>":
+            line = frame.f_lineno
+        frame = frame.f_back
+    if script is None or line is None:
+        return None
+    try:
+        tree = ast.parse(Path(script).read_text(), script)
+    except (OSError, SyntaxError, ValueError):
+        return None
+
+    def guard(node) -> bool:
+        t = node.test
+        return (isinstance(node, ast.If) and isinstance(t, ast.Compare)
+                and isinstance(t.left, ast.Name) and t.left.id == "__name__"
+                and any(isinstance(c, ast.Constant) and c.value == "__main__"
+                        for c in t.comparators))
+
+    guarded = any(guard(n) and n.lineno <= line <= (n.end_lineno or n.lineno)
+                  for n in ast.walk(tree) if isinstance(n, ast.If))
+    return None if guarded else f"{script}:{line}"
+
+
 def _connect(scheduler, n_workers, timeout):
+    if scheduler is None:
+        where = unguarded_main_call()
+        if where is not None:
+            raise RunError(f"{where}: a sweep on a local Dask cluster starts worker processes "
+                           "that import this script again: call it under "
+                           "`if __name__ == \"__main__\":`, or run the points in this process "
+                           "(scheduler=\"none\"; gsb sweep --scheduler none)")
     try:
         return dask_client(scheduler, n_workers, timeout)
     except KeyboardInterrupt:

@@ -91,3 +91,28 @@ def test_a_point_whose_journal_touched_its_bearing_is_told_apart_from_a_solver_f
     assert _touched(touched) and not _touched(run_error(not_converged))
     assert stopped_on_physics("stopped on physics (a journal touched its bearing): RunError: x")
     assert not stopped_on_physics("RunError: step 3 failed: did not converge")
+
+
+def test_a_sweep_from_an_unguarded_script_stops_at_once_with_one_line(tmp_path):
+    """A plain script calling ``gsb.sweep`` at its top level, outside ``if __name__ ==
+    "__main__":``: the local cluster's worker processes would import it again and start
+    sweeps of their own (multiprocessing's bootstrapping error, 255 lines, then "Nanny
+    failed to start"). It stops before any process or file, the error naming the script's
+    line, the guard and the in-process option."""
+    import subprocess
+    import sys
+
+    from tests.helpers import ROOT
+
+    script = tmp_path / "plain.py"
+    script.write_text("import orchestrator as gsb\n"
+                      "gsb.sweep('baguet2010_spur', {'drive.speed': [300, 325]}, 'sweep.h5',\n"
+                      "          periods=2, progress=False)\n")
+    proc = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                          timeout=300, cwd=tmp_path, env=os.environ | {"PYTHONPATH": str(ROOT)})
+    last = proc.stderr.strip().splitlines()[-1]
+    assert proc.returncode == 1 and "bootstrapping" not in proc.stderr, proc.stderr[-2000:]
+    assert last.startswith(f"orchestrator.run.spec.RunError: {script}:2: a sweep on a local "
+                           "Dask cluster starts worker processes"), last
+    assert '`if __name__ == "__main__":`' in last and 'scheduler="none"' in last
+    assert not (tmp_path / "sweep.h5").exists()
