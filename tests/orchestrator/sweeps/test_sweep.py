@@ -41,6 +41,8 @@ def test_sweep_gathers_points_and_reports_a_failed_one(scheduler, tmp_path):
     failed point is reported with its reason, the others are kept, in point order; the
     LocalCluster leaves this process's environment as it was (Dask's nanny sets the BLAS
     thread counts of later child processes to 1 there)."""
+    import threadpoolctl  # noqa: F401 - its import sets KMP_DUPLICATE_LIB_OK, not the sweep
+
     environment = dict(os.environ)
     points = [SweepPoint({"drive.speed": 200.0}, "linear", "a"),
               SweepPoint({"drive.speed": -5.0}, "linear", "bad"),
