@@ -40,6 +40,20 @@ class Result:
     summary: object = None
     coords: dict | None = None
 
+    def __repr__(self) -> str:
+        """A few lines: the case, the steps, each channel's shape, R (the arrays are in
+        ``channels``)."""
+        time = self.channels.get("time", np.empty(0))
+        name = self.attrs.get("case_name", self.attrs.get("case", "a run"))
+        lines = [f"Result of {name}: {time.size} steps"
+                 + (f" to t = {float(time[-1]):.6g} s" if time.size else "")]
+        lines += [f"  {n} {tuple(np.shape(a))}" for n, a in self.channels.items() if n != "time"]
+        report = self.report
+        if report is not None and "dynamic_factor" in report:
+            r = ", ".join(f"{float(v):.4g}" for v in np.atleast_1d(report["dynamic_factor"]))
+            lines.append(f"  dynamic factor R = {r}")
+        return "\n".join(lines)
+
     def __getitem__(self, name: str) -> np.ndarray:
         try:
             return self.channels[name]

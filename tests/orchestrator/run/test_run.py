@@ -306,6 +306,11 @@ def test_a_run_in_memory_keeps_its_steps_when_a_step_fails_or_ctrl_c_stops_it(mo
     import orchestrator as gsb
 
     full = gsb.simulate("baguet2010_spur", periods=2, in_process=True, progress=False)
+    # its repr is a few lines (the arrays stay in channels), not every array printed
+    shown = repr(full).splitlines()
+    assert shown[0] == f"Result of baguet2010_spur: 64 steps to t = {full.time[-1]:.6g} s"
+    assert "  journal_position (64, 4, 2)" in shown and len(shown) <= 12
+    assert shown[-1].startswith("  dynamic factor R = ")
     fail_master_step(monkeypatch, at=40)
     with pytest.raises(gsb.RunError, match=r"step 40 of 64 .* 39 steps computed") as failed:
         gsb.simulate("baguet2010_spur", periods=2, in_process=True, progress=False)
