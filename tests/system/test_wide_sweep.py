@@ -2,11 +2,10 @@
 and the coupled step do not give up anywhere over speed 100-1500 rad/s, unbalance 0.3-3 mm,
 helix angle 0-15 deg and torque 50-600 N m. Paper-scale runs: ``-m slow``."""
 
-import math
-
 import numpy as np
 import pytest
 
+from fmu_src.examples import helix_overrides
 from tests.helpers import run_paper_case
 
 #: the points: speed [rad/s], unbalance e_mu [mm], helix angle [deg], torque [N m]
@@ -20,17 +19,14 @@ POINTS = [tuple(p) for p in np.random.default_rng(7).uniform(
                               for w, e, b, t in POINTS])
 def test_a_random_operating_point_runs_the_paper_length(tmp_path, speed, unbalance, helix,
                                                         torque):
-    """2048 mesh periods of the shipped spur case (helix below 0.5 deg) or the helical one
-    at that helix angle (the transverse module kept at 4 mm: normal module 4 mm cos(beta)),
-    hybrid bearings, in-process: every step is taken (some perhaps in sub-steps, which the
-    summary counts). Measured with these 24 points: all run, one of them with one step in
-    sub-steps (9 s each on one core)."""
+    """2048 mesh periods of the shipped spur case, made helical at that helix angle as the
+    paper's sweep does (:func:`fmu_src.examples.helix_overrides`: the transverse module kept
+    at 4 mm; spur below 0.5 deg), hybrid bearings, in-process: every step is taken (some
+    perhaps in sub-steps, which the summary counts). Measured with these 24 points: all run,
+    one of them with one step in sub-steps (9 s each on one core)."""
     overrides = {"drive.speed": speed, "gears.*.unbalance": f"{unbalance} mm",
                  "drive.torque": f"{torque} N.m"}
-    case = "baguet2010_spur"
     if helix >= 0.5:
-        case = "baguet2010_helical"
-        overrides |= {"gears.*.helix_angle": f"{helix} deg",
-                      "gears.*.module": f"{4.0 * math.cos(math.radians(helix))} mm"}
-    _, summary = run_paper_case(tmp_path, periods=2048, case=case, **overrides)
+        overrides |= helix_overrides(helix)
+    _, summary = run_paper_case(tmp_path, periods=2048, **overrides)
     assert summary.steps == 2048 * 32

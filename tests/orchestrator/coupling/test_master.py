@@ -370,15 +370,15 @@ def test_the_helical_steps_that_did_not_converge_are_taken_in_sub_steps(tmp_path
     (as at 1000 rad/s on the spur case); at 10 deg, 900 and 1100 rad/s bearing 1 nearly
     unloaded (2.5-285 N against 440-3600 N at the others: docs/design.md section 4). Each
     run now passes that step, in sub-steps, and goes on to the next mesh period."""
+    from fmu_src.description import time_step
+    from fmu_src.examples import helix_overrides, paper_case
     from tests.helpers import run_paper_case
 
     periods = step // 32 + 1
-    _, summary = run_paper_case(
-        tmp_path, periods=periods, case="baguet2010_helical",
-        **{"drive.speed": speed, "gears.*.helix_angle": f"{helix} deg",
-           "gears.*.module": f"{4.0 * math.cos(math.radians(helix))} mm"})
+    point = {"drive.speed": speed, **helix_overrides(helix)}  # as the sweep varies it
+    _, summary = run_paper_case(tmp_path, periods=periods, **point)
     assert summary.steps == periods * 32
-    dt = 2.0 * math.pi / speed / 26 / 32  # a pinion of 26 teeth, 32 steps per mesh period
+    dt = time_step(paper_case(**point))
     assert any(t == pytest.approx((step - 1) * dt, rel=1e-9) for t, _ in summary.substeps)
 
 
