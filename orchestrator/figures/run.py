@@ -495,12 +495,10 @@ def _mesh(plt, run: RunData):
         ax.set_xlim(0.0, run.time[-1] * 1e3)
     handles, labels = axes[-1, 1].get_legend_handles_labels()
     caption = None
-    w0_text = ""
-    if run.static_mesh is not None:
-        w0_text = " W0: the mesh force at X0 (" + ", ".join(
+    if captions:
+        w0_text = "" if run.static_mesh is None else " W0: the mesh force at X0 (" + ", ".join(
             f"{name + ' ' if n > 1 else ''}{float(w):.4g} N"
             for name, w in zip(run.meshes, run.static_mesh, strict=True)) + ")."
-    if captions:
         torque = num_attr(run.attrs, "torque")
         under = "" if torque is None else f" under {torque:.4g} N m"
         import textwrap

@@ -44,7 +44,7 @@ class Result:
         """A few lines: the case, the steps, each channel's shape, R (the arrays are in
         ``channels``)."""
         time = self.channels.get("time", np.empty(0))
-        name = self.attrs.get("case_name", self.attrs.get("case", "a run"))
+        name = self.attrs.get("case", "a run")
         lines = [f"Result of {name}: {time.size} steps"
                  + (f" to t = {float(time[-1]):.6g} s" if time.size else "")]
         lines += [f"  {n} {tuple(np.shape(a))}" for n, a in self.channels.items() if n != "time"]

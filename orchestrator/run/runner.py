@@ -134,7 +134,8 @@ class RunSummary:
                 f"{self.static_iterations} iteration{'s' * (self.static_iterations != 1)} "
                 f"({self.static_time:.2f} s)"
                 + (f"; {self.relaxed_steps} step(s) relaxed at a kink of a bearing law"
-                   if self.relaxed_steps else "") + substeps_text(self.substeps))
+                   if self.relaxed_steps else "")
+                + (f"; {substeps_text(self.substeps)}" if self.substeps else ""))
 
     def report_text(self) -> str:
         """The report (``report``) in a few lines: R and the transmission-error peak-to-peak
@@ -189,17 +190,17 @@ def report_text(r: dict) -> str:
 @dataclass
 class Static:
     """What the static step leaves: the master's report, X0 (nb, 2) [m], the static force [N]
-    and transmission error [m] of each mesh, the checks' warnings and notes, the wall time
-    [s] and the gear nodes' u, v (n_gears, 2) [m]."""
+    and transmission error [m] of each mesh, the gear nodes' u, v (n_gears, 2) [m], the
+    checks' warnings and notes and the wall time [s]."""
 
     report: StepReport
     x0: np.ndarray
     mesh_force: np.ndarray
     transmission_error: np.ndarray
+    gear_node: np.ndarray
     warnings: list
     seconds: float
     notes: list = field(default_factory=list)
-    gear_node: np.ndarray | None = None
 
 
 class Stop(Exception):
@@ -352,8 +353,8 @@ class Runner:
         warnings = unbalance_warnings(case) + warnings
         for text in warnings if self.echo else ():
             print(f"warning: {text}", file=sys.stderr, flush=True)
-        return Static(static, x0, mesh_force, te, warnings, time.perf_counter() - t0, notes,
-                      np.array(gear_node, dtype=float))
+        return Static(static, x0, mesh_force, te, np.array(gear_node, dtype=float), warnings,
+                      time.perf_counter() - t0, notes)
 
     @one_blas_thread
     def transient(self, recorder, first: int = 0, bar: Progress | None = None) -> dict:
@@ -430,13 +431,11 @@ class Runner:
 
 
 def substeps_text(substeps) -> str:
-    """``"; N step(s) ... "`` for the steps taken in sub-steps, ``(t [s], count)`` each
-    (:data:`orchestrator.coupling.master.SUBSTEPS`), or ``""``: the first five times."""
-    if not substeps:
-        return ""
+    """``"N step(s) ... "``: the steps taken in sub-steps, ``(t [s], count)`` each
+    (:data:`orchestrator.coupling.master.SUBSTEPS`), the first five times."""
     at = ", ".join(f"{t:.6g} s ({m})" for t, m in substeps[:5])
     more = f" and {len(substeps) - 5} more" if len(substeps) > 5 else ""
-    return (f"; {len(substeps)} step(s) whose coupled iteration did not converge taken again "
+    return (f"{len(substeps)} step(s) whose coupled iteration did not converge taken again "
             f"in sub-steps, at t = {at}{more}")
 
 
@@ -445,7 +444,7 @@ def _substep_attributes(substeps) -> dict:
     one's start time [s] and sub-step count; nothing when there are none."""
     if not substeps:
         return {}
-    return {"substeps": substeps_text(substeps)[2:],
+    return {"substeps": substeps_text(substeps),
             "substep_times": np.array([t for t, _ in substeps]),
             "substep_counts": np.array([m for _, m in substeps], dtype=np.int64)}
 
@@ -455,7 +454,7 @@ def _static_attributes(static: Static) -> dict:
             "static_iterations": static.report.iterations,
             "static_mesh_force": static.mesh_force,
             "static_transmission_error": static.transmission_error,
-            **({} if static.gear_node is None else {"static_gear_node": static.gear_node}),
+            "static_gear_node": static.gear_node,
             "warnings": "\n".join(static.warnings), "notes": "\n".join(static.notes)}
 
 

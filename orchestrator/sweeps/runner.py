@@ -284,9 +284,9 @@ def unguarded_main_call() -> str | None:
     except (OSError, SyntaxError, ValueError):
         return None
 
-    def guard(node) -> bool:
+    def guard(node: ast.If) -> bool:
         t = node.test
-        return (isinstance(node, ast.If) and isinstance(t, ast.Compare)
+        return (isinstance(t, ast.Compare)
                 and isinstance(t.left, ast.Name) and t.left.id == "__name__"
                 and any(isinstance(c, ast.Constant) and c.value == "__main__"
                         for c in t.comparators))
