@@ -104,14 +104,14 @@ def test_a_sweep_from_an_unguarded_script_stops_at_once_with_one_line(tmp_path):
     import subprocess
     import sys
 
-    from tests.helpers import ROOT
+    from tests.helpers import probe_env
 
     script = tmp_path / "plain.py"
     script.write_text("import orchestrator as gsb\n"
                       "gsb.sweep('baguet2010_spur', {'drive.speed': [300, 325]}, 'sweep.h5',\n"
                       "          periods=2, progress=False)\n")
     proc = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
-                          timeout=300, cwd=tmp_path, env=os.environ | {"PYTHONPATH": str(ROOT)})
+                          timeout=300, cwd=tmp_path, env=probe_env())
     last = proc.stderr.strip().splitlines()[-1]
     assert proc.returncode == 1 and "bootstrapping" not in proc.stderr, proc.stderr[-2000:]
     assert last.startswith(f"orchestrator.run.spec.RunError: {script}:2: a sweep on a local "
