@@ -239,6 +239,9 @@ FIELDS: tuple[Field, ...] = (
     _f("simulation.locate_contact", "flag", "cut steps at the angles where contact lines "
        "enter or leave the path of contact, so that Newmark keeps order 2 "
        "(gear_fmu.structure)", default=True),
+    _f("simulation.gyroscopic", "flag", "gyroscopic moments of the shafts, gears and discs "
+       "spinning at their speeds, in the transient and the modes (gear_fmu.timoshenko; the "
+       "paper neglects them)", default=True),
     _f("simulation.steps_per_mesh_period", "count", "time steps per mesh period of the "
        "fastest mesh", default=32, minimum=4),
     _f("simulation.mesh_periods", "count", "mesh periods of the fastest mesh simulated",

@@ -120,7 +120,8 @@ def structure(case: Case, damping_bearing_stiffness=1e8) -> Structure:
                      damping_bearing_stiffness=damping_bearing_stiffness,
                      tol=case["simulation.tolerance"],
                      consistent_start=case["simulation.consistent_start"],
-                     locate_contact=case["simulation.locate_contact"])
+                     locate_contact=case["simulation.locate_contact"],
+                     gyroscopic=case["simulation.gyroscopic"])
 
 
 def mesh_period(case: Case) -> float:

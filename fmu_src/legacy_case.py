@@ -250,10 +250,12 @@ def translate(data: dict, source: str, file: str | None = None) -> dict:
                "(docs/case-files.md)" if file else "docs/case-files.md has the current schema")
     warnings.warn(f"{file or source} is a single-stage case file of an earlier version "
                   "([gear_pair], [operation], lists per shaft and bearing): read as the train "
-                  f"pinion_shaft, gear_shaft, bearings 1-4; {upgrade}", LegacyCaseWarning,
+                  "pinion_shaft, gear_shaft, bearings 1-4, without gyroscopic terms as then "
+                  f"(simulation.gyroscopic = false); {upgrade}", LegacyCaseWarning,
                   stacklevel=2)
     return {"case": dict(data.get("case", {})), "shafts": _shafts(v), "gears": _gears(v),
             "meshes": {MESH: {"gears": list(GEARS),
                               "centre_distance": v["gear_pair.centre_distance"]}},
             "bearings": _bearings(v), "drive": _drive(v),
-            "simulation": dict(data.get("simulation", {}))}
+            # the schema's default turned gyroscopic terms on: such a file keeps its physics
+            "simulation": {"gyroscopic": False, **data.get("simulation", {})}}

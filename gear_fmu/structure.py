@@ -4,13 +4,16 @@
 train (:class:`gear_fmu.system.GearShaftSystem`, built from a :class:`gear_fmu.layout.Layout`).
 One call of :meth:`Structure.step` is a full Newmark step (Eq. 11-16) of
 
-    M Xdd + C Xd + K_shaft X
+    M Xdd + (C + G(Omega)) Xd + K_shaft X
         = F0(t) + sum_m F_mesh,m(t, X) + sum_j B_j^T (F0_j - Kb_j X_j - Cb_j Xd_j)
 
 where the bearings enter as affine laws (Eq. 17, :class:`bearing_fmu.affine.AffineLaws`) given
 by the caller in the global (s, t) frame at the bearing nodes (X_j = (u, v) of bearing j's node,
 the layout's order), re-set by the master at every iteration: the Newton tangent is
-``c0 M + c1 C + K + sum K_mesh + Kb + c1 Cb`` (Eq. 14, 16; c0 = 4/dt^2, c1 = 2/dt). External
+``c0 M + c1 C + K + sum K_mesh + Kb + c1 Cb`` (Eq. 14, 16; c0 = 4/dt^2, c1 = 2/dt). The
+gyroscopic matrix ``G(Omega)`` of the shafts, gears and discs at their constant speeds
+(:meth:`gear_fmu.system.GearShaftSystem.gyroscopic`; not in the paper) is on when asked
+(``gyroscopic``): it joins C wherever C acts, and makes the tangent unsymmetric. External
 loads ``F0(t)`` (:mod:`gear_fmu.loads`): input torque, mass unbalances of Eq. (10), optional
 gravity. Each mesh element works in its pair's own frame
 (:func:`gear_fmu.mesh.element.pair_frame`) and is driven by the rigid-body angle of its
@@ -174,6 +177,9 @@ class Structure:
     consistent_start, locate_contact : bool
         Time integration refinements (module docstring); off by default here, on by default
         in case files.
+    gyroscopic : bool
+        Add the gyroscopic matrix ``G(Omega)`` at the shafts' speeds to C (module docstring);
+        off by default here, on by default in case files (off in the paper's).
     """
 
     @one_blas_thread
@@ -189,6 +195,7 @@ class Structure:
         max_iter: int = 30,
         consistent_start: bool = False,
         locate_contact: bool = False,
+        gyroscopic: bool = False,
     ):
         if not (tol > 0.0 and math.isfinite(tol)):
             raise ValueError(f"tol = {tol!r} must be finite and > 0")
@@ -216,6 +223,7 @@ class Structure:
         self._static = Condensation(k_static, self.nc)
         self.consistent_start = bool(consistent_start)
         self.locate_contact = bool(locate_contact)
+        self.gyroscopic = bool(gyroscopic)
         self._m_inv = None  # M^-1 restricted to the condensed columns, when first needed
         self._m_inv_g = None  # ... to the gear-node columns
         self._one = None  # the arguments of the last single step (_one_step)
@@ -269,6 +277,8 @@ class Structure:
         self._pending_reference = None
         self._damping_full = damping_full
         self._c = self._permute(damping_full)
+        if self.gyroscopic:
+            self._c = self._c + self._permute(self.gyroscopic_full)
         # b = [M C] [p; q] (prepare_step), transposed for the compiled step's products
         self._mc_t = np.ascontiguousarray(np.hstack([self._m, self._c]).T)
         self._memo = history_memo(self._m.shape[0])
@@ -290,6 +300,20 @@ class Structure:
         """The damping matrix C (full numbering) [N s/m]."""
         self._require_damping()
         return self._damping_full
+
+    @property
+    def gyroscopic_full(self) -> np.ndarray:
+        """``G(Omega)`` (full numbering) [N m s] at the shafts' speeds, zero when the
+        structure has no gyroscopic terms (``gyroscopic`` False)."""
+        return self.gyroscopic_at(self.loads.input_speed)
+
+    def gyroscopic_at(self, input_speed: float) -> np.ndarray:
+        """``G(Omega)`` (full numbering) [N m s] with the input shaft at ``input_speed``
+        [rad/s] and the others at their ratios (a linearisation at another speed); zero when
+        the structure has no gyroscopic terms."""
+        if not self.gyroscopic:
+            return np.zeros((self.system.n_dof, self.system.n_dof))
+        return self.system.gyroscopic(shaft_speeds(self.layout, float(input_speed)))
 
     @property
     def reference_modes(self):
@@ -446,7 +470,8 @@ class Structure:
         step alone once differed from the same step of a plan by them (numpy 1.26's
         OpenBLAS here, the CI machine with the newest)."""
         c0, c1 = 4.0 / dt**2, 2.0 / dt
-        cond = Condensation(c0 * self._m + c1 * self._c + self._k, self.nc)
+        cond = Condensation(c0 * self._m + c1 * self._c + self._k, self.nc,
+                            symmetric=not self.gyroscopic)
         return cond, cond.g @ self._f_const[self.nc:]
 
     def check_laws(self, f0, kb, cb):

@@ -38,6 +38,14 @@ so that the annulus has the given mass: ``r_i^2 = r^2 - M / (rho pi b)``. Paper'
 pinion r = 52 mm, r_i = 32.7 mm (close to the 35 mm shaft radius), Ip = 3.77e-3 kg m^2,
 Id = 2.30e-3 kg m^2; gear r = 314 mm, r_i = 152 mm, Ip = 4.50 kg m^2, Id = 2.26 kg m^2 (see
 :func:`annulus_inertias`). A disc's inertias are as given.
+
+Gyroscopic terms (not in the paper)
+-----------------------------------
+Each shaft's elements and the gears and discs on it spin with the shaft
+(:func:`gear_fmu.timoshenko.timoshenko_gyroscopic`, :func:`gear_fmu.timoshenko.disc_gyroscopic`):
+``G_i`` per unit spin of shaft i (``GearShaftSystem.shaft_gyroscopic``), and
+``G(Omega) = sum_i Omega_i G_i`` with each shaft's signed speed about +z
+(:meth:`GearShaftSystem.gyroscopic`).
 """
 
 from __future__ import annotations
@@ -52,7 +60,12 @@ from bearing_fmu.blas_threads import one_blas_thread
 from gear_fmu.dofs import DOF_PER_NODE, THETA, U, V, W, dof
 from gear_fmu.drivetrain import Drivetrain
 from gear_fmu.layout import GearSpec, Layout, ShaftSpec
-from gear_fmu.timoshenko import disc_matrices, timoshenko_element
+from gear_fmu.timoshenko import (
+    disc_gyroscopic,
+    disc_matrices,
+    timoshenko_element,
+    timoshenko_gyroscopic,
+)
 
 __all__ = ["GearShaftSystem", "Unbalances", "annulus_inertias", "gear_inertias"]
 
@@ -178,6 +191,9 @@ class GearShaftSystem:
         Mass of each shaft with everything on it [kg].
     unbalances : Unbalances
         The unbalanced bodies (Eq. 10).
+    shaft_gyroscopic : (n_shafts, n_dof, n_dof) array
+        Gyroscopic matrix of each shaft with its gears and discs, per unit spin [kg m^2]
+        (module docstring).
 
     Examples
     --------
@@ -240,26 +256,32 @@ class GearShaftSystem:
         n_dof = DOF_PER_NODE * len(node_shaft)
         m = np.zeros((n_dof, n_dof))
         k = np.zeros((n_dof, n_dof))
+        gyro = np.zeros((len(lay.shafts), n_dof, n_dof))
         cache: dict = {}
         for node, le, i, seg in elements:
             key = (i, seg, le)
             if key not in cache:
-                cache[key] = timoshenko_element(lay.shafts[i].section(seg), le)
-            ke, me = cache[key]
+                section = lay.shafts[i].section(seg)
+                cache[key] = (*timoshenko_element(section, le),
+                              timoshenko_gyroscopic(section, le))
+            ke, me, ge = cache[key]
             idx = np.arange(DOF_PER_NODE * node, DOF_PER_NODE * (node + 2))
             k[np.ix_(idx, idx)] += ke
             m[np.ix_(idx, idx)] += me
+            gyro[i][np.ix_(idx, idx)] += ge
         self.gear_nodes = np.array([self._node_at(g.shaft, g.position) for g in lay.gears],
                                    dtype=int)
-        for g, node in zip(lay.gears, self.gear_nodes, strict=True):
-            idiam, ip = gear_inertias(g, lay.shaft(g.shaft).density)
+        for gear, node in zip(lay.gears, self.gear_nodes, strict=True):
+            idiam, ip = gear_inertias(gear, lay.shaft(gear.shaft).density)
             idx = np.arange(DOF_PER_NODE * node, DOF_PER_NODE * (node + 1))
-            m[np.ix_(idx, idx)] += disc_matrices(g.mass, idiam, ip)
+            m[np.ix_(idx, idx)] += disc_matrices(gear.mass, idiam, ip)
+            gyro[lay.shaft_index[gear.shaft]][np.ix_(idx, idx)] += disc_gyroscopic(ip)
         self.disc_nodes = np.array([self._node_at(d.shaft, d.position) for d in lay.discs],
                                    dtype=int)
         for d, node in zip(lay.discs, self.disc_nodes, strict=True):
             idx = np.arange(DOF_PER_NODE * node, DOF_PER_NODE * (node + 1))
             m[np.ix_(idx, idx)] += disc_matrices(d.mass, d.diametral_inertia, d.polar_inertia)
+            gyro[lay.shaft_index[d.shaft]][np.ix_(idx, idx)] += disc_gyroscopic(d.polar_inertia)
         self.bearing_nodes = np.array([self._node_at(b.shaft, b.position)
                                        for b in lay.bearings], dtype=int)
         self.bearing_dofs = np.array([[dof(n, U), dof(n, V)] for n in self.bearing_nodes],
@@ -275,6 +297,7 @@ class GearShaftSystem:
         self.n_dof = n_dof
         self.mass = m
         self.stiffness = k
+        self.shaft_gyroscopic = gyro
         self.input_dof = dof(self._node_at(lay.drive.input_shaft, lay.input_position), THETA)
         self.output_dof = dof(self._node_at(lay.drive.output_shaft, lay.output_position),
                               THETA)
@@ -336,9 +359,22 @@ class GearShaftSystem:
         self.mass = m
         self.stiffness = k
         self.coupling_damping = c
+        g = np.zeros((self.shaft_gyroscopic.shape[0], n, n))
+        g[:, :n0, :n0] = self.shaft_gyroscopic
+        self.shaft_gyroscopic = g
         # static ground on the load: the torsional stiffness scale of the shafts
         self.static_ground = 0.0 if dt.clamped else float(
             np.max(np.diag(k)[self.dof_kind() == 1]))
+
+    def gyroscopic(self, speeds) -> np.ndarray:
+        """``G(Omega) = sum_i Omega_i G_i`` (n_dof, n_dof) [N m s]: the gyroscopic matrix at the
+        shafts' signed ``speeds`` about +z [rad/s] (:func:`gear_fmu.loads.shaft_speeds`;
+        module docstring). Its term ``G(Omega) Xd`` joins ``C Xd`` in Eq. (9)."""
+        w = np.asarray(speeds, dtype=float)
+        if w.shape != (self.shaft_gyroscopic.shape[0],):
+            raise ValueError(f"speeds: one per shaft ({self.shaft_gyroscopic.shape[0]}), "
+                             f"got shape {w.shape}")
+        return np.einsum("i,ijk->jk", w, self.shaft_gyroscopic)
 
     # ------------------------------------------------------------------ reduced space
     @property

@@ -22,7 +22,24 @@ are integrated exactly by Gauss quadrature of these shape functions:
     M = int rho A N_w^T N_w + rho I N_r^T N_r dz
 
 (the closed form of K is Przemieniecki's; the test suite checks it). Axial and torsional parts are
-linear rods with consistent mass. Gyroscopic terms are neglected, as in the paper.
+linear rods with consistent mass.
+
+Gyroscopic matrix (not in the paper, which neglects it)
+-------------------------------------------------------
+A section spinning at Omega about +z (signed) with small rotations (phi, psi) has the angular
+momentum ``rho I (phi' e_s + psi' e_t) + rho J Omega e_z'`` per unit length, its axis tilted to
+``e_z' = e_z + psi e_s - phi e_t``; its rate gives the moments ``rho J Omega psi'`` about s and
+``-rho J Omega phi'`` about t. On the element, with the section rotations interpolated as in M
+(``psi = N_r q_s`` in the (s, z) plane, ``phi = -N_r T q_t`` in the (t, z) plane,
+``T = diag(1, -1, 1, -1)``):
+
+    M Xdd + Omega G Xd + K X = F,   G = rho J int (N_phi^T N_psi - N_psi^T N_phi) dz
+
+skew-symmetric (:func:`timoshenko_gyroscopic`; Nelson & McVaugh (1976), "The dynamics of
+rotor-bearing systems using finite elements", J. Eng. Ind. 98(2), 593-600, for the
+Euler-Bernoulli element); a rigid disc's is ``I_p`` on (phi, psi)
+(:func:`disc_gyroscopic`). A forward whirl (the same sense as the spin) is stiffened by it,
+a backward one softened.
 
 Shear coefficient of the hollow circular section: Cowper (1966), "The shear coefficient in
 Timoshenko's beam theory", J. Appl. Mech. 33, 335-340, Table 1:
@@ -42,9 +59,13 @@ from gear_fmu.dofs import DOF_PER_NODE, PHI, PSI, THETA, U, V, W
 __all__ = [
     "HollowSection",
     "cowper_shear_coefficient",
+    "disc_gyroscopic",
     "disc_matrices",
+    "gyroscopic_coupling",
+    "planar_rotary",
     "planar_timoshenko",
     "timoshenko_element",
+    "timoshenko_gyroscopic",
 ]
 
 
@@ -213,6 +234,77 @@ def planar_timoshenko(
             k += wt * kga * np.outer(gam, gam)
         m += wt * (rho_a * np.outer(nw, nw) + rho_i * np.outer(nr, nr))
     return k, m
+
+
+def _shear_parameter(length: float, ei: float, kga: float) -> float:
+    """Phi = 12 E I / (kappa G A L^2) [-] (0 for the Euler-Bernoulli element, kga = inf)."""
+    if not (length > 0.0 and math.isfinite(length)):
+        raise ValueError(f"element length = {length!r} m must be finite and > 0")
+    return 0.0 if math.isinf(kga) else 12.0 * ei / (kga * length**2)
+
+
+def planar_rotary(length: float, ei: float, kga: float) -> np.ndarray:
+    """``int N_r^T N_r dz`` (4, 4) [m, m^2, m^3] of the planar element on (w1, r1, w2, r2): the
+    section rotation's consistent matrix (times rho I the rotary inertia of M, times rho J
+    Omega the gyroscopic coupling of the two planes; module docstring).
+
+    Parameters
+    ----------
+    length, ei, kga : float
+        As :func:`planar_timoshenko`.
+    """
+    phi_s = _shear_parameter(length, ei, kga)
+    r = np.zeros((4, 4))
+    for xg, wg in zip(_GAUSS_X, _GAUSS_W, strict=True):
+        _, _, nr, _ = _shape_functions(0.5 * (xg + 1.0), length, phi_s)
+        r += 0.5 * wg * length * np.outer(nr, nr)
+    return r
+
+
+def gyroscopic_coupling(rotary: np.ndarray, polar: float, nodes: int) -> np.ndarray:
+    """The skew gyroscopic matrix (6 nodes, 6 nodes) per unit spin from the rotations' matrix
+    ``rotary`` on (w1, r1, ...) of each plane and the polar inertia factor ``polar``
+    (module docstring): rows phi of the (t, z) plane against psi of the (s, z) plane."""
+    n = DOF_PER_NODE
+    s_idx = [i for node in range(nodes) for i in (n * node + U, n * node + PSI)]
+    t_idx = [i for node in range(nodes) for i in (n * node + V, n * node + PHI)]
+    t = np.diag([1.0, -1.0] * nodes)
+    g = np.zeros((n * nodes, n * nodes))
+    g[np.ix_(t_idx, s_idx)] = -polar * (t @ rotary)
+    g[np.ix_(s_idx, t_idx)] = polar * (rotary @ t)
+    return g
+
+
+def timoshenko_gyroscopic(section: HollowSection, length: float) -> np.ndarray:
+    """Gyroscopic matrix G (12, 12) per unit spin [kg m^2 ... ] of a 2-node shaft element:
+    ``Omega G Xd`` joins ``C Xd`` in Eq. (9) for a shaft spinning at Omega [rad/s] about +z
+    (module docstring). Skew-symmetric; DOF order as :func:`timoshenko_element`.
+
+    Parameters
+    ----------
+    section : HollowSection
+    length : float
+        Element length [m].
+    """
+    s = section
+    ei = s.young * s.second_moment
+    kga = s.shear_coefficient * s.shear_modulus * s.area
+    return gyroscopic_coupling(planar_rotary(length, ei, kga), s.density * s.polar_moment, 2)
+
+
+def disc_gyroscopic(polar_inertia: float) -> np.ndarray:
+    """Gyroscopic matrix (6, 6) per unit spin of a rigid disc on one node: ``G[phi, psi] =
+    I_p``, ``G[psi, phi] = -I_p`` (module docstring) [kg m^2].
+
+    Examples
+    --------
+    >>> g = disc_gyroscopic(2.0)
+    >>> g[3, 4], g[4, 3]
+    (np.float64(2.0), np.float64(-2.0))
+    """
+    if not (math.isfinite(polar_inertia) and polar_inertia >= 0.0):
+        raise ValueError(f"disc polar_inertia = {polar_inertia!r} kg m^2 must be finite and >= 0")
+    return gyroscopic_coupling(np.diag([0.0, 1.0]), polar_inertia, 1)
 
 
 def timoshenko_element(section: HollowSection, length: float) -> tuple[np.ndarray, np.ndarray]:

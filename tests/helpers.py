@@ -184,9 +184,11 @@ def monolithic_structure(st, bearing_law, meshes=None):
     """Full (reduced) M, C, K, load and nonlinear callback for the generic Newmark step: the
     structure ``st``'s train written out apart from its condensed step.
 
-    The load: the input torque and the unbalances of Eq. (10) (each body's force turning with
-    its shaft's signed speed). The nonlinear force: every mesh, evaluated at the structure's
-    kinematics (each mesh's driver angle at t) on its gear nodes' DOFs, and the bearings
+    C: the structure's damping, with the gyroscopic matrix at the shafts' signed speeds when
+    the structure has it. The load: the input torque and the unbalances of Eq. (10) (each
+    body's force turning with its shaft's signed speed). The nonlinear force: every mesh,
+    evaluated at the structure's kinematics (each mesh's driver angle at t) on its gear
+    nodes' DOFs, and the bearings
     ``bearing_law(j, x_j, v_j) -> (force, Kb, Cb)``. ``meshes``: the mesh elements (default:
     copies of the structure's, whose caches are then their own). Its ``active`` is the contact
     sets of all meshes, one after the other."""
@@ -200,12 +202,13 @@ def monolithic_structure(st, bearing_law, meshes=None):
     if sys_.load_dof is not None:
         raise ValueError("monolithic_structure: an output clamped (no load torque) only")
     red = sys_.reduced_index
-    m, c, k = (sys_.reduce(a) for a in (sys_.mass, st.damping_full, sys_.stiffness))
+    speeds = st.loads.input_speed * lay.ratios * lay.directions  # signed, per shaft
+    c = st.damping_full + (sys_.gyroscopic(speeds) if st.gyroscopic else 0.0)
+    m, c, k = (sys_.reduce(a) for a in (sys_.mass, c, sys_.stiffness))
     meshes = copy.deepcopy(st.meshes) if meshes is None else tuple(meshes)
     gears = [red[mesh_dofs(sys_, i)] for i in range(len(meshes))]
     brg = red[sys_.bearing_dofs]
     n = m.shape[0]
-    speeds = st.loads.input_speed * lay.ratios * lay.directions  # signed, per shaft
     bodies = [*zip(lay.gears, sys_.gear_nodes, strict=True),
               *zip(lay.discs, sys_.disc_nodes, strict=True)]
     unbalances = []

@@ -19,7 +19,11 @@ __all__ = ["Condensation", "CondensationSlots", "gauss_solve"]
 
 
 class Condensation:
-    """Static condensation of a constant symmetric matrix A (ordered [c; r]) onto c.
+    """Static condensation of a constant matrix A (ordered [c; r]) onto c.
+
+    A is symmetric positive definite without gyroscopic terms (Cholesky factors of A_rr);
+    with them (``symmetric=False``: the skew ``2/dt Omega G`` of :mod:`gear_fmu.timoshenko`
+    in ``c1 C``) A_rr is factored by LU and its two off-diagonal blocks are kept apart.
 
     Attributes
     ----------
@@ -28,21 +32,27 @@ class Condensation:
     s0 : (nc, nc) array
         Schur complement ``A_cc - A_cr W``.
     g : (nc + n_r, n_r) array
-        ``(-W^T; A_rr^-1)``: applied to ``b_r`` it gives the correction of the condensed
-        right-hand side and ``A_rr^-1 b_r``.
+        ``(-A_cr A_rr^-1; A_rr^-1)`` (``-W^T`` on top when A is symmetric): applied to ``b_r``
+        it gives the correction of the condensed right-hand side and ``A_rr^-1 b_r``.
     g_t, w_t : arrays
         ``g`` and ``w`` transposed, C-contiguous, as the compiled step's products take them
         (:func:`gear_fmu.step.assembly.matvec_t`).
     """
 
-    def __init__(self, a: np.ndarray, nc: int):
+    def __init__(self, a: np.ndarray, nc: int, symmetric: bool = True):
         acc, acr, arr = a[:nc, :nc], a[:nc, nc:], a[nc:, nc:]
-        cho = scipy.linalg.cho_factor(arr)
-        arr_inv = scipy.linalg.cho_solve(cho, np.eye(arr.shape[0]))
-        self.w = arr_inv @ acr.T  # A_rr^-1 A_rc
+        eye = np.eye(arr.shape[0])
+        if symmetric:
+            arr_inv = scipy.linalg.cho_solve(scipy.linalg.cho_factor(arr), eye)
+            self.w = arr_inv @ acr.T  # A_rr^-1 A_rc
+            left = self.w.T  # A_cr A_rr^-1
+        else:
+            arr_inv = scipy.linalg.lu_solve(scipy.linalg.lu_factor(arr), eye)
+            self.w = arr_inv @ a[nc:, :nc]
+            left = acr @ arr_inv
         self.s0 = acc - acr @ self.w
-        # rows: (-W^T, A_rr^-1) applied to b_r gives (z correction, y)
-        self.g = np.ascontiguousarray(np.vstack([-self.w.T, arr_inv]))
+        # rows: (-A_cr A_rr^-1, A_rr^-1) applied to b_r gives (z correction, y)
+        self.g = np.ascontiguousarray(np.vstack([-left, arr_inv]))
         self.g_t = np.ascontiguousarray(self.g.T)
         self.w_t = np.ascontiguousarray(self.w.T)
 
