@@ -13,7 +13,9 @@ The API (:mod:`orchestrator.api`), importable from ``orchestrator``:
   (:class:`orchestrator.run.result.Result`: channels with named dimensions, ``to_xarray()``),
   and ``read_result`` for a results file (:func:`orchestrator.api.read_result`);
 * ``sweep``: a parametric sweep on Dask (:func:`orchestrator.api.sweep`); ``modes``: the
-  linearised system at X0 (:func:`orchestrator.api.modes`);
+  linearised system at X0 (:func:`orchestrator.api.modes`); ``campbell``: the damped modes
+  over speed with their whirl, the critical speeds and the stability threshold, labelled
+  (:func:`orchestrator.api.campbell`);
 * ``Case``, ``CaseError`` (:mod:`fmu_src.case`), ``RunError``
   (:class:`orchestrator.run.spec.RunError`), ``RunInterrupted``
   (:class:`orchestrator.run.progress.RunInterrupted`).
@@ -34,7 +36,8 @@ _API = {
     "Case": "fmu_src.case", "CaseError": "fmu_src.case", "load_case": "fmu_src.case",
     "shipped_cases": "fmu_src.case", "simulate": "orchestrator.api",
     "read_result": "orchestrator.api", "sweep": "orchestrator.api",
-    "modes": "orchestrator.api", "Result": "orchestrator.run.result",
+    "modes": "orchestrator.api", "campbell": "orchestrator.api",
+    "Result": "orchestrator.run.result",
     "RunError": "orchestrator.run.spec", "RunInterrupted": "orchestrator.run.progress",
 }
 

@@ -8,8 +8,9 @@
 ``gsb.simulate(case, periods=64)`` runs it and returns a
 :class:`~orchestrator.run.result.Result`; ``result["journal_position"]`` is an array (time,
 bearing, axis) [m] and
-``result.to_xarray()`` the same labelled. :func:`sweep` runs a parametric sweep on Dask and
-:func:`modes` linearises a case about its static solution.
+``result.to_xarray()`` the same labelled. :func:`sweep` runs a parametric sweep on Dask,
+:func:`modes` linearises a case about its static solution and :func:`campbell` does it over
+speeds.
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ from fmu_src.case import Case, load_case
 from orchestrator.run.result import Result
 from orchestrator.run.spec import RunSpec
 
-__all__ = ["modes", "read_result", "simulate", "sweep"]
+__all__ = ["campbell", "modes", "read_result", "simulate", "sweep"]
 
 
 def _case(case) -> Case:
@@ -145,3 +146,38 @@ def modes(case, undamped: bool = True):
     from orchestrator.analysis.campbell import linearise
 
     return linearise(_case(case), undamped=undamped)
+
+
+def campbell(case, speeds, bearing_stiffness: float | None = None,
+             max_frequency: float = 6000.0):
+    """The Campbell diagram of a case as an :class:`xarray.Dataset` (speed x mode).
+
+    At every input speed its own static solution X0, the bearings linearised there and the
+    gyroscopic matrix at that speed (when the case has it, ``simulation.gyroscopic``), then
+    the damped modes (:func:`orchestrator.analysis.campbell.campbell_data`), labelled by
+    :func:`orchestrator.analysis.campbell.campbell_dataset`: ``frequency`` [Hz],
+    ``damping_ratio``, ``log_decrement``, ``whirl_direction`` per speed and mode (1-based),
+    the critical speeds along ``crossing`` and the attribute ``stability_threshold_rad_s``.
+
+    Parameters
+    ----------
+    case : Case or str or path
+    speeds : array_like
+        Input speeds [rad/s], increasing, > 0.
+    bearing_stiffness : float, optional
+        Isotropic bearings [N/m] without damping instead of the film at each X0.
+    max_frequency : float
+        Modes above 1.5 times this [Hz] are left out.
+    """
+    import numpy as np
+
+    from fmu_src.case import CaseError
+    from orchestrator.analysis.campbell import campbell_data, campbell_dataset
+
+    w = np.asarray(speeds, dtype=float).ravel()
+    if w.size < 2 or not np.all(np.isfinite(w)) or w[0] <= 0.0 or np.any(np.diff(w) <= 0.0):
+        raise CaseError(f"speeds {w.tolist()!r} rad/s: at least two, finite, > 0 and "
+                        "increasing")
+    case = _case(case)
+    return campbell_dataset(campbell_data(case, w, bearing_stiffness,
+                                          max_frequency=max_frequency))

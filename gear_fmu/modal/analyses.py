@@ -211,7 +211,8 @@ def modes(st, bearing_stiffness=1e8, n_gauss: int = 8, mesh_stiffness=None):
 def damped(st, kb, cb, mesh_stiffness=None, n_gauss: int = 8):
     """Damped modes of the linearised system about X0, Eq. (20) with C0 = C + Cb(X0).
 
-    M, the structure's damping ``st.damping_full`` (whatever built it), K_shaft, the mean mesh
+    M, the structure's damping ``st.damping_full`` (whatever built it) and gyroscopic matrix
+    ``st.gyroscopic_full`` (zero without), K_shaft, the mean mesh
     stiffnesses and the bearings' full 2x2 ``kb`` [N/m] and ``cb`` [N s/m] (nb, 2, 2) in the
     global frame (:func:`gear_fmu.modal.damped_modes.damped_modes`). ``mesh_stiffness``:
     (n_meshes, 12, 12) means already computed, else :func:`exact_mean_mesh_stiffness` with the
@@ -222,7 +223,8 @@ def damped(st, kb, cb, mesh_stiffness=None, n_gauss: int = 8):
     if mesh_stiffness is None:
         sym = kb if kb.ndim == 0 else 0.5 * (kb + np.swapaxes(kb, -1, -2))
         mesh_stiffness = exact_mean_mesh_stiffness(st, sym, n_gauss)
-    return damped_modes(st.system, st.damping_full, mesh_stiffness, kb, cb)
+    return damped_modes(st.system, st.damping_full, mesh_stiffness, kb, cb,
+                        st.gyroscopic_full)
 
 
 @one_blas_thread

@@ -175,8 +175,8 @@ def damped_eigen(m, c, k, k_mesh=None, dof_kind=None, zero_tol: float = 1e-6) ->
 
 
 @one_blas_thread
-def damped_modes(system: GearShaftSystem, damping_full, mesh_stiffness, kb, cb
-                 ) -> DampedModes:
+def damped_modes(system: GearShaftSystem, damping_full, mesh_stiffness, kb, cb,
+                 gyroscopic=None) -> DampedModes:
     """Damped modes of the gear-shaft system linearised about X0 (Eq. 20, module docstring).
 
     Parameters
@@ -191,6 +191,9 @@ def damped_modes(system: GearShaftSystem, damping_full, mesh_stiffness, kb, cb
         Bearings' stiffness at X0 [N/m], global frame, full 2x2.
     cb : float or (nb, 2, 2)
         Bearings' damping at X0 [N s/m], global frame, full 2x2.
+    gyroscopic : (n_dof, n_dof) array, optional
+        ``G(Omega)`` at the speed of the linearisation [N m s], added to C
+        (``Structure.gyroscopic_at``).
 
     Returns
     -------
@@ -200,6 +203,8 @@ def damped_modes(system: GearShaftSystem, damping_full, mesh_stiffness, kb, cb
     n = system.n_dof
     c_full = _square(damping_full, n, "damping matrix") + bearing_block_matrix(
         system, cb, "bearing damping")
+    if gyroscopic is not None:
+        c_full = c_full + _square(gyroscopic, n, "gyroscopic matrix")
     k_mesh = mesh_stiffness_matrix(system, mesh_stiffness)
     k_full = system.stiffness + k_mesh + bearing_block_matrix(system, kb, "bearing stiffness")
     found = damped_eigen(system.reduce(system.mass), system.reduce(c_full),
@@ -306,16 +311,21 @@ def tooth_critical_speeds(frequency_hz, damping_ratio, mesh_energy_fraction, z1,
     return rows
 
 
-def damped_mode_table(modes: DampedModes, n_modes: int | None = None) -> str:
-    """Text table: index, damped frequency [Hz], damping ratio, mesh energy share, type, and
-    a line on the modes left out."""
+def damped_mode_table(modes: DampedModes, n_modes: int | None = None,
+                      whirl: list[str] | None = None) -> str:
+    """Text table: index, damped frequency [Hz], damping ratio, mesh energy share, type, the
+    ``whirl`` direction of each mode if given (:func:`gear_fmu.modal.whirl.whirl`), and a
+    line on the modes left out."""
     total = modes.eigenvalues.size
     n = total if n_modes is None else min(n_modes, total)
-    lines = [f"{'mode':>4}  {'f_d [Hz]':>11}  {'zeta [-]':>8}  {'mesh [-]':>8}  type"]
+    lines = [f"{'mode':>4}  {'f_d [Hz]':>11}  {'zeta [-]':>8}  {'mesh [-]':>8}  "
+             + ("whirl     " if whirl is not None else "") + "type"]
     f, zeta, share = modes.frequency_hz, modes.damping_ratio, modes.mesh_energy_fraction
     for i in range(n):
         kind = modes.kinds[i] + (" (overdamped)" if modes.overdamped[i] else "")
-        lines.append(f"{i + 1:>4}  {f[i]:>11.2f}  {zeta[i]:>8.4f}  {share[i]:>8.3f}  {kind}")
+        spin = "" if whirl is None else f"{'-' if modes.overdamped[i] else whirl[i]:<8}  "
+        lines.append(f"{i + 1:>4}  {f[i]:>11.2f}  {zeta[i]:>8.4f}  {share[i]:>8.3f}  "
+                     f"{spin}{kind}")
     if n < total:
         rest = modes.overdamped[n:]
         lines.append(f"({total - n} more not listed, {int(rest.sum())} of them over-damped "

@@ -10,9 +10,11 @@ the structure builds the damping C the transient uses
   (:func:`gear_fmu.modal.analyses.exact_mean_mesh_stiffness`);
 * the undamped modes of K0 with the symmetric part of the bearings' Kb
   (:func:`gear_fmu.modal.analyses.modes`);
-* the damped modes of M, C0 = C + Cb(X0), K0 = K_shaft + K_mesh,mean + Kb(X0), the bearings'
-  Kb and Cb full 2x2 (:func:`gear_fmu.modal.damped_modes.damped_modes`), and the share of
-  each mode's strain energy in each mesh (:func:`mesh_shares`).
+* the damped modes of M, C0 = C + G(Omega) + Cb(X0), K0 = K_shaft + K_mesh,mean + Kb(X0),
+  the bearings' Kb and Cb full 2x2, the gyroscopic matrix at the speed when the case has it
+  (:func:`gear_fmu.modal.damped_modes.damped_modes`), the share of each mode's strain energy
+  in each mesh (:func:`mesh_shares`) and each mode's whirl direction
+  (:func:`gear_fmu.modal.whirl.whirl`).
 
 :func:`campbell_data` repeats it over input speeds (the bearings' equilibrium, Kb and Cb
 depend on the speed) on one structure (:class:`Linearisation`: what does not depend on the
@@ -22,7 +24,9 @@ driver's teeth, r the driver shaft's speed over the input speed omega) and every
 ``f = r omega / (2 pi)``, which :func:`orchestrator.figures.campbell.plot_campbell` draws.
 Modes are followed from one speed to the next by their shapes (largest modal assurance
 criterion ``|phi_a^H M phi_b|^2``, one-to-one); a crossing is interpolated linearly along
-such a segment.
+such a segment. :func:`gear_fmu.modal.whirl.stability_threshold` finds the lowest speed where
+a mode's damping turns negative, and :func:`campbell_dataset` labels it all (speed x mode) for
+xarray.
 """
 
 from __future__ import annotations
@@ -40,11 +44,12 @@ from fmu_src.case import Case
 from gear_fmu.modal.analyses import exact_mean_mesh_stiffness, line_of_action_stiffness, modes
 from gear_fmu.modal.damped_modes import MESH_MODE_FRACTION, DampedModes, damped_modes
 from gear_fmu.modal.modes import Modes, mesh_dofs
+from gear_fmu.modal.whirl import stability_threshold, whirl
 from orchestrator.coupling.master import CouplingError
 from orchestrator.coupling.system import announce_compilation, build_master
 
-__all__ = ["Linearisation", "Linearised", "campbell_data", "crossings", "linearise",
-           "mesh_shares", "order_lines"]
+__all__ = ["Linearisation", "Linearised", "campbell_data", "campbell_dataset", "crossings",
+           "linearise", "mesh_shares", "order_lines"]
 
 #: mesh harmonics drawn and searched, k = 1 .. HARMONICS
 HARMONICS = 4
@@ -113,6 +118,11 @@ class Linearised:
     damped : DampedModes
     mesh_shares : (n_modes, n_meshes) array
         Share of each damped mode's strain energy in each mesh (:func:`mesh_shares`).
+    whirl : (n_modes,) array
+        Each damped mode's signed whirl value [-] (+1 forward circles;
+        :func:`gear_fmu.modal.whirl.whirl`).
+    whirl_direction : list of str
+        ``"forward"``, ``"backward"`` or ``"mixed"`` per damped mode.
     lines : dict
         The train's excitation lines (:func:`order_lines`).
     """
@@ -129,6 +139,8 @@ class Linearised:
     modes: Modes | None
     damped: DampedModes
     mesh_shares: np.ndarray
+    whirl: np.ndarray
+    whirl_direction: list
     lines: dict
 
     @property
@@ -219,7 +231,9 @@ class Linearisation:
         k_mesh = exact_mean_mesh_stiffness(st, kb_ref, self.n_gauss)
         ref = st.reference_mesh_stiffness
         found = modes(st, kb_ref, mesh_stiffness=k_mesh) if undamped else None
-        damped = damped_modes(st.system, st.damping_full, k_mesh, kb, cb)
+        damped = damped_modes(st.system, st.damping_full, k_mesh, kb, cb,
+                              st.gyroscopic_at(case["drive.speed"]))
+        spin, direction = whirl(st.system, damped.shapes, st.layout.directions)
         meshes = range(len(st.meshes))
         return Linearised(
             case, source, kb, cb, k_mesh,
@@ -227,13 +241,14 @@ class Linearisation:
             None if ref is None else np.array([line_of_action_stiffness(st, ref, m)
                                                for m in meshes]),
             np.array([st.meshes[m].pair.contact_width for m in meshes]), st.system.mass,
-            found, damped, mesh_shares(st.system, damped, k_mesh), self.lines)
+            found, damped, mesh_shares(st.system, damped, k_mesh), spin, direction,
+            self.lines)
 
     def campbell(self, speeds, max_frequency: float = 6000.0) -> dict:
         """:func:`campbell_data` on this linearisation."""
         kept, per_speed, skipped = [], [], []
         mass = None
-        fixed = None  # isotropic bearings: the modes of every speed
+        fixed = None  # isotropic bearings without gyroscopic terms: the modes of every speed
         for w in np.asarray(speeds, dtype=float):
             if fixed is None:
                 try:
@@ -246,9 +261,11 @@ class Linearisation:
                 sel = (~d.overdamped) & (f <= 1.5 * max_frequency)
                 modes_w = {"frequency_hz": f[sel], "damping_ratio": d.damping_ratio[sel],
                            "mesh_energy_fraction": d.mesh_energy_fraction[sel],
-                           "mesh_shares": lin.mesh_shares[sel], "shapes": d.shapes[:, sel]}
+                           "mesh_shares": lin.mesh_shares[sel], "shapes": d.shapes[:, sel],
+                           "whirl": lin.whirl[sel],
+                           "whirl_direction": np.array(lin.whirl_direction)[sel]}
                 mass = lin.mass
-                if self.bearing_stiffness is not None:
+                if self.bearing_stiffness is not None and not self.structure.gyroscopic:
                     fixed = modes_w
             else:
                 modes_w = {key: v.copy() for key, v in fixed.items()}
@@ -258,6 +275,8 @@ class Linearisation:
                 "lines": self.lines, "skipped": skipped,
                 "max_frequency": float(max_frequency)}
         data["segments"] = _segments(data)
+        data["stability_threshold"] = stability_threshold(
+            data["speeds"], [m["damping_ratio"] for m in per_speed])
         return data
 
 
@@ -303,10 +322,13 @@ def campbell_data(case: Case, speeds, bearing_stiffness: float | None = None,
     dict
         ``speeds`` (kept speeds, rad/s), ``modes`` (per speed: dict of ``frequency_hz``,
         ``damping_ratio``, ``mesh_energy_fraction``, ``mesh_shares`` (per mesh),
-        ``shapes`` of the oscillating modes below the limit), ``mass``, ``lines`` (the
+        ``shapes``, ``whirl`` (signed value) and ``whirl_direction`` (forward, backward,
+        mixed) of the oscillating modes below the limit), ``mass``, ``lines`` (the
         train's excitation lines, :func:`order_lines`), ``skipped`` (list of (speed,
         message) where the static solution failed), ``segments`` (``(speed index a, mode at
-        a, mode at a + 1)``: the same mode at neighbouring speeds).
+        a, mode at a + 1)``: the same mode at neighbouring speeds), ``stability_threshold``
+        (the lowest speed [rad/s] where a mode's damping ratio turns negative, None if none,
+        :func:`gear_fmu.modal.whirl.stability_threshold`).
     """
     return Linearisation(case, bearing_stiffness, n_gauss).campbell(speeds, max_frequency)
 
@@ -374,3 +396,72 @@ def crossings(data: dict, harmonics: int = HARMONICS,
     out.sort(key=lambda c: (-1 if c["mesh"] is None else rank[c["mesh"]], c["harmonic"],
                             c["speed_rad_s"]))
     return out
+
+
+def campbell_dataset(data: dict, harmonics: int = HARMONICS,
+                     min_mesh_fraction: float = MESH_MODE_FRACTION):
+    """The Campbell diagram labelled (xarray): ``speed`` x ``mode`` and the critical speeds.
+
+    ``data`` from :func:`campbell_data`. Modes are numbered 1, 2, ... by frequency at each
+    speed (rows past a speed's count are NaN, ``""`` for the direction); follow a mode across
+    speeds by its shape with ``data["segments"]``.
+
+    Returns
+    -------
+    xarray.Dataset
+        Coordinates ``speed`` (input speed [rad/s]), ``speed_rpm``, ``mode`` (1-based),
+        ``mesh``; variables ``frequency`` [Hz] (damped), ``damping_ratio`` [-],
+        ``log_decrement`` [-] (``2 pi zeta / sqrt(1 - zeta^2)``), ``whirl`` [-] (signed, +1
+        forward circles), ``whirl_direction`` (forward, backward, mixed),
+        ``mesh_energy_fraction`` [-] and ``mesh_share`` (speed, mode, mesh) [-]; along
+        ``crossing`` the critical speeds (:func:`crossings`): ``critical_speed`` [rad/s],
+        ``critical_frequency`` [Hz], ``critical_line`` (the excitation) and
+        ``critical_damping_ratio``; attributes ``stability_threshold_rad_s`` (NaN when every
+        mode is damped over the speeds) and ``skipped_speeds_rad_s``.
+    """
+    import xarray as xr
+
+    w = np.asarray(data["speeds"], dtype=float)
+    meshes = list(data["lines"]["meshes"])
+    n = max((m["frequency_hz"].size for m in data["modes"]), default=0)
+
+    def table(key, fill=np.nan, dtype=float, extra=()):
+        out = np.full((w.size, n, *extra), fill, dtype=dtype)
+        for i, m in enumerate(data["modes"]):
+            out[i, :m[key].shape[0]] = m[key]
+        return out
+
+    zeta = table("damping_ratio")
+    with np.errstate(invalid="ignore"):
+        decrement = 2.0 * np.pi * zeta / np.sqrt(1.0 - zeta**2)
+    dims = ("speed", "mode")
+    cross = crossings(data, harmonics, min_mesh_fraction)
+    threshold = data.get("stability_threshold")
+    return xr.Dataset(
+        {"frequency": (dims, table("frequency_hz"), {"units": "Hz",
+                                                     "long_name": "damped natural frequency"}),
+         "damping_ratio": (dims, zeta, {"units": "1"}),
+         "log_decrement": (dims, decrement, {"units": "1"}),
+         "whirl": (dims, table("whirl"), {"units": "1", "long_name": "signed whirl (+1: "
+                                          "forward circles, -1: backward)"}),
+         "whirl_direction": (dims, table("whirl_direction", "", object)),
+         "mesh_energy_fraction": (dims, table("mesh_energy_fraction"), {"units": "1"}),
+         "mesh_share": ((*dims, "mesh"), table("mesh_shares", extra=(len(meshes),)),
+                        {"units": "1", "long_name": "share of the strain energy in the mesh"}),
+         "critical_speed": ("crossing", [c["speed_rad_s"] for c in cross], {"units": "rad/s"}),
+         "critical_frequency": ("crossing", [c["frequency_hz"] for c in cross],
+                                {"units": "Hz"}),
+         "critical_line": ("crossing", [_line_name(c) for c in cross]),
+         "critical_damping_ratio": ("crossing", [c["damping_ratio"] for c in cross],
+                                    {"units": "1"})},
+        coords={"speed": ("speed", w, {"units": "rad/s", "long_name": "input speed"}),
+                "speed_rpm": ("speed", w * 30.0 / math.pi, {"units": "rpm"}),
+                "mode": ("mode", np.arange(1, n + 1)),
+                "mesh": ("mesh", meshes)},
+        attrs={"stability_threshold_rad_s": np.nan if threshold is None else threshold,
+               "skipped_speeds_rad_s": [s for s, _ in data["skipped"]]})
+
+
+def _line_name(c: dict) -> str:
+    """The excitation line of a crossing: ``"1x <shaft>"`` or ``"<mesh> k=<harmonic>"``."""
+    return f"1x {c['shaft']}" if c["mesh"] is None else f"{c['mesh']} k={c['harmonic']}"

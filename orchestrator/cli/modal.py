@@ -71,6 +71,20 @@ def _modal_checks(args) -> tuple[float, float]:
     return low, high
 
 
+def _threshold_text(data: dict) -> str:
+    """The stability threshold of a Campbell diagram's data as a line."""
+    w, th = data["speeds"], data["stability_threshold"]
+    if th is None:
+        return (f"campbell: stable: every mode's damping ratio is positive at every speed "
+                f"{w[0]:g}-{w[-1]:g} rad/s")
+    if th == w[0]:
+        return (f"campbell: UNSTABLE from the lowest speed computed, {th:g} rad/s: a mode's "
+                "damping ratio is negative there")
+    return (f"campbell: stability threshold {th:.1f} rad/s ({th * 30 / math.pi:.0f} rpm): the "
+            "lowest speed where a mode's damping ratio turns negative (interpolated between "
+            "the speeds computed)")
+
+
 def _finite(x):
     """A float for JSON, None for NaN or inf."""
     x = float(x)
@@ -128,6 +142,7 @@ def modal(args) -> int:
                                                     min_mesh_fraction=args.mesh_fraction)),
                  "speeds_rad_s": data["speeds"].tolist(),
                  "crossings": campbell.crossings(data, min_mesh_fraction=args.mesh_fraction),
+                 "stability_threshold_rad_s": data["stability_threshold"],
                  "skipped": [{"speed_rad_s": w, "error": e} for w, e in data["skipped"]]}
     if args.json:
         out = {
@@ -148,10 +163,12 @@ def modal(args) -> int:
                  "mesh_energy_fraction": _finite(s),
                  "mesh_shares": {m: _finite(v) for m, v in zip(lines["meshes"], per,
                                                                 strict=True)},
-                 "kind": kd, "overdamped": bool(o)}
-                for i, (f, z, s, per, kd, o) in enumerate(zip(
+                 "kind": kd, "overdamped": bool(o), "whirl": None if o else wd}
+                for i, (f, z, s, per, kd, o, wd) in enumerate(zip(
                     dm.frequency_hz, dm.damping_ratio, dm.mesh_energy_fraction,
-                    lin.mesh_shares, dm.kinds, dm.overdamped, strict=True))],
+                    lin.mesh_shares, dm.kinds, dm.overdamped, lin.whirl_direction,
+                    strict=True))],
+            "gyroscopic": bool(case["simulation.gyroscopic"]),
             "critical_speeds": critical,
             "speed_range_rad_s": [low, high], "mesh_fraction": args.mesh_fraction,
             "campbell": chart}
@@ -168,10 +185,14 @@ def modal(args) -> int:
                                        f"{refs[m] / lin.contact_width[m] / 1e9:.3f} N/(mm um)")
         print(f"  {name}: {lin.mesh_stiffness_loa[m]:.5g} N/m = {per_width[m]:.3f} "
               f"N/(mm um) per unit width ({lin.contact_width[m] * 1e3:g} mm){ref}")
-    print("\ndamped modes (Eq. 20: M, C0 = C + Cb(X0), K0 = K_shaft + K_mesh,mean + Kb(X0)); "
-          "f_d = |Im lambda| / 2 pi, zeta = -Re lambda / |lambda|, mesh = strain energy share"
+    gyro = ("G(Omega) the gyroscopic matrix at the case's speed" if case["simulation.gyroscopic"]
+            else "no gyroscopic terms (simulation.gyroscopic = false)")
+    print("\ndamped modes (Eq. 20: M, C0 = C + G(Omega) + Cb(X0), K0 = K_shaft + K_mesh,mean + "
+          f"Kb(X0); {gyro}); f_d = |Im lambda| / 2 pi, zeta = -Re lambda / |lambda|, mesh = "
+          "strain energy share, whirl: forward with the shaft's spin, backward against it, "
+          "mixed (gear_fmu.modal.whirl)"
           + (f"; {dm.n_rigid // 2} rigid-body motion(s) left out" if dm.n_rigid else ""))
-    print(damped_mode_table(dm, args.modes))
+    print(damped_mode_table(dm, args.modes, lin.whirl_direction))
     excitation = "; ".join(
         f"{m}: z = {z}" + ("" if r == 1.0 else f", r = {r:.4g}")
         for m, z, r in zip(lines["meshes"], lines["teeth"], lines["ratios"], strict=True))
@@ -184,6 +205,7 @@ def modal(args) -> int:
     if chart is not None:
         for w, e in data["skipped"]:
             print(f"campbell: {w:g} rad/s skipped: {e}")
+        print(_threshold_text(data))
         print(f"\ncampbell: {chart['path']} ({len(chart['speeds_rad_s'])} speeds; the "
               f"crossings it marks follow each mode with the bearings linearised at every "
               f"speed, so they differ from the table above, whose modes are those at the "

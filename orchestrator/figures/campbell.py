@@ -17,13 +17,18 @@ from orchestrator.figures.base import pyplot
 
 __all__ = ["plot_campbell"]
 
+#: marker of each whirl direction (gear_fmu.modal.whirl)
+_WHIRL_MARKERS = {"forward": "^", "backward": "v", "mixed": "o", "none": "s"}
+
 
 def plot_campbell(data: dict, path, title: str, harmonics: int = HARMONICS,
                   min_mesh_fraction: float = MESH_MODE_FRACTION) -> Path:
     """Campbell diagram PNG (module docstring): damped frequencies [Hz] against the input
-    speed [rad/s] up to ``data["max_frequency"]``, coloured by damping ratio, marker area by
-    mesh energy share; each mesh's harmonics (a colour per mesh) and each shaft's 1x line;
-    crossings marked (:func:`orchestrator.analysis.campbell.crossings`)."""
+    speed [rad/s] up to ``data["max_frequency"]``, coloured by damping ratio, marker shape by
+    whirl direction (forward, backward, mixed, none), marker area by mesh energy share,
+    unstable modes edged red with the stability threshold drawn; each mesh's harmonics (a
+    colour per mesh) and each shaft's 1x line; crossings marked
+    (:func:`orchestrator.analysis.campbell.crossings`)."""
     from matplotlib.colors import LogNorm
 
     plt = pyplot()
@@ -68,11 +73,24 @@ def plot_campbell(data: dict, path, title: str, harmonics: int = HARMONICS,
     sc = None
     for wi, m in zip(w, data["modes"], strict=True):
         share = np.nan_to_num(m["mesh_energy_fraction"], nan=0.0).clip(0.0, 1.0)
-        sc = ax.scatter(np.full(m["frequency_hz"].size, wi), m["frequency_hz"],
-                        c=m["damping_ratio"].clip(0.01, 1.0), cmap="viridis_r", norm=norm,
-                        s=12 + 110 * share, edgecolors="k", linewidths=0.3, zorder=3)
+        zeta = m["damping_ratio"]
+        for direction, marker in _WHIRL_MARKERS.items():
+            on = m["whirl_direction"] == direction
+            if not on.any():
+                continue
+            sc = ax.scatter(np.full(int(on.sum()), wi), m["frequency_hz"][on],
+                            c=zeta[on].clip(0.01, 1.0), cmap="viridis_r", norm=norm,
+                            marker=marker, s=(16 + 110 * share[on]),
+                            edgecolors=np.where(zeta[on] < 0.0, "tab:red", "k"),
+                            linewidths=np.where(zeta[on] < 0.0, 1.8, 0.3), zorder=3)
     if sc is not None:
-        fig.colorbar(sc, ax=ax, label="damping ratio ζ [-]")
+        fig.colorbar(sc, ax=ax, label="damping ratio ζ [-] (ζ ≤ 0.01 and unstable ζ < 0 "
+                                      "at the light end)")
+    threshold = data.get("stability_threshold")
+    if threshold is not None:
+        ax.axvline(threshold, color="tab:red", lw=1.5,
+                   label=f"stability threshold {threshold:.0f} rad/s: a mode's ζ < 0 "
+                         "beyond (red edges)")
     cross = crossings(data, harmonics, min_mesh_fraction)
     mesh = [c for c in cross if c["harmonic"] > 0 and c["frequency_hz"] <= f_max]
     once = [c for c in cross if c["harmonic"] == 0 and c["frequency_hz"] <= f_max]
@@ -98,8 +116,12 @@ def plot_campbell(data: dict, path, title: str, harmonics: int = HARMONICS,
     ax.grid(True, alpha=0.3)
     ax.set_title(title, fontsize=11)
     handles, labels = ax.get_legend_handles_labels()
-    handles.append(plt.Line2D([], [], ls="none", marker="o", mfc="0.7", mec="k", ms=10))
-    labels.append("damped mode (marker area: mesh strain energy share)")
+    for direction, marker in _WHIRL_MARKERS.items():
+        handles.append(plt.Line2D([], [], ls="none", marker=marker, mfc="0.7", mec="k", ms=9))
+        labels.append({"none": "axial or torsional (no whirl)"}.get(direction,
+                                                                     f"{direction} whirl")
+                      + (" (marker area: mesh strain energy share)"
+                         if direction == "forward" else ""))
     fig.legend(handles, labels, loc="outside lower center", ncols=2, fontsize=9)
     fig.savefig(path, dpi=120)
     plt.close(fig)

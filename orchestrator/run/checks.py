@@ -232,7 +232,7 @@ def time_step_findings(case: Case, laws: AffineLaws, dt: float,
     if st is None:
         st = description.structure(case, damping_bearing_stiffness=sym)
     k_mesh = exact_mean_mesh_stiffness(st, sym)  # as gsb modal: the same modes
-    modes = damped_modes(st.system, st.damping_full, k_mesh, kb, cb)
+    modes = damped_modes(st.system, st.damping_full, k_mesh, kb, cb, st.gyroscopic_full)
     shares = mesh_shares(st.system, modes, k_mesh)
     meshes = description.layout(case).mesh_names
     steps = case["simulation.steps_per_mesh_period"]

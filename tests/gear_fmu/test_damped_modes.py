@@ -329,7 +329,7 @@ def test_gsb_modal_prints_the_three_tables(capsys):
     assert main(["modal", SPUR, "--bearing", "linear", "--modes", "14"]) == 0
     out = capsys.readouterr().out
     assert "N/(mm um)" in out and "16 equally spaced angles" in out
-    assert "f_d [Hz]  zeta [-]  mesh [-]  type" in out
+    assert "f_d [Hz]  zeta [-]  mesh [-]  whirl     type" in out
     assert "omega [rad/s]   N [rpm]" in out
     assert "torsion-bending" in out
 

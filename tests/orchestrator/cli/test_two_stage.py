@@ -182,7 +182,7 @@ def test_gsb_modal_prints_modes_and_critical_speeds_per_mesh(capsys):
     assert main(["modal", CASE, "--modes", "8"]) == 0
     text = capsys.readouterr().out
     assert "  stage1: " in text and "  stage2: " in text and "N/(mm um)" in text
-    assert "f_d [Hz]  zeta [-]  mesh [-]  type" in text
+    assert "f_d [Hz]  zeta [-]  mesh [-]  whirl     type" in text
     assert "mesh name" in text and "stage1: z = 23; stage2: z = 21, r = 0.2911" in text
     assert main(["modal", CASE, "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
