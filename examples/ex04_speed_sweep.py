@@ -4,6 +4,9 @@ Each point is a full coupled run (hybrid bearings, in-process) at another input 
 to the dynamic tooth load factor R and the peak-to-peak of the bearing forces over its last two
 pinion revolutions. ``scheduler="none"`` runs the points one after the other here; without it
 they go to a Dask LocalCluster (``orchestrator.sweeps.runner``), or to any cluster by address.
+The sweep's figures come back labelled (``res.to_xarray()``: one dimension per varied field and
+one for the bearing model); each point's decimated time series stay in its group of the file
+(``orchestrator.sweeps.file.read_sweep``).
 
 Run: ``python examples/ex04_speed_sweep.py``
 """
@@ -27,10 +30,13 @@ def main(speeds=SPEEDS, periods: int = 64, scheduler: str | None = "none",
         res = gsb.sweep(case, {"drive.speed": list(speeds)}, Path(tmp) / "sweep.h5",
                         periods, bearings=["hybrid"], steady_periods=52, scheduler=scheduler,
                         progress=False)
-        data = read_sweep(res.path)
-    return [{"speed_rad_s": w, "R": float(d["R"][0]), "force_ptp_N": d["force_ptp"],
-             "mean_mesh_force_N": float(d["mesh_force"].mean()), "error": d["error"]}
-            for w, d in zip(speeds, data, strict=True)]
+        ds = res.to_xarray().sel(bearing_model="hybrid")
+        series = read_sweep(res.path)
+    return [{"speed_rad_s": w, "R": float(ds.R.sel(drive_speed=w, mesh="mesh")),
+             "force_ptp_N": ds.force_ptp.sel(drive_speed=w).values,
+             "mean_mesh_force_N": float(d["mesh_force"].mean()),
+             "error": str(ds.error.sel(drive_speed=w).item())}
+            for w, d in zip(speeds, series, strict=True)]
 
 
 if __name__ == "__main__":

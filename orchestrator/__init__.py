@@ -12,13 +12,16 @@ The API (:mod:`orchestrator.api`), importable from ``orchestrator``:
 * ``simulate``: a run kept in memory (:func:`orchestrator.api.simulate`), its ``Result``
   (:class:`orchestrator.run.result.Result`: channels with named dimensions, ``to_xarray()``),
   and ``read_result`` for a results file (:func:`orchestrator.api.read_result`);
-* ``sweep``: a parametric sweep on Dask (:func:`orchestrator.api.sweep`); ``modes``: the
+* ``sweep``: a parametric sweep on Dask (:func:`orchestrator.api.sweep`), ``read_sweep``
+  its file as an xarray Dataset (:func:`orchestrator.api.read_sweep`); ``modes``: the
   linearised system at X0 (:func:`orchestrator.api.modes`); ``campbell``: the damped modes
   over speed with their whirl, the critical speeds and the stability threshold, labelled
   (:func:`orchestrator.api.campbell`);
 * ``Case``, ``CaseError`` (:mod:`fmu_src.case`), ``RunError``
   (:class:`orchestrator.run.spec.RunError`), ``RunInterrupted``
-  (:class:`orchestrator.run.progress.RunInterrupted`).
+  (:class:`orchestrator.run.progress.RunInterrupted`); the warnings a run gives once, as
+  Python warnings: ``RunWarning`` and its kinds ``TimeStepWarning``, ``OverloadWarning``
+  (:mod:`orchestrator.run.checks`).
 
 Subpackages, one concern each: :mod:`~orchestrator.coupling` (the master, in-process and FMI
 transports), :mod:`~orchestrator.run` (a run's life cycle, results files),
@@ -35,10 +38,13 @@ import importlib
 _API = {
     "Case": "fmu_src.case", "CaseError": "fmu_src.case", "load_case": "fmu_src.case",
     "shipped_cases": "fmu_src.case", "simulate": "orchestrator.api",
-    "read_result": "orchestrator.api", "sweep": "orchestrator.api",
+    "read_result": "orchestrator.api", "read_sweep": "orchestrator.api",
+    "sweep": "orchestrator.api",
     "modes": "orchestrator.api", "campbell": "orchestrator.api",
     "Result": "orchestrator.run.result",
     "RunError": "orchestrator.run.spec", "RunInterrupted": "orchestrator.run.progress",
+    "RunWarning": "orchestrator.run.checks", "TimeStepWarning": "orchestrator.run.checks",
+    "OverloadWarning": "orchestrator.run.checks",
 }
 
 __all__ = sorted(_API)

@@ -15,33 +15,74 @@ speeds.
 
 from __future__ import annotations
 
+import contextlib
 import itertools
+import logging
+import math
+import sys
 from pathlib import Path
 
 from fmu_src.case import Case, load_case
 from orchestrator.run.result import Result
 from orchestrator.run.spec import RunSpec
 
-__all__ = ["campbell", "modes", "read_result", "simulate", "sweep"]
+__all__ = ["campbell", "modes", "read_result", "read_sweep", "simulate", "sweep"]
+
+
+@contextlib.contextmanager
+def _startup_shown(show: bool):
+    """Print the ``gsb.startup`` log (the FMU build, the native layer, numba's compilation:
+    what makes a first call slow) on stderr during the call, as the command line does, unless
+    ``show`` is False or the caller's logging already takes it."""
+    log = logging.getLogger("gsb.startup")
+    if not show or log.handlers or (log.propagate and logging.getLogger().handlers):
+        yield
+        return
+    handler = logging.StreamHandler(sys.stderr)
+    handler.setFormatter(logging.Formatter("gsb: %(message)s"))
+    level, log.level = log.level, logging.INFO
+    log.addHandler(handler)
+    try:
+        yield
+    finally:
+        log.removeHandler(handler)
+        log.setLevel(level)
 
 
 def _case(case) -> Case:
     return case if isinstance(case, Case) else load_case(case)
 
 
-def _with(case: Case, periods: int | None, bearing: str | None) -> Case:
-    """``periods`` and ``bearing`` as the case fields they are (``simulation.mesh_periods``,
-    ``bearings.*.model``: every bearing), through the case's one override path and its
-    checks."""
-    fields = {}
-    if periods is not None:
-        fields["simulation.mesh_periods"] = periods
+def _with(case: Case, periods: int | None = None, bearing: str | None = None,
+          fields: dict | None = None, seconds: float | None = None) -> Case:
+    """The case with the call's settings as the case fields they are: ``fields`` (any field,
+    as ``--set``), ``bearing`` (``bearings.*.model``: every bearing), ``periods``
+    (``simulation.mesh_periods``) or ``seconds`` (the whole mesh periods of the fastest mesh
+    that cover that time [s], at the case's speed after the overrides), through the case's
+    one override path and its checks (CaseError naming the field and the limit)."""
+    from fmu_src.case import CaseError
+
+    fields = dict(fields or {})
     if bearing is not None:
         fields["bearings.*.model"] = bearing
-    return case.with_overrides(fields) if fields else case
+    case = case.with_overrides(fields) if fields else case
+    if periods is not None and seconds is not None:
+        raise CaseError(f"periods = {periods!r} and seconds = {seconds!r}: give one run length")
+    if seconds is not None:
+        from fmu_src.description import mesh_period
+
+        if isinstance(seconds, bool) or not isinstance(seconds, (int, float)) \
+                or not math.isfinite(seconds) or seconds <= 0.0:
+            raise CaseError(f"seconds = {seconds!r}: the run length must be a finite time > 0 s")
+        periods = max(1, math.ceil(seconds / mesh_period(case) - 1e-9))
+    if periods is not None:
+        case = case.with_overrides({"simulation.mesh_periods": periods})
+    return case
 
 
 def simulate(case, periods: int | None = None, bearing: str | None = None, *,
+             seconds: float | None = None, speed=None, torque=None, unbalance=None,
+             overrides: dict | None = None,
              in_process: bool = False, steps: int | None = None,
              results_dir: str | Path | None = None, fmu_dir: str | Path | None = None,
              progress: bool = True, threads: int = 1) -> Result:
@@ -52,10 +93,18 @@ def simulate(case, periods: int | None = None, bearing: str | None = None, *,
     case : Case or str or path
         A case (:func:`fmu_src.case.load_case`), the name of a shipped case or a case file.
     periods : int, optional
-        Mesh periods to simulate (the case's ``simulation.mesh_periods``).
+        Mesh periods of the fastest mesh to simulate (the case's ``simulation.mesh_periods``).
     bearing : str, optional
         Bearing model of every bearing (the case's ``bearings.*.model``: ``hybrid``,
         ``short``, ``fd``, ``linear``, ``lumped``).
+    seconds : float, optional
+        Run length [s] instead of ``periods``: the whole mesh periods that cover it.
+    speed, torque, unbalance : float or str, optional
+        The input speed (``drive.speed``), input torque (``drive.torque``) and the unbalance
+        eccentricity of every gear (``gears.*.unbalance``): SI numbers or strings with units
+        (``"3000 rpm"``), as ``gsb run --speed --torque --unbalance``.
+    overrides : dict, optional
+        Any case field, ``{"bearings.3.clearance": "120 um"}`` (``gsb run --set``).
     in_process : bool
         Drive the physics objects directly instead of the FMUs (same numbers, bit for bit).
     steps : int, optional
@@ -67,7 +116,8 @@ def simulate(case, periods: int | None = None, bearing: str | None = None, *,
     fmu_dir : path, optional
         Folder of the built FMUs (default: the per-user cache, built there if missing).
     progress : bool
-        A progress line on stderr.
+        A progress line on stderr, and what a first call builds or compiles (the FMUs, the
+        numba kernels: a minute once per code version), as ``gsb run`` says it.
     threads : int
         In-process: how many threads share the hybrid bearings (the same numbers, bit for
         bit; faster with a core to spare, which each thread keeps busy while the run lasts).
@@ -90,12 +140,15 @@ def simulate(case, periods: int | None = None, bearing: str | None = None, *,
     """
     from orchestrator.run.runner import run_case, simulate_case
 
-    case = _with(_case(case), periods, bearing)
-    if results_dir is None:
-        return simulate_case(RunSpec.of(case, in_process, None, fmu_dir, steps, threads),
-                             progress=progress)
-    summary = run_case(case, in_process=in_process, out_dir=results_dir, fmu_dir=fmu_dir,
-                       progress=progress, steps=steps, threads=threads)
+    named = {"drive.speed": speed, "drive.torque": torque, "gears.*.unbalance": unbalance}
+    fields = dict(overrides or {}) | {k: v for k, v in named.items() if v is not None}
+    case = _with(_case(case), periods, bearing, fields, seconds)
+    with _startup_shown(progress):
+        if results_dir is None:
+            return simulate_case(RunSpec.of(case, in_process, None, fmu_dir, steps, threads),
+                                 progress=progress)
+        summary = run_case(case, in_process=in_process, out_dir=results_dir, fmu_dir=fmu_dir,
+                           progress=progress, steps=steps, threads=threads)
     result = Result.from_file(summary.results)
     result.summary = summary
     return result
@@ -116,21 +169,49 @@ def read_result(path: str | Path) -> Result:
         raise ValueError(f"{path}: not a readable results file ({exc})") from None
     if kind != "run":
         raise ValueError(f"{path}: not the results file of a run (kind {kind!r}); a sweep's "
-                         "file is read with orchestrator.sweeps.file.read_sweep")
+                         "file is read with read_sweep")
     return Result.from_file(path)
+
+
+def read_sweep(path: str | Path):
+    """A sweep file (:func:`sweep`'s or ``gsb sweep``'s, also while it runs) as an
+    :class:`xarray.Dataset`: the varied fields and the bearing models as dimensions, the
+    points' figures (R, peak-to-peaks, orbit centres, ...) as variables, NaN and an ``error``
+    where a point failed (:func:`orchestrator.sweeps.file.sweep_dataset`). FileNotFoundError or
+    ValueError naming the file when it is missing or not a sweep's."""
+    from orchestrator.run.results import read_attributes
+    from orchestrator.sweeps.file import sweep_dataset
+
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"{path}: no such sweep file")
+    try:
+        kind = read_attributes(path).get("kind")
+    except OSError as exc:
+        raise ValueError(f"{path}: not a readable sweep file ({exc})") from None
+    if kind != "sweep":
+        raise ValueError(f"{path}: not a sweep's file (kind {kind!r}); a run's file is read "
+                         "with read_result")
+    return sweep_dataset(path)
 
 
 def sweep(case, vary: dict, path: str | Path, periods: int, bearings=None,
           steady_periods: int = 26, scheduler: str | None = None, n_workers: int = 2,
-          progress: bool = True):
+          progress: bool = True, overwrite: bool = False):
     """Every combination of the values in ``vary`` (``{"drive.speed": [300, 325, 350],
     ...}``, values as in a case file) and of ``bearings`` (default: the case's model), each an
     in-process run of ``periods`` mesh periods on Dask (``scheduler``: a cluster's address;
     default: ``n_workers`` local processes), written to the sweep file ``path`` as the points
-    complete. Returns :class:`orchestrator.sweeps.runner.SweepResult`; ``gsb plot path`` draws
-    its figures."""
+    complete. An existing ``path`` is a RunError unless ``overwrite``. Returns
+    :class:`orchestrator.sweeps.runner.SweepResult` (``.to_xarray()``: the varied fields and
+    the bearing models as dimensions, :func:`read_sweep`); ``gsb plot path`` draws its
+    figures."""
+    from orchestrator.run.spec import RunError
     from orchestrator.sweeps.runner import SweepPoint, run_sweep
 
+    if Path(path).exists() and not overwrite:
+        raise RunError(f"{path} exists: a sweep never replaces a file silently; "
+                       "overwrite=True replaces it, read_sweep(path) reads it")
     keys = list(vary)
     models = [None] if bearings is None else list(bearings)
     points = [SweepPoint(dict(zip(keys, values, strict=True)), model)
@@ -139,17 +220,19 @@ def sweep(case, vary: dict, path: str | Path, periods: int, bearings=None,
                      n_workers, progress, vary_keys=keys)
 
 
-def modes(case, undamped: bool = True):
+def modes(case, undamped: bool = True, progress: bool = True):
     """The case linearised about its static solution X0: bearing Kb, Cb, the mean mesh
-    stiffness, the damped (and undamped) modes
-    (:class:`orchestrator.analysis.campbell.Linearised`)."""
+    stiffness, the damped (and undamped) modes with their whirl
+    (:class:`orchestrator.analysis.campbell.Linearised`; modes numbered from 1 where printed:
+    ``damped.frequency_hz[0]`` is mode 1). ``progress``: say what a first call compiles."""
     from orchestrator.analysis.campbell import linearise
 
-    return linearise(_case(case), undamped=undamped)
+    with _startup_shown(progress):
+        return linearise(_case(case), undamped=undamped)
 
 
 def campbell(case, speeds, bearing_stiffness: float | None = None,
-             max_frequency: float = 6000.0):
+             max_frequency: float = 6000.0, progress: bool = True):
     """The Campbell diagram of a case as an :class:`xarray.Dataset` (speed x mode).
 
     At every input speed its own static solution X0, the bearings linearised there and the
@@ -168,6 +251,8 @@ def campbell(case, speeds, bearing_stiffness: float | None = None,
         Isotropic bearings [N/m] without damping instead of the film at each X0.
     max_frequency : float
         Modes above 1.5 times this [Hz] are left out.
+    progress : bool
+        Say what a first call compiles (numba's kernels, once per code version).
     """
     import numpy as np
 
@@ -178,6 +263,6 @@ def campbell(case, speeds, bearing_stiffness: float | None = None,
     if w.size < 2 or not np.all(np.isfinite(w)) or w[0] <= 0.0 or np.any(np.diff(w) <= 0.0):
         raise CaseError(f"speeds {w.tolist()!r} rad/s: at least two, finite, > 0 and "
                         "increasing")
-    case = _case(case)
-    return campbell_dataset(campbell_data(case, w, bearing_stiffness,
-                                          max_frequency=max_frequency))
+    with _startup_shown(progress):
+        return campbell_dataset(campbell_data(_case(case), w, bearing_stiffness,
+                                              max_frequency=max_frequency))

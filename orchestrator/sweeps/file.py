@@ -33,8 +33,8 @@ from fmu_src.case import INSTANCE_SECTIONS, Case, CaseError, field_of
 from fmu_src.units import DIMENSIONS, symbol
 from orchestrator.analysis.spectrum import PAD
 
-__all__ = ["DATASETS", "field_unit", "finish", "point_values", "read_sweep", "read_sweep_attrs",
-           "store_point", "write_header"]
+__all__ = ["DATASETS", "GRIDDED", "field_unit", "finish", "point_values", "read_sweep",
+           "read_sweep_attrs", "store_point", "sweep_dataset", "write_header"]
 
 
 #: Datasets of a successful point: name -> (unit, description).
@@ -238,3 +238,76 @@ def read_sweep_attrs(path) -> dict:
             value = value.item()
         out[key] = value
     return out
+
+
+#: the point datasets a sweep's xarray dataset carries, with the dimensions of one point's
+#: (the decimated time series and the spectra, whose lengths change from point to point, stay
+#: in the points' groups: :func:`read_sweep`)
+GRIDDED = {"R": ("mesh",), "transmission_error_ptp": ("mesh",), "force_ptp": ("bearing",),
+           "force_mean": ("bearing",), "orbit_centre": ("bearing", "axis"),
+           "orbit_mean": ("bearing", "axis"), "static_journal": ("bearing", "axis"),
+           "wall_time": (), "iterations_per_step": ()}
+
+
+def _dim(key: str) -> str:
+    """A case key as a dimension name (``drive.speed`` -> ``drive_speed``, ``gears.*.unbalance``
+    -> ``gears_unbalance``)."""
+    return key.replace(".*.", ".").replace(".", "_")
+
+
+def sweep_dataset(path):
+    """A sweep file as an :class:`xarray.Dataset` over its varied fields and bearing models.
+
+    Dimensions: one per varied field (named after its key, ``drive.speed`` -> ``drive_speed``,
+    its sorted SI values as coordinate with their ``unit``), then ``bearing_model``, ``mesh``,
+    ``bearing`` (the bearings' names) and ``axis`` (s, t). When the points are not a full grid
+    of those values, one dimension ``point`` instead, the varied values as coordinates along it.
+    Variables: each dataset of :data:`GRIDDED` (unit and description from :data:`DATASETS`),
+    ``error`` (the message of a failed point, ``""`` otherwise) and ``ok``; NaN where a point
+    failed. Attributes: the file's root attributes (:func:`read_sweep_attrs`).
+    """
+    import xarray as xr
+
+    attrs = read_sweep_attrs(path)
+    points = read_sweep(path)
+    keys = list(attrs.get("vary_keys", []))
+    units = list(attrs.get("vary_units", [""] * len(keys)))
+    models = list(dict.fromkeys(p["bearing"] for p in points))
+    sizes = {"mesh": len(attrs["mesh_names"]), "bearing": len(attrs["bearing_names"]),
+             "axis": 2}
+    values = [sorted({float(p["values"][i]) for p in points}) for i in range(len(keys))]
+    grid = [len(v) for v in values] + [len(models)]
+    where = [(*(values[i].index(float(p["values"][i])) for i in range(len(keys))),
+              models.index(p["bearing"])) for p in points]
+    gridded = len(set(where)) == len(points) == int(np.prod(grid))
+    if gridded:
+        outer = [*(_dim(k) for k in keys), "bearing_model"]
+        index = where
+    else:
+        outer, grid, index = ["point"], [len(points)], [(i,) for i in range(len(points))]
+    data = {}
+    for name, inner in GRIDDED.items():
+        arr = np.full((*grid, *(sizes[d] for d in inner)), np.nan)
+        for at, p in zip(index, points, strict=True):
+            if name in p:
+                arr[at] = p[name]
+        unit, doc = DATASETS[name]
+        data[name] = ((*outer, *inner), arr, {"units": unit, "description": doc})
+    error = np.full(grid, "", dtype=object)
+    for at, p in zip(index, points, strict=True):
+        error[at] = p["error"] or ""
+    data["error"] = (tuple(outer), error, {"description": "why the point failed (\"\": it "
+                                                          "succeeded)"})
+    data["ok"] = (tuple(outer), error == "")
+    coords = {"mesh": list(attrs["mesh_names"]), "bearing": list(attrs["bearing_names"]),
+              "axis": ["s", "t"]}
+    if gridded:
+        for key, unit, vals in zip(keys, units, values, strict=True):
+            coords[_dim(key)] = (_dim(key), vals, {"units": unit, "case_key": key})
+        coords["bearing_model"] = models
+    else:
+        for i, (key, unit) in enumerate(zip(keys, units, strict=True)):
+            coords[_dim(key)] = ("point", [float(p["values"][i]) for p in points],
+                                 {"units": unit, "case_key": key})
+        coords["bearing_model"] = ("point", [p["bearing"] for p in points])
+    return xr.Dataset(data, coords=coords, attrs=attrs)

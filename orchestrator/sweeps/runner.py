@@ -84,6 +84,11 @@ class SweepResult:
     def complete(self) -> bool:
         return not self.failed
 
+    def to_xarray(self):
+        """The sweep file as an :class:`xarray.Dataset` over the varied fields and the bearing
+        models (:func:`orchestrator.sweeps.file.sweep_dataset`)."""
+        return sweep_file.sweep_dataset(self.path)
+
 
 def as_case(case) -> Case:
     """A :class:`~fmu_src.case.Case`: itself, parsed from TOML text (a string with a line

@@ -65,6 +65,18 @@ def test_sweep_gathers_points_and_reports_a_failed_one(scheduler, tmp_path):
         assert d["R"] > 1.0 and d["force_ptp"].shape == (4,)
         assert d["orbit"].shape[1:] == (4, 2)
         assert d["spectrum"].shape == (4, d["spectrum_orders"].size)
+    # labelled: the varied field and the bearing model as dimensions, the failed point NaN
+    ds = res.to_xarray()
+    assert ds.R.dims == ("drive_speed", "bearing_model", "mesh")
+    assert ds.drive_speed.values.tolist() == [-5.0, 200.0, 400.0]
+    assert ds.drive_speed.attrs["units"] == "rad/s"
+    assert ds.bearing_model.values.tolist() == ["linear"]
+    at = ds.sel(bearing_model="linear")
+    assert at.R.sel(drive_speed=200.0).values.tolist() == data[0]["R"].tolist()
+    assert at.force_ptp.sel(drive_speed=400.0).values.tolist() == data[2]["force_ptp"].tolist()
+    assert np.isnan(at.R.sel(drive_speed=-5.0)).all() and not at.ok.sel(drive_speed=-5.0)
+    assert "drive.speed" in at.error.sel(drive_speed=-5.0).item()
+    assert at.force_ptp.dims == ("drive_speed", "bearing") and ds.bearing.size == 4
 
 
 def test_a_point_whose_journal_touched_its_bearing_is_told_apart_from_a_solver_failure():
@@ -118,3 +130,41 @@ def test_a_sweep_from_an_unguarded_script_stops_at_once_with_one_line(tmp_path):
                            "Dask cluster starts worker processes"), last
     assert '`if __name__ == "__main__":`' in last and 'scheduler="none"' in last
     assert not (tmp_path / "sweep.h5").exists()
+
+
+def test_a_sweep_that_is_not_a_grid_is_labelled_by_point(tmp_path):
+    """Points that do not fill the product of their values (a run_sweep of chosen points):
+    one dimension ``point``, the varied values and the model as coordinates along it."""
+    from fmu_src.case import load_case
+    from orchestrator.sweeps import file as sweep_file
+
+    case = load_case(SPUR)
+    path = tmp_path / "s.h5"
+    keys = ["drive.speed", "drive.torque"]
+    sweep_file.write_header(path, case, keys, ["linear"], 4, 2, 2)
+    points = [SweepPoint({"drive.speed": 200.0, "drive.torque": 100.0}, "linear"),
+              SweepPoint({"drive.speed": 300.0, "drive.torque": 150.0}, "linear")]
+    for i, pt in enumerate(points):
+        data = {"R": np.array([1.0 + i]), "force_ptp": np.full(4, 10.0 * i)}
+        sweep_file.store_point(path, i, pt, case, keys, {"ok": True, "data": data}, 0)
+    ds = sweep_file.sweep_dataset(path)
+    assert ds.R.dims == ("point", "mesh")
+    assert ds.drive_speed.values.tolist() == [200.0, 300.0]
+    assert ds.drive_torque.values.tolist() == [100.0, 150.0]
+    assert ds.R.values.ravel().tolist() == [1.0, 2.0]
+    assert np.isnan(ds.orbit_centre).all()  # not stored: NaN, not an error
+
+
+def test_the_api_never_overwrites_a_sweep_file_silently(tmp_path):
+    import orchestrator as gsb
+    from orchestrator.run.spec import RunError
+
+    path = tmp_path / "s.h5"
+    path.write_text("a file of the user's")
+    with pytest.raises(RunError, match="exists: a sweep never replaces a file silently"):
+        gsb.sweep(SPUR, {"drive.speed": [200.0]}, path, periods=4, scheduler="none")
+    assert path.read_text() == "a file of the user's"
+    with pytest.raises(ValueError, match="not a readable sweep file"):
+        gsb.read_sweep(path)
+    with pytest.raises(FileNotFoundError, match="no such sweep file"):
+        gsb.read_sweep(tmp_path / "none.h5")
