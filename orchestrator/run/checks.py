@@ -31,10 +31,26 @@ from gear_fmu.modal.analyses import exact_mean_mesh_stiffness
 from gear_fmu.modal.damped_modes import damped_modes, under_resolved
 from orchestrator.analysis.campbell import mesh_shares
 
-__all__ = ["EPS_LIMIT", "FIRST_GUESS_EPS", "PERIOD_ERROR_LIMIT", "film_capacities",
-           "newmark_period_error", "newmark_resonance_response", "overload_message",
-           "reference_step", "shaft_unbalance",
-           "steps_for_period_error", "time_step_findings", "unbalance_warnings"]
+__all__ = ["EPS_LIMIT", "FIRST_GUESS_EPS", "PERIOD_ERROR_LIMIT", "OverloadWarning",
+           "RunWarning", "TimeStepWarning", "film_capacities", "newmark_period_error",
+           "newmark_resonance_response", "overload_message", "reference_step",
+           "shaft_unbalance", "steps_for_period_error", "time_step_findings",
+           "unbalance_warnings"]
+
+
+class RunWarning(UserWarning):
+    """What a run finds about its inputs after the static solution and says once (the run
+    goes on; the text is also kept in the results file's ``warnings``)."""
+
+
+class TimeStepWarning(RunWarning):
+    """The time step resolves a mode with the mesh's strain energy too coarsely
+    (:func:`time_step_findings`)."""
+
+
+class OverloadWarning(RunWarning):
+    """A shaft's unbalance force exceeds its bearings' static load capacity
+    (:func:`unbalance_warnings`)."""
 
 #: eccentricity ratio up to which the static solution searches (bearing_fmu.static)
 EPS_LIMIT = 0.995

@@ -50,6 +50,7 @@ import shlex
 import signal
 import sys
 import time
+import warnings as python_warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -65,6 +66,8 @@ from orchestrator.run import files as run_files
 from orchestrator.run.channels import channels, coordinates, dims
 from orchestrator.run.checks import (
     FIRST_GUESS_EPS,
+    OverloadWarning,
+    TimeStepWarning,
     overload_message,
     shaft_unbalance,
     time_step_findings,
@@ -346,13 +349,16 @@ class Runner:
         # solve its static problem again for outputs read after the final laws were set
         mesh_force, te, gear_node = structure.step_outputs()
         try:
-            warnings, notes = time_step_findings(case, master.laws, self.spec.dt,
-                                                 structure.physics)
+            steps, notes = time_step_findings(case, master.laws, self.spec.dt,
+                                              structure.physics)
         except (ValueError, np.linalg.LinAlgError) as exc:  # a check, not the run
-            warnings, notes = [f"the time-step check could not run: {exc}"], []
-        warnings = unbalance_warnings(case) + warnings
-        for text in warnings if self.echo else ():
-            print(f"warning: {text}", file=sys.stderr, flush=True)
+            steps, notes = [f"the time-step check could not run: {exc}"], []
+        overloads = unbalance_warnings(case)
+        warnings = overloads + steps
+        if self.echo:  # Python warnings: the command line prints each as one line
+            for texts, category in ((overloads, OverloadWarning), (steps, TimeStepWarning)):
+                for text in texts:
+                    python_warnings.warn(text, category, stacklevel=2)
         return Static(static, x0, mesh_force, te, np.array(gear_node, dtype=float), warnings,
                       time.perf_counter() - t0, notes)
 

@@ -42,7 +42,8 @@ def test_a_coarser_step_warns_with_the_period_error(tmp_path):
                "--quiet", "--out", tmp_path, "--set", "simulation.steps_per_mesh_period=16",
                cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr
-    warnings = [line for line in proc.stderr.splitlines() if line.startswith("warning: ")]
+    warnings = [line for line in proc.stderr.splitlines()
+                if line.startswith("gsb run: warning: ")]
     assert len(warnings) == 2, proc.stderr
     assert "4366 Hz" in warnings[1] and "lengthens its period by 12.3 %" in warnings[1]
     assert "steps_per_mesh_period >= 59 (now 16)" in warnings[1]
