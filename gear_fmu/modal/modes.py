@@ -114,14 +114,14 @@ class Modes:
     shapes : (n_dof, n) full mode shapes, mass-normalised (zero on the clamped DOF)
     kinetic_fraction : (n, 3) share of the modal kinetic energy in bending / torsion / axial DOFs
         (exact partition: M has no coupling between DOF kinds)
-    mesh_strain_fraction : (n,) share of the strain energy stored in the mesh
+    mesh_energy_fraction : (n,) share of the strain energy stored in the mesh
     kinds : list of str, type of each mode (see :func:`classify`)
     """
 
     omega: np.ndarray
     shapes: np.ndarray
     kinetic_fraction: np.ndarray
-    mesh_strain_fraction: np.ndarray
+    mesh_energy_fraction: np.ndarray
     kinds: list
 
     @property
@@ -216,6 +216,6 @@ def mode_table(modes: Modes, n_modes: int | None = None) -> str:
         b, t, a = modes.kinetic_fraction[i]
         lines.append(
             f"{i + 1:>4}  {modes.frequency_hz[i]:>11.2f}  {modes.kinds[i]:<17} {b:>5.2f} {t:>5.2f} "
-            f"{a:>5.2f} {modes.mesh_strain_fraction[i]:>5.2f}"
+            f"{a:>5.2f} {modes.mesh_energy_fraction[i]:>5.2f}"
         )
     return "\n".join(lines)

@@ -157,7 +157,7 @@ def modal(args) -> int:
             "undamped_modes": [
                 {"frequency_hz": float(f), "kind": kd, "mesh_energy_fraction": _finite(s)}
                 for f, kd, s in zip(found.frequency_hz, found.kinds,
-                                    found.mesh_strain_fraction, strict=True)],
+                                    found.mesh_energy_fraction, strict=True)],
             "damped_modes": [
                 {"mode": i + 1, "frequency_hz": float(f), "damping_ratio": _finite(z),
                  "mesh_energy_fraction": _finite(s),

@@ -42,7 +42,7 @@ def bearing_force_departure(ptp_bearing1: float, r_300: float, r_max: float) -> 
     mesh = [i for i in range(d.frequency_hz.size)
             if not d.overdamped[i] and d.mesh_energy_fraction[i] >= 0.25]
     undamped = lin.modes
-    top = int(np.argmax(undamped.mesh_strain_fraction))
+    top = int(np.argmax(undamped.mesh_energy_fraction))
     crit = tooth_critical_speeds(d.frequency_hz, d.damping_ratio, d.mesh_energy_fraction,
                                  lin.z1, (100.0, 1200.0), min_mesh_fraction=0.25)
     return (
