@@ -40,7 +40,8 @@ def _startup_shown(show: bool):
         return
     handler = logging.StreamHandler(sys.stderr)
     handler.setFormatter(logging.Formatter("gsb: %(message)s"))
-    level, log.level = log.level, logging.INFO
+    level = log.level
+    log.setLevel(logging.INFO)  # setLevel, not .level: it clears the loggers' caches
     log.addHandler(handler)
     try:
         yield

@@ -99,10 +99,11 @@ class Result:
             variables[name] = (dims(name), np.asarray(values),
                                {"units": UNITS[name], "description": DESCRIPTIONS[name]})
         used = {d for name in variables for d in dims(name)}
-        coords = {"time": ("time", self.time, {"units": "s", "description": "end of the step"})}
+        coords = {"time": ("time", self.time, {"units": UNITS["time"],
+                                               "description": DESCRIPTIONS["time"]})}
         coords |= {d: (d, [str(x) for x in labels]) for d, labels in self.coordinates().items()
                    if d in used}
-        return xr.Dataset(variables, coords=coords, attrs=_netcdf_attributes(self.attrs))
+        return xr.Dataset(variables, coords=coords, attrs=_as_stored(self.attrs))
 
     @classmethod
     def from_file(cls, path) -> Result:
@@ -116,17 +117,26 @@ class Result:
         return cls(data, attrs, coords=coords or None)
 
 
-def _netcdf_attributes(attrs: dict) -> dict:
-    """Attributes netCDF can hold: numbers, strings and 1-D numeric arrays (a multi-dimensional
-    array, such as the static journal positions, flattened row by row; booleans as 0/1)."""
-    out = {}
-    for key, value in attrs.items():
-        if isinstance(value, (bool, np.bool_)):
-            value = int(value)
-        elif isinstance(value, np.ndarray) and value.ndim > 1:
-            value = value.ravel()
-        out[key] = value
-    return out
+def _as_stored(attrs: dict) -> dict:
+    """The attributes as xarray reads them from a results file: written to an HDF5 file in
+    memory as the results writer writes them
+    (:func:`orchestrator.run.results.attribute_value`), read back by xarray's ``h5netcdf``
+    engine (numbers as numpy scalars, a one-element array as its element, arrays of any rank
+    kept): a run's :meth:`Result.to_xarray` and its file's dataset are then identical."""
+    import io
+
+    import h5py
+    import xarray as xr
+
+    from orchestrator.run.results import attribute_value
+
+    buffer = io.BytesIO()
+    with h5py.File(buffer, "w") as f:
+        for key, value in attrs.items():
+            f.attrs[key] = attribute_value(value)
+    buffer.seek(0)
+    with xr.open_dataset(buffer, engine="h5netcdf") as ds:
+        return dict(ds.attrs)
 
 
 class MemoryRecorder:

@@ -43,7 +43,7 @@ from pathlib import Path
 import numpy as np
 
 from fmu_src.state_codec import FORMAT_VERSION, StateFormatError
-from orchestrator.run.channels import dims
+from orchestrator.run.channels import DESCRIPTIONS, UNITS, dims
 
 __all__ = ["OlderFileWarning", "ResultsWriter", "add_attributes", "attribute_value",
            "clear_write_flags", "csv_column_labels", "export_csv", "live_writer", "open_results",
@@ -151,8 +151,11 @@ def live_writer(path) -> int | None:
         if not _superblock(path)[0][11]:  # HDF5's consistency flags: not open for writing
             return None
         with open_results(path) as f:
-            pid = int(f.attrs.get("writer_pid", -1))
-            host = str(f.attrs.get("writer_host", ""))
+            # files of earlier versions keep them at the root
+            group = f["resume"] if "resume" in f else f
+            where = group.attrs if "writer_pid" in group.attrs else f.attrs
+            pid = int(where.get("writer_pid", -1))
+            host = str(where.get("writer_host", ""))
     except OSError:
         return None
     if pid <= 0 or host != socket.gethostname():
@@ -209,7 +212,7 @@ class ResultsWriter:
         import h5py
 
         self.path = Path(path)
-        self.channels = {"time": ((), "s", "simulated time")} | dict(channels)
+        self.channels = {"time": ((), UNITS["time"], DESCRIPTIONS["time"])} | dict(channels)
         self.flush_seconds = float(flush_seconds)
         self.capacity = max(int(capacity), 1)
         self.checkpoint = checkpoint
@@ -242,8 +245,10 @@ class ResultsWriter:
         for key, value in (attrs or {}).items():
             self.file.attrs[key] = attribute_value(value)
         self.file.attrs["complete"] = False
-        self.file.attrs["writer_pid"] = os.getpid()  # live_writer: is a run still writing it?
-        self.file.attrs["writer_host"] = socket.gethostname()
+        # live_writer: is a run still writing it? (in a group: not a setting of the run, and
+        # xarray's dataset of the file is then the run's Result.to_xarray())
+        self.file["resume"].attrs["writer_pid"] = os.getpid()
+        self.file["resume"].attrs["writer_host"] = socket.gethostname()
         self.file.swmr_mode = True  # readers may open the file from now on
         self._last = time.monotonic()
 
