@@ -57,10 +57,27 @@ NS = {
 for _prefix, _uri in NS.items():  # ecos and OMSimulator read the prefixes literally
     ET.register_namespace(_prefix, _uri)
 
-#: the gear-shaft FMU's component name in the SSD (each bearing's:
-#: :func:`fmu_src.contract.bearing_component`), and the name of the parameter set
+#: the gear-shaft FMU's component name in the SSD when no name of its variables holds it
+#: (:func:`gear_component`; each bearing's: :func:`fmu_src.contract.bearing_component`), and
+#: the name of the parameter set
 GEAR = "gear_shaft"
 PARAMETER_SET = "case"
+
+
+def gear_component(variable_names) -> str:
+    """The gear-shaft FMU's component name: :data:`GEAR`, or it with ``_fmu`` appended until
+    no dot-separated segment of its ``variable_names`` (the parameters and start values the
+    SSD sets) equals it, nor ``model`` or ``root``. OMSimulator 3.0 maps a value of the SSD to
+    ``model.root.<component>.<variable>`` and drops every segment of the variable's name that
+    is one of those three (``instantiated_model.validatePath``): the paper's shaft named
+    ``gear_shaft`` lost its ``shafts.gear_shaft.length[1]`` to an unknown
+    ``shafts.length[1]``, and the tool crashed."""
+    taken = {"model", "root"} | {part.split("[")[0] for name in variable_names
+                                 for part in str(name).split(".")}
+    name = GEAR
+    while name in taken:
+        name += "_fmu"
+    return name
 _SSV_TYPE = {bool: "Boolean", int: "Integer", float: "Real", str: "String"}
 
 
@@ -141,12 +158,13 @@ def ssd_text(case: Case, gear_source: str, bearing_sources, laws=None) -> bytes:
     names = bearing_names(case)
     if isinstance(bearing_sources, str):
         bearing_sources = [bearing_sources] * len(names)
-    wiring = connections(case, GEAR)
-    gear_conns = [(a_var, "output") for a, a_var, _, _ in wiring if a == GEAR]
-    gear_conns += [(b_var, "input") for _, _, b, b_var in wiring if b == GEAR]
     gear_start, bearing_start = _start_values(case, laws)
-    _component(elements, GEAR, gear_source, gear_conns,
-               {n: v for n, _, v in gear_parameters(case)} | gear_start)
+    gear_values = {n: v for n, _, v in gear_parameters(case)} | gear_start
+    gear = gear_component(gear_values)
+    wiring = connections(case, gear)
+    gear_conns = [(a_var, "output") for a, a_var, _, _ in wiring if a == gear]
+    gear_conns += [(b_var, "input") for _, _, b, b_var in wiring if b == gear]
+    _component(elements, gear, gear_source, gear_conns, gear_values)
     for b, source, params, start in zip(names, bearing_sources,
                                         description.bearing_parameters(case), bearing_start,
                                         strict=True):

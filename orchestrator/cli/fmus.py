@@ -69,8 +69,10 @@ def export_ssp(args) -> int:
     finally:
         master.close()
     path = write_ssp(case, args.dest, laws=master.laws)
+    dt = time_step(case)
     print(f"{path} (run: gsb run {path}; ecos simulate --path {path} --parameterSet case "
-          f"--stepSize {time_step(case)!r} --stopTime <s>)")
+          f"--stepSize {dt!r} --stopTime <s>; OMSimulator 3.0, which takes the step from its "
+          f"API only: SSP('{path}').instantiate(), then .setFixedStepSize({dt!r}))")
     return 0
 
 

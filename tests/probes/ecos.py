@@ -16,7 +16,8 @@ def simulate(ssp: str, step_size: float, steps: int, case: str = "baguet2010_spu
     from fmu_src.contract import bearing_component, bearing_names, journal_output_names
 
     train = shipped_case(case)
-    names = [f"gear_shaft::{n}" for n in journal_output_names(train)]
+    gear = _gear_component(ssp)
+    names = [f"{gear}::{n}" for n in journal_output_names(train)]
     ecc = [f"{bearing_component(b)}::eccentricity" for b in bearing_names(train)]
     x, e = [], []
     with EcosSimulation(ssp_path=ssp, step_size=step_size) as sim:
@@ -28,6 +29,20 @@ def simulate(ssp: str, step_size: float, steps: int, case: str = "baguet2010_spu
             e.append([sim.get_real(n) for n in ecc])
         sim.terminate()
     return dict(x=x, e=e)
+
+
+def _gear_component(ssp: str) -> str:
+    """The name of the archive's component whose FMU is ``GearShaft.fmu``
+    (:func:`fmu_src.build.ssp.gear_component` chose it for its case)."""
+    import zipfile
+    from xml.etree import ElementTree as ET
+
+    from fmu_src.build.ssp import NS
+
+    with zipfile.ZipFile(ssp) as z:
+        root = ET.fromstring(z.read("SystemStructure.ssd"))
+    return next(c.get("name") for c in root.iterfind(".//ssd:Component", NS)
+                if c.get("source", "").endswith("GearShaft.fmu"))
 
 
 PROBES = probes_of(simulate)
