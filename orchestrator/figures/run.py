@@ -323,8 +323,18 @@ def _spectra(plt, run: RunData):
         if keep.any():
             top = max(top, float(amp[keep][:, on].max()))
         ranges.append((q, orders, q_lo, q_hi, keep))
+    shaded = False
     for ax, (shaft, on), (q, orders, q_lo, q_hi, keep) in zip(axes, groups, ranges,
                                                                strict=True):
+        # the Hann main lobe about order 0 (2 resolutions): a line there overlaps its
+        # negative-frequency image and the removed mean, and the curve is not its amplitude
+        lobe = 2.0 * spec["resolution"][on[0]]
+        if lobe > q_lo:
+            ax.axvspan(q_lo, min(lobe, q_hi), color="0.9", zorder=0,
+                       label=None if shaded else "within 2 resolutions of order 0 (Hann main "
+                                                 "lobe):\nthe curve is not the line there; "
+                                                 "its marker is")
+            shaded = True
         for j, b in enumerate(on):
             colour, ls, marker = bearing_style(b)
             ax.plot(q[keep], amp[keep, b], color=colour, ls=ls, lw=1.5 if j % 2 == 0 else 1.1,

@@ -87,6 +87,19 @@ def _edges(x: np.ndarray) -> np.ndarray:
     return np.r_[x[0] - (mid[0] - x[0]), mid, x[-1] + (x[-1] - mid[-1])]
 
 
+def _rows(x: np.ndarray, amp: np.ndarray) -> tuple[np.ndarray, np.ma.MaskedArray]:
+    """Row edges and values of a waterfall: a band of 0.8 of the smallest spacing about each
+    computed value of the sweep, nothing (masked rows) between two: no cell spans a value
+    that was not computed."""
+    x = np.asarray(x, dtype=float)
+    gap = float(np.min(np.diff(x))) if x.size > 1 else 0.0
+    half = 0.4 * (gap if gap > 0.0 else (0.1 * abs(x[0]) or 1.0))
+    edges = np.column_stack([x - half, x + half]).ravel()
+    rows = np.full((2 * x.size - 1, amp.shape[1]), np.nan)
+    rows[::2] = amp
+    return edges, np.ma.masked_invalid(rows)
+
+
 def _groups(points, keys, units, ix):
     """Successful points by (bearing model, values of the other varied fields), each sorted
     by the swept value: ``{label: [points]}``."""
@@ -232,8 +245,11 @@ def sweep_figures(path, out_dir=None) -> list[Path]:
                 continue
             top = orders[-1] + 0.5 * (orders[1] - orders[0] if orders.size > 1 else 1.0)
             orders, amp = _pool(orders, amp, 300)  # lines narrower than a pixel would vanish
-            mesh = ax.pcolormesh(_edges(orders), _edges(x), np.maximum(amp, peak * 1e-6),
-                                 norm=norm, cmap="viridis", shading="flat")
+            edges, rows = _rows(x, np.maximum(amp, peak * 1e-6))
+            mesh = ax.pcolormesh(_edges(orders), edges, rows, norm=norm, cmap="viridis",
+                                 shading="flat")
+            if x.size <= 16:  # the values computed, each a band
+                ax.set_yticks(x, [f"{v:.4g}" for v in x], fontsize=8)
             shown = [(q, text) for q, text in marks if q <= top]
             sec = ax.secondary_xaxis("top")
             sec.set_xticks([q for q, _ in shown], [text for _, text in shown], fontsize=8,

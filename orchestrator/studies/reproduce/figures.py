@@ -91,7 +91,23 @@ def has_line(f, a, target, resolution=None, prominence=10.0, band=12):
     return bool(a[near].max() > prominence * max(np.median(side), 1e-12))
 
 
+class _Stamped:
+    """pyplot with a ``stamp``: the text :func:`_save` writes across every figure (a quick
+    plan's, which is not steady state)."""
+
+    def __init__(self, plt, stamp: str):
+        self._plt, self.stamp = plt, stamp
+
+    def __getattr__(self, name):
+        return getattr(self._plt, name)
+
+
 def _save(fig, path: Path, plt) -> Path:
+    stamp = getattr(plt, "stamp", "")
+    if stamp:
+        fig.text(0.5, 0.5, stamp.split(":")[0], ha="center", va="center", rotation=25,
+                 fontsize=24, color="tab:red", alpha=0.25, zorder=100)
+        fig.text(0.005, 0.005, stamp, ha="left", va="bottom", fontsize=9, color="tab:red")
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return path
@@ -371,6 +387,9 @@ def draw_all(runs: dict, sweeps: dict, plan, fig_dir: Path) -> dict:
     fig_dir = Path(fig_dir)
     fig_dir.mkdir(parents=True, exist_ok=True)
     plt = pyplot()
+    if plan.label == "quick":
+        plt = _Stamped(plt, "gsb reproduce --quick: fewer periods, not steady state: "
+                            "trends only")
     c1 = _attrs(runs["spur_hybrid"])["clearance"][0]  # bearing 1 (orbits in units of C_1)
     figs = {}
     figs["orbits"] = _fig_orbits(runs, fig_dir, plt)

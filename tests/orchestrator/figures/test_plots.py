@@ -230,3 +230,19 @@ def test_mesh_figure_of_a_long_run_bins_by_pinion_revolution(tmp_path):
     finally:
         for fig in figures.values():
             plt.close(fig)
+
+
+def test_figures_of_a_quick_reproduction_are_stamped(tmp_path):
+    """``gsb reproduce --quick`` is not steady state: each of its figures says so across it
+    and in a corner; a full reproduction's do not."""
+    from orchestrator.figures.base import pyplot
+    from orchestrator.studies.reproduce.figures import _save, _Stamped
+
+    for stamp in ("gsb reproduce --quick: trends only", ""):
+        plt = _Stamped(pyplot(), stamp) if stamp else pyplot()
+        fig, ax = plt.subplots()
+        ax.plot([0, 1], [0, 1])
+        _save(fig, tmp_path / "f.png", plt)
+        assert [t.get_text() for t in fig.texts] == ([stamp.split(":")[0], stamp] if stamp
+                                                     else [])
+        assert (tmp_path / "f.png").stat().st_size > 5_000
