@@ -21,6 +21,15 @@ structure, its static and dynamic solves and the modal analyses are decorated wi
 long loops (a run, an FMU's step) enter :data:`ONE_BLAS_THREAD` once, so that the calls inside
 cost a counter. The matrices of this project are small: one thread costs nothing measurable,
 and is faster on busy cores.
+
+An FMU's process is another matter (:func:`limit_for_good`): FMI hosts call FMUs from several
+threads at once (ecos steps them in its own threads), a limit set from a thread the host
+created did not hold there (OpenBLAS 0.3 of scipy 1.17's wheels: the count read back stayed 2),
+and a threaded OpenBLAS called from two threads at once corrupted its work (an LU factorisation
+of the gear-shaft FMU came out singular or crashed the host, at random). Each FMU instance
+therefore limits the process's BLAS to one thread for good, and an FMU's bootstrap sets
+``OPENBLAS_NUM_THREADS`` and ``MKL_NUM_THREADS`` to 1 before numpy loads, unless the host
+chose them.
 """
 
 from __future__ import annotations
@@ -29,7 +38,7 @@ import functools
 import threading
 import warnings
 
-__all__ = ["ONE_BLAS_THREAD", "one_blas_thread"]
+__all__ = ["ONE_BLAS_THREAD", "limit_for_good", "one_blas_thread"]
 
 
 class _OneBlasThread:
@@ -104,3 +113,12 @@ def one_blas_thread(func):
             return func(*args, **kwargs)
 
     return wrapper
+
+
+
+def limit_for_good() -> None:
+    """Every BLAS library of the process to one thread, not restored (module docstring: an FMU
+    instance's process). Called from the thread that creates the instance."""
+    for library in ONE_BLAS_THREAD._blas():
+        if library.get_num_threads() != 1:
+            library.set_num_threads(1)

@@ -40,8 +40,15 @@ REQUIREMENTS_TEXT = f"{', '.join(REQUIREMENTS[:-1])} and {REQUIREMENTS[-1]}"
 def require(fmu: str) -> None:
     """Import every package of :data:`REQUIREMENTS`; ImportError naming the FMU, the packages
     missing (or failing to import), this Python's executable and the command that installs
-    them, if any does not import."""
+    them, if any does not import. Before numpy first loads in the process, its BLAS is set to
+    one thread unless the host chose a count (``OPENBLAS_NUM_THREADS``, ``MKL_NUM_THREADS``):
+    hosts call FMUs from several threads at once, and a threaded
+    OpenBLAS called from two threads corrupts its work (``bearing_fmu.blas_threads``)."""
     import importlib
+
+    if "numpy" not in sys.modules:
+        for name in ("OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+            os.environ.setdefault(name, "1")
 
     missing: dict[str, str] = {}  # package -> why it does not import
     for name in REQUIREMENTS:

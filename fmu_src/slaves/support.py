@@ -22,6 +22,7 @@ import numpy as np
 from pythonfmu import Boolean, Fmi2Causality, Fmi2Slave, Fmi2Variability, Integer, Real, String
 from pythonfmu.enums import Fmi2Status
 
+from bearing_fmu.blas_threads import limit_for_good
 from fmu_src.contract import ValueRefused, parameter_field
 from fmu_src.state_codec import StateArrays, decode, encode
 
@@ -115,6 +116,7 @@ class ContractSlave(Fmi2Slave):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
+        limit_for_good()  # hosts call FMUs from several threads (bearing_fmu.blas_threads)
         self._read_status = FMI_OK
         self._by_kind = {}  # {variable type: {value reference: variable}}, see _accessors
         release_python_state_at_exit(self.resources, type(self).__name__)
