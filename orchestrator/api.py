@@ -155,23 +155,30 @@ def simulate(case, periods: int | None = None, bearing: str | None = None, *,
     return result
 
 
-def read_result(path: str | Path) -> Result:
-    """The channels and settings of a results file (``gsb run``'s, or :func:`simulate`'s with
-    ``results_dir``), also while a run writes it. FileNotFoundError or ValueError naming the
-    file when it is missing or not a run's results file (a sweep file: ``gsb plot``)."""
+def _file_of_kind(path, kind: str, what: str, other: str) -> Path:
+    """``path`` as a Path once it is a readable file whose root attribute ``kind`` is ``kind``;
+    FileNotFoundError or ValueError naming it (``what`` it should be, ``other``: how the
+    other kind of file is read) otherwise."""
     from orchestrator.run.results import read_attributes
 
     path = Path(path)
     if not path.is_file():
-        raise FileNotFoundError(f"{path}: no such results file")
+        raise FileNotFoundError(f"{path}: no such {what}")
     try:
-        kind = read_attributes(path).get("kind")
+        found = read_attributes(path).get("kind")
     except OSError as exc:
-        raise ValueError(f"{path}: not a readable results file ({exc})") from None
-    if kind != "run":
-        raise ValueError(f"{path}: not the results file of a run (kind {kind!r}); a sweep's "
-                         "file is read with read_sweep")
-    return Result.from_file(path)
+        raise ValueError(f"{path}: not a readable {what} ({exc})") from None
+    if found != kind:
+        raise ValueError(f"{path}: not a {what} (kind {found!r}); {other}")
+    return path
+
+
+def read_result(path: str | Path) -> Result:
+    """The channels and settings of a results file (``gsb run``'s, or :func:`simulate`'s with
+    ``results_dir``), also while a run writes it. FileNotFoundError or ValueError naming the
+    file when it is missing or not a run's results file (a sweep file: :func:`read_sweep`)."""
+    return Result.from_file(_file_of_kind(path, "run", "results file of a run",
+                                          "a sweep's file is read with read_sweep"))
 
 
 def read_sweep(path: str | Path):
@@ -180,20 +187,10 @@ def read_sweep(path: str | Path):
     points' figures (R, peak-to-peaks, orbit centres, ...) as variables, NaN and an ``error``
     where a point failed (:func:`orchestrator.sweeps.file.sweep_dataset`). FileNotFoundError or
     ValueError naming the file when it is missing or not a sweep's."""
-    from orchestrator.run.results import read_attributes
     from orchestrator.sweeps.file import sweep_dataset
 
-    path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"{path}: no such sweep file")
-    try:
-        kind = read_attributes(path).get("kind")
-    except OSError as exc:
-        raise ValueError(f"{path}: not a readable sweep file ({exc})") from None
-    if kind != "sweep":
-        raise ValueError(f"{path}: not a sweep's file (kind {kind!r}); a run's file is read "
-                         "with read_result")
-    return sweep_dataset(path)
+    return sweep_dataset(_file_of_kind(path, "sweep", "sweep file",
+                                       "a run's file is read with read_result"))
 
 
 def sweep(case, vary: dict, path: str | Path, periods: int, bearings=None,

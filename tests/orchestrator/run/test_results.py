@@ -152,7 +152,7 @@ def test_read_result_names_a_missing_or_foreign_file(tmp_path):
     other = tmp_path / "other.h5"
     with ResultsWriter(other, {"x": ((), "m", "a length")}, {"kind": "sweep"}) as w:
         w.append(time=0.0, x=1.0)
-    with pytest.raises(ValueError, match=r"other\.h5: not the results file of a run"):
+    with pytest.raises(ValueError, match=r"other\.h5: not a results file of a run"):
         gsb.read_result(other)
 
 
