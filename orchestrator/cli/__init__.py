@@ -102,6 +102,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"gsb {args.command}: internal error: {type(exc).__name__}: {exc} (please "
               "report it; GSB_TRACEBACK=1 shows the traceback)", file=sys.stderr)
         return 1
+    finally:  # main called in a process that goes on (a test, a script): no handler left
+        _show_startup(False)
 
 
 if __name__ == "__main__":

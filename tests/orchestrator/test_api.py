@@ -61,6 +61,7 @@ def test_the_first_call_says_what_it_compiles_unless_told_not_to(capsys, monkeyp
 
     log = logging.getLogger("gsb.startup")
     root = logging.getLogger()
+    monkeypatch.setattr(log, "handlers", [])  # nothing of the command line's left
     # the caller's logging configured (whatever other tests left on the root logger)
     monkeypatch.setattr(root, "handlers", [logging.NullHandler()])
     with _startup_shown(True):
@@ -74,6 +75,16 @@ def test_the_first_call_says_what_it_compiles_unless_told_not_to(capsys, monkeyp
         log.info("compiling the numba kernels")
     assert capsys.readouterr().err == ""
     assert log.handlers == []
+
+
+def test_the_command_line_leaves_no_log_handler_behind(capsys):
+    """``main`` called in a process that goes on (a test, a script) removes the handler that
+    printed its start-up log: a later library call would write to a closed stream."""
+    import orchestrator.cli
+
+    assert orchestrator.cli.main(["cases"]) == 0
+    assert not [h for h in logging.getLogger("gsb.startup").handlers
+                if getattr(h, "gsb_cli", False)]
 
 
 def test_the_campbell_diagram_as_a_dataset():
