@@ -46,6 +46,8 @@ def _show_startup(show: bool) -> None:
     log = logging.getLogger("gsb.startup")
     for handler in [h for h in log.handlers if getattr(h, "gsb_cli", False)]:
         log.removeHandler(handler)
+        log.propagate = True  # as it was before the command line took the log
+        log.setLevel(logging.NOTSET)
     if show:
         handler = logging.StreamHandler(sys.stderr)
         handler.setFormatter(logging.Formatter("gsb: %(message)s"))

@@ -62,6 +62,7 @@ def test_the_first_call_says_what_it_compiles_unless_told_not_to(capsys, monkeyp
     log = logging.getLogger("gsb.startup")
     root = logging.getLogger()
     monkeypatch.setattr(log, "handlers", [])  # nothing of the command line's left
+    monkeypatch.setattr(log, "propagate", True)
     # the caller's logging configured (whatever other tests left on the root logger)
     monkeypatch.setattr(root, "handlers", [logging.NullHandler()])
     with _startup_shown(True):
@@ -83,8 +84,9 @@ def test_the_command_line_leaves_no_log_handler_behind(capsys):
     import orchestrator.cli
 
     assert orchestrator.cli.main(["cases"]) == 0
-    assert not [h for h in logging.getLogger("gsb.startup").handlers
-                if getattr(h, "gsb_cli", False)]
+    log = logging.getLogger("gsb.startup")
+    assert not [h for h in log.handlers if getattr(h, "gsb_cli", False)]
+    assert log.propagate and log.level == logging.NOTSET
 
 
 def test_the_campbell_diagram_as_a_dataset():
