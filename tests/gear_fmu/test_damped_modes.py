@@ -308,6 +308,10 @@ def test_gsb_modal_json_is_one_object_with_the_damped_modes(capsys):
     assert mesh["mean_mesh_stiffness_N_per_m"] == pytest.approx(20.33e9 * 0.04, rel=1e-3)
     damped = out["damped_modes"]
     assert {"frequency_hz", "damping_ratio", "mesh_energy_fraction", "kind"} <= set(damped[0])
+    # every oscillating mode's whirl named; the paper's case keeps the paper's choice
+    assert {d["whirl"] for d in damped if not d["overdamped"]} <= {"forward", "backward",
+                                                                   "mixed", "none"}
+    assert out["gyroscopic"] is False
     osc = [d["frequency_hz"] for d in damped if not d["overdamped"]]
     assert osc == sorted(osc) and osc[0] > 0.0
     mesh = [d for d in damped if (d["mesh_energy_fraction"] or 0.0) >= 0.1 and
@@ -388,6 +392,8 @@ def test_gsb_modal_campbell_at_three_speeds(tmp_path, capsys):
         assert 100.0 <= c["speed_rad_s"] <= 900.0
     # the mesh modes near 2.2 and 4.4 kHz meet the harmonics k >= 2 inside 100-900 rad/s
     assert any(c["harmonic"] >= 2 and c["mesh"] == "mesh" for c in chart["crossings"])
+    # linearised film bearings, every mode damped from 100 to 900 rad/s
+    assert chart["stability_threshold_rad_s"] is None
 
 
 def test_gsb_modal_campbell_writes_into_results_and_says_why_its_crossings_differ(
@@ -402,3 +408,5 @@ def test_gsb_modal_campbell_writes_into_results_and_says_why_its_crossings_diffe
     assert (tmp_path / "results" / f"{SPUR}_campbell.png").is_file()
     assert not list(tmp_path.glob("*.png"))
     assert "whose modes are those at the case's 325 rad/s" in printed
+    assert "campbell: stable: every mode's damping ratio is positive at every speed 100-900" \
+        in printed
