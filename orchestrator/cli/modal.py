@@ -71,6 +71,23 @@ def _modal_checks(args) -> tuple[float, float]:
     return low, high
 
 
+def _crossing_table(rows: list[dict]) -> str:
+    """The Campbell diagram's critical speeds: where a followed mode crosses an excitation
+    line (:func:`orchestrator.analysis.campbell.crossings`), as a text table."""
+    if not rows:
+        return "campbell: no mode crosses an excitation line over the speeds computed"
+    out = ["campbell critical speeds (a mode followed over speed crossing an excitation line; "
+           "mesh = its strain energy share in that mesh, or in every mesh for a 1x line):",
+           f"{'line':<18} {'omega [rad/s]':>13} {'N [rpm]':>8} {'f [Hz]':>9} "
+           f"{'zeta [-]':>8} {'mesh [-]':>8}"]
+    for c in rows:
+        line = f"1x {c['shaft']}" if c["mesh"] is None else f"{c['mesh']} k={c['harmonic']}"
+        out.append(f"{line:<18} {c['speed_rad_s']:>13.1f} {c['speed_rpm']:>8.0f} "
+                   f"{c['frequency_hz']:>9.1f} {c['damping_ratio']:>8.4f} "
+                   f"{c['mesh_energy_fraction']:>8.3f}")
+    return "\n".join(out)
+
+
 def _threshold_text(data: dict) -> str:
     """The stability threshold of a Campbell diagram's data as a line."""
     w, th = data["speeds"], data["stability_threshold"]
@@ -205,6 +222,7 @@ def modal(args) -> int:
     if chart is not None:
         for w, e in data["skipped"]:
             print(f"campbell: {w:g} rad/s skipped: {e}")
+        print(_crossing_table(chart["crossings"]))
         print(_threshold_text(data))
         print(f"\ncampbell: {chart['path']} ({len(chart['speeds_rad_s'])} speeds; the "
               f"crossings it marks follow each mode with the bearings linearised at every "

@@ -410,3 +410,5 @@ def test_gsb_modal_campbell_writes_into_results_and_says_why_its_crossings_diffe
     assert "whose modes are those at the case's 325 rad/s" in printed
     assert "campbell: stable: every mode's damping ratio is positive at every speed 100-900" \
         in printed
+    assert "campbell critical speeds (a mode followed over speed crossing an excitation line" \
+        in printed and "mesh k=2" in printed
