@@ -219,9 +219,7 @@ def planar_timoshenko(
     (K, M) : tuple of (4, 4) arrays
         Stiffness [N/m, N, N m] and consistent mass [kg, kg m, kg m^2].
     """
-    if not (length > 0.0 and math.isfinite(length)):
-        raise ValueError(f"element length = {length!r} m must be finite and > 0")
-    phi_s = 0.0 if math.isinf(kga) else 12.0 * ei / (kga * length**2)
+    phi_s = _shear_parameter(length, ei, kga)
     k = np.zeros((4, 4))
     m = np.zeros((4, 4))
     for xg, wg in zip(_GAUSS_X, _GAUSS_W, strict=True):
@@ -234,6 +232,13 @@ def planar_timoshenko(
             k += wt * kga * np.outer(gam, gam)
         m += wt * (rho_a * np.outer(nw, nw) + rho_i * np.outer(nr, nr))
     return k, m
+
+
+def _rigidities(section: HollowSection) -> tuple[float, float]:
+    """``(E I [N m^2], kappa G A [N])`` of a section: the bending and shear stiffnesses of the
+    planar element."""
+    s = section
+    return s.young * s.second_moment, s.shear_coefficient * s.shear_modulus * s.area
 
 
 def _shear_parameter(length: float, ei: float, kga: float) -> float:
@@ -286,10 +291,8 @@ def timoshenko_gyroscopic(section: HollowSection, length: float) -> np.ndarray:
     length : float
         Element length [m].
     """
-    s = section
-    ei = s.young * s.second_moment
-    kga = s.shear_coefficient * s.shear_modulus * s.area
-    return gyroscopic_coupling(planar_rotary(length, ei, kga), s.density * s.polar_moment, 2)
+    return gyroscopic_coupling(planar_rotary(length, *_rigidities(section)),
+                               section.density * section.polar_moment, 2)
 
 
 def disc_gyroscopic(polar_inertia: float) -> np.ndarray:
@@ -327,9 +330,8 @@ def timoshenko_element(section: HollowSection, length: float) -> tuple[np.ndarra
     (K, M) : tuple of (12, 12) arrays, SI.
     """
     s = section
-    ei = s.young * s.second_moment
-    kga = s.shear_coefficient * s.shear_modulus * s.area
-    kp, mp = planar_timoshenko(length, ei, kga, s.density * s.area, s.density * s.second_moment)
+    kp, mp = planar_timoshenko(length, *_rigidities(s), s.density * s.area,
+                               s.density * s.second_moment)
     k = np.zeros((12, 12))
     m = np.zeros((12, 12))
     n = DOF_PER_NODE

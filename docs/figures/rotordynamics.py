@@ -18,12 +18,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
 
-from bearing_fmu.short_bearing import ShortBearing  # noqa: E402
-from bearing_fmu.static import static_equilibrium  # noqa: E402
-from gear_fmu.dofs import PHI, PSI, U, V  # noqa: E402
-from gear_fmu.modal.damped_modes import damped_eigen  # noqa: E402
 from gear_fmu.modal.whirl import stability_threshold, whirl  # noqa: E402
-from gear_fmu.timoshenko import HollowSection  # noqa: E402
 from orchestrator.figures.base import pyplot  # noqa: E402
 from tests.gear_fmu import test_gyroscopic as gyro  # noqa: E402
 from tests.gear_fmu import test_stability as stab  # noqa: E402
@@ -34,21 +29,12 @@ MARKERS = {"forward": "^", "backward": "v", "mixed": "o", "none": "s"}
 
 def friswell(plt) -> None:
     """Example 5.9.1 of Friswell et al. (2010): its six lowest whirl frequencies over speed."""
-    nu = 211e9 / (2.0 * 81.2e9) - 1.0
-    s = HollowSection(0.05, 0.0, young=211e9, poisson=nu, density=7810.0)
-    k, m, g = gyro.shaft(s, [0.25] * 6)
-    for node, outer in ((2, 0.28), (4, 0.35)):
-        r2 = (outer / 2) ** 2 + 0.025**2
-        mass = 7810.0 * math.pi / 4 * (outer**2 - 0.05**2) * 0.07
-        gyro.add_disc(m, g, node, mass, mass * r2 / 4 + mass * 0.07**2 / 12, mass * r2 / 2)
-    for node in (0, 6):
-        for i in (U, V):
-            k[6 * node + i, 6 * node + i] += 1e6
+    k, m, g, keep = gyro.friswell_rotor()
     nodes = SimpleNamespace(n_nodes=7, node_shaft=np.zeros(7, dtype=int), mass=m)
     rpm = np.linspace(0.0, 6000.0, 61)
     fig, ax = plt.subplots(figsize=(8, 5.5), constrained_layout=True)
     for n in rpm[1:]:
-        freq, shapes = gyro.whirl_modes(k, m, g, n * math.pi / 30.0, gyro.lateral(7))
+        freq, shapes = gyro.whirl_modes(k, m, g, n * math.pi / 30.0, keep)
         _, labels = whirl(nodes, shapes[:, :6], [1.0])
         for f, label in zip(freq[:6], labels, strict=True):
             ax.plot(n, f, MARKERS[label], color="tab:blue" if label == "forward"
@@ -56,7 +42,7 @@ def friswell(plt) -> None:
     for n, published in ((0.0, gyro.FRISWELL_0), (4000.0, gyro.FRISWELL_4000)):
         ax.plot([n] * 6, published, "o", mfc="none", mec="k", ms=10)
         if n:
-            freq, _ = gyro.whirl_modes(k, m, g, n * math.pi / 30.0, gyro.lateral(7))
+            freq, _ = gyro.whirl_modes(k, m, g, n * math.pi / 30.0, keep)
             print("Friswell 5.9.1 at 4000 rpm [rad/s]:", np.round(freq[:6], 2), "published",
                   published, "largest relative difference",
                   f"{np.max(np.abs(freq[:6] / published - 1)):.1e}")
@@ -74,29 +60,16 @@ def friswell(plt) -> None:
 
 def overhung(plt) -> None:
     """An overhung disc on a massless cantilever: this code against the closed form."""
-    length, mass, radius = 0.3, 5.0, 0.15
-    i_p = mass * radius**2 / 2
-    i_d = i_p / 2
-    section = HollowSection(0.025, 0.0, density=1e-6)
-    ei = section.young * section.second_moment
-    kga = section.shear_coefficient * section.shear_modulus * section.area
-    flex = np.array([[length**3 / (3 * ei) + length / kga, length**2 / (2 * ei)],
-                     [length**2 / (2 * ei), length / ei]])
-    (k11, k12), (_, k22) = np.linalg.inv(flex)
-    k, m, g = gyro.shaft(section, [0.1] * 3)
-    gyro.add_disc(m, g, 3, mass, i_d, i_p)
-    keep = gyro.lateral(4, clamped={(0, i) for i in (U, V, PHI, PSI)})
+    k, m, g, keep = gyro.overhung_model()
     spins = np.linspace(0.0, 3000.0, 31)
     fig, ax = plt.subplots(figsize=(8, 5.5), constrained_layout=True)
     worst = 0.0
     for spin in spins:
         freq, _ = gyro.whirl_modes(k, m, g, spin, keep)
-        exact = []
-        for sense, colour in ((1.0, "tab:blue"), (-1.0, "tab:orange")):
-            poly = np.polymul([-mass, 0.0, k11], [-i_d, i_p * sense * spin, k22])
-            poly[-1] -= k12**2
-            roots = sorted(r.real for r in np.roots(poly) if abs(r.imag) < 1e-9 and r.real > 0)
-            exact += roots
+        expected = gyro.overhung_closed_form(spin)
+        exact = expected["forward"] + expected["backward"]
+        for sense, colour in (("forward", "tab:blue"), ("backward", "tab:orange")):
+            roots = expected[sense]
             ax.plot([spin] * len(roots), roots, "_", color=colour, ms=14, mew=2)
         ax.plot([spin] * 4, freq[:4], ".", color="k", ms=5)
         worst = max(worst, float(np.max(np.abs(freq[:4] / sorted(exact) - 1))))
@@ -116,13 +89,8 @@ def overhung(plt) -> None:
 def stability(plt) -> None:
     """A rigid rotor on two short bearings: the least damping ratio over speed."""
     expected = stab.closed_form_threshold()
-    model = ShortBearing(stab.BEARING)
     speeds = np.arange(300.0, 2050.0, 50.0)
-    zetas = []
-    for omega in speeds:
-        st = static_equilibrium(model, (0.0, -stab.LOAD), omega)
-        modes = damped_eigen(stab.MASS * np.eye(2), st.result.damping, st.result.stiffness)
-        zetas.append(modes.damping_ratio[~modes.overdamped])
+    zetas = stab.damping_ratios(speeds)
     found = stability_threshold(speeds, zetas)
     print(f"stability threshold: closed form {expected:.2f} rad/s, this code {found:.2f} rad/s "
           f"({found / expected - 1:+.1e})")

@@ -74,6 +74,60 @@ def whirl_modes(k, m, g, spin, keep):
     return lam.imag[up][order], shapes
 
 
+#: the overhung disc (5 kg, r 150 mm, a thin disc: I_d = I_p / 2) on a massless cantilever
+#: (300 mm, 25 mm solid; density 1e-6 kg/m^3: the shaft's mass 1e-12 of the disc's), and the
+#: elements of its model
+OVERHUNG = {"length": 0.3, "mass": 5.0, "i_p": 5.0 * 0.15**2 / 2, "i_d": 5.0 * 0.15**2 / 4}
+OVERHUNG_SECTION = HollowSection(0.025, 0.0, density=1e-6)
+OVERHUNG_ELEMENTS = 3
+
+
+def overhung_closed_form(spin: float) -> dict:
+    """``{"forward": [...], "backward": [...]}`` whirl frequencies [rad/s] of the overhung disc
+    at ``spin`` [rad/s]: the tip's stiffness from the cantilever's flexibility [[L^3/3EI +
+    L/kGA, L^2/2EI], [L^2/2EI, L/EI]] (exact for Timoshenko) and circular whirl at w in the
+    spin's sense, (k11 - m w^2)(k22 - I_d w^2 + I_p spin w) - k12^2 = 0 (-spin backward)."""
+    o, sec = OVERHUNG, OVERHUNG_SECTION
+    length = o["length"]
+    ei = sec.young * sec.second_moment
+    kga = sec.shear_coefficient * sec.shear_modulus * sec.area
+    flex = np.array([[length**3 / (3 * ei) + length / kga, length**2 / (2 * ei)],
+                     [length**2 / (2 * ei), length / ei]])
+    (k11, k12), (_, k22) = np.linalg.inv(flex)
+    out = {}
+    for sense, s in (("forward", abs(spin)), ("backward", -abs(spin))):
+        poly = np.polymul([-o["mass"], 0.0, k11], [-o["i_d"], o["i_p"] * s, k22])
+        poly[-1] -= k12**2
+        out[sense] = sorted(r.real for r in np.roots(poly) if abs(r.imag) < 1e-9 and r.real > 0)
+    return out
+
+
+def overhung_model():
+    """K, M, G of the overhung disc on :data:`OVERHUNG_ELEMENTS` Timoshenko elements and the
+    lateral DOFs kept (the root node clamped)."""
+    n = OVERHUNG_ELEMENTS
+    k, m, g = shaft(OVERHUNG_SECTION, [OVERHUNG["length"] / n] * n)
+    add_disc(m, g, n, OVERHUNG["mass"], OVERHUNG["i_d"], OVERHUNG["i_p"])
+    return k, m, g, lateral(n + 1, clamped={(0, i) for i in (U, V, PHI, PSI)})
+
+
+def friswell_rotor():
+    """K, M, G of Friswell et al.'s Example 5.9.1 (module docstring; the test's docstring) and
+    its lateral DOFs."""
+    nu = 211e9 / (2.0 * 81.2e9) - 1.0
+    s = HollowSection(0.05, 0.0, young=211e9, poisson=nu, density=7810.0)
+    n_el = 6
+    k, m, g = shaft(s, [1.5 / n_el] * n_el)
+    for node, outer in ((2, 0.28), (4, 0.35)):
+        r2 = (outer / 2) ** 2 + 0.025**2
+        mass = 7810.0 * math.pi / 4 * (outer**2 - 0.05**2) * 0.07
+        add_disc(m, g, node, mass, mass * r2 / 4 + mass * 0.07**2 / 12, mass * r2 / 2)
+    for node in (0, n_el):
+        for i in (U, V):
+            k[6 * node + i, 6 * node + i] += 1e6
+    return k, m, g, lateral(n_el + 1)
+
+
 def test_the_gyroscopic_matrices_are_skew_and_the_disc_holds_its_polar_inertia():
     s = HollowSection(0.07, 0.03)
     g = timoshenko_gyroscopic(s, 0.02)
@@ -93,28 +147,11 @@ def test_overhung_disc_on_a_massless_cantilever_whirls_as_the_closed_form(spin):
     """Tip disc m, I_d, I_p on a cantilever of tip flexibility [[L^3/3EI + L/kGA, L^2/2EI],
     [L^2/2EI, L/EI]] (exact for Timoshenko); circular whirl at w in the spin's sense:
     (k11 - m w^2)(k22 - I_d w^2 + I_p spin w) - k12^2 = 0, against it with -spin."""
-    length, mass, radius = 0.3, 5.0, 0.15
-    i_p = mass * radius**2 / 2
-    i_d = i_p / 2
-    section = HollowSection(0.025, 0.0, density=1e-6)  # the shaft's mass 1e-12 of the disc's
-    ei = section.young * section.second_moment
-    kga = section.shear_coefficient * section.shear_modulus * section.area
-    flex = np.array([[length**3 / (3 * ei) + length / kga, length**2 / (2 * ei)],
-                     [length**2 / (2 * ei), length / ei]])
-    (k11, k12), (_, k22) = np.linalg.inv(flex)
-    expected = {}
-    for sense, s in (("forward", abs(spin)), ("backward", -abs(spin))):
-        # (k11 - m w^2)(k22 - I_d w^2 + I_p s w) - k12^2 as a polynomial in w
-        poly = np.polymul([-mass, 0.0, k11], [-i_d, i_p * s, k22])
-        poly[-1] -= k12**2
-        roots = np.roots(poly)
-        expected[sense] = sorted(r.real for r in roots if abs(r.imag) < 1e-9 and r.real > 0)
-    n_el = 3
-    k, m, g = shaft(section, [length / n_el] * n_el)
-    add_disc(m, g, n_el, mass, i_d, i_p)
-    keep = lateral(n_el + 1, clamped={(0, i) for i in (U, V, PHI, PSI)})
+    expected = overhung_closed_form(spin)
+    k, m, g, keep = overhung_model()
     freq, shapes = whirl_modes(k, m, g, spin, keep)
-    nodes = SimpleNamespace(n_nodes=n_el + 1, node_shaft=np.zeros(n_el + 1, dtype=int), mass=m)
+    nodes = SimpleNamespace(n_nodes=OVERHUNG_ELEMENTS + 1,
+                            node_shaft=np.zeros(OVERHUNG_ELEMENTS + 1, dtype=int), mass=m)
     _, labels = whirl(nodes, shapes[:, :4], [np.sign(spin) or 1.0])
     want = sorted(expected["forward"] + expected["backward"])
     assert len(want) == 4
@@ -168,17 +205,7 @@ def test_friswell_example_5_9_1_to_one_percent(rpm, published):
     """Shaft 1.5 m, solid 50 mm, E = 211 GPa, G = 81.2 GPa, rho = 7810 kg/m^3, six equal
     Timoshenko elements; discs 70 mm wide on a 50 mm bore, 280 mm at 0.5 m and 350 mm at 1 m;
     bearings 1 MN/m at both ends, undamped."""
-    nu = 211e9 / (2.0 * 81.2e9) - 1.0
-    s = HollowSection(0.05, 0.0, young=211e9, poisson=nu, density=7810.0)
-    n_el = 6
-    k, m, g = shaft(s, [1.5 / n_el] * n_el)
-    for node, outer in ((2, 0.28), (4, 0.35)):
-        r2 = (outer / 2) ** 2 + 0.025**2
-        mass = 7810.0 * math.pi / 4 * (outer**2 - 0.05**2) * 0.07
-        add_disc(m, g, node, mass, mass * r2 / 4 + mass * 0.07**2 / 12, mass * r2 / 2)
-    for node in (0, n_el):
-        for i in (U, V):
-            k[6 * node + i, 6 * node + i] += 1e6
-    freq, _ = whirl_modes(k, m, g, rpm * math.pi / 30.0, lateral(n_el + 1))
+    k, m, g, keep = friswell_rotor()
+    freq, _ = whirl_modes(k, m, g, rpm * math.pi / 30.0, keep)
     # the table rounds to 0.01 rad/s (6e-5 of 85 rad/s); measured within 4.7e-5 of it
     assert np.allclose(freq[:6], published, rtol=2e-4, atol=0.0), freq[:6]
