@@ -115,7 +115,6 @@ def one_blas_thread(func):
     return wrapper
 
 
-
 def limit_for_good() -> None:
     """Every BLAS library of the process to one thread, not restored (module docstring: an FMU
     instance's process). Called from the thread that creates the instance."""

@@ -49,7 +49,7 @@ from orchestrator.coupling.master import CouplingError
 from orchestrator.coupling.system import announce_compilation, build_master
 
 __all__ = ["Linearisation", "Linearised", "campbell_data", "campbell_dataset", "crossings",
-           "linearise", "mesh_shares", "order_lines"]
+           "line_name", "linearise", "mesh_shares", "order_lines"]
 
 #: mesh harmonics drawn and searched, k = 1 .. HARMONICS
 HARMONICS = 4
@@ -122,7 +122,7 @@ class Linearised:
         Each damped mode's signed whirl value [-] (+1 forward circles;
         :func:`gear_fmu.modal.whirl.whirl`).
     whirl_direction : list of str
-        ``"forward"``, ``"backward"`` or ``"mixed"`` per damped mode.
+        ``"forward"``, ``"backward"``, ``"mixed"`` or ``"none"`` per damped mode.
     lines : dict
         The train's excitation lines (:func:`order_lines`).
     """
@@ -323,7 +323,7 @@ def campbell_data(case: Case, speeds, bearing_stiffness: float | None = None,
         ``speeds`` (kept speeds, rad/s), ``modes`` (per speed: dict of ``frequency_hz``,
         ``damping_ratio``, ``mesh_energy_fraction``, ``mesh_shares`` (per mesh),
         ``shapes``, ``whirl`` (signed value) and ``whirl_direction`` (forward, backward,
-        mixed) of the oscillating modes below the limit), ``mass``, ``lines`` (the
+        mixed, none) of the oscillating modes below the limit), ``mass``, ``lines`` (the
         train's excitation lines, :func:`order_lines`), ``skipped`` (list of (speed,
         message) where the static solution failed), ``segments`` (``(speed index a, mode at
         a, mode at a + 1)``: the same mode at neighbouring speeds), ``stability_threshold``
@@ -412,7 +412,7 @@ def campbell_dataset(data: dict, harmonics: int = HARMONICS,
         Coordinates ``speed`` (input speed [rad/s]), ``speed_rpm``, ``mode`` (1-based),
         ``mesh``; variables ``frequency`` [Hz] (damped), ``damping_ratio`` [-],
         ``log_decrement`` [-] (``2 pi zeta / sqrt(1 - zeta^2)``), ``whirl`` [-] (signed, +1
-        forward circles), ``whirl_direction`` (forward, backward, mixed),
+        forward circles), ``whirl_direction`` (forward, backward, mixed, none),
         ``mesh_energy_fraction`` [-] and ``mesh_share`` (speed, mode, mesh) [-]; along
         ``crossing`` the critical speeds (:func:`crossings`): ``critical_speed`` [rad/s],
         ``critical_frequency`` [Hz], ``critical_line`` (the excitation) and
@@ -451,7 +451,7 @@ def campbell_dataset(data: dict, harmonics: int = HARMONICS,
          "critical_speed": ("crossing", [c["speed_rad_s"] for c in cross], {"units": "rad/s"}),
          "critical_frequency": ("crossing", [c["frequency_hz"] for c in cross],
                                 {"units": "Hz"}),
-         "critical_line": ("crossing", [_line_name(c) for c in cross]),
+         "critical_line": ("crossing", [line_name(c) for c in cross]),
          "critical_damping_ratio": ("crossing", [c["damping_ratio"] for c in cross],
                                     {"units": "1"})},
         coords={"speed": ("speed", w, {"units": "rad/s", "long_name": "input speed"}),
@@ -462,6 +462,6 @@ def campbell_dataset(data: dict, harmonics: int = HARMONICS,
                "skipped_speeds_rad_s": [s for s, _ in data["skipped"]]})
 
 
-def _line_name(c: dict) -> str:
+def line_name(c: dict) -> str:
     """The excitation line of a crossing: ``"1x <shaft>"`` or ``"<mesh> k=<harmonic>"``."""
     return f"1x {c['shaft']}" if c["mesh"] is None else f"{c['mesh']} k={c['harmonic']}"

@@ -74,6 +74,7 @@ def _modal_checks(args) -> tuple[float, float]:
 def _crossing_table(rows: list[dict]) -> str:
     """The Campbell diagram's critical speeds: where a followed mode crosses an excitation
     line (:func:`orchestrator.analysis.campbell.crossings`), as a text table."""
+    from orchestrator.analysis.campbell import line_name
     if not rows:
         return "campbell: no mode crosses an excitation line over the speeds computed"
     out = ["campbell critical speeds (a mode followed over speed crossing an excitation line; "
@@ -81,8 +82,7 @@ def _crossing_table(rows: list[dict]) -> str:
            f"{'line':<18} {'omega [rad/s]':>13} {'N [rpm]':>8} {'f [Hz]':>9} "
            f"{'zeta [-]':>8} {'mesh [-]':>8}"]
     for c in rows:
-        line = f"1x {c['shaft']}" if c["mesh"] is None else f"{c['mesh']} k={c['harmonic']}"
-        out.append(f"{line:<18} {c['speed_rad_s']:>13.1f} {c['speed_rpm']:>8.0f} "
+        out.append(f"{line_name(c):<18} {c['speed_rad_s']:>13.1f} {c['speed_rpm']:>8.0f} "
                    f"{c['frequency_hz']:>9.1f} {c['damping_ratio']:>8.4f} "
                    f"{c['mesh_energy_fraction']:>8.3f}")
     return "\n".join(out)
