@@ -15,39 +15,16 @@ speeds.
 
 from __future__ import annotations
 
-import contextlib
 import itertools
-import logging
 import math
-import sys
 from pathlib import Path
 
 from fmu_src.case import Case, load_case
+from orchestrator.run.progress import startup_log
 from orchestrator.run.result import Result
 from orchestrator.run.spec import RunSpec
 
 __all__ = ["campbell", "modes", "read_result", "read_sweep", "simulate", "sweep"]
-
-
-@contextlib.contextmanager
-def _startup_shown(show: bool):
-    """Print the ``gsb.startup`` log (the FMU build, the native layer, numba's compilation:
-    what makes a first call slow) on stderr during the call, as the command line does, unless
-    ``show`` is False or the caller's logging already takes it."""
-    log = logging.getLogger("gsb.startup")
-    if not show or log.handlers or (log.propagate and logging.getLogger().handlers):
-        yield
-        return
-    handler = logging.StreamHandler(sys.stderr)
-    handler.setFormatter(logging.Formatter("gsb: %(message)s"))
-    level = log.level
-    log.setLevel(logging.INFO)  # setLevel, not .level: it clears the loggers' caches
-    log.addHandler(handler)
-    try:
-        yield
-    finally:
-        log.removeHandler(handler)
-        log.setLevel(level)
 
 
 def _case(case) -> Case:
@@ -144,7 +121,7 @@ def simulate(case, periods: int | None = None, bearing: str | None = None, *,
     named = {"drive.speed": speed, "drive.torque": torque, "gears.*.unbalance": unbalance}
     fields = dict(overrides or {}) | {k: v for k, v in named.items() if v is not None}
     case = _with(_case(case), periods, bearing, fields, seconds)
-    with _startup_shown(progress):
+    with startup_log(progress):
         if results_dir is None:
             return simulate_case(RunSpec.of(case, in_process, None, fmu_dir, steps, threads),
                                  progress=progress)
@@ -225,7 +202,7 @@ def modes(case, undamped: bool = True, progress: bool = True):
     ``damped.frequency_hz[0]`` is mode 1). ``progress``: say what a first call compiles."""
     from orchestrator.analysis.campbell import linearise
 
-    with _startup_shown(progress):
+    with startup_log(progress):
         return linearise(_case(case), undamped=undamped)
 
 
@@ -261,6 +238,6 @@ def campbell(case, speeds, bearing_stiffness: float | None = None,
     if w.size < 2 or not np.all(np.isfinite(w)) or w[0] <= 0.0 or np.any(np.diff(w) <= 0.0):
         raise CaseError(f"speeds {w.tolist()!r} rad/s: at least two, finite, > 0 and "
                         "increasing")
-    with _startup_shown(progress):
+    with startup_log(progress):
         return campbell_dataset(campbell_data(_case(case), w, bearing_stiffness,
                                               max_frequency=max_frequency))

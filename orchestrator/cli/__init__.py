@@ -10,7 +10,7 @@ from bearing_fmu.base import BearingError
 from fmu_src.case import CaseError
 from gear_fmu.mesh.geometry import GearGeometryError
 from orchestrator.cli.options import UsageError
-from orchestrator.run.progress import RunInterrupted
+from orchestrator.run.progress import RunInterrupted, startup_log
 from orchestrator.run.spec import RunError
 
 
@@ -36,25 +36,6 @@ def make_parser() -> argparse.ArgumentParser:
     for command_group in (bearing, run, reproduce, fmus, modal, sweep, plot, doctor):
         command_group.add_parser(sub)
     return parser
-
-
-def _show_startup(show: bool) -> None:
-    """Print what a first run does once (the FMU build, the native layer, numba's compilation:
-    the ``gsb.startup`` log of the library, silent by default) on stderr, unless ``--quiet``."""
-    import logging
-
-    log = logging.getLogger("gsb.startup")
-    for handler in [h for h in log.handlers if getattr(h, "gsb_cli", False)]:
-        log.removeHandler(handler)
-        log.propagate = True  # as it was before the command line took the log
-        log.setLevel(logging.NOTSET)
-    if show:
-        handler = logging.StreamHandler(sys.stderr)
-        handler.setFormatter(logging.Formatter("gsb: %(message)s"))
-        handler.gsb_cli = True
-        log.addHandler(handler)
-        log.setLevel(logging.INFO)
-        log.propagate = False
 
 
 def _show_warnings(command: str):
@@ -84,9 +65,9 @@ def main(argv: list[str] | None = None) -> int:
     import warnings
 
     args = make_parser().parse_args(argv)
-    _show_startup(not getattr(args, "quiet", False))
-    try:
-        with warnings.catch_warnings():
+    try:  # what a first run builds or compiles, printed unless --quiet
+        with warnings.catch_warnings(), startup_log(not getattr(args, "quiet", False),
+                                                    always=True):
             warnings.showwarning = _show_warnings(args.command)
             return args.func(args)
     except RunInterrupted as exc:
@@ -104,8 +85,6 @@ def main(argv: list[str] | None = None) -> int:
         print(f"gsb {args.command}: internal error: {type(exc).__name__}: {exc} (please "
               "report it; GSB_TRACEBACK=1 shows the traceback)", file=sys.stderr)
         return 1
-    finally:  # main called in a process that goes on (a test, a script): no handler left
-        _show_startup(False)
 
 
 if __name__ == "__main__":

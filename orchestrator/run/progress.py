@@ -1,16 +1,45 @@
-"""What a long run shows and how it stops: the progress line, and SIGINT/SIGTERM held until
-the end of the current step (:class:`RunInterrupted` then carries the shell's exit code)."""
+"""What a long run shows and how it stops: the progress line, what a first run builds or
+compiles (:func:`startup_log`), and SIGINT/SIGTERM held until the end of the current step
+(:class:`RunInterrupted` then carries the shell's exit code)."""
 
 from __future__ import annotations
 
 import contextlib
+import logging
 import math
 import signal
 import sys
 import threading
 import time
 
-__all__ = ["Progress", "RunInterrupted", "deferred_signals"]
+__all__ = ["Progress", "RunInterrupted", "deferred_signals", "startup_log"]
+
+
+@contextlib.contextmanager
+def startup_log(show: bool, always: bool = False):
+    """Print the ``gsb.startup`` log (the FMU build, the native layer, numba's compilation:
+    what makes a first run slow; silent by default, as a library's log) on stderr as
+    ``gsb: <message>`` while the block runs, then give the logger back as it found it.
+    ``always`` (the command line, unless ``--quiet``): whatever the caller's logging, which
+    then does not get the records too; else (the API) only when nothing would show them: no
+    handler of the log's own, none on the root logger it propagates to."""
+    log = logging.getLogger("gsb.startup")
+    quiet = log.handlers or (log.propagate and logging.getLogger().handlers)
+    if not show or (quiet and not always):
+        yield
+        return
+    handler = logging.StreamHandler(sys.stderr)
+    handler.setFormatter(logging.Formatter("gsb: %(message)s"))
+    level, propagate = log.level, log.propagate
+    log.setLevel(logging.INFO)  # setLevel, not .level: it clears the loggers' caches
+    log.propagate = False
+    log.addHandler(handler)
+    try:
+        yield
+    finally:
+        log.removeHandler(handler)
+        log.setLevel(level)
+        log.propagate = propagate
 
 
 class RunInterrupted(RuntimeError):

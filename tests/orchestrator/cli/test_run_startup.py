@@ -56,17 +56,14 @@ def test_the_cli_shows_an_fmu_build_unless_quiet(show, tmp_path, monkeypatch, ca
     """The library logs the build on ``gsb.startup``; the CLI prints it on stderr, ``--quiet``
     (show False) not (the build itself stubbed: what is printed is the point)."""
     import fmu_src.build.fmus
-    from orchestrator.cli import _show_startup
     from orchestrator.coupling.fmi.cache import ensure_fmus
+    from orchestrator.run.progress import startup_log
 
     built = []
     monkeypatch.setattr(fmu_src.build.fmus, "build_fmus",
                         lambda dest, names, **kw: built.append(names))
-    _show_startup(show)
-    try:
+    with startup_log(show, always=True):  # as gsb's main runs a command
         ensure_fmus(["GearShaft"], tmp_path)
-    finally:
-        _show_startup(False)
     err = capsys.readouterr().err
     assert built == [["GearShaft"]]
     if show:
