@@ -302,8 +302,8 @@ def disc_gyroscopic(polar_inertia: float) -> np.ndarray:
     Examples
     --------
     >>> g = disc_gyroscopic(2.0)
-    >>> g[3, 4], g[4, 3]
-    (np.float64(2.0), np.float64(-2.0))
+    >>> float(g[3, 4]), float(g[4, 3])
+    (2.0, -2.0)
     """
     if not (math.isfinite(polar_inertia) and polar_inertia >= 0.0):
         raise ValueError(f"disc polar_inertia = {polar_inertia!r} kg m^2 must be finite and >= 0")
