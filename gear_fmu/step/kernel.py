@@ -185,12 +185,15 @@ def advance_pieces(n_pieces, slots, mc_t, g_k, g_const_k, s0_k, w_k, table, angl
     use_sets(meshes, True)
     xs, vs, as_ = x, v, a
     status, k = CONVERGED, 0
+    # a boolean, not the literal True, so that contact_newton is compiled once for this and
+    # the static solution (numba compiles a callee again for each literal argument)
+    has_used = np.bool_(True)
     for p in range(n_pieces):
         memo_p = memo if p == 0 else memo[:0]
         s = slots[p]
         status, k = advance(mc_t, g_k[s], g_const_k[s], s0_k[s], w_k[s], xs, vs, as_, f_c,
                             unb_coef, unb_idx, table[p, 1], f0, kb, cb, table[p, 0], angles[p],
-                            errs[p], has_err, meshes, fc, kc, totals, lengths, True, f_scale,
+                            errs[p], has_err, meshes, fc, kc, totals, lengths, has_used, f_scale,
                             tol, max_iter, residuals, x1, v1, a1, memo_p)
         if status != CONVERGED:
             return status, p, k

@@ -42,6 +42,7 @@ turns its outcome into the master's counters, laws and errors.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -69,8 +70,8 @@ from orchestrator.coupling.master import (
     python_structure_call,
 )
 
-__all__ = ["RELAXATION", "STALL", "CoupledSteps", "StepBlock", "coupled_steps", "evaluate_set",
-           "relaxed_law"]
+__all__ = ["RELAXATION", "STALL", "CoupledSteps", "StepBlock", "bearing_slots", "coupled_steps",
+           "evaluate_set", "relaxed_law"]
 
 #: weight of the new linearisation in a relaxed iteration (module docstring): the law used next
 #: is ``RELAXATION * new + (1 - RELAXATION) * last used``
@@ -317,9 +318,12 @@ def _evaluate_group(args, states, out):
 
 @njit(cache=True)
 def _group(args, index, states, out):
-    """A group's kernel on the rows ``index`` of the set's ``states`` and ``out``; the failed
-    bearing as the set's index."""
+    """A group's kernel on the rows ``index`` of the set's ``states`` and ``out`` (nothing for
+    an empty ``index``: :func:`bearing_slots`' placeholder); the failed bearing as the set's
+    index."""
     k = index.size
+    if k == 0:
+        return np.int64(-1), np.int64(0)
     whole = k == states.shape[0]  # every bearing, in order: no copies
     for g in range(k):
         whole = whole and index[g] == g
@@ -337,18 +341,72 @@ def _group(args, index, states, out):
 
 
 @njit(cache=True)
-def evaluate_set(groups, states, out):
-    """Every bearing at its journal state ``states`` (nb, 4) [m, m/s] into ``out`` (nb, 5, 2)
-    (force [N], Kb [N/m], Cb [N s/m], global frame), group by group: ``groups`` a tuple of
-    ``(args, index)``, ``index`` the group's bearings in the set. Returns ``(failed bearing or
-    -1, its status)``; the groups after a failed one are not evaluated."""
-    failed, why = -1, 0
-    for group in literal_unroll(groups):
-        if failed < 0:  # (no return inside a loop over a tuple of several types)
-            bad, status = _group(group[0], group[1], states, out)
-            if bad >= 0:
-                failed, why = np.int64(bad), np.int64(status)
+def _evaluate_slot(slot, states, out, failed, why):
+    """The groups of one kind (a tuple of groups of one type), into ``out``; returns the
+    failed bearing of lowest index so far (``failed``, -1 for none) and its status."""
+    for g in range(len(slot)):
+        bad, status = _group(slot[g][0], slot[g][1], states, out)
+        if bad >= 0 and (failed < 0 or bad < failed):
+            failed, why = bad, status
     return failed, why
+
+
+@njit(cache=True)
+def evaluate_set(slots, states, out):
+    """Every bearing at its journal state ``states`` (nb, 4) [m, m/s] into ``out`` (nb, 5, 2)
+    (force [N], Kb [N/m], Cb [N s/m], global frame), kind by kind: ``slots`` from
+    :func:`bearing_slots`. Returns ``(failed bearing or -1, its status)``: of the bearings
+    that failed, the one of lowest index (each group stops at its first failure)."""
+    failed, why = np.int64(-1), np.int64(0)
+    for slot in literal_unroll(slots):
+        failed, why = _evaluate_slot(slot, states, out, failed, why)
+    return failed, why
+
+
+#: the kinds of group in the order of :func:`bearing_slots`; a group on threads
+#: (``THREADED``) gets a slot only when there is one: its kernel loads numba's threading
+#: layer, which no other run (nor an FMU's host) should carry
+SLOT_KINDS = (HYBRID, SHORT, AFFINE, FMUS, PYTHON)
+
+
+@functools.cache
+def _placeholders() -> dict:
+    """A group of each kind of :data:`SLOT_KINDS` with no bearing: arguments of the types the
+    real groups have (the hybrid and short ones from a set of one bearing), an empty index."""
+    from bearing_fmu import BearingData
+    from bearing_fmu.hybrid.model import HybridBearing, HybridSet
+    from bearing_fmu.short_bearing import ShortBearing, ShortSet
+
+    b, q, none = BearingData(0.07, 0.05, 150e-6, 0.0288), np.eye(2)[None].copy(), np.empty(0,
+                                                                                    np.int64)
+    u32 = np.empty((0, 0), dtype=np.uint32)
+    args = {HYBRID: HybridSet([HybridBearing(b, n=16)], q, [1.0]).kernel_arguments(),
+            SHORT: ShortSet([ShortBearing(b)], q, [1.0]).kernel_arguments(),
+            AFFINE: (np.empty((0, 2, 2)), np.empty((0, 2)), np.empty((0, 2, 2)),
+                     np.empty((0, 2, 2))),
+            FMUS: (np.empty((0, 0), np.int64), u32, u32, np.empty((0, 4)), np.empty((0, 10))),
+            PYTHON: (np.int64(-1),)}
+    return {kind: ((a, none),) for kind, a in args.items()}
+
+
+def bearing_slots(groups) -> tuple:
+    """The bearing groups ``((arguments, indices), ...)`` of
+    :meth:`orchestrator.coupling.master.BearingSet.compiled_groups` as :func:`evaluate_set`
+    takes them: one slot per kind of :data:`SLOT_KINDS`, each the tuple of that kind's groups
+    or a placeholder with no bearing, then the groups on threads if any. The slots' types
+    then do not depend on the mix of models: :func:`coupled_steps` is compiled once per
+    transport (and number of meshes), not once for each mix; only hybrid bearings of two
+    grids (two hybrid groups) or on threads make another type."""
+    by_kind: dict[int, list] = {}
+    for group in groups:
+        by_kind.setdefault(len(group[0]), []).append(group)
+    unknown = set(by_kind) - {*SLOT_KINDS, THREADED}
+    if unknown:
+        raise TypeError(f"bearing groups of {sorted(unknown)} arguments: not a kind of "
+                        f"orchestrator.coupling.step (lengths {(*SLOT_KINDS, THREADED)})")
+    slots = tuple(tuple(by_kind[k]) if k in by_kind else _placeholders()[k]
+                  for k in SLOT_KINDS)
+    return slots + ((tuple(by_kind[THREADED]),) if THREADED in by_kind else ())
 
 
 # --- the iteration --------------------------------------------------------------------------
@@ -362,7 +420,7 @@ def coupled_steps(n, structure, bearings, f0, kb, cb, x0, force0, expanded, tol,
     ``expanded``, what a gear-shaft FMU's law inputs carry), until one is not accepted.
 
     ``structure``: the structure's arguments (:func:`structure_solve`); ``bearings``: the
-    bearing groups (:func:`evaluate_set`); ``mismatches`` (max_iterations,) each iteration's
+    bearing slots (:func:`bearing_slots`); ``mismatches`` (max_iterations,) each iteration's
     relative mismatch; ``states`` (nb, 4) and ``out`` (nb, 5, 2) the iterate's journal states
     and the bearings' results there. Step i writes its accepted journal states, bearing
     forces, the structure's outputs and iterations into row i of ``rec_states`` ...
@@ -469,7 +527,7 @@ class CoupledSteps:
         error in the block, after the steps before it are taken); ``time_of(k)``: the time
         [s] of the block's step k, as the caller's messages give it."""
         structure, m, finish = self.structure.compiled_block(t, dt, n, time_of)
-        groups = self.bearings.compiled_groups()
+        groups = bearing_slots(self.bearings.compiled_groups())
         nb = self.bearings.count
         n_out = self.structure.output_width
         if self._mismatches is None or self._mismatches.size != master.max_iterations:

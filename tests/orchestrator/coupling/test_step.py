@@ -130,6 +130,51 @@ def test_a_failing_bearing_names_the_first_bearing_out_of_its_clearance(model, t
         m.close()
 
 
+def test_bearings_of_two_models_name_the_failing_bearing_of_lowest_index():
+    """Bearings 1, 2 and 4 hybrid, 3 short: the hybrid group is evaluated first and fails at
+    bearing 4, the short one at bearing 3; bearing 3 is reported (the lowest index, whatever
+    the order of the groups)."""
+    case = load_case("baguet2010_spur", {"bearings.*.model": "hybrid",
+                                         "bearings.3.model": "short"})
+    m = _master(case)
+    try:
+        dt = time_step(case)
+        assert m.steps(0, dt, 2).error is None
+        _push_second_shaft(m)
+        e = m.steps(2, dt, 4).error
+        assert isinstance(e, BearingError)
+        assert (e.bearing, e.bearing_index) == ("3", 2)
+        assert "eccentricity" in str(e)
+    finally:
+        m.close()
+
+
+def test_one_compiled_step_whatever_the_mix_of_bearing_models():
+    """The bearing slots of :func:`coupled_steps` have one numba type for every model and mix
+    of models in-process, whatever the hybrid grid (a group on threads and hybrid bearings of
+    two grids aside): the step is compiled once, not once per mix (it once was, 17 times in a
+    run of the tests)."""
+    import numba
+
+    from bearing_fmu import MODELS
+    from orchestrator.coupling.step import bearing_slots
+
+    mixes = [{"bearings.*.model": model} for model in MODELS] + [
+        {"bearings.*.model": "hybrid", "bearings.2.model": "short", "bearings.3.model": "fd",
+         "bearings.4.model": "linear"},
+        {"bearings.*.model": "lumped", "bearings.1.model": "hybrid",
+         "bearings.2.model": "hybrid", "bearings.1.nodes": 32, "bearings.2.nodes": 32}]
+    types = set()
+    for overrides in mixes:
+        m = build_master(load_case("baguet2010_spur", overrides), in_process=True)
+        try:
+            types.add(numba.typeof(bearing_slots(m.bearings.compiled_groups())))
+        finally:
+            m.close()
+    one_each = numba.typeof(bearing_slots(()))
+    assert types == {one_each}, [str(t)[:300] for t in types]
+
+
 @pytest.mark.parametrize("name, steps", [("baguet2010_spur", 32), ("baguet2010_helical", 16)])
 def test_bearings_on_two_threads_give_the_bits_of_one(name, steps):
     """The hybrid bearings shared by two threads (``build_master(threads=2)``) against one
