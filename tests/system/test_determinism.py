@@ -5,15 +5,17 @@ context: what it inlines, the vector width, the CPU's FMA), a kernel loaded from
 with a stale callee compiled in (:mod:`bearing_fmu.numba_cache`), or two transports evaluating
 the bearings along different sequences (the hybrid solver starts from its last solution).
 Here the paper's spur case runs in fresh interpreters with numba's cache empty (every kernel
-compiled in the process), full (every kernel loaded) and half full (callees loaded, their
-callers compiled), each in-process and through the FMUs: every channel of every run,
-and the static solution, must be the same bits.
+compiled in the process) and full (every kernel loaded), each in-process and through the FMUs,
+and half full (callees loaded, their callers compiled) in-process: every channel of every run,
+and the static solution, must be the same bits. The FMU processes compiling their callers
+against cached callees (the same mechanism, in the FMUs' own copy of the code) is a ``slow``
+test: four bearing FMUs and the gear-shaft FMU compiling at once take a minute of the default
+run's five.
 
 From a fresh clone the cold in-process run is the xdist warm-up's (tests/conftest.py: it
 compiles the kernels the workers then load, in an empty cache of its own); the FMU transport's
-own kernels, which no in-process run compiles, are then compiled by the warm run and loaded by
-the half-warm one. Elsewhere (numba's cache already full, or no xdist) the test compiles its
-cold runs itself.
+own kernels, which no in-process run compiles, are then compiled by the warm run. Elsewhere
+(numba's cache already full, or no xdist) the test compiles its cold runs itself.
 """
 
 import hashlib
@@ -31,10 +33,12 @@ from tests.helpers import PROBES, ROOT, run_isolated
 PERIODS = DETERMINISM_PERIODS
 
 
-def _runs(fmu_dir, numba_cache=None, env_vars=None) -> dict:
-    """Both transports in a fresh interpreter (:func:`tests.probes.determinism.runs`)."""
+def _runs(fmu_dir, numba_cache=None, env_vars=None,
+          transports: tuple[str, ...] = ("in-process", "fmu")) -> dict:
+    """The ``transports`` in a fresh interpreter (:func:`tests.probes.determinism.runs`)."""
     return run_isolated(module="tests.probes.determinism", numba_cache=numba_cache,
-                        args=["runs", {"fmu_dir": fmu_dir, "periods": PERIODS}],
+                        args=["runs", {"fmu_dir": fmu_dir, "periods": PERIODS,
+                                       "transports": list(transports)}],
                         env_vars=env_vars)
 
 
@@ -56,23 +60,51 @@ def _cold_runs(fmu_dir, cache: Path) -> dict:
 CALLERS = ("hybrid/_kernels.*", "step/kernel.*", "coupling/step.*")
 
 
-def test_same_bits_with_a_cold_a_warm_and_a_half_warm_numba_cache(fmu_dir, tmp_path):
-    """Half warm: the full cache without the :data:`CALLERS`' entries, which are then compiled
-    against callees loaded from the cache."""
-    cold = _cold_runs(fmu_dir, tmp_path / "a")
-    warm = _runs(fmu_dir, tmp_path / "a")
-    shutil.copytree(tmp_path / "a", tmp_path / "b")
-    dropped = [f for pattern in CALLERS for f in (tmp_path / "b").rglob(pattern)]
+def _half_warm(full: Path, half: Path) -> list[Path]:
+    """A copy ``half`` of the numba cache ``full`` without the :data:`CALLERS`' entries (the
+    ones removed, as they were in ``full``)."""
+    shutil.copytree(full, half)
+    dropped = [f for pattern in CALLERS for f in half.rglob(pattern)]
     assert len(dropped) >= 4, dropped
     for f in dropped:
         f.unlink()
-    half = _runs(fmu_dir, tmp_path / "b")
-    assert sorted(f.name for pattern in CALLERS for f in (tmp_path / "b").rglob(pattern)) == \
-        sorted(f.name for f in dropped)  # compiled again
+    return dropped
+
+
+def _compiled_again(half: Path, dropped: list[Path]) -> bool:
+    """Whether the run in ``half`` compiled kernels of each of the :data:`CALLERS` again
+    (those of its transport: a run in-process does not compile the FMU transport's)."""
+    again = [{f.name for f in half.rglob(pattern)} for pattern in CALLERS]
+    return all(a and a <= {f.name for f in dropped} for a in again)
+
+
+def test_same_bits_with_a_cold_a_warm_and_a_half_warm_numba_cache(fmu_dir, tmp_path):
+    """Half warm: the full cache without the :data:`CALLERS`' entries, which are then compiled
+    against callees loaded from the cache (in-process; through the FMUs:
+    :func:`test_the_fmus_compiling_against_cached_callees_give_the_same_bits`)."""
+    cold = _cold_runs(fmu_dir, tmp_path / "a")
+    warm = _runs(fmu_dir, tmp_path / "a")
+    dropped = _half_warm(tmp_path / "a", tmp_path / "b")
+    half = _runs(fmu_dir, tmp_path / "b", transports=("in-process",))
+    assert _compiled_again(tmp_path / "b", dropped)
     assert cold["in-process rows"] == warm["fmu rows"] == 32 * PERIODS
     assert warm["in-process"] == warm["fmu"], "FMUs and in-process differ"
     assert {k: warm[k] for k in cold} == cold, "a warm numba cache changes the results"
-    assert half == warm, "callees loaded from numba's cache change the results"
+    assert half == {k: warm[k] for k in half}, "callees loaded from numba's cache change the " \
+        "results"
+
+
+@pytest.mark.slow
+def test_the_fmus_compiling_against_cached_callees_give_the_same_bits(fmu_dir, tmp_path):
+    """Through the FMUs, with every kernel compiled (an empty cache), then with the
+    :data:`CALLERS`' entries compiled in the FMUs' processes against callees loaded from the
+    cache."""
+    cold = _runs(fmu_dir, tmp_path / "a", transports=("fmu",))
+    dropped = _half_warm(tmp_path / "a", tmp_path / "b")
+    half = _runs(fmu_dir, tmp_path / "b", transports=("fmu",))
+    assert _compiled_again(tmp_path / "b", dropped)
+    assert cold["fmu rows"] == 32 * PERIODS
+    assert half == cold, "callees loaded from numba's cache change the FMUs' results"
 
 
 def test_a_bearing_fmu_in_a_host_without_the_package_gives_the_same_bits(fmu_dir, tmp_path):
