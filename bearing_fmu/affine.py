@@ -181,6 +181,18 @@ def affine_global(q, s, f0, kb, cb, out):
     law_to_global(q, loc, out)
 
 
+
+def affine_set_arguments(q, laws) -> tuple:
+    """The arguments of :func:`affine_set_global` before the states and the output: the
+    frames ``q`` (k, 2, 2) and the ``laws``' f0 (k, 2), kb and cb (k, 2, 2) stacked, each
+    C-contiguous (no law: the types of a set of none)."""
+    k = len(laws)
+    return (np.ascontiguousarray(q, dtype=np.float64).reshape(k, 2, 2),
+            np.array([law.f0 for law in laws], dtype=np.float64).reshape(k, 2),
+            np.array([law.kb for law in laws], dtype=np.float64).reshape(k, 2, 2),
+            np.array([law.cb for law in laws], dtype=np.float64).reshape(k, 2, 2))
+
+
 @njit(cache=True)
 def affine_set_global(q, f0, kb, cb, s, out):
     """:func:`affine_global` for a set of laws in one call, in their order: ``q`` (nb, 2, 2),

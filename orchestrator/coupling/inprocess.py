@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from bearing_fmu.affine import AffineLaws
+from bearing_fmu.affine import AffineLaws, affine_set_arguments
 from bearing_fmu.base import BearingError, BearingModel
 from bearing_fmu.frames import LocalFrame
 from bearing_fmu.hybrid.model import HybridBearing, HybridSet
@@ -266,10 +266,7 @@ class ModelBearings(BearingSet):
         laws = tuple(self.models[b].affine_law(self.omegas[b]) for b in index)
         if self._affine is None or any(a is not b for a, b in zip(self._affine[0], laws,
                                                                     strict=False)):
-            self._affine = (laws, (np.ascontiguousarray(self._q[index]),
-                                   np.array([law.f0 for law in laws]),
-                                   np.array([law.kb for law in laws]),
-                                   np.array([law.cb for law in laws])))
+            self._affine = (laws, affine_set_arguments(self._q[index], laws))
         return self._affine[1]
 
     def raise_failure(self, b, status, states) -> None:

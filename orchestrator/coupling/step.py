@@ -49,7 +49,7 @@ import numpy as np
 from numba import literal_unroll, njit, objmode
 from numba.extending import overload
 
-from bearing_fmu.affine import AffineLaws, _relinearise, affine_set_global
+from bearing_fmu.affine import AffineLaws, _relinearise, affine_set_arguments, affine_set_global
 from bearing_fmu.hybrid._kernels import hybrid_set_global, hybrid_set_threads
 from bearing_fmu.short_bearing import short_set_global
 from fmu_src.lifecycle import step_output_row
@@ -70,8 +70,8 @@ from orchestrator.coupling.master import (
     python_structure_call,
 )
 
-__all__ = ["RELAXATION", "STALL", "CoupledSteps", "StepBlock", "bearing_slots", "coupled_steps",
-           "evaluate_set", "relaxed_law"]
+__all__ = ["RELAXATION", "STALL", "CoupledSteps", "StepBlock", "bearing_slots", "compile_step",
+           "coupled_steps", "evaluate_set", "relaxed_law"]
 
 #: weight of the new linearisation in a relaxed iteration (module docstring): the law used next
 #: is ``RELAXATION * new + (1 - RELAXATION) * last used``
@@ -376,15 +376,14 @@ def _placeholders() -> dict:
     from bearing_fmu import BearingData
     from bearing_fmu.hybrid.model import HybridBearing, HybridSet
     from bearing_fmu.short_bearing import ShortBearing, ShortSet
+    from orchestrator.coupling.fmi.bearings import group_arguments
 
     b, q, none = BearingData(0.07, 0.05, 150e-6, 0.0288), np.eye(2)[None].copy(), np.empty(0,
                                                                                     np.int64)
-    u32 = np.empty((0, 0), dtype=np.uint32)
     args = {HYBRID: HybridSet([HybridBearing(b, n=16)], q, [1.0]).kernel_arguments(),
             SHORT: ShortSet([ShortBearing(b)], q, [1.0]).kernel_arguments(),
-            AFFINE: (np.empty((0, 2, 2)), np.empty((0, 2)), np.empty((0, 2, 2)),
-                     np.empty((0, 2, 2))),
-            FMUS: (np.empty((0, 0), np.int64), u32, u32, np.empty((0, 4)), np.empty((0, 10))),
+            AFFINE: affine_set_arguments(np.empty((0, 2, 2)), []),
+            FMUS: group_arguments([], [], []),
             PYTHON: (np.int64(-1),)}
     return {kind: ((a, none),) for kind, a in args.items()}
 
@@ -408,6 +407,18 @@ def bearing_slots(groups) -> tuple:
                   for k in SLOT_KINDS)
     return slots + ((tuple(by_kind[THREADED]),) if THREADED in by_kind else ())
 
+
+
+def compile_step(structure) -> None:
+    """Compile :func:`coupled_steps` (or load it from numba's cache) for a transport's
+    structure arguments ``structure`` (the gear-shaft FMU's:
+    :func:`orchestrator.coupling.fmi.structure.block_arguments` of empty lists) and bearing
+    slots of any mix, taking no step: what a warm-up calls before runs start at once (the
+    tests' conftest)."""
+    z = np.zeros
+    coupled_steps(0, structure, bearing_slots(()), z((1, 2)), z((1, 2, 2)), z((1, 2, 2)),
+                  z((1, 4)), z((1, 2)), False, 1e-6, 1, RELAXATION, STALL, z(1), z((1, 4)),
+                  z((1, 5, 2)), z((0, 1, 4)), z((0, 1, 2)), z((0, 1)), z(0, dtype=np.int64))
 
 # --- the iteration --------------------------------------------------------------------------
 @njit(cache=True)

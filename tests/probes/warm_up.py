@@ -57,7 +57,7 @@ def train_kernels() -> None:
 
 def native_and_structure() -> None:
     """The native layer, then the structure's and the master's kernels (short in-process runs
-    of both shipped cases)."""
+    of both shipped cases) and :func:`other_transports`."""
     from fmu_src.build.native import export_library
     from fmu_src.case import load_case
     from orchestrator.run.runner import run_case
@@ -67,15 +67,30 @@ def native_and_structure() -> None:
         for case, model in (("baguet2010_spur", "lumped"), ("baguet2010_helical", "lumped")):
             run_case(load_case(case, {"bearings.*.model": model}), steps=2, in_process=True,
                      out_dir=tmp + "/" + case, progress=False)
+    other_transports()
+
+
+def other_transports() -> None:
+    """The master's step through the gear-shaft FMU and with a structure called back in
+    Python, compiled without an FMU (:func:`orchestrator.coupling.step.compile_step`): about
+    30 s from an empty cache, which the first tests of both workers would otherwise spend at
+    the same time."""
+    import numpy as np
+
+    from orchestrator.coupling.fmi.structure import block_arguments
+    from orchestrator.coupling.step import compile_step
+
+    compile_step(block_arguments([], [], [], [], [], [], [], [], 0.0))
+    compile_step((np.zeros(1, dtype=np.int64),))  # PythonStructure.arguments
 
 
 def cold_paper_case(folder: str, periods: int, default_cache: str) -> None:
     """From an empty numba cache, in this process's own ``NUMBA_CACHE_DIR`` (``folder``/numba,
     cold by construction): the native layer, then the in-process run of
     :func:`tests.probes.determinism.runs` (every kernel compiled here), its result in
-    ``folder``/cold.json for tests/system/test_determinism.py; then this code version's
-    kernels copied into the ``default_cache`` folder where missing (each file written apart
-    and renamed into place), so that the workers load them."""
+    ``folder``/cold.json for tests/system/test_determinism.py, and :func:`other_transports`;
+    then this code version's kernels copied into the ``default_cache`` folder where missing
+    (each file written apart and renamed into place), so that the workers load them."""
     import json
     import os
     from pathlib import Path
@@ -90,6 +105,7 @@ def cold_paper_case(folder: str, periods: int, default_cache: str) -> None:
         raise RuntimeError(f"{own}: not an empty numba cache")
     result = runs(None, periods, ("in-process",))
     (Path(folder) / "cold.json").write_text(json.dumps(result))
+    other_transports()
     for path in sorted(p for p in own.rglob("*") if p.is_file()):
         target = Path(default_cache) / path.relative_to(own)
         if target.exists():

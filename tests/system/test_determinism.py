@@ -13,8 +13,8 @@ test: four bearing FMUs and the gear-shaft FMU compiling at once take a minute o
 run's five.
 
 From a fresh clone the cold in-process run is the xdist warm-up's (tests/conftest.py: it
-compiles the kernels the workers then load, in an empty cache of its own); the FMU transport's
-own kernels, which no in-process run compiles, are then compiled by the warm run. Elsewhere
+compiles the kernels the workers then load, in an empty cache of its own, the master's step
+through the FMUs too: :func:`tests.probes.warm_up.other_transports`). Elsewhere
 (numba's cache already full, or no xdist) the test compiles its cold runs itself.
 """
 

@@ -31,7 +31,7 @@ from fmu_src.state_codec import StateArrays
 from orchestrator.coupling.fmi.instance import FmuError, FmuInstance, all_finite, status_name
 from orchestrator.coupling.master import BearingSet, PythonGroup
 
-__all__ = ["MINIMAL_INPUTS", "MINIMAL_OUTPUTS", "FmuBearings"]
+__all__ = ["MINIMAL_INPUTS", "MINIMAL_OUTPUTS", "FmuBearings", "group_arguments"]
 
 #: what any bearing FMU must have: Real inputs (journal state, global frame [m, m/s]) ...
 MINIMAL_INPUTS = STATE_NAMES
@@ -42,6 +42,20 @@ MINIMAL_OUTPUTS = FORCE_NAMES
 #: ~ eps / FD_STEP, both near 1e-10 of the stiffness)
 FD_STEP = 1e-5
 
+
+
+def group_arguments(calls, in_vr, out_vr) -> tuple:
+    """The arguments of :func:`orchestrator.coupling.fmi.steps.fmu_bearing_group` for bearing
+    FMUs: per FMU the addresses of its FMI functions ``calls``, its input and output value
+    references, and the buffers of one exchange. With empty lists, their types without an FMU
+    (:func:`orchestrator.coupling.step.bearing_slots`' placeholder)."""
+    k = len(calls)
+
+    def table(rows, dtype):
+        return np.array(rows, dtype=dtype).reshape(k, len(rows[0]) if k else 0)
+
+    return (table(calls, np.int64), table(in_vr, np.uint32), table(out_vr, np.uint32),
+            np.empty((k, 4)), np.empty((k, 10)))
 
 class FmuBearings(BearingSet):
     """Bearing FMUs, one instance per bearing, each of its own file (swap a model by naming
@@ -218,12 +232,9 @@ class FmuBearings(BearingSet):
         groups = []
         full = [b for b, fo in enumerate(self.force_only) if not fo]
         if full:
-            calls = np.array([[address(f) for f in self._calls[b]] for b in full],
-                             dtype=np.int64)
-            groups.append(((calls, np.array([list(self._in_vr[b]) for b in full],
-                                            dtype=np.uint32),
-                            np.array([list(self._out_vr[b]) for b in full], dtype=np.uint32),
-                            np.empty((len(full), 4)), np.empty((len(full), 10))),
+            groups.append((group_arguments([[address(f) for f in self._calls[b]] for b in full],
+                                           [list(self._in_vr[b]) for b in full],
+                                           [list(self._out_vr[b]) for b in full]),
                            np.array(full, dtype=np.int64)))
         partial = [b for b, fo in enumerate(self.force_only) if fo]
         if partial:

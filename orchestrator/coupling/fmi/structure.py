@@ -28,7 +28,22 @@ from fmu_src.state_codec import StateArrays
 from orchestrator.coupling.fmi.instance import FmuError, FmuInstance, all_finite, status_name
 from orchestrator.coupling.master import StructureSlave
 
-__all__ = ["FmuState", "FmuStructure"]
+__all__ = ["FmuState", "FmuStructure", "block_arguments"]
+
+
+def block_arguments(addresses, law_vr, law_values, journal_vr, journal_values, extra_vr,
+                    extra_values, times, dt: float) -> tuple:
+    """The gear-shaft FMU's arguments of :func:`orchestrator.coupling.step.coupled_steps`
+    (:mod:`orchestrator.coupling.fmi.steps`): the FMI functions' and the component's
+    ``addresses``, the value references and buffers of the laws, the journal states and the
+    other outputs, the block's step start ``times`` [s] and ``dt`` [s]. With empty lists, the
+    arguments' types without an FMU (:func:`orchestrator.coupling.step.compile_step`)."""
+    u32 = np.uint32
+    return (np.array(addresses, dtype=np.int64), np.array(law_vr, dtype=u32),
+            np.asarray(law_values, dtype=np.float64), np.array(journal_vr, dtype=u32),
+            np.asarray(journal_values, dtype=np.float64), np.array(extra_vr, dtype=u32),
+            np.asarray(extra_values, dtype=np.float64), np.zeros(1, dtype=np.int64),
+            np.asarray(times, dtype=float), float(dt))
 
 
 class FmuState:
@@ -235,15 +250,11 @@ class FmuStructure(StructureSlave):
         if self.in_init:
             self.exit_initialization()
         times = np.array([time_of(k) for k in range(n)], dtype=float)
-        gear = np.array([address(f) for f in (self._set_real, self._get_real, self._do_step,
-                                              self._get_state, self._set_state,
-                                              self._free_state)] + [address(self._c)],
-                        dtype=np.int64)
-        u32 = np.uint32
-        args = (gear, np.array(self._law_vr, dtype=u32), self._law_np,
-                np.array(self._jr_vr, dtype=u32), self._jr_np, np.array(self._ex_vr, dtype=u32),
-                np.frombuffer(self._ex_val, dtype=np.float64), np.zeros(1, dtype=np.int64),
-                times, float(dt))
+        gear = [address(f) for f in (self._set_real, self._get_real, self._do_step,
+                                     self._get_state, self._set_state, self._free_state)]
+        args = block_arguments([*gear, address(self._c)], self._law_vr, self._law_np,
+                               self._jr_vr, self._jr_np, self._ex_vr,
+                               np.frombuffer(self._ex_val, dtype=np.float64), times, dt)
         self._since = len(self.slave.messages)
         n_steps = self.n_steps
 

@@ -133,9 +133,16 @@ def test_a_train_of_every_bearing_model_gives_the_same_bits_through_the_fmus(fmu
     linear and lumped bearings: through its own gear-shaft FMU and one bearing FMU instance
     per bearing, each of its own model and named after it, the static solution and four
     steps are the in-process transport's bits; the FD bearing's FMU (no compiled form) is
-    called back in Python from the compiled step."""
+    called back in Python from the compiled step. The compiled step's arguments have the
+    types the tests' warm-up compiles it for without an FMU
+    (:func:`tests.probes.warm_up.other_transports`): the bearing slots of either transport
+    those of no bearing, the FMU's structure arguments those of empty lists."""
+    import numba
+
     from bearing_fmu import MODELS
     from fmu_src.contract import bearing_fmu_name
+    from orchestrator.coupling.fmi.structure import block_arguments
+    from orchestrator.coupling.step import bearing_slots
 
     case = load_case(TRAIN_CASE, MIXED)
     names = case.names("bearings")
@@ -154,6 +161,14 @@ def test_a_train_of_every_bearing_model_gives_the_same_bits_through_the_fmus(fmu
         assert b.mesh_force.shape == (4, 2) and b.gear_nodes.shape == (4, 4, 2)
         assert b.states.shape == (4, 6, 4)
         _same_state(in_process, fmu)
+        none = numba.typeof(bearing_slots(()))
+        for m in (in_process, fmu):
+            assert numba.typeof(bearing_slots(m.bearings.compiled_groups())) == none
+        t = fmu.structure.t
+        args, _, finish = fmu.structure.compiled_block(t, dt, 1, lambda k: t + k * dt)
+        finish(0)
+        assert numba.typeof(args) == numba.typeof(
+            block_arguments([], [], [], [], [], [], [], [], 0.0))
     finally:
         _close(in_process, fmu)
 
