@@ -26,6 +26,24 @@ DATA = ROOT / "tests" / "data"
 PROBES = ROOT / "tests" / "probes"
 
 
+#: the hybrid film solver's relative tolerance on the force (tol = 1e-8): two hosts that call
+#: the bearings in their own order warm-start it from other solutions, so each force may move
+#: by as much; the structure's displacement under a relative change of its loads changes by as
+#: much relative to the largest (a stable, damped system over a few steps: no growth), so the
+#: positions of two such runs may differ by FILM_BOUND of the largest position
+FILM_BOUND = 1e-8
+
+
+def film_bounds(position_scale: float, velocity_scale: float, dt: float) -> tuple[float, float]:
+    """Bounds on the relative differences of two hosts' journal positions and velocities
+    that :data:`FILM_BOUND` allows: positions FILM_BOUND of the largest ``position_scale``
+    [m]; velocities what Newmark's velocity update (``v1 = 2 (x1 - x0) / dt - v0``, Eq. 12)
+    makes of such a position difference, ``2 FILM_BOUND position_scale / dt``, relative to
+    the largest velocity ``velocity_scale`` [m/s]; ``dt`` the step [s]."""
+    return FILM_BOUND, 2.0 * FILM_BOUND * position_scale / (dt * velocity_scale)
+
+
+
 def _argv(args) -> list[str]:
     """Command-line arguments of a probe: strings as they are, anything else as JSON."""
     return [a if isinstance(a, str) else json.dumps(a, default=str) for a in args]
