@@ -34,13 +34,15 @@ PROBES = ROOT / "tests" / "probes"
 FILM_BOUND = 1e-8
 
 
-def film_bounds(position_scale: float, velocity_scale: float, dt: float) -> tuple[float, float]:
-    """Bounds on the relative differences of two hosts' journal positions and velocities
-    that :data:`FILM_BOUND` allows: positions FILM_BOUND of the largest ``position_scale``
-    [m]; velocities what Newmark's velocity update (``v1 = 2 (x1 - x0) / dt - v0``, Eq. 12)
-    makes of such a position difference, ``2 FILM_BOUND position_scale / dt``, relative to
-    the largest velocity ``velocity_scale`` [m/s]; ``dt`` the step [s]."""
-    return FILM_BOUND, 2.0 * FILM_BOUND * position_scale / (dt * velocity_scale)
+def film_bounds(position_scale: float, velocity_scale: float, dt: float,
+                relative: float = FILM_BOUND) -> tuple[float, float]:
+    """Bounds on the relative differences of two runs' journal positions and velocities whose
+    bearing laws differ by ``relative`` (default :data:`FILM_BOUND`): positions ``relative``
+    of the largest ``position_scale`` [m]; velocities what Newmark's velocity update
+    (``v1 = 2 (x1 - x0) / dt - v0``, Eq. 12) makes of such a position difference,
+    ``2 relative position_scale / dt``, relative to the largest velocity ``velocity_scale``
+    [m/s]; ``dt`` the step [s]."""
+    return relative, 2.0 * relative * position_scale / (dt * velocity_scale)
 
 
 

@@ -30,7 +30,11 @@ def force_only_bearings(out_dir: str, gear_fmu: str, bearing_fmu: str) -> dict:
     def rel(k):
         return float(np.abs(b[k] - a[k]).max() / np.abs(a[k]).max())
 
+    from fmu_src.description import time_step
+
     return dict(position=rel("journal_position"), velocity=rel("journal_velocity"),
+                position_scale=float(np.abs(a["journal_position"]).max()),
+                velocity_scale=float(np.abs(a["journal_velocity"]).max()), dt=time_step(case),
                 label=b["attrs"]["bearing_model"],
                 its=[ref.iterations_per_step, mine.iterations_per_step])
 
