@@ -47,7 +47,7 @@ from fmu_src.fields import (
 )
 from fmu_src.fields import field_spec as _f
 from fmu_src.legacy_case import LegacyCaseWarning
-from fmu_src.units import symbol
+from fmu_src.units import UnitError, parse_window, symbol
 from gear_fmu.drivetrain import OUTPUT_ENDS
 from gear_fmu.layout import HANDS, UNBALANCE_MASSES, LayoutError, check_name
 from gear_fmu.mesh.geometry import GearGeometryError
@@ -246,6 +246,11 @@ FIELDS: tuple[Field, ...] = (
        "fastest mesh", default=32, minimum=4),
     _f("simulation.mesh_periods", "count", "mesh periods of the fastest mesh simulated",
        default=2048, minimum=1),
+    _f("simulation.window", "text", "the last part of the run that R, the peak-to-peak, the "
+       "line amplitudes and the figures are taken over: '26 periods' (of the fastest mesh), "
+       "'0.05 s' or '2 revolutions of <shaft>'; empty: the last revolution of the slowest "
+       "shaft, or the last half of a shorter run (orchestrator.analysis.metrics"
+       ".report_window)", default=""),
     _f("simulation.tolerance", "dimensionless", "convergence limit l of the coupled Newton",
        default=1e-5, **_POS, maximum=0.1),
     _f("simulation.max_iterations", "count", "coupled iterations per step before failing",
@@ -487,7 +492,22 @@ def parse_case(data: dict, source: str = "<case>") -> Case:
             values.update(_read_table(section, content, f"{section}.", source))
     _check_model_options(values, source)
     _check_train(values, source)
+    _check_window(values, source)
     return Case(values, source)
+
+
+def _check_window(v: dict, source: str) -> None:
+    """``simulation.window`` readable (:func:`fmu_src.units.parse_window`), its shaft one of
+    the train's."""
+    try:
+        window = parse_window(v["simulation.window"])
+    except UnitError as exc:
+        raise CaseError(f"{source}: {exc}") from None
+    shafts = instance_names(v, "shafts")
+    if window is not None and window[1] == "revolutions" and window[2] not in shafts:
+        raise CaseError(f"{source}: simulation.window = {v['simulation.window']!r}: no shaft "
+                        f"{window[2]!r}; the shafts are {', '.join(shafts)}"
+                        f"{_closest(window[2], shafts)}")
 
 
 def _check_model_options(v: dict, source: str) -> None:

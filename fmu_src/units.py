@@ -156,3 +156,40 @@ def parse_quantity(value, dimension: str, field: str) -> float:
     if not math.isfinite(out):
         raise UnitError(f"{field}: {value!r} is not finite")
     return out
+
+
+#: the units of a window of the report (:func:`parse_window`): mesh periods of the fastest
+#: mesh, a time, revolutions of a named shaft
+WINDOW_UNITS = ("periods", "time", "revolutions")
+_REVOLUTIONS = re.compile(r"^(?:revolutions?|revs?)\s+of\s+(?:the\s+)?(?:shaft\s+)?(\S+)$")
+
+
+def parse_window(value, field: str = "simulation.window") -> tuple[float, str, str] | None:
+    """The window of a run's report and figures as written in a case or on the command line:
+    ``""`` (the default rule: :func:`orchestrator.analysis.metrics.report_window`) -> None;
+    ``"26 periods"`` (mesh periods of the fastest mesh, the unit of ``mesh_periods``),
+    ``"0.05 s"`` (any time unit), ``"2 revolutions of gear_shaft"`` -> ``(count, unit,
+    shaft)``, ``unit`` one of :data:`WINDOW_UNITS`, ``count`` [-] or [s] > 0, ``shaft`` the
+    name given ("" unless revolutions). :class:`UnitError` naming ``field`` otherwise.
+
+    >>> parse_window("26 periods"), parse_window("50 ms"), parse_window("2 rev of gear_shaft")
+    ((26.0, 'periods', ''), (0.05, 'time', ''), (2.0, 'revolutions', 'gear_shaft'))
+    """
+    forms = ("'26 periods' (mesh periods of the fastest mesh), '0.05 s' or '2 revolutions of "
+             "<shaft>'")
+    if value is None or (isinstance(value, str) and not value.strip()):
+        return None
+    m = _QUANTITY.match(value) if isinstance(value, str) else None
+    if not m:
+        raise UnitError(f"{field}: cannot read {value!r} as a window: write {forms}")
+    number, rest = float(m.group(1)), m.group(2)
+    if not (math.isfinite(number) and number > 0.0):
+        raise UnitError(f"{field}: {value!r}: the window must be longer than 0")
+    if rest in ("periods", "period", "mesh periods", "mesh period"):
+        return number, "periods", ""
+    rev = _REVOLUTIONS.match(rest)
+    if rev:
+        return number, "revolutions", rev.group(1)
+    if rest in _SPELLINGS and _SPELLINGS[rest][1] == "time":
+        return number * _SPELLINGS[rest][0], "time", ""
+    raise UnitError(f"{field}: cannot read {value!r} as a window: write {forms}")

@@ -60,7 +60,7 @@ def _with(case: Case, periods: int | None = None, bearing: str | None = None,
 
 def simulate(case, periods: int | None = None, bearing: str | None = None, *,
              seconds: float | None = None, speed=None, torque=None, unbalance=None,
-             overrides: dict | None = None,
+             window: str | None = None, overrides: dict | None = None,
              in_process: bool = False, steps: int | None = None,
              results_dir: str | Path | None = None, fmu_dir: str | Path | None = None,
              progress: bool = True, threads: int = 1) -> Result:
@@ -81,6 +81,12 @@ def simulate(case, periods: int | None = None, bearing: str | None = None, *,
         The input speed (``drive.speed``), input torque (``drive.torque``) and the unbalance
         eccentricity of every gear (``gears.*.unbalance``): SI numbers or strings with units
         (``"3000 rpm"``), as ``gsb run --speed --torque --unbalance``.
+    window : str, optional
+        The last part of the run that ``result.report`` is taken over (the case's
+        ``simulation.window``, ``gsb run --window``): ``"26 periods"`` (of the fastest mesh),
+        ``"0.05 s"`` or ``"2 revolutions of gear_shaft"``; default: the last revolution of the
+        slowest shaft, or the last half of a shorter run. Stored with the report
+        (``report["window_kind"]``, ``report["window_s"]``).
     overrides : dict, optional
         Any case field, ``{"bearings.3.clearance": "120 um"}`` (``gsb run --set``).
     in_process : bool
@@ -118,7 +124,8 @@ def simulate(case, periods: int | None = None, bearing: str | None = None, *,
     """
     from orchestrator.run.runner import run_case, simulate_case
 
-    named = {"drive.speed": speed, "drive.torque": torque, "gears.*.unbalance": unbalance}
+    named = {"drive.speed": speed, "drive.torque": torque, "gears.*.unbalance": unbalance,
+             "simulation.window": window}
     fields = dict(overrides or {}) | {k: v for k, v in named.items() if v is not None}
     case = _with(_case(case), periods, bearing, fields, seconds)
     with startup_log(progress):

@@ -18,7 +18,7 @@ from fmu_src.description import gear_pairs, layout
 from orchestrator.analysis.spectrum import line_amplitudes, train_lines
 
 __all__ = ["fit_ellipse", "report_window", "run_metrics", "run_report", "static_mesh_load",
-           "static_mesh_loads", "steady_window", "stored_case"]
+           "static_mesh_loads", "steady_window", "stored_case", "window_duration"]
 
 
 def steady_window(time: np.ndarray, duration: float) -> np.ndarray:
@@ -55,18 +55,50 @@ def static_mesh_loads(case: Case) -> np.ndarray:
 
 def report_window(case: Case, time_s) -> tuple[float, str]:
     """The window of the report and the figures of a run ending at ``time_s[-1]`` [s]: the
-    last revolution of the train's slowest shaft (the paper's: the last gear revolution,
-    which holds a whole number of mesh periods of its mesh and of every shaft's 1x of a
-    single stage), or the last half of the run when it is shorter. Returns its duration [s]
-    and its name ("last revolution of the slowest shaft gear_shaft", "last half of the run").
+    case's ``simulation.window`` (:func:`fmu_src.units.parse_window`: mesh periods of the
+    fastest mesh, seconds or revolutions of a named shaft), by default the last revolution
+    of the train's slowest shaft (the paper's: the last gear revolution, which holds a whole
+    number of mesh periods of its mesh and of every shaft's 1x of a single stage), or the
+    last half of the run when it is shorter. Returns its duration [s] and its name ("last
+    revolution of the slowest shaft gear_shaft", "last 26 mesh periods", "last half of the
+    run"). ValueError for a given window longer than the run.
     """
-    lay = layout(case)
-    k = int(np.argmin(lay.ratios))
-    revolution = 2.0 * math.pi / (abs(lay.drive.speed) * float(lay.ratios[k]))
     end_s = float(np.asarray(time_s)[-1])
-    if math.isfinite(revolution) and end_s >= revolution * (1.0 - 1e-9):
+    duration, name = window_duration(case)
+    if duration is None:
+        return 0.5 * end_s, "last half of the run"
+    if end_s < duration * (1.0 - 1e-9):
+        if not case["simulation.window"]:
+            return 0.5 * end_s, "last half of the run"
+        raise ValueError(f"simulation.window = {case['simulation.window']!r} ({duration:.4g} s) "
+                         f"is longer than the run ({end_s:.4g} s): shorten it, or lengthen "
+                         f"the run (simulation.mesh_periods)")
+    return duration, name
+
+
+def window_duration(case: Case) -> tuple[float | None, str]:
+    """The duration [s] and the name of the case's window (:func:`report_window`), whatever
+    the run's length (None for a default rule without a revolution: a train at rest)."""
+    from fmu_src.description import mesh_period
+    from fmu_src.units import parse_window
+
+    lay = layout(case)
+    window = parse_window(case["simulation.window"])
+    if window is None:
+        k = int(np.argmin(lay.ratios))
+        revolution = 2.0 * math.pi / (abs(lay.drive.speed) * float(lay.ratios[k]))
+        if not math.isfinite(revolution):
+            return None, "last half of the run"
         return revolution, f"last revolution of the slowest shaft {lay.shafts[k].name}"
-    return 0.5 * end_s, "last half of the run"
+    count, unit, shaft = window
+    if unit == "time":
+        return count, f"last {count:g} s"
+    if unit == "periods":
+        return count * mesh_period(case), f"last {count:g} mesh periods"
+    ratio = float(lay.ratios[lay.shaft_index[shaft]])
+    plural = "" if count == 1 else "s"
+    return (count * 2.0 * math.pi / (abs(lay.drive.speed) * ratio),
+            f"last {count:g} revolution{plural} of {shaft}")
 
 
 def _per_mesh(results: dict, name: str, win) -> np.ndarray:

@@ -50,7 +50,7 @@ def add_case_argument(p, case_help: str = "case file (TOML) or the name of a shi
 #: the options that set a case field: option -> the field (``*``: every instance)
 OPTION_FIELDS = {"--speed": "drive.speed", "--torque": "drive.torque",
                  "--unbalance": "gears.*.unbalance", "--bearing": "bearings.*.model",
-                 "--periods": "simulation.mesh_periods"}
+                 "--periods": "simulation.mesh_periods", "--window": "simulation.window"}
 
 
 def add_override_options(p) -> None:
@@ -91,7 +91,8 @@ def overrides_from_args(args) -> dict:
     periods = getattr(args, "periods", None)
     given = {"--speed": args.speed, "--torque": args.torque, "--unbalance": args.unbalance,
              "--bearing": getattr(args, "bearing", None),
-             "--periods": None if periods is None else check_periods(periods)}
+             "--periods": None if periods is None else check_periods(periods),
+             "--window": getattr(args, "window", None)}
     for option, value in given.items():
         key = OPTION_FIELDS[option]
         if value is not None:

@@ -25,6 +25,10 @@ def add_parser(sub) -> None:
     p.add_argument("--out", type=Path, default=None,
                    help="folder of the figures (default: the folder beside the file named "
                         "after it)")
+    p.add_argument("--window", default=None,
+                   help="a run's file: the window of the figures instead of the stored case's "
+                        "simulation.window ('26 periods', '0.05 s', '2 revolutions of "
+                        "<shaft>')")
     p.set_defaults(func=plot)
 
 
@@ -64,8 +68,11 @@ def plot(args) -> int:
         if kind == "run":
             from orchestrator.figures.run import run_figures
 
-            written = run_figures(path, args.out)
+            written = run_figures(path, args.out, window=args.window)
         else:
+            if args.window is not None:
+                raise CaseError(f"{path}: --window applies to a run's results file; a "
+                                f"sweep's window is gsb sweep --steady-periods")
             from orchestrator.figures.sweep import sweep_figures
 
             written = sweep_figures(path, args.out)

@@ -35,6 +35,11 @@ def add_parser(sub) -> None:
                                                             "swaps the bearing FMU)")
     p.add_argument("--periods", type=int, help="mesh periods to simulate (overrides the case; "
                                                "with --resume: the new total length)")
+    p.add_argument("--window", help="the last part of the run that the report and the "
+                                    "figures are taken over (overrides simulation.window): "
+                                    "'26 periods' (of the fastest mesh), '0.05 s' or '2 "
+                                    "revolutions of <shaft>'; default: the last revolution "
+                                    "of the slowest shaft")
     p.add_argument("--in-process", action="store_true",
                    help="run the Python slaves directly, without the FMI layer")
     p.add_argument("--threads", type=int, default=1,
@@ -215,26 +220,31 @@ def run(args) -> int:
     finally:
         if folder is not None:
             shutil.rmtree(folder, ignore_errors=True)
-    figures = _figures(summary, args)
+    figures = _figures(summary, args, case["simulation.window"])
     print(f"static solution X0 ({case['case.name']}):")
     print(static_report(case, summary.static_positions))
     _print_summary(summary, figures)
     return 0
 
 
-def _figures(summary, args) -> list[Path]:
+def _figures(summary, args, window: str | None = None) -> list[Path]:
     """The figures of a finished run, in the folder beside its results file
-    (:func:`orchestrator.figures.run.run_figures`); none with ``--no-figures``."""
+    (:func:`orchestrator.figures.run.run_figures`, over ``window``: the case's
+    ``simulation.window``, None for the stored one); none with ``--no-figures``."""
     if args.no_figures:
         return []
     from orchestrator.figures.run import RUN_FIGURES, run_figures
+    from orchestrator.run.results import read_attributes
 
-    if summary.stored:  # drawn from the same file before, unless they are missing
+    kind = None if summary.report is None else summary.report["window_kind"]
+    if summary.stored:  # drawn from the same file before, unless missing or of another window
         drawn = [summary.results.with_suffix("") / name for name in RUN_FIGURES]
-        if all(p.is_file() and p.stat().st_mtime >= summary.results.stat().st_mtime
-               for p in drawn):
+        stored = str(read_attributes(summary.results).get("report_window_kind", ""))
+        if kind == stored and all(
+                p.is_file() and p.stat().st_mtime >= summary.results.stat().st_mtime
+                for p in drawn):
             return drawn
-    return run_figures(summary.results)
+    return run_figures(summary.results, window=window)
 
 
 def _print_summary(summary, figures: list[Path]) -> None:

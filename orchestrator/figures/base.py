@@ -105,9 +105,10 @@ def run_title(attrs: dict, steps: int, what: str = "") -> str:
 class RunData:
     """The arrays, the train and the windows the figures of a run share: the bearings,
     shafts, meshes and gears of the case stored in the results file (its order and names),
-    each shaft's speed ratio to the input, the report's window."""
+    each shaft's speed ratio to the input, the report's window (the stored case's, or
+    ``window``: its ``simulation.window`` replaced)."""
 
-    def __init__(self, results: dict):
+    def __init__(self, results: dict, window: str | None = None):
         from fmu_src.description import layout
         from orchestrator.analysis.metrics import stored_case
 
@@ -120,6 +121,13 @@ class RunData:
             raise ValueError("the file stores no case (attribute case_toml): its bearings, "
                              "shafts and meshes are unknown")
         self.case = stored_case(self.attrs)
+        if window is not None:
+            from fmu_src.case import CaseError
+
+            try:
+                self.case = self.case.with_overrides({"simulation.window": window})
+            except CaseError as exc:
+                raise ValueError(str(exc).replace("(stored case)", "(--window)")) from None
         lay = self.layout = layout(self.case)
         self.bearings = list(lay.bearing_names)
         self.bearing_shaft = [b.shaft for b in lay.bearings]

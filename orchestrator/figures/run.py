@@ -531,12 +531,14 @@ _DRAW = {"orbits.png": _orbits, "bearing_forces.png": _bearing_forces,
          "spectra.png": _spectra, "mesh.png": _mesh}
 
 
-def make_run_figures(results: dict) -> dict:
+def make_run_figures(results: dict, window: str | None = None) -> dict:
     """The run figures (matplotlib Figures, by file name) of what
-    :func:`orchestrator.run.results.read_results` returns; the caller closes them. Raises
-    ValueError below 2 time steps."""
+    :func:`orchestrator.run.results.read_results` returns, over the stored case's window or
+    ``window`` (:data:`fmu_src.case.FIELDS` ``simulation.window``); the caller closes them.
+    Raises ValueError below 2 time steps, or for a window that is not one or is longer than
+    the run."""
     plt = pyplot()
-    run = RunData(results)
+    run = RunData(results, window)
     figures = {}
     with plt.rc_context({"font.size": 10, "axes.titlesize": 11, "axes.labelsize": 10}):
         try:
@@ -549,15 +551,15 @@ def make_run_figures(results: dict) -> dict:
     return figures
 
 
-def run_figures(path, out_dir=None) -> list[Path]:
+def run_figures(path, out_dir=None, window: str | None = None) -> list[Path]:
     """Write :data:`RUN_FIGURES` of the results file ``path`` (module docstring) into
     ``out_dir`` (default: the folder beside the file named after its stem), removing those
-    PNGs left there by an earlier call first; returns the paths written. Raises ValueError if
-    the file holds fewer than 2 time steps."""
+    PNGs left there by an earlier call first; returns the paths written. ``window``: as
+    :func:`make_run_figures`. Raises ValueError if the file holds fewer than 2 time steps."""
     plt = pyplot()
     path = Path(path)
     out_dir = path.with_suffix("") if out_dir is None else Path(out_dir)
-    figures = make_run_figures(read_results(path))
+    figures = make_run_figures(read_results(path), window)
     out_dir.mkdir(parents=True, exist_ok=True)
     for name in RUN_FIGURES + _OLD_FIGURES:
         (out_dir / name).unlink(missing_ok=True)

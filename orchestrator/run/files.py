@@ -39,7 +39,7 @@ class TargetError(RuntimeError):
 def results_name(case, label: str, in_process: bool, steps: int | None = None,
                  bearing_fmu: Path | str | None = None) -> str:
     """``<case>_<label>[_inprocess]_<hash>`` (module docstring)."""
-    h = hashlib.sha256(case.to_toml(header=False).encode())
+    h = hashlib.sha256(_case_body(case.to_toml(header=False)).encode())
     h.update(f"\nlabel={label}\nin_process={bool(in_process)}\nsteps={steps}\n".encode())
     if bearing_fmu is not None:
         h.update(Path(bearing_fmu).read_bytes())
@@ -72,11 +72,21 @@ INPUTS = ("mode", "bearing_model", "bearing_fmu_sha256", "steps_total")
 
 
 def _case_body(toml: str) -> str:
-    """A stored case file without its header comment (which names where it was read from)."""
+    """A stored case file without its header comment (which names where it was read from)
+    and without ``simulation.window``: the window chooses what the report is taken over, not
+    what is computed, so runs that differ in it alone are the same run (and keep the names
+    they had before the field existed)."""
     lines = str(toml).split("\n")
     while lines and lines[0].startswith("#"):
         lines.pop(0)
-    return "\n".join(lines)
+    section = ""
+    kept = []
+    for line in lines:
+        if line.startswith("["):
+            section = line
+        if not (section == "[simulation]" and line.startswith("window = ")):
+            kept.append(line)
+    return "\n".join(kept)
 
 
 def _plain(value) -> str:

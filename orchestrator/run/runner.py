@@ -539,18 +539,32 @@ def run_case(case: Case, in_process: bool = False, out_dir: Path | str = "result
     except run_files.TargetError as exc:
         raise RunError(str(exc)) from None
     if where.stored:
-        return stored_summary(where.final)
+        return stored_summary(where.final, spec.case["simulation.window"])
     return _run_to_file(spec, attributes, where, progress=progress,
                         flush_seconds=flush_seconds, echo=echo_warnings)
 
 
-def stored_summary(path: Path) -> RunSummary:
+def with_window(attrs: dict, window: str) -> dict:
+    """A results file's attributes with its stored case's ``simulation.window`` replaced
+    (the case stored again in ``case_toml``)."""
+    from orchestrator.analysis.metrics import stored_case
+
+    case = stored_case(attrs)
+    if case["simulation.window"] == window:
+        return attrs
+    return attrs | {"case_toml": case.with_overrides({"simulation.window": window}).to_toml()}
+
+
+def stored_summary(path: Path, window: str | None = None) -> RunSummary:
     """The summary of a complete results file, read from it (nothing computed): its steps,
     wall time, coupled iterations, static solution and report
-    (:func:`orchestrator.analysis.metrics.run_report` of its channels)."""
+    (:func:`orchestrator.analysis.metrics.run_report` of its channels, over ``window``, the
+    ``simulation.window`` of this request, when given, instead of the stored case's)."""
     from orchestrator.analysis.metrics import run_report
 
     results = read_results(path)
+    if window is not None:
+        results["attrs"] = with_window(results["attrs"], window)
     a = results["attrs"]
     steps = len(results["time"])
     warnings, notes = ([w for w in str(a.get(key, "")).split("\n") if w]

@@ -77,8 +77,25 @@ class RunSpec:
         if steps is not None and (isinstance(steps, bool) or int(steps) < 1):
             raise RunError(f"steps = {steps!r}: need at least one step")
         threads = check_threads(threads, in_process)
-        return cls(case, in_process, fmus, fmu_dir, None if steps is None else int(steps),
+        spec = cls(case, in_process, fmus, fmu_dir, None if steps is None else int(steps),
                    threads)
+        spec.check_window()
+        return spec
+
+    def check_window(self) -> None:
+        """RunError before the run for a ``simulation.window`` longer than the run (the
+        default window, the last revolution of the slowest shaft, becomes the last half of a
+        shorter run: :func:`orchestrator.analysis.metrics.report_window`)."""
+        from orchestrator.analysis.metrics import window_duration
+
+        text = self.case["simulation.window"]
+        length = self.n_steps * self.dt
+        if text:
+            duration, _ = window_duration(self.case)
+            if duration > length * (1.0 + 1e-9):
+                raise RunError(f"simulation.window = {text!r} ({duration:.4g} s) is longer "
+                               f"than the run ({self.n_steps} steps, {length:.4g} s): shorten "
+                               f"it, or lengthen the run (simulation.mesh_periods)")
 
     @property
     def dt(self) -> float:

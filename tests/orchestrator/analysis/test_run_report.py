@@ -175,6 +175,55 @@ def test_run_report_over_the_last_half_of_a_short_run():
         run_report({k: v if k == "attrs" else v[:1] for k, v in results.items()})
 
 
+@pytest.mark.parametrize("window, duration, name", [
+    ("26 periods", 26 * 2 * math.pi / (Z1 * OMEGA), "last 26 mesh periods"),
+    ("2 revolutions of pinion_shaft", 2 * 2 * math.pi / OMEGA,
+     "last 2 revolutions of pinion_shaft"),
+    ("1 rev of gear_shaft", 2 * math.pi * Z2 / (Z1 * OMEGA), "last 1 revolution of gear_shaft"),
+    ("10 ms", 0.01, "last 0.01 s")])
+def test_run_report_over_a_stated_window(window, duration, name):
+    """``simulation.window`` in periods, revolutions of a named shaft or seconds: the report's
+    window is the last ``duration`` (from the teeth and the speed by hand), named so, and R
+    and the peak-to-peak are the extremes of the channels over the steps ending in it."""
+    n = Z2 * 32 + 800
+    results = hand_built_results(n)[0]
+    results["attrs"]["case_toml"] = load_case(SPUR, {"simulation.window": window}).to_toml()
+    r = run_report(results)
+    t = results["time"]
+    np.testing.assert_allclose(r["window_s"], [t[-1] - duration, t[-1]], rtol=1e-14)
+    assert r["window_kind"] == name
+    inside = t > t[-1] - duration * (1 - 1e-9)
+    assert inside.sum() == math.ceil(duration / DT - 1e-6)  # the steps ending in it
+    norm = np.hypot(*np.moveaxis(results["bearing_force"][inside], -1, 0))
+    assert r["dynamic_factor"][0] == pytest.approx(
+        results["mesh_force"][inside].max() / static_load(), rel=1e-14)
+    np.testing.assert_allclose(r["bearing_force_ptp"], np.ptp(norm, axis=0), rtol=1e-12,
+                               atol=1e-9)
+
+
+def test_a_stated_window_longer_than_the_run_or_unreadable_is_refused(tmp_path):
+    """Before the run (its length in steps and seconds in the message), and when reporting a
+    stored run; an unknown shaft gets the closest name, text that is no window the forms."""
+    from fmu_src.case import CaseError
+
+    case = load_case(SPUR, {"simulation.window": "2 revolutions of gear_shaft",
+                            "simulation.mesh_periods": 64})
+    with pytest.raises(RunError, match=r"simulation.window = '2 revolutions of gear_shaft' "
+                                       r"\(0.2335 s\) is longer than the run \(2048 steps"):
+        run_case(case, in_process=True, out_dir=tmp_path, progress=False)
+    assert not list(tmp_path.iterdir())  # nothing run, nothing written
+    results = hand_built_results(Z2 * 32 + 800)[0]
+    results["attrs"]["case_toml"] = load_case(SPUR, {"simulation.window": "0.5 s"}).to_toml()
+    with pytest.raises(ValueError, match=r"'0.5 s' \(0.5 s\) is longer than the run"):
+        run_report(results)
+    with pytest.raises(CaseError, match=r"no shaft 'gearshaft'.*did you mean gear_shaft"):
+        load_case(SPUR, {"simulation.window": "1 revolution of gearshaft"})
+    with pytest.raises(CaseError, match=r"cannot read '3 kg' as a window: write '26 periods'"):
+        load_case(SPUR, {"simulation.window": "3 kg"})
+    with pytest.raises(CaseError, match="the window must be longer than 0"):
+        load_case(SPUR, {"simulation.window": "0 periods"})
+
+
 def test_gsb_run_stores_the_report_as_numeric_attributes(tmp_path):
     """Through the pipeline: the spur case, linear bearings, 8 mesh periods in-process."""
     case = load_case(SPUR, {"bearings.*.model": "linear"})

@@ -199,3 +199,20 @@ def test_unit_messages_read_as_english(dimension, phrase):
         parse_quantity("1 furlong", dimension, "x")
     assert f"unknown unit 'furlong' in '1 furlong'; {phrase} takes one of the units " in \
         str(err.value)
+
+
+def test_window_errors_name_the_field_and_the_run_length(tmp_path, capsys):
+    """``--window`` text that is no window, a shaft that is not the train's, a window longer
+    than the run: one line each, exit 2, before anything runs."""
+    out = ["--out", str(tmp_path), "--in-process", "--periods", "64"]
+    line = one_error_line(*in_process(capsys, "run", "baguet2010_spur", "--window", "3 kg",
+                                      *out), "run")
+    assert "simulation.window: cannot read '3 kg' as a window: write '26 periods'" in line
+    line = one_error_line(*in_process(capsys, "run", "baguet2010_spur", "--window",
+                                      "1 rev of gearshaft", *out), "run")
+    assert "no shaft 'gearshaft'; the shafts are pinion_shaft, gear_shaft; did you mean " \
+           "gear_shaft?" in line
+    line = one_error_line(*in_process(capsys, "run", "baguet2010_spur", "--window",
+                                      "1 rev of gear_shaft", *out), "run")
+    assert "is longer than the run (2048 steps, 0.04759 s)" in line
+    assert not list(tmp_path.iterdir())

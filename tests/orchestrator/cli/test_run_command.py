@@ -183,3 +183,22 @@ def test_a_run_resumed_longer_is_replaced_only_with_overwrite(tmp_path, capsys):
     assert "--overwrite replaces it" in err and "np." not in err, err
     assert main([*args, "--overwrite"]) == 0
     assert len(read_results(path)["time"]) == 32
+
+
+def test_another_window_answers_from_the_stored_run(tmp_path, capsys):
+    """``--window`` chooses what the report is taken over, not what is computed: the same
+    run with another window is read from its file (untouched, its name the same), reported
+    and drawn over the new window."""
+    from orchestrator.cli import main
+
+    out = tmp_path / "results"
+    assert main(["run", *ONE_PERIOD, "--out", str(out)]) == 0
+    [path] = out.glob("*.h5")
+    data = path.read_bytes()
+    capsys.readouterr()
+    assert main(["run", *ONE_PERIOD, "--out", str(out), "--window", "0.5 periods"]) == 0
+    printed = capsys.readouterr().out
+    assert "32 steps read from the stored results of the same inputs" in printed
+    assert "report over the last 0.5 mesh periods" in printed
+    assert list(out.glob("*.h5")) == [path] and path.read_bytes() == data
+    assert read_attributes(path)["report_window_kind"] == "last half of the run"

@@ -246,3 +246,27 @@ def test_figures_of_a_quick_reproduction_are_stamped(tmp_path):
         assert [t.get_text() for t in fig.texts] == ([stamp.split(":")[0], stamp] if stamp
                                                      else [])
         assert (tmp_path / "f.png").stat().st_size > 5_000
+
+
+def test_gsb_plot_with_another_window(run_file, tmp_path, capsys):
+    """``gsb plot FILE --window``: the figures over that window, named on them (the orbits'
+    legend, the spectra's notes); a window that is none, or one for a sweep's file, is one
+    line naming it."""
+    from matplotlib.text import Text
+
+    plt = pyplot()
+    figures = make_run_figures(read_results(run_file), "26 periods")
+    try:
+        texts = {name: " ".join(t.get_text() for t in fig.findobj(Text))
+                 for name, fig in figures.items()}
+    finally:
+        for fig in figures.values():
+            plt.close(fig)
+    assert "last 26 mesh periods" in texts["orbits.png"]
+    assert "last 26 mesh periods" in texts["spectra.png"]
+    assert "last revolution of the slowest shaft" not in texts["spectra.png"]
+    assert main(["plot", str(run_file), "--window", "26 periods", "--out", str(tmp_path)]) == 0
+    assert len(capsys.readouterr().out.split()) == len(RUN_FIGURES)
+    assert main(["plot", str(run_file), "--window", "3 kg", "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert "cannot read '3 kg' as a window" in err and len(err.strip().splitlines()) == 1
