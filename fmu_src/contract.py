@@ -408,9 +408,10 @@ def gear_case_fields():
     exposes as parameters: the case's name, the shafts, gears, meshes and discs, where each
     bearing sits (its shaft and position), the drive, the damping model, the structure's
     tolerance and time-integration switches (the rest of the bearing fields belong to the
-    bearing FMUs, the run length and the coupled iterations to the master)."""
+    bearing FMUs, the run length, the coupled iterations and the report's window to the
+    master)."""
     master_only = ("simulation.steps_per_mesh_period", "simulation.mesh_periods",
-                   "simulation.max_iterations")
+                   "simulation.max_iterations", "simulation.window")
     return tuple(f for f in FIELDS
                  if f.key.split(".")[0] in ("shafts", "gears", "meshes", "discs", "drive")
                  or f.key in ("case.name", "bearings.*.shaft", "bearings.*.position")
@@ -519,8 +520,10 @@ BEARING_RESOURCE = "bearing.fmu"
 
 def transmission_fields():
     """The case fields the transmission FMU exposes as parameters: all of them but the case's
-    description and the run length (the host's stop time decides it)."""
-    return tuple(f for f in FIELDS if f.key not in ("case.description", "simulation.mesh_periods"))
+    description, the run length (the host's stop time decides it) and the report's window
+    (the FMU reports nothing: its host analyses its outputs)."""
+    return tuple(f for f in FIELDS if f.key not in ("case.description", "simulation.mesh_periods",
+                                                    "simulation.window"))
 
 
 def transmission_variables(case, bearing_fmu: str = "") -> tuple[FmiVar, ...]:
