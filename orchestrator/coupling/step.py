@@ -344,8 +344,8 @@ def _group(args, index, states, out):
 def _evaluate_slot(slot, states, out, failed, why):
     """The groups of one kind (a tuple of groups of one type), into ``out``; returns the
     failed bearing of lowest index so far (``failed``, -1 for none) and its status."""
-    for g in range(len(slot)):
-        bad, status = _group(slot[g][0], slot[g][1], states, out)
+    for group in slot:
+        bad, status = _group(group[0], group[1], states, out)
         if bad >= 0 and (failed < 0 or bad < failed):
             failed, why = bad, status
     return failed, why
