@@ -408,7 +408,6 @@ def bearing_slots(groups) -> tuple:
     return slots + ((tuple(by_kind[THREADED]),) if THREADED in by_kind else ())
 
 
-
 def compile_step(structure) -> None:
     """Compile :func:`coupled_steps` (or load it from numba's cache) for a transport's
     structure arguments ``structure`` (the gear-shaft FMU's:
@@ -419,6 +418,7 @@ def compile_step(structure) -> None:
     coupled_steps(0, structure, bearing_slots(()), z((1, 2)), z((1, 2, 2)), z((1, 2, 2)),
                   z((1, 4)), z((1, 2)), False, 1e-6, 1, RELAXATION, STALL, z(1), z((1, 4)),
                   z((1, 5, 2)), z((0, 1, 4)), z((0, 1, 2)), z((0, 1)), z(0, dtype=np.int64))
+
 
 # --- the iteration --------------------------------------------------------------------------
 @njit(cache=True)
