@@ -181,7 +181,6 @@ def affine_global(q, s, f0, kb, cb, out):
     law_to_global(q, loc, out)
 
 
-
 def affine_set_arguments(q, laws) -> tuple:
     """The arguments of :func:`affine_set_global` before the states and the output: the
     frames ``q`` (k, 2, 2) and the ``laws``' f0 (k, 2), kb and cb (k, 2, 2) stacked, each

@@ -33,14 +33,18 @@ def static_mesh_load(torque: float, base_radius: float, base_helix_angle: float 
     return abs(torque) / (base_radius * math.cos(base_helix_angle))
 
 
-def stored_case(attrs: dict, source: str | None = None) -> Case:
+def stored_case(attrs: dict, source: str | None = None, window: str | None = None) -> Case:
     """The case a results file was run with (root attribute ``case_toml``, the effective case
     after the overrides, bit for bit); ``source`` names it in error messages (default: the
-    case file it was read from)."""
+    case file it was read from); ``window``: its ``simulation.window`` replaced (what a
+    report of the stored run over another window takes)."""
     from fmu_src.case import parse_case, parse_toml
 
     where = f"{attrs.get('case_file', 'results') if source is None else source} (stored case)"
-    return parse_case(parse_toml(str(attrs["case_toml"]), where), where)
+    case = parse_case(parse_toml(str(attrs["case_toml"]), where), where)
+    if window is None or case["simulation.window"] == window:
+        return case
+    return case.with_overrides({"simulation.window": window})
 
 
 def static_mesh_loads(case: Case) -> np.ndarray:
@@ -65,11 +69,10 @@ def report_window(case: Case, time_s) -> tuple[float, str]:
     """
     end_s = float(np.asarray(time_s)[-1])
     duration, name = window_duration(case)
-    if duration is None:
+    shorter = duration is None or end_s < duration * (1.0 - 1e-9)
+    if shorter and not case["simulation.window"]:
         return 0.5 * end_s, "last half of the run"
-    if end_s < duration * (1.0 - 1e-9):
-        if not case["simulation.window"]:
-            return 0.5 * end_s, "last half of the run"
+    if shorter:
         raise ValueError(f"simulation.window = {case['simulation.window']!r} ({duration:.4g} s) "
                          f"is longer than the run ({end_s:.4g} s): shorten it, or lengthen "
                          f"the run (simulation.mesh_periods)")
@@ -78,7 +81,8 @@ def report_window(case: Case, time_s) -> tuple[float, str]:
 
 def window_duration(case: Case) -> tuple[float | None, str]:
     """The duration [s] and the name of the case's window (:func:`report_window`), whatever
-    the run's length (None for a default rule without a revolution: a train at rest)."""
+    the run's length (None and "" for the default rule without a revolution: a train at
+    rest)."""
     from fmu_src.description import mesh_period
     from fmu_src.units import parse_window
 
@@ -88,7 +92,7 @@ def window_duration(case: Case) -> tuple[float | None, str]:
         k = int(np.argmin(lay.ratios))
         revolution = 2.0 * math.pi / (abs(lay.drive.speed) * float(lay.ratios[k]))
         if not math.isfinite(revolution):
-            return None, "last half of the run"
+            return None, ""
         return revolution, f"last revolution of the slowest shaft {lay.shafts[k].name}"
     count, unit, shaft = window
     if unit == "time":
@@ -186,10 +190,11 @@ def run_metrics(results: dict, steady: float) -> dict:
     }
 
 
-def run_report(results: dict) -> dict:
+def run_report(results: dict, window: str | None = None) -> dict:
     """Figures of ``gsb run`` over the window of :func:`report_window` (the last revolution
-    of the slowest shaft, or the last half of a shorter run), for the train of the stored
-    case (bearings and meshes in its order).
+    of the slowest shaft, or the last half of a shorter run, or the stored case's
+    ``simulation.window``; ``window`` replaces it), for the train of the stored case
+    (bearings and meshes in its order).
 
     Returns
 
@@ -211,7 +216,7 @@ def run_report(results: dict) -> dict:
     time_s = np.asarray(results["time"], dtype=float)
     if time_s.size < 2:
         raise ValueError(f"a report needs at least 2 time steps, got {time_s.size}")
-    case = stored_case(results["attrs"])
+    case = stored_case(results["attrs"], window=window)
     lay = layout(case)
     duration, kind = report_window(case, time_s)
     end_s = float(time_s[-1])

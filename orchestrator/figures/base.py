@@ -120,14 +120,15 @@ class RunData:
         if "case_toml" not in self.attrs:
             raise ValueError("the file stores no case (attribute case_toml): its bearings, "
                              "shafts and meshes are unknown")
-        self.case = stored_case(self.attrs)
-        if window is not None:
-            from fmu_src.case import CaseError
+        from fmu_src.case import CaseError
 
-            try:
-                self.case = self.case.with_overrides({"simulation.window": window})
-            except CaseError as exc:
-                raise ValueError(str(exc).replace("(stored case)", "(--window)")) from None
+        try:
+            self.case = stored_case(self.attrs, window=window)
+        except CaseError as exc:
+            if window is None:
+                raise
+            # a window that is none: the one the caller gave
+            raise ValueError(str(exc).replace("(stored case)", "(--window)")) from None
         lay = self.layout = layout(self.case)
         self.bearings = list(lay.bearing_names)
         self.bearing_shaft = [b.shaft for b in lay.bearings]

@@ -544,17 +544,6 @@ def run_case(case: Case, in_process: bool = False, out_dir: Path | str = "result
                         flush_seconds=flush_seconds, echo=echo_warnings)
 
 
-def with_window(attrs: dict, window: str) -> dict:
-    """A results file's attributes with its stored case's ``simulation.window`` replaced
-    (the case stored again in ``case_toml``)."""
-    from orchestrator.analysis.metrics import stored_case
-
-    case = stored_case(attrs)
-    if case["simulation.window"] == window:
-        return attrs
-    return attrs | {"case_toml": case.with_overrides({"simulation.window": window}).to_toml()}
-
-
 def stored_summary(path: Path, window: str | None = None) -> RunSummary:
     """The summary of a complete results file, read from it (nothing computed): its steps,
     wall time, coupled iterations, static solution and report
@@ -563,8 +552,6 @@ def stored_summary(path: Path, window: str | None = None) -> RunSummary:
     from orchestrator.analysis.metrics import run_report
 
     results = read_results(path)
-    if window is not None:
-        results["attrs"] = with_window(results["attrs"], window)
     a = results["attrs"]
     steps = len(results["time"])
     warnings, notes = ([w for w in str(a.get(key, "")).split("\n") if w]
@@ -572,7 +559,7 @@ def stored_summary(path: Path, window: str | None = None) -> RunSummary:
     return RunSummary(Path(path), steps, float(a.get("wall_time", 0.0)), 0.0,
                       int(np.sum(results["iterations"])), 0,
                       int(a.get("static_iterations", 0)), np.asarray(a["static_journal"]),
-                      report=run_report(results) if steps >= 2 else None,
+                      report=run_report(results, window) if steps >= 2 else None,
                       warnings=warnings, notes=notes, stored=True)
 
 

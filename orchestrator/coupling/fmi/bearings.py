@@ -43,7 +43,6 @@ MINIMAL_OUTPUTS = FORCE_NAMES
 FD_STEP = 1e-5
 
 
-
 def group_arguments(calls, in_vr, out_vr) -> tuple:
     """The arguments of :func:`orchestrator.coupling.fmi.steps.fmu_bearing_group` for bearing
     FMUs: per FMU the addresses of its FMI functions ``calls``, its input and output value
@@ -56,6 +55,7 @@ def group_arguments(calls, in_vr, out_vr) -> tuple:
 
     return (table(calls, np.int64), table(in_vr, np.uint32), table(out_vr, np.uint32),
             np.empty((k, 4)), np.empty((k, 10)))
+
 
 class FmuBearings(BearingSet):
     """Bearing FMUs, one instance per bearing, each of its own file (swap a model by naming
