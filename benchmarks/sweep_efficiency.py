@@ -34,12 +34,12 @@ def main() -> None:
           f"{args.periods} mesh periods each; {os.cpu_count()} cores")
     with tempfile.TemporaryDirectory() as tmp:
         warm = points[:1] + points[-1:]
-        run_sweep(CASE, warm, f"{tmp}/warm.h5", 2, 1, scheduler="none", progress=False)
-        serial = run_sweep(CASE, points, f"{tmp}/serial.h5", args.periods, 26,
+        run_sweep(CASE, warm, f"{tmp}/warm.h5", 2, scheduler="none", progress=False)
+        serial = run_sweep(CASE, points, f"{tmp}/serial.h5", args.periods,
                            scheduler="none", progress=False)
         print(f"one process:               {serial.wall_time:7.1f} s")
-        run_sweep(CASE, warm, f"{tmp}/warm2.h5", 2, 1, n_workers=2, progress=False)
-        cluster = run_sweep(CASE, points, f"{tmp}/cluster.h5", args.periods, 26, n_workers=2,
+        run_sweep(CASE, warm, f"{tmp}/warm2.h5", 2, n_workers=2, progress=False)
+        cluster = run_sweep(CASE, points, f"{tmp}/cluster.h5", args.periods, n_workers=2,
                             progress=False)
         print(f"LocalCluster, 2 workers:   {cluster.wall_time:7.1f} s (cluster start included)")
     eff = serial.wall_time / (2 * cluster.wall_time)

@@ -28,7 +28,7 @@ def main(speeds=SPEEDS, periods: int = 64, scheduler: str | None = "none",
     case = gsb.load_case("baguet2010_spur", overrides)
     with tempfile.TemporaryDirectory() as tmp:
         res = gsb.sweep(case, {"drive.speed": list(speeds)}, Path(tmp) / "sweep.h5",
-                        periods, bearings=["hybrid"], steady_periods=52, scheduler=scheduler,
+                        periods, bearings=["hybrid"], window="52 periods", scheduler=scheduler,
                         progress=False)
         ds = res.to_xarray().sel(bearing_model="hybrid")
         series = read_sweep(res.path)

@@ -178,19 +178,35 @@ def read_sweep(path: str | Path):
 
 
 def sweep(case, vary: dict, path: str | Path, periods: int, bearings=None,
-          steady_periods: int = 26, scheduler: str | None = None, n_workers: int = 2,
-          progress: bool = True, overwrite: bool = False):
+          window: str | None = None, scheduler: str | None = None, n_workers: int = 2,
+          progress: bool = True, overwrite: bool = False, steady_periods: int | None = None):
     """Every combination of the values in ``vary`` (``{"drive.speed": [300, 325, 350],
     ...}``, values as in a case file) and of ``bearings`` (default: the case's model), each an
     in-process run of ``periods`` mesh periods on Dask (``scheduler``: a cluster's address;
     default: ``n_workers`` local processes), written to the sweep file ``path`` as the points
-    complete. An existing ``path`` is a RunError unless ``overwrite``. Returns
-    :class:`orchestrator.sweeps.runner.SweepResult` (``.to_xarray()``: the varied fields and
-    the bearing models as dimensions, :func:`read_sweep`); ``gsb plot path`` draws its
-    figures."""
+    complete. ``window``: the steady window every point is reduced over, as
+    ``simulation.window`` (``"26 periods"``, ``"0.05 s"``, ``"2 revolutions of gear_shaft"``;
+    default: the case's own, by default the last revolution of the slowest shaft or the last
+    half of the run if shorter), stored in the file (attribute ``window``, variable
+    ``window_s``); ``steady_periods=N``, an earlier spelling of ``window="N periods"``, warns.
+    An existing ``path`` is a RunError unless ``overwrite``; a window longer than a point's run
+    a CaseError (nothing run). Returns :class:`orchestrator.sweeps.runner.SweepResult`
+    (``.to_xarray()``: the varied fields and the bearing models as dimensions,
+    :func:`read_sweep`); ``gsb plot path`` draws its figures."""
+    import warnings
+
+    from fmu_src.case import CaseError
     from orchestrator.run.spec import RunError
     from orchestrator.sweeps.runner import SweepPoint, run_sweep
 
+    if steady_periods is not None:
+        if window is not None:
+            raise CaseError(f"steady_periods={steady_periods}: the same as window; give one of "
+                            f"them, not both (window={window!r})")
+        warnings.warn(f"sweep(steady_periods={steady_periods}) is "
+                      f"sweep(window='{steady_periods} periods')", DeprecationWarning,
+                      stacklevel=2)
+        window = f"{steady_periods} periods"
     if Path(path).exists() and not overwrite:
         raise RunError(f"{path} exists: a sweep never replaces a file silently; "
                        "overwrite=True replaces it, read_sweep(path) reads it")
@@ -198,8 +214,9 @@ def sweep(case, vary: dict, path: str | Path, periods: int, bearings=None,
     models = [None] if bearings is None else list(bearings)
     points = [SweepPoint(dict(zip(keys, values, strict=True)), model)
               for model in models for values in itertools.product(*vary.values())]
-    return run_sweep(_case(case), points, path, periods, steady_periods, scheduler,
-                     n_workers, progress, vary_keys=keys)
+    base = _with(_case(case), fields=None if window is None else {"simulation.window": window})
+    return run_sweep(base, points, path, periods, scheduler, n_workers, progress,
+                     vary_keys=keys)
 
 
 def modes(case, undamped: bool = True, progress: bool = True):

@@ -72,7 +72,8 @@ def plot(args) -> int:
         else:
             if args.window is not None:
                 raise CaseError(f"{path}: --window applies to a run's results file; a "
-                                f"sweep's window is gsb sweep --steady-periods")
+                                f"sweep's points are reduced over their window as they run: "
+                                f"gsb sweep --window")
             from orchestrator.figures.sweep import sweep_figures
 
             written = sweep_figures(path, args.out)

@@ -28,8 +28,7 @@ from bearing_fmu import MODELS
 from fmu_src.case import CaseError, field_of
 from fmu_src.units import DIMENSIONS, UnitError, parse_quantity
 
-__all__ = ["MAX_POINTS", "SHORTHANDS", "add_parser", "parse_vary", "slowest_revolution",
-           "sweep"]
+__all__ = ["MAX_POINTS", "SHORTHANDS", "add_parser", "parse_vary", "sweep"]
 
 #: ``--vary`` shorthands (``*``: every gear)
 SHORTHANDS = {"speed": "drive.speed", "torque": "drive.torque",
@@ -74,10 +73,14 @@ def add_parser(sub) -> None:
     p.add_argument("--periods", type=int, default=None,
                    help="mesh periods of every run (default: the case's "
                         "simulation.mesh_periods)")
-    p.add_argument("--steady-periods", type=int, default=None,
-                   help="mesh periods (of the fastest mesh) of the steady window the figures "
-                        "are taken over (default: one revolution of the slowest shaft, 157 "
-                        "for the paper's gear, or half the run if shorter)")
+    p.add_argument("--window", default=None, metavar="TEXT",
+                   help="the steady window every point's figures are taken over: '26 "
+                        "periods' (mesh periods of the fastest mesh), '0.05 s' or '2 "
+                        "revolutions of SHAFT' (default: the case's simulation.window, by "
+                        "default the last revolution of the slowest shaft, 157 mesh periods "
+                        "for the paper's gear, or the last half of the run if shorter)")
+    p.add_argument("--steady-periods", type=int, default=None, metavar="N",
+                   help="the same as --window 'N periods' (kept for earlier scripts)")
     p.add_argument("--scheduler", default=None, metavar="ADDRESS",
                    help="address of a running Dask scheduler (tcp://host:8786); 'none' runs "
                         "the points one after the other in this process (default: a "
@@ -187,23 +190,28 @@ def _fmt(key: str, value) -> str:
     return f"{key.split('.')[-1]} {value:g}{' ' + unit if unit not in ('', '1') else ''}"
 
 
-def sweep_hash(case, vary: list, bearings: list, periods: int, steady: int) -> str:
-    """8 hex digits of the effective case, the varied values, the bearing models and the
-    periods (the sweep file's name)."""
+def sweep_hash(case, vary: list, bearings: list, periods: int) -> str:
+    """8 hex digits of the effective case (its window too), the varied values, the bearing
+    models and the periods (the sweep file's name)."""
     blob = json.dumps({"case": case.to_toml(header=False), "vary": [[k, list(v)] for k, v in vary],
-                       "bearings": bearings, "periods": periods, "steady_periods": steady})
+                       "bearings": bearings, "periods": periods})
     return hashlib.sha256(blob.encode()).hexdigest()[:8]
 
 
 def _plan(args):
-    """The checked inputs: (case, vary [(key, values)], bearings, points, periods, steady)."""
+    """The checked inputs: (case, vary [(key, values)], bearings, points, periods); the
+    case carries the window (``--window``)."""
     from fmu_src import description
     from fmu_src.case import load_case
     from orchestrator.cli.options import set_overrides
     from orchestrator.run.spec import check_periods
-    from orchestrator.sweeps.runner import SweepPoint, check_point
+    from orchestrator.sweeps.runner import SweepPoint, check_point, sweep_window
 
-    case = load_case(args.case, set_overrides(args.overrides))
+    window = _window(args)
+    overrides = set_overrides(args.overrides)
+    if window is not None:
+        overrides["simulation.window"] = window
+    case = load_case(args.case, overrides)
     vary = []
     for text in args.vary:
         key, values = parse_vary(text)
@@ -224,12 +232,6 @@ def _plan(args):
                         f"{MAX_POINTS}")
     periods = check_periods(case["simulation.mesh_periods"] if args.periods is None
                             else args.periods)
-    turn = slowest_revolution(case)
-    steady = args.steady_periods
-    if steady is None:
-        steady = turn if periods >= turn else max(1, periods // 2)
-    elif not 1 <= steady <= periods:
-        raise CaseError(f"--steady-periods {steady}: must lie in [1, --periods = {periods}]")
     keys = [k for k, _ in vary]
     points = []
     for bearing in bearings:
@@ -243,17 +245,24 @@ def _plan(args):
             except CaseError as exc:
                 raise CaseError(f"point {len(points)} ({label}): {exc}") from None
             points.append(p)
-    return case, vary, bearings, points, periods, steady
+    try:
+        sweep_window(case, points, periods)
+    except CaseError as exc:
+        given = f"--window {window!r}" if window is not None else "the case's window"
+        raise CaseError(f"{given} for --periods {periods}: {exc}") from None
+    return case, vary, bearings, points, periods
 
 
-def slowest_revolution(case) -> int:
-    """Periods of the fastest mesh in a revolution of the slowest shaft, rounded up (the
-    paper's: 157, a gear revolution)."""
-    from orchestrator.analysis.campbell import order_lines
-
-    lines = order_lines(case)
-    fastest = max(lines["mesh_orders"] or [1.0])
-    return max(1, math.ceil(fastest / min(lines["shaft_ratios"]) - 1e-9))
+def _window(args) -> str | None:
+    """``--window``, or ``--steady-periods N`` as 'N periods' (None: the case's own)."""
+    if args.steady_periods is None:
+        return args.window
+    if args.window is not None:
+        raise CaseError(f"--steady-periods {args.steady_periods}: the same as --window; give "
+                        f"one of them, not both (--window {args.window!r})")
+    if args.steady_periods < 1:
+        raise CaseError(f"--steady-periods {args.steady_periods}: must be >= 1")
+    return f"{args.steady_periods} periods"
 
 
 def _checks(args) -> None:
@@ -272,13 +281,13 @@ def sweep(args) -> int:
     from orchestrator.sweeps.runner import run_sweep, stopped_on_physics
 
     _checks(args)
-    case, vary, bearings, points, periods, steady = _plan(args)
-    digest = sweep_hash(case, vary, bearings, periods, steady)
+    case, vary, bearings, points, periods = _plan(args)
+    digest = sweep_hash(case, vary, bearings, periods)
     path = Path(args.out) / f"{case.name}_sweep_{digest}.h5"
     if path.exists() and not args.overwrite:
         raise CaseError(f"{path} exists (the same sweep was run before); --overwrite replaces "
                         "it")
-    res = run_sweep(case, points, path, periods, steady, scheduler=args.scheduler,
+    res = run_sweep(case, points, path, periods, scheduler=args.scheduler,
                     n_workers=args.workers or 2, progress=not args.quiet, name=path.stem,
                     vary_keys=[k for k, _ in vary], worker_timeout=args.worker_timeout)
     ok = res.n_points - len(res.failed)

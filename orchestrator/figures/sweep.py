@@ -141,6 +141,14 @@ def waterfall_data(points, ix: int, bearing: int = 0, ratio: float = 1.0):
     return np.array([p["values"][ix] for p in points]), orders[1:] / ratio, amp[:, 1:]
 
 
+def _window_name(attrs: dict) -> str:
+    """The window a sweep file's figures are taken over (its ``window`` attribute; a file of
+    an earlier version: its ``steady_periods``)."""
+    if attrs.get("window"):
+        return str(attrs["window"])
+    return f"last {attrs['steady_periods']} mesh periods"
+
+
 def sweep_figures(path, out_dir=None) -> list[Path]:
     """The PNG figures of a sweep file (module docstring) in ``out_dir`` (default: the folder
     named after the file's stem, beside it); returns their paths ([] when no point
@@ -180,8 +188,7 @@ def sweep_figures(path, out_dir=None) -> list[Path]:
     fixed = _fixed(case, keys)
     head = (f"{attrs['case']}: bearing model{'s' * (n_models > 1)} {bearings}"
             + (f"; {fixed}" if fixed else ""))
-    window = (f"{attrs['periods']} mesh periods per run, last {attrs['steady_periods']} "
-              "(steady window)")
+    window = f"{attrs['periods']} mesh periods per run, window: {_window_name(attrs)}"
     failed = sum(p["error"] is not None for p in points)
     if failed:
         window += f"; {failed} failed point{'s' * (failed > 1)} left out"

@@ -8,7 +8,9 @@ attributes (:data:`DATASETS`).
 * root attributes: ``kind = "sweep"``, ``case`` (name), ``case_file`` (where the client read
   it), ``case_toml`` (the case's text, SI; the points override it), ``vary_keys`` (strings,
   the case fields varied), ``vary_units`` (their SI units), ``bearings`` (the bearing models,
-  strings), ``periods``, ``steady_periods`` (mesh periods of the run and of its steady window),
+  strings), ``periods`` (mesh periods of every run), ``window`` (the name of the window the
+  points' figures are taken over, :func:`orchestrator.sweeps.runner.sweep_window`; a file of an
+  earlier version holds ``steady_periods`` instead, that window in mesh periods),
   ``n_points``, ``n_failed``, ``status`` ("running", "complete", "failed points",
   "worker timeout", "scheduler lost", "interrupted"), ``complete`` (true only when every point
   succeeded), ``wall_time`` [s], and the names that label the points' datasets:
@@ -73,6 +75,7 @@ DATASETS = {
                                   "the full-resolution steady window, a whole number of "
                                   "input revolutions when it holds one; docs/equations.md)"),
     "spectrum_window": (symbol("time"), "start and end of the spectrum's window"),
+    "window_s": (symbol("time"), "duration of the steady window (attribute window)"),
 }
 
 
@@ -145,7 +148,7 @@ def _strings(values):
 
 
 def write_header(path: Path, base: Case, vary_keys, bearings, periods: int,
-                 steady_periods: int, n_points: int) -> None:
+                 window: str, n_points: int) -> None:
     """Create the sweep file with its root attributes (module docstring), no point yet."""
     import h5py
 
@@ -159,7 +162,7 @@ def write_header(path: Path, base: Case, vary_keys, bearings, periods: int,
         f.attrs["vary_units"] = _strings(field_unit(k) for k in vary_keys)
         f.attrs["bearings"] = _strings(bearings)
         f.attrs["periods"] = int(periods)
-        f.attrs["steady_periods"] = int(steady_periods)
+        f.attrs["window"] = str(window)
         f.attrs["n_points"] = int(n_points)
         f.attrs["n_failed"] = 0
         f.attrs["status"] = "running"
@@ -246,7 +249,7 @@ def read_sweep_attrs(path) -> dict:
 GRIDDED = {"R": ("mesh",), "transmission_error_ptp": ("mesh",), "force_ptp": ("bearing",),
            "force_mean": ("bearing",), "orbit_centre": ("bearing", "axis"),
            "orbit_mean": ("bearing", "axis"), "static_journal": ("bearing", "axis"),
-           "wall_time": (), "iterations_per_step": ()}
+           "window_s": (), "wall_time": (), "iterations_per_step": ()}
 
 
 def _dim(key: str) -> str:

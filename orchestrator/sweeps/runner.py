@@ -45,7 +45,7 @@ from orchestrator.sweeps.file import DATASETS, field_unit, read_sweep, read_swee
 
 __all__ = ["DATASETS", "SweepInterrupted", "SweepPoint", "SweepResult", "as_case",
            "check_point", "field_unit", "point_spectrum", "read_sweep", "read_sweep_attrs",
-           "run_point", "run_sweep"]
+           "run_point", "run_sweep", "sweep_window"]
 
 #: the highest order kept in a point's spectrum, in orders of the fastest mesh
 MAX_MESH_ORDER = 3.5
@@ -101,46 +101,46 @@ def as_case(case) -> Case:
     return load_case(case)
 
 
-def point_spectrum(case: Case, results: dict, steady_periods: int) -> dict:
+def point_spectrum(case: Case, results: dict, window_s: float) -> dict:
     """Order spectrum of ||F_b|| (every bearing) of a run, from its full-resolution samples,
     in peak amplitude (:func:`orchestrator.analysis.spectrum.order_spectrum`, the scale of
     every figure), in orders of the input shaft (cycles per input revolution; divide by a
     shaft's speed ratio for that shaft's orders), 0 to 3.5 times the fastest mesh's order.
 
-    The window is the last whole number of input revolutions of the steady window (the last
-    ``steady_periods`` periods of the fastest mesh), or the whole steady window if it is
-    shorter than one revolution; so the input shaft's orders (the paper's pinion orders 1, z1,
-    2 z1, ...) fall on bins when it holds a revolution and read their amplitudes exactly."""
+    The window is the last whole number of input revolutions of the steady window (its last
+    ``window_s`` seconds: :func:`orchestrator.analysis.metrics.report_window`), or the whole
+    steady window if it is shorter than one revolution; so the input shaft's orders (the
+    paper's pinion orders 1, z1, 2 z1, ...) fall on bins when it holds a revolution and read
+    their amplitudes exactly."""
     from fmu_src.description import layout, time_step
     from orchestrator.analysis.campbell import order_lines
     from orchestrator.analysis.spectrum import order_spectrum
 
     fastest = max(order_lines(case)["mesh_orders"] or [1.0])  # mesh periods per input rev
-    per_mesh = int(case["simulation.steps_per_mesh_period"])
-    steady = max(1, int(steady_periods))
-    revolutions = int(steady // fastest)
-    n = round(revolutions * fastest * per_mesh) if revolutions >= 1 else steady * per_mesh
+    per_revolution = fastest * int(case["simulation.steps_per_mesh_period"])  # steps
+    dt = time_step(case)
+    steps = max(1, round(window_s / dt))
+    revolutions = int(steps / per_revolution + 1e-9)
+    n = round(revolutions * per_revolution) if revolutions >= 1 else steps
     time_s = np.asarray(results["time"], dtype=float)
     n = min(n, time_s.size)
     force = np.asarray(results["bearing_force"][-n:], dtype=float)
     norm = np.hypot(force[..., 0], force[..., 1])
     input_hz = abs(layout(case).drive.speed) / (2.0 * math.pi)
-    orders, amp = order_spectrum(norm, time_step(case), input_hz,
-                                 max_order=MAX_MESH_ORDER * fastest)
+    orders, amp = order_spectrum(norm, dt, input_hz, max_order=MAX_MESH_ORDER * fastest)
     step = time_s[1] - time_s[0] if time_s.size > 1 else 0.0
     return {"spectrum_orders": orders, "spectrum": amp.T,
             "spectrum_window": np.array([time_s[-n] - step, time_s[-1]])}
 
 
-def run_point(case, point: SweepPoint, periods: int, steady_periods: int,
-              keep_steps: int = 4096) -> dict:
-    """Run one point and reduce it (executed on a worker). ``case``: the sweep's case as a
-    :class:`~fmu_src.case.Case` or its TOML text (never a path); the point's overrides are
-    applied here. Never raises (errors are returned) except
+def run_point(case, point: SweepPoint, periods: int, keep_steps: int = 4096) -> dict:
+    """Run one point and reduce it (executed on a worker) over its window (the case's
+    ``simulation.window``: :func:`orchestrator.analysis.metrics.report_window`). ``case``: the
+    sweep's case as a :class:`~fmu_src.case.Case` or its TOML text (never a path); the point's
+    overrides are applied here. Never raises (errors are returned) except
     :class:`~orchestrator.run.progress.RunInterrupted`, a Ctrl-C of a serial sweep."""
     try:
-        from fmu_src.description import mesh_period
-        from orchestrator.analysis.metrics import run_metrics, steady_window
+        from orchestrator.analysis.metrics import report_window, run_metrics, steady_window
         from orchestrator.run.runner import simulate_case
         from orchestrator.run.spec import RunSpec
 
@@ -152,11 +152,10 @@ def run_point(case, point: SweepPoint, periods: int, steady_periods: int,
         if point.bearing is not None:
             run["bearings.*.model"] = point.bearing
         case = case.with_overrides(point.overrides | run)
-        steady_n = min(steady_periods, periods)
-        steady = steady_n * mesh_period(case)
         t0 = time.perf_counter()
         result = simulate_case(RunSpec.of(case, in_process=True), echo_warnings=False)
         s, r = result.summary, result.as_dict()
+        steady, _ = report_window(case, r["time"])
         metrics = run_metrics(r, steady)
         win = steady_window(r["time"], steady)
         stride = max(1, int(np.count_nonzero(win)) // keep_steps)
@@ -167,7 +166,8 @@ def run_point(case, point: SweepPoint, periods: int, steady_periods: int,
         out["mesh_force"] = r["mesh_force"][win][::stride]
         out["transmission_error"] = r["transmission_error"][win][::stride]
         out["static_journal"] = np.asarray(s.static_positions)
-        out.update(point_spectrum(case, r, steady_n))
+        out["window_s"] = np.asarray(steady)
+        out.update(point_spectrum(case, r, steady))
         out["wall_time"] = np.asarray(time.perf_counter() - t0)
         out["iterations_per_step"] = np.asarray(s.iterations_per_step)
         return {"ok": True, "data": out, "warnings": "\n".join(s.warnings)}
@@ -212,6 +212,30 @@ def check_point(case: Case, point: SweepPoint) -> Case:
     if point.bearing is not None:
         overrides["bearings.*.model"] = point.bearing
     return case.with_overrides(overrides)
+
+
+def sweep_window(case: Case, points, periods: int) -> str:
+    """The name of the window every point's figures are taken over (the case's
+    ``simulation.window``, :func:`orchestrator.analysis.metrics.report_window`, for a run of
+    ``periods`` mesh periods): "last 26 mesh periods", or each distinct name joined by "; " when
+    the points differ (a window in seconds over several speeds is the same name). Raises
+    :class:`~fmu_src.fields.CaseError` naming the first point whose run is shorter than the
+    window (a point the case loader rejects is skipped: it is recorded as failed)."""
+    from fmu_src.description import mesh_period
+    from orchestrator.analysis.metrics import report_window
+
+    names = []
+    for i, point in enumerate(points):
+        try:
+            own = check_point(case, point).with_overrides({"simulation.mesh_periods": periods})
+        except CaseError:
+            continue
+        try:
+            _, name = report_window(own, [periods * mesh_period(own)])
+        except ValueError as exc:
+            raise CaseError(f"point {i} ({point.label or point.overrides}): {exc}") from None
+        names.append(name)
+    return "; ".join(dict.fromkeys(names))
 
 
 @contextlib.contextmanager
@@ -326,21 +350,24 @@ def _workers(client) -> int:
     return int(info.get("n_workers", len(info.get("workers", {}))))
 
 
-def run_sweep(case, points, path: str | Path, periods: int, steady_periods: int = 26,
-              scheduler: str | None = None, n_workers: int = 2, progress: bool = True,
-              name: str = "", vary_keys=None, worker_timeout: float = 60.0) -> SweepResult:
+def run_sweep(case, points, path: str | Path, periods: int, scheduler: str | None = None,
+              n_workers: int = 2, progress: bool = True, name: str = "", vary_keys=None,
+              worker_timeout: float = 60.0) -> SweepResult:
     """Run the points, gather them into one HDF5 file as they complete (module docstring).
 
     ``case``: a :class:`~fmu_src.case.Case`, its TOML text, or a case file / shipped name read
-    here (the workers get its content). ``vary_keys``: the fields varied (default: every key the
+    here (the workers get its content); its ``simulation.window`` is every point's window
+    (:func:`sweep_window`). ``vary_keys``: the fields varied (default: every key the
     points override, in order of appearance). ``worker_timeout`` [s]: stop when no worker is
-    connected to the scheduler for that long. Raises :class:`~orchestrator.run.spec.RunError` if
-    the cluster cannot be reached (nothing written) and :class:`SweepInterrupted` on Ctrl-C (the
-    finished points kept in the file)."""
+    connected to the scheduler for that long. Raises :class:`~fmu_src.fields.CaseError` for a
+    window longer than a point's run and :class:`~orchestrator.run.spec.RunError` if the
+    cluster cannot be reached (nothing written in either case), :class:`SweepInterrupted` on
+    Ctrl-C (the finished points kept in the file)."""
     from orchestrator.run.progress import Progress
 
     base = as_case(case)
     points = list(points)
+    window = sweep_window(base, points, periods)
     if vary_keys is None:
         vary_keys = list(dict.fromkeys(k for p in points for k in p.overrides))
     vary_keys = list(vary_keys)
@@ -382,7 +409,7 @@ def run_sweep(case, points, path: str | Path, periods: int, steady_periods: int 
                 store(i, {"ok": False, "error": why, "traceback": ""})
 
     try:
-        sweep_file.write_header(path, base, vary_keys, bearings, periods, steady_periods,
+        sweep_file.write_header(path, base, vary_keys, bearings, periods, window,
                                 len(points))
         try:
             for i, why in rejected.items():
@@ -391,13 +418,13 @@ def run_sweep(case, points, path: str | Path, periods: int, steady_periods: int 
             todo = [i for i in range(len(points)) if i not in rejected]
             if client is None:
                 for i in todo:
-                    store(i, run_point(base, points[i], periods, steady_periods))
+                    store(i, run_point(base, points[i], periods))
                     done += 1
                     bar.update(done, f"{len(failed)} failed")
             else:  # Ctrl-C taken between polls: Dask's waits may swallow a KeyboardInterrupt
                 with deferred_signals((signal.SIGINT,), "stopping the sweep") as asked:
                     status, message, done = _gather(client, base, points, todo, periods,
-                                                    steady_periods, store, bar, done, failed,
+                                                    store, bar, done, failed,
                                                     scheduler, worker_timeout, progress, asked)
                 if message:
                     give_up(message)
@@ -420,16 +447,16 @@ def run_sweep(case, points, path: str | Path, periods: int, steady_periods: int 
     return SweepResult(path, wall, len(points), failed, status, message, warned)
 
 
-def _gather(client, base, points, todo, periods, steady_periods, store, bar, done, failed,
-            scheduler, worker_timeout, progress, asked):
+def _gather(client, base, points, todo, periods, store, bar, done, failed, scheduler,
+            worker_timeout, progress, asked):
     """Submit the points, store them as they complete; stop when no worker is connected for
     ``worker_timeout`` s, and with KeyboardInterrupt once ``asked`` (the signals received,
     :func:`orchestrator.run.progress.deferred_signals`) is not empty. Returns (status, message,
     done)."""
     from dask.distributed import wait
 
-    futures = {client.submit(run_point, base, points[i], periods, steady_periods,
-                             pure=False): i for i in todo}
+    futures = {client.submit(run_point, base, points[i], periods, pure=False): i
+               for i in todo}
     pending = set(futures)
     poll = min(1.0, max(0.05, worker_timeout / 10))
     alone_since = None

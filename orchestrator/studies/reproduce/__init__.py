@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import json
 import time
-from dataclasses import asdict
+from dataclasses import asdict, fields
 from pathlib import Path
 
 from orchestrator.run.results import read_results
@@ -74,7 +74,9 @@ def draw(out: str | Path = "results/reproduce") -> Path:
     """Figures and ``report.md`` from the runs of :func:`reproduce` kept in ``out``."""
     out = Path(out)
     meta = json.loads((out / "reproduce.json").read_text())
-    plan = Plan(**{k: tuple(v) if isinstance(v, list) else v for k, v in meta["plan"].items()})
+    known = {f.name for f in fields(Plan)}  # an earlier version's plan held steady_periods
+    plan = Plan(**{k: tuple(v) if isinstance(v, list) else v for k, v in meta["plan"].items()
+                   if k in known})
     runs = {k: read_results(out / "runs" / name) for k, name in meta["runs"].items()}
     sweeps = {p.stem: read_sweep(p) for p in sorted((out / "sweeps").glob("*.h5"))}
     figs = draw_all(runs, sweeps, plan, out / "figures")

@@ -32,7 +32,9 @@ class Plan:
     helix_angles: tuple  # deg, Figs. 11, 14
     table4_periods: int  # transient length timed for Table 4 (FD projected from fd_periods)
     fd_periods: int
-    steady_periods: int = 157  # one gear revolution: the window of every figure
+    #: the window of every figure (``simulation.window``; "": the default rule, the last
+    #: revolution of the slowest shaft: the paper's last gear revolution, 157 mesh periods)
+    window: str = ""
     label: str = "full"
 
 
@@ -47,7 +49,7 @@ FULL = Plan(periods=2048, speeds=tuple(float(w) for w in range(100, 1201, 100)),
 #: :meta hide-value:
 QUICK = Plan(periods=192, speeds=(100.0, 325.0, 600.0, 900.0, 1200.0),
              torques=(100.0, 220.0, 400.0), unbalances=(0.6e-3, 2.4e-3),
-             helix_angles=(0.0, 12.5), table4_periods=64, fd_periods=2, steady_periods=157,
+             helix_angles=(0.0, 12.5), table4_periods=64, fd_periods=2,
              label="quick")
 
 
@@ -111,7 +113,8 @@ def run_parameter_sweeps(plan: Plan, out: Path, scheduler, workers, progress) ->
     """All sweep files (``out/sweeps/<name>.h5``), run one after the other on the cluster;
     returns the failed points of each."""
     w = plan.speeds
-    spur, helical = load_case(SPUR), load_case(HELICAL)  # the workers get the content
+    window = {"simulation.window": plan.window} if plan.window else {}
+    spur, helical = load_case(SPUR, window), load_case(HELICAL, window)  # content to workers
     sweeps = {
         "fig08_speed": (spur, [SweepPoint({"drive.speed": s}, m, f"{m} {s:g}")
                                for m in ("hybrid", "linear") for s in w]),
@@ -131,7 +134,7 @@ def run_parameter_sweeps(plan: Plan, out: Path, scheduler, workers, progress) ->
     failed = {}
     for name, (case, points) in sweeps.items():
         res = run_sweep(case, points, out / "sweeps" / f"{name}.h5", plan.periods,
-                        plan.steady_periods, scheduler=scheduler, n_workers=workers,
+                        scheduler=scheduler, n_workers=workers,
                         progress=progress, name=name)
         failed[name] = res.failed
     return failed

@@ -70,6 +70,18 @@ def bearing_force_departure(ptp_bearing1: float, r_300: float, r_max: float) -> 
         "bearings' static stiffness) bear on it as well.")
 
 
+def _window_text(plan) -> str:
+    """The plan's window as the spur case's report names it, in mesh periods."""
+    from fmu_src.case import load_case
+    from fmu_src.description import mesh_period
+    from orchestrator.analysis.metrics import window_duration
+
+    case = load_case("baguet2010_spur",
+                     {"simulation.window": plan.window} if plan.window else None)
+    duration, name = window_duration(case)
+    return f"{name}, {duration / mesh_period(case):.4g} mesh periods"
+
+
 def write_report(out, plan, meta, figs) -> Path:
     table4, timings = meta["table4"], meta["timings"]
     rel = {k: v[0].relative_to(out) for k, v in figs.items()}
@@ -132,8 +144,8 @@ def write_report(out, plan, meta, figs) -> Path:
         "# Baguet & Jacquenot (2010), section 4, regenerated",
         "",
         f"Plan: **{plan.label}** ({plan.periods} mesh periods per run, speeds "
-        f"{', '.join(f'{w:g}' for w in plan.speeds)} rad/s, steady-state window "
-        f"{plan.steady_periods} mesh periods = one gear revolution)."
+        f"{', '.join(f'{w:g}' for w in plan.speeds)} rad/s, steady-state window of every "
+        f"run and sweep point: {_window_text(plan)})."
         + (" Quick runs are not steady state: compare trends only." if plan.label == "quick"
            else ""),
         f"Wall time: {timings['total']:.0f} s (base runs {timings['base runs']:.0f} s, Table 4 "

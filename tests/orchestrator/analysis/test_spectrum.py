@@ -194,7 +194,7 @@ def test_every_figure_path_shows_the_same_amplitude_at_the_same_order(synthetic_
     all."""
     case, results = synthetic_run
     run = run_spectrum(RunData(results))
-    stored = point_spectrum(case, results, steady_periods=Z2)
+    stored = point_spectrum(case, results, window_s=Z2 * PER_MESH * DT)
     point = {"values": [325.0], **stored}
     report = run_report(results)["line_amplitudes"]  # (4, 5): 1x, gear 1x, 26x, 52x, 78x
     np.testing.assert_array_equal(run["lines"], report)

@@ -17,7 +17,7 @@ import pytest
 
 from fmu_src import description
 from fmu_src.case import load_case
-from fmu_src.description import layout
+from fmu_src.description import layout, mesh_period
 from orchestrator.cli import main
 from orchestrator.run.results import read_results
 
@@ -159,8 +159,12 @@ def test_a_speed_sweep_of_the_two_stage_reducer(tmp_path, capsys):
     path = Path(re.search(r"^sweep: (.*)$", out, re.MULTILINE).group(1))
     attrs = read_sweep_attrs(path)
     assert attrs["bearing_names"] == BEARINGS and attrs["mesh_names"] == MESHES
-    assert attrs["steady_periods"] == 2  # half the run: shorter than an output revolution
+    assert attrs["window"] == "last half of the run"  # shorter than an output revolution
     points = read_sweep(path)
+    half = 2 * mesh_period(load_case(CASE, {"drive.speed": "2800 rpm"}))
+    np.testing.assert_allclose(points[0]["window_s"], half, rtol=1e-12)
+    np.testing.assert_allclose(points[0]["time"][-1] - points[0]["time"][0],
+                               half - (points[0]["time"][1] - points[0]["time"][0]), rtol=1e-9)
     assert len(points) == 2 and all(p["error"] is None for p in points)
     for p in points:
         assert p["R"].shape == (2,) and (p["R"] > 1.0).all()

@@ -6,6 +6,7 @@ import os
 import numpy as np
 import pytest
 
+from fmu_src.case import load_case
 from orchestrator.analysis.metrics import fit_ellipse, steady_window
 from orchestrator.sweeps.runner import SweepPoint, read_sweep, read_sweep_attrs, run_sweep
 
@@ -47,8 +48,9 @@ def test_sweep_gathers_points_and_reports_a_failed_one(scheduler, tmp_path):
     points = [SweepPoint({"drive.speed": 200.0}, "linear", "a"),
               SweepPoint({"drive.speed": -5.0}, "linear", "bad"),
               SweepPoint({"drive.speed": 400.0}, "linear", "b")]
-    res = run_sweep(SPUR, points, tmp_path / "s.h5", periods=4, steady_periods=2,
-                    scheduler=scheduler, progress=False)
+    case = load_case(SPUR, {"simulation.window": "2 periods"})
+    res = run_sweep(case, points, tmp_path / "s.h5", periods=4, scheduler=scheduler,
+                    progress=False)
     assert [i for i, _ in res.failed] == [1]
     assert "drive.speed" in res.failed[0][1]
     assert dict(os.environ) == environment
@@ -135,13 +137,12 @@ def test_a_sweep_from_an_unguarded_script_stops_at_once_with_one_line(tmp_path):
 def test_a_sweep_that_is_not_a_grid_is_labelled_by_point(tmp_path):
     """Points that do not fill the product of their values (a run_sweep of chosen points):
     one dimension ``point``, the varied values and the model as coordinates along it."""
-    from fmu_src.case import load_case
     from orchestrator.sweeps import file as sweep_file
 
     case = load_case(SPUR)
     path = tmp_path / "s.h5"
     keys = ["drive.speed", "drive.torque"]
-    sweep_file.write_header(path, case, keys, ["linear"], 4, 2, 2)
+    sweep_file.write_header(path, case, keys, ["linear"], 4, "last 2 mesh periods", 2)
     points = [SweepPoint({"drive.speed": 200.0, "drive.torque": 100.0}, "linear"),
               SweepPoint({"drive.speed": 300.0, "drive.torque": 150.0}, "linear")]
     for i, pt in enumerate(points):
@@ -168,3 +169,41 @@ def test_the_api_never_overwrites_a_sweep_file_silently(tmp_path):
         gsb.read_sweep(path)
     with pytest.raises(FileNotFoundError, match="no such sweep file"):
         gsb.read_sweep(tmp_path / "none.h5")
+
+
+def test_a_sweeps_window_in_revolutions_follows_each_points_speed(tmp_path):
+    """``gsb.sweep(window="1 revolution of pinion_shaft")`` at two speeds: each point is
+    reduced over one pinion revolution at its own speed, 2 pi / w (closed form), stored as
+    ``window_s`` with the window's name as the file's attribute and in the xarray dataset;
+    the stored steady samples span it. A window longer than a point's run is a CaseError
+    naming the point before anything runs; ``steady_periods`` is the earlier spelling of
+    ``window="N periods"`` and warns."""
+    import warnings
+
+    import orchestrator as gsb
+    from fmu_src.case import CaseError
+
+    speeds = [200.0, 400.0]
+    res = gsb.sweep(SPUR, {"drive.speed": speeds}, tmp_path / "s.h5", periods=30,
+                    bearings=["linear"], window="1 revolution of pinion_shaft",
+                    scheduler="none", progress=False)
+    assert res.complete, res.failed
+    ds = res.to_xarray()
+    assert ds.attrs["window"] == "last 1 revolution of pinion_shaft"
+    window = ds.window_s.sel(bearing_model="linear").values
+    np.testing.assert_allclose(window, [2 * math.pi / w for w in speeds], rtol=1e-12)
+    for point, w in zip(read_sweep(res.path), window, strict=True):
+        dt = point["time"][1] - point["time"][0]
+        assert point["time"][-1] - point["time"][0] == pytest.approx(w - dt, rel=1e-9)
+    with pytest.raises(CaseError, match=r"point 1 .*longer than the run"):
+        gsb.sweep(SPUR, {"drive.speed": [100.0, 1000.0]}, tmp_path / "t.h5", periods=30,
+                  window="0.05 s", scheduler="none", progress=False)
+    assert not (tmp_path / "t.h5").exists()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        res = gsb.sweep(SPUR, {"drive.speed": [300.0]}, tmp_path / "u.h5", periods=4,
+                        bearings=["linear"], steady_periods=3, scheduler="none",
+                        progress=False)
+    assert [w.category for w in caught] == [DeprecationWarning]
+    assert "window='3 periods'" in str(caught[0].message)
+    assert read_sweep_attrs(res.path)["window"] == "last 3 mesh periods"

@@ -114,7 +114,7 @@ def test_sweep_file_attributes_units_and_values(dask_sweep):
     assert a["kind"] == "sweep" and a["case"] == SPUR
     assert a["vary_keys"] == ["drive.speed"] and a["vary_units"] == ["rad/s"]
     assert a["bearings"] == ["linear"]
-    assert (a["periods"], a["steady_periods"]) == (2, 1)
+    assert (a["periods"], a["window"]) == (2, "last half of the run")
     assert a["wall_time"] > 0
     expected = load_case(client / "my_case.toml", {"simulation.steps_per_mesh_period": 16})
     assert parse_case(tomllib.loads(a["case_toml"])).values == expected.values
@@ -154,7 +154,7 @@ def test_order_spectrum_of_a_synthetic_force_recovers_its_lines():
     phi = 0.3 * t[:, None] / dt  # the force direction turns: only its norm counts
     force = np.stack([norm[:, None] * scale * np.cos(phi), norm[:, None] * scale * np.sin(phi)],
                      axis=-1)
-    out = point_spectrum(case, {"time": t, "bearing_force": force}, steady_periods=57)
+    out = point_spectrum(case, {"time": t, "bearing_force": force}, window_s=57 * per_mesh * dt)
     orders, spec = out["spectrum_orders"], out["spectrum"]
     step = 0.5 / PAD  # two revolutions, zero-padded PAD times
     np.testing.assert_allclose(orders, np.arange(orders.size) * step, rtol=1e-12, atol=0)
@@ -246,8 +246,18 @@ BAD = {
     "bearing": (["--vary", "speed=100,200", "--bearing", "hybrid,magic"],
                 ["--bearing hybrid,magic", "'magic'", "lumped"]),
     "periods": (["--vary", "speed=100,200", "--periods", "0"], ["--periods 0", ">= 1"]),
+    "window": (["--vary", "speed=100,200", "--periods", "2", "--window", "5 periods"],
+               ["--window '5 periods' for --periods 2", "point 0", "longer than the run"]),
+    "window in s": (["--vary", "speed=100,200", "--periods", "64", "--window", "1 s"],
+                    ["--window '1 s' for --periods 64", "point 0 (", "longer than the run"]),
+    "window text": (["--vary", "speed=100,200", "--window", "5 furlongs"],
+                    ["simulation.window", "'5 furlongs'", "'26 periods'"]),
+    "window shaft": (["--vary", "speed=100,200", "--window", "2 revolutions of rotor"],
+                     ["rotor"]),
+    "window twice": (["--vary", "speed=100,200", "--window", "5 periods",
+                      "--steady-periods", "5"], ["--steady-periods 5", "not both"]),
     "steady": (["--vary", "speed=100,200", "--periods", "2", "--steady-periods", "5"],
-               ["--steady-periods 5", "--periods = 2"]),
+               ["--window '5 periods' for --periods 2", "longer than the run"]),
     "timeout": (["--vary", "speed=100,200", "--worker-timeout", "0"],
                 ["--worker-timeout 0", "> 0"]),
     "workers": (["--vary", "speed=100,200", "--workers", "0"], ["--workers 0", ">= 1"]),
