@@ -16,8 +16,12 @@ from orchestrator.analysis.metrics import fit_ellipse, steady_window
 from orchestrator.analysis.spectrum import order_spectrum, spectral_resolution
 from orchestrator.coupling.system import build_master
 from orchestrator.figures.base import AMPLITUDE_LABEL, order_label, pyplot
+from orchestrator.studies.reproduce.plan import window_text
 
 __all__ = ["draw_all", "force_spectrum", "has_line"]
+
+#: the window of the base runs' steady orbits (Figs. 5, 6, 14)
+GEAR_REVOLUTION = "the last gear revolution"
 
 
 def _attrs(results):
@@ -93,16 +97,23 @@ def has_line(f, a, target, resolution=None, prominence=10.0, band=12):
 
 class _Stamped:
     """pyplot with a ``stamp``: the text :func:`_save` writes across every figure (a quick
-    plan's, which is not steady state)."""
+    plan's, which is not steady state), and the ``window`` of the sweeps' points it writes
+    under every figure of a steady state."""
 
-    def __init__(self, plt, stamp: str):
-        self._plt, self.stamp = plt, stamp
+    def __init__(self, plt, stamp: str, window: str = ""):
+        self._plt, self.stamp, self.window = plt, stamp, window
 
     def __getattr__(self, name):
         return getattr(self._plt, name)
 
 
-def _save(fig, path: Path, plt) -> Path:
+def _save(fig, path: Path, plt, window: str | None = None) -> Path:
+    """``fig`` as ``path``, with the quick plan's stamp and the steady window its curves are
+    taken over (``window``; None: the sweeps' points', ``plt.window``; "": none, a transient)."""
+    window = getattr(plt, "window", "") if window is None else window
+    if window:
+        fig.text(0.995, 0.005, f"window: {window}", ha="right", va="bottom", fontsize=8,
+                 color="0.3")
     stamp = getattr(plt, "stamp", "")
     if stamp:
         fig.text(0.5, 0.5, stamp.split(":")[0], ha="center", va="center", rotation=25,
@@ -142,7 +153,7 @@ def _fig_orbits(runs, fig_dir, plt) -> tuple[Path, dict]:
         ax.set_aspect("equal")
         ax.set_title(f"Fig. 6{'ab'[k]}: bearing {b + 1} (s/C, t/C)")
         ax.legend(fontsize=7)
-    path = _save(fig, fig_dir / "fig05_06_orbits.png", plt)
+    path = _save(fig, fig_dir / "fig05_06_orbits.png", plt, GEAR_REVOLUTION)
     j = pos[win]
     sym = max(np.abs(j[:, 0] - j[:, 1]).max(), np.abs(j[:, 2] - j[:, 3]).max()) / np.abs(j).max()
     bend = [np.ptp(r["gear_node"][win, 0, k]) / np.ptp(j[:, 0, k]) for k in (0, 1)]
@@ -190,7 +201,7 @@ def _fig_forces(runs, prefix, fig_dir, plt, name, title) -> tuple[Path, dict]:
         else:
             info["bearing3_lines"]["z2/z1"] = has_line(f, amp, z2 / z1, res)
     fig.suptitle(title)
-    path = _save(fig, fig_dir / f"{name}.png", plt)
+    path = _save(fig, fig_dir / f"{name}.png", plt, "each panel's, in its title")
     return path, info
 
 
@@ -341,7 +352,7 @@ def _fig_transients(runs, fig_dir, plt) -> tuple[Path, dict]:
         ax.set_aspect("equal")
         ax.set_title(f"Fig. 17: helical, bearing {b + 1}")
         ax.legend(fontsize=7)
-    path = _save(fig, fig_dir / "fig12_17_transients.png", plt)
+    path = _save(fig, fig_dir / "fig12_17_transients.png", plt, "")
     for key in ("spur_hybrid", "helical_hybrid", "helical_linear"):
         r = runs[key]
         a = _attrs(r)
@@ -377,7 +388,7 @@ def _fig_face_load(fig_dir, plt) -> tuple[Path, dict]:
         ax.set_title(f"Fig. 13{'ab'[name == 'helical']}: {name}")
         ax.legend(fontsize=7)
         info[name] = spreads
-    p = _save(fig, fig_dir / "fig13_face_load.png", plt)
+    p = _save(fig, fig_dir / "fig13_face_load.png", plt, "")
     return p, info
 
 
@@ -386,10 +397,10 @@ def draw_all(runs: dict, sweeps: dict, plan, fig_dir: Path) -> dict:
     (:mod:`orchestrator.studies.reproduce.report`)."""
     fig_dir = Path(fig_dir)
     fig_dir.mkdir(parents=True, exist_ok=True)
-    plt = pyplot()
-    if plan.label == "quick":
-        plt = _Stamped(plt, "gsb reproduce --quick: fewer periods, not steady state: "
-                            "trends only")
+    stamp = ("gsb reproduce --quick: fewer periods, not steady state: trends only"
+             if plan.label == "quick" else "")
+    plt = _Stamped(pyplot(), stamp, f"{window_text(plan)}; Fig. 14's spur orbit: "
+                                    f"{GEAR_REVOLUTION}")
     c1 = _attrs(runs["spur_hybrid"])["clearance"][0]  # bearing 1 (orbits in units of C_1)
     figs = {}
     figs["orbits"] = _fig_orbits(runs, fig_dir, plt)

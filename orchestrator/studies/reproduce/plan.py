@@ -18,7 +18,8 @@ from orchestrator.coupling.system import build_master
 from orchestrator.run.runner import run_case
 from orchestrator.sweeps.runner import SweepPoint, run_sweep
 
-__all__ = ["FULL", "QUICK", "Plan", "run_base_cases", "run_parameter_sweeps", "run_table4"]
+__all__ = ["FULL", "QUICK", "Plan", "run_base_cases", "run_parameter_sweeps", "run_table4",
+           "window_text"]
 
 
 @dataclass(frozen=True)
@@ -51,6 +52,17 @@ QUICK = Plan(periods=192, speeds=(100.0, 325.0, 600.0, 900.0, 1200.0),
              torques=(100.0, 220.0, 400.0), unbalances=(0.6e-3, 2.4e-3),
              helix_angles=(0.0, 12.5), table4_periods=64, fd_periods=2,
              label="quick")
+
+
+def window_text(plan: Plan) -> str:
+    """The plan's window as the spur case names it, with its length in mesh periods (the
+    report's and the figures')."""
+    from fmu_src.description import mesh_period
+    from orchestrator.analysis.metrics import window_duration
+
+    case = load_case(SPUR, {"simulation.window": plan.window} if plan.window else None)
+    duration, name = window_duration(case)
+    return f"{name}, {duration / mesh_period(case):.4g} mesh periods"
 
 
 def run_base_cases(plan: Plan, out: Path, progress: bool) -> dict:

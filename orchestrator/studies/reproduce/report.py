@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
+from orchestrator.studies.reproduce.plan import window_text
 from orchestrator.sweeps.runner import stopped_on_physics
 
 __all__ = ["json_default", "write_report"]
@@ -68,18 +69,6 @@ def bearing_force_departure(ptp_bearing1: float, r_300: float, r_max: float) -> 
         "`docs/drivetrain.md`). Other choices the paper leaves open (tooth stiffness of "
         "Weber-Banaschek checked against ISO 6336, modal damping 0.03 on the modes with the "
         "bearings' static stiffness) bear on it as well.")
-
-
-def _window_text(plan) -> str:
-    """The plan's window as the spur case's report names it, in mesh periods."""
-    from fmu_src.case import load_case
-    from fmu_src.description import mesh_period
-    from orchestrator.analysis.metrics import window_duration
-
-    case = load_case("baguet2010_spur",
-                     {"simulation.window": plan.window} if plan.window else None)
-    duration, name = window_duration(case)
-    return f"{name}, {duration / mesh_period(case):.4g} mesh periods"
 
 
 def write_report(out, plan, meta, figs) -> Path:
@@ -145,7 +134,7 @@ def write_report(out, plan, meta, figs) -> Path:
         "",
         f"Plan: **{plan.label}** ({plan.periods} mesh periods per run, speeds "
         f"{', '.join(f'{w:g}' for w in plan.speeds)} rad/s, steady-state window of every "
-        f"run and sweep point: {_window_text(plan)})."
+        f"run and sweep point: {window_text(plan)})."
         + (" Quick runs are not steady state: compare trends only." if plan.label == "quick"
            else ""),
         f"Wall time: {timings['total']:.0f} s (base runs {timings['base runs']:.0f} s, Table 4 "

@@ -234,18 +234,27 @@ def test_mesh_figure_of_a_long_run_bins_by_pinion_revolution(tmp_path):
 
 def test_figures_of_a_quick_reproduction_are_stamped(tmp_path):
     """``gsb reproduce --quick`` is not steady state: each of its figures says so across it
-    and in a corner; a full reproduction's do not."""
+    and in a corner; a full reproduction's do not. Each names the window its steady curves
+    are taken over (the plan's, or its own), a transient's none; the plan's window by
+    default is the gear revolution, 157 mesh periods (z2 = 157)."""
     from orchestrator.figures.base import pyplot
     from orchestrator.studies.reproduce.figures import _save, _Stamped
+    from orchestrator.studies.reproduce.plan import FULL, window_text
 
+    window = window_text(FULL)
+    assert window == "last revolution of the slowest shaft gear_shaft, 157 mesh periods"
     for stamp in ("gsb reproduce --quick: trends only", ""):
-        plt = _Stamped(pyplot(), stamp) if stamp else pyplot()
-        fig, ax = plt.subplots()
-        ax.plot([0, 1], [0, 1])
-        _save(fig, tmp_path / "f.png", plt)
-        assert [t.get_text() for t in fig.texts] == ([stamp.split(":")[0], stamp] if stamp
-                                                     else [])
-        assert (tmp_path / "f.png").stat().st_size > 5_000
+        for own, shown in ((None, window), ("the last gear revolution", None), ("", "")):
+            plt = _Stamped(pyplot(), stamp, window)
+            fig, ax = plt.subplots()
+            ax.plot([0, 1], [0, 1])
+            _save(fig, tmp_path / "f.png", plt, own)
+            shown = own if shown is None else shown
+            assert [t.get_text() for t in fig.texts] == (
+                ([f"window: {shown}"] if shown else [])
+                + ([stamp.split(":")[0], stamp] if stamp else []))
+            assert (tmp_path / "f.png").stat().st_size > 5_000
+            plt.close(fig)
 
 
 def test_gsb_plot_with_another_window(run_file, tmp_path, capsys):
