@@ -108,17 +108,18 @@ class _Stamped:
 
 
 def _save(fig, path: Path, plt, window: str | None = None) -> Path:
-    """``fig`` as ``path``, with the quick plan's stamp and the steady window its curves are
-    taken over (``window``; None: the sweeps' points', ``plt.window``; "": none, a transient)."""
+    """``fig`` as ``path``, its title followed by the steady window its curves are taken over
+    (``window``; None: the sweeps' points', ``plt.window``; "": none, a transient) and the
+    quick plan's stamp, which is also written across it."""
     window = getattr(plt, "window", "") if window is None else window
-    if window:
-        fig.text(0.995, 0.005, f"window: {window}", ha="right", va="bottom", fontsize=8,
-                 color="0.3")
     stamp = getattr(plt, "stamp", "")
+    lines = [fig.get_suptitle()] if fig.get_suptitle() else []
+    lines += [f"window: {window}"] * bool(window) + [stamp] * bool(stamp)
+    if lines:
+        fig.suptitle("\n".join(lines), fontsize=11)
     if stamp:
         fig.text(0.5, 0.5, stamp.split(":")[0], ha="center", va="center", rotation=25,
                  fontsize=24, color="tab:red", alpha=0.25, zorder=100)
-        fig.text(0.005, 0.005, stamp, ha="left", va="bottom", fontsize=9, color="tab:red")
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return path
@@ -246,7 +247,7 @@ def _fig_torque(points, fig_dir, plt, clearance) -> tuple[Path, dict]:
     circle = np.linspace(0, 2 * np.pi, 361)
     ax.plot(np.cos(circle), np.sin(circle), "k-", lw=0.6)
     ax.set_aspect("equal")
-    ax.set_title("Fig. 9: bearing 1, omega = 325 rad/s (s/C, t/C); + ellipse centres")
+    fig.suptitle("Fig. 9: bearing 1, omega = 325 rad/s (s/C, t/C); + ellipse centres")
     ax.legend(fontsize=8)
     path = _save(fig, fig_dir / "fig09_torque.png", plt)
     ecc = {t: math.hypot(*c) for t, c in sorted(centres.items())}
@@ -317,7 +318,8 @@ def _fig_helix(points, base, spur_run, fig_dir, plt, plan, clearance) -> tuple[P
     axes[3].set_title("Fig. 14: bearing 1 at 325 rad/s (s/C, t/C)")
     axes[3].legend(fontsize=7)
     fig.suptitle("Fig. 11: influence of the helix angle (hybrid bearings)")
-    path = _save(fig, fig_dir / "fig11_14_helix.png", plt)
+    path = _save(fig, fig_dir / "fig11_14_helix.png", plt,
+                 f"{plt.window}; Fig. 14's spur orbit: {GEAR_REVOLUTION}")
     return path, info
 
 
@@ -399,8 +401,7 @@ def draw_all(runs: dict, sweeps: dict, plan, fig_dir: Path) -> dict:
     fig_dir.mkdir(parents=True, exist_ok=True)
     stamp = ("gsb reproduce --quick: fewer periods, not steady state: trends only"
              if plan.label == "quick" else "")
-    plt = _Stamped(pyplot(), stamp, f"{window_text(plan)}; Fig. 14's spur orbit: "
-                                    f"{GEAR_REVOLUTION}")
+    plt = _Stamped(pyplot(), stamp, window_text(plan))
     c1 = _attrs(runs["spur_hybrid"])["clearance"][0]  # bearing 1 (orbits in units of C_1)
     figs = {}
     figs["orbits"] = _fig_orbits(runs, fig_dir, plt)

@@ -234,7 +234,7 @@ def test_mesh_figure_of_a_long_run_bins_by_pinion_revolution(tmp_path):
 
 def test_figures_of_a_quick_reproduction_are_stamped(tmp_path):
     """``gsb reproduce --quick`` is not steady state: each of its figures says so across it
-    and in a corner; a full reproduction's do not. Each names the window its steady curves
+    and under its title; a full reproduction's do not. Each names the window its steady curves
     are taken over (the plan's, or its own), a transient's none; the plan's window by
     default is the gear revolution, 157 mesh periods (z2 = 157)."""
     from orchestrator.figures.base import pyplot
@@ -248,11 +248,13 @@ def test_figures_of_a_quick_reproduction_are_stamped(tmp_path):
             plt = _Stamped(pyplot(), stamp, window)
             fig, ax = plt.subplots()
             ax.plot([0, 1], [0, 1])
+            fig.suptitle("Fig. 0")
             _save(fig, tmp_path / "f.png", plt, own)
             shown = own if shown is None else shown
-            assert [t.get_text() for t in fig.texts] == (
-                ([f"window: {shown}"] if shown else [])
-                + ([stamp.split(":")[0], stamp] if stamp else []))
+            assert fig.get_suptitle().split("\n") == (
+                ["Fig. 0"] + ([f"window: {shown}"] if shown else []) + ([stamp] if stamp else []))
+            across = [t for t in fig.texts if t.get_text() == "gsb reproduce --quick"]
+            assert len(across) == bool(stamp)
             assert (tmp_path / "f.png").stat().st_size > 5_000
             plt.close(fig)
 
