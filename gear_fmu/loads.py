@@ -41,18 +41,25 @@ class StructureLoads:
         Gravity acceleration components (g_s, g_t) [m/s^2]; None = no gravity.
     input_angle0 : float
         Rigid-body angle of the input shaft at t = 0 [rad].
+    profile : gear_fmu.speed_profile.SpeedProfile or None
+        The input speed against time in a run-up or run-down (its ``omega0`` is
+        ``input_speed``, the static solution's); None: ``input_speed`` throughout.
     """
 
     torque: float = 220.0
     input_speed: float = 325.0
     gravity: tuple[float, float] | None = None
     input_angle0: float = 0.0
+    profile: object = None
 
     def __post_init__(self) -> None:
         if not math.isfinite(self.torque):
             raise ValueError(f"torque = {self.torque!r} N m is not finite")
         if not (math.isfinite(self.input_speed) and self.input_speed >= 0.0):
             raise ValueError(f"input_speed = {self.input_speed!r} rad/s must be finite and >= 0")
+        if self.profile is not None and self.profile.omega0 != self.input_speed:
+            raise ValueError(f"the speed profile starts at {self.profile.omega0!r} rad/s, not at "
+                             f"input_speed = {self.input_speed!r} rad/s")
 
 
 def shaft_speeds(layout, input_speed: float) -> np.ndarray:
@@ -67,6 +74,24 @@ def unbalance_coefficients(unbalances, speeds) -> np.ndarray:
     :func:`unbalance_into` turns into forces."""
     w = np.asarray(speeds, dtype=float)[unbalances.shaft]
     return np.ascontiguousarray(np.column_stack([unbalances.me * w * w, w, unbalances.phase]))
+
+
+def accelerated_unbalance_coefficients(unbalances, ratios, profile, t: float) -> np.ndarray:
+    """:func:`unbalance_coefficients` of a run-up at time t [s] (Eq. 10 with the angular
+    acceleration, docs/equations.md "Run-ups"): each unbalance ``M e_mu`` at the shaft angle
+    ``phi = s Theta(t) + phase`` (``Theta`` the input angle of ``profile``,
+    :class:`gear_fmu.speed_profile.SpeedProfile`; ``s`` the shaft's signed ``ratios``) pulls
+    its node with ``M e_mu (phi'^2 cos phi + phi'' sin phi, phi'^2 sin phi - phi'' cos phi)``,
+    i.e. ``A (cos(phi - delta), sin(phi - delta))`` with ``A = M e_mu sqrt(phi'^4 +
+    phi''^2)``, ``delta = atan2(phi'', phi'^2)``: coefficients whose angle ``omega t + c`` is
+    ``phi(t) - delta`` at t, turning at ``omega = phi'(t)`` (within a step, its sub-steps
+    take that rate: an angle off by ``phi'' h^2 / 2`` at most)."""
+    s = np.asarray(ratios, dtype=float)[unbalances.shaft]
+    w, acc = s * profile.speed(t), s * profile.acceleration(t)
+    phi = s * profile.angle(t) + unbalances.phase
+    delta = np.arctan2(acc, w * w)
+    amplitude = unbalances.me * np.hypot(w * w, acc)
+    return np.ascontiguousarray(np.column_stack([amplitude, w, phi - delta - w * t]))
 
 
 def unbalance_force(coef, t: float) -> np.ndarray:

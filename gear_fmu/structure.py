@@ -58,6 +58,7 @@ from bearing_fmu.blas_threads import one_blas_thread
 from gear_fmu.dofs import DOF_PER_NODE, THETA, U, V, dof
 from gear_fmu.loads import (
     StructureLoads,
+    accelerated_unbalance_coefficients,
     constant_loads,
     shaft_speeds,
     unbalance_coefficients,
@@ -234,6 +235,8 @@ class Structure:
                                                           strict=True)]
         self._mesh_tuple = tuple(w.arrays() for w in self._work)
         self._has_err = any(m.has_errors for m in self.meshes)
+        self._signed_ratios = self.layout.ratios * self.layout.directions
+        self._ramp = None  # a run-up's rigid-body inertia load (_at_time), when first needed
         self._forces()
         # the state: at rest at t = 0, no solution yet
         n = self._perm.size
@@ -397,7 +400,7 @@ class Structure:
         sys_, ld = self.system, self.loads
         f = self._permute(constant_loads(sys_, ld))
         self._f_const = f  # static part of F0(t)
-        self._f_c = np.ascontiguousarray(f[:self.nc])
+        self._f_c = self._f_c_const = np.ascontiguousarray(f[:self.nc])
         self._speeds = shaft_speeds(self.layout, ld.input_speed)
         w = ld.input_speed * self._driver_ratio
         z = np.array([m.pair.teeth[0] for m in self.meshes], dtype=float)
@@ -430,8 +433,54 @@ class Structure:
         self._condensations.clear()
 
     def input_angle(self, t: float) -> float:
-        """Rigid-body angle of the input shaft at t [rad]."""
+        """Rigid-body angle of the input shaft at t [rad] (in a run-up the integral of its
+        speed, :class:`gear_fmu.speed_profile.SpeedProfile`)."""
+        if self.loads.profile is not None:
+            return self.loads.input_angle0 + self.loads.profile.angle(t)
         return self.loads.input_angle0 + self.loads.input_speed * t
+
+    def input_speed_at(self, t: float) -> float:
+        """Speed of the input shaft at t [rad/s]."""
+        p = self.loads.profile
+        return self.loads.input_speed if p is None else p.speed(t)
+
+    def bearing_speeds_at(self, t: float) -> np.ndarray | None:
+        """The speed magnitude of each bearing's shaft at t [rad/s] in a run-up (the layout's
+        bearing order), None at constant speed."""
+        if self.loads.profile is None:
+            return None
+        lay = self.layout
+        speeds = np.abs(self.input_speed_at(t) * self._signed_ratios)
+        return np.array([speeds[lay.shaft_index[b.shaft]] for b in lay.bearings])
+
+    def _at_time(self, t1: float, slotted) -> None:
+        """A run-up's speed-dependent loads for the step ending at t1 [s] (nothing at constant
+        speed; docs/equations.md "Run-ups"): the unbalances at the speed and angular
+        acceleration of t1 (:func:`gear_fmu.loads.accelerated_unbalance_coefficients`), and
+        the rigid-body inertia of the ramp ``-M u_rb dOmega/dt`` (``u_rb`` the rigid rotation
+        per unit input angle, :meth:`gear_fmu.system.GearShaftSystem.rigid_rotation`) on the
+        constant loads: on the condensed DOFs directly, on the others through the condensation
+        of each sub-step length ``h`` of ``slotted`` ([(slot, h)]) the step uses (the ramp's
+        acceleration of t1 for all of them)."""
+        p = self.loads.profile
+        if p is None:
+            return
+        alpha = p.acceleration(t1)
+        self._unb_coef = accelerated_unbalance_coefficients(
+            self.system.unbalances, self._signed_ratios, p, t1)
+        if self._ramp is None:
+            u_rb = self.system.rigid_rotation(self._signed_ratios)
+            self._ramp = (self._permute(-(self.system.mass @ u_rb)), {})
+        load, condensed = self._ramp
+        self._f_c = self._f_c_const + alpha * load[:self.nc]
+        g_const = self._condensations.arrays()[1]
+        if len(condensed) > 256:
+            condensed.clear()
+        for k, h in slotted:
+            cond, g_f = self._dynamic(h)
+            if h not in condensed:
+                condensed[h] = cond.g @ load[self.nc:]
+            g_const[k] = g_f + alpha * condensed[h]
 
     def mesh_angles(self, input_angle: float) -> np.ndarray:
         """Each mesh's pinion (driver) angle [rad] at the input shaft's angle
@@ -616,6 +665,9 @@ class Structure:
         step again at each of its iterations."""
         key = (self.t, dt, self._condensations.generation)
         if self._one is not None and self._one[0] == key:
+            if self.loads.profile is not None:  # (a plan of another step may have set them)
+                n, index, table = self._one[1][0], self._one[1][1], self._one[1][2]
+                self._at_time(self._one[1][7], [(index[p], table[p, 0]) for p in range(n)])
             return self._one[1]
         self._check_step(dt)
         pieces = self._pieces(dt, self.t)
@@ -638,6 +690,7 @@ class Structure:
             if self._has_err:
                 errs[p] = self._errors(before)
                 errs_after[p] = self._errors(np.where(np.isnan(aft), before, aft))
+        self._at_time(pieces[-1][1], [(index[p], table[p, 0]) for p in range(n)])
         key = (self.t, dt, slots.generation)
         self._one = (key, (n, index, table, angles, after, errs, errs_after, pieces[-1][1]))
         self._m_inv_gear_columns()
@@ -656,6 +709,9 @@ class Structure:
             t1 = t + dt
             return [(dt, t1, self.mesh_angles(self.input_angle(t1)),
                      np.full(len(self.meshes), math.nan))]
+        if self._events is None and self.loads.profile is not None:
+            self._events = [ContactEvents(mesh, lambda t, r=float(r): r * self.input_angle(t))
+                            for mesh, r in zip(self.meshes, self._driver_ratio, strict=True)]
         if self._events is None:  # (input_angle inlined: a call per angle on the hot path)
             a0, w = self.loads.input_angle0, self.loads.input_speed
             self._events = [ContactEvents(mesh, lambda t, r=float(r): r * (a0 + w * t))
@@ -676,6 +732,8 @@ class Structure:
         self._check_step(dt)
         t, steps, slotted = self.t, [], []
         slots = self._condensations
+        if self.loads.profile is not None:  # the loads of each step: one step per plan
+            n = min(n, 1)
         while len(steps) < n:
             pieces = self._pieces(dt, t)
             lengths = [h for h, _, _, _ in pieces]
@@ -684,6 +742,7 @@ class Structure:
             steps.append(pieces)
             slotted.append([slots.slot(h, self._dynamic) for h in lengths])
             t = pieces[-1][1]
+            self._at_time(t, zip(slotted[-1], lengths, strict=True))
         m, n_meshes = len(steps), len(self.meshes)
         width = max(len(p) for p in steps)
         counts = np.array([len(p) for p in steps], dtype=np.int64)

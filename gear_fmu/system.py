@@ -376,6 +376,23 @@ class GearShaftSystem:
                              f"got shape {w.shape}")
         return np.einsum("i,ijk->jk", w, self.shaft_gyroscopic)
 
+    def rigid_rotation(self, signed_ratios) -> np.ndarray:
+        """(n_dof,) the rigid-body rotation of the train per unit rotation of the input shaft
+        about +z: each node's ``theta`` its shaft's ``signed_ratios`` entry (the layout's
+        ratios times its directions), a motor's or a load's DOF behind a coupling that of the
+        shaft it drives. ``-M u_rb dOmega/dt`` is the inertia load of a run-up on the
+        ``theta`` DOFs, which are rotations on top of the imposed one (docs/equations.md
+        "Run-ups")."""
+        s = np.asarray(signed_ratios, dtype=float)
+        lay = self.layout
+        u = np.zeros(self.n_dof)
+        for node, shaft in enumerate(self.node_shaft):
+            u[dof(node, THETA)] = s[shaft]
+        for name, shaft in (("motor", lay.drive.input_shaft), ("load", lay.drive.output_shaft)):
+            if name in self.extra_dofs:
+                u[self.extra_dofs[name]] = s[lay.shaft_index[shaft]]
+        return u
+
     # ------------------------------------------------------------------ reduced space
     @property
     def reduced_index(self) -> np.ndarray:
