@@ -352,6 +352,13 @@ class FilmBearingSet:
         """Whether the models can share one call."""
         raise NotImplementedError
 
+    def set_speeds(self, omegas) -> None:
+        """The shaft speed at each bearing [rad/s] (> 0) from the next call on, and the force
+        scales of Eq. (5) at them (a run-up: the arrays the compiled calls take, in place)."""
+        self._omega[:] = [check_omega(w) for w in omegas]
+        self._fs[:] = [m.bearing.force_scale(w) for m, w in zip(self.models, self._omega,
+                                                                  strict=True)]
+
     def raise_status(self, b, status, states) -> None:
         """Raise the error of bearing ``b`` (0-based) whose call returned ``status`` at the
         global journal states ``states`` (nb, 4) (its model's ``raise_status``), with its

@@ -47,7 +47,7 @@ from fmu_src.fields import (
 )
 from fmu_src.fields import field_spec as _f
 from fmu_src.legacy_case import LegacyCaseWarning
-from fmu_src.units import UnitError, parse_window, symbol
+from fmu_src.units import UnitError, parse_speed_profile, parse_window, symbol
 from gear_fmu.drivetrain import OUTPUT_ENDS
 from gear_fmu.layout import HANDS, UNBALANCE_MASSES, LayoutError, check_name
 from gear_fmu.mesh.geometry import GearGeometryError
@@ -188,6 +188,9 @@ FIELDS: tuple[Field, ...] = (
        "shaft's start (default: its start)", default=None, minimum=0.0),
     _f("drive.speed", "angular_speed", "input shaft speed omega (the other shafts' speeds follow "
        "from the gear ratios)", **_POS),
+    _f("drive.speed_profile", "text", "a run-up or run-down of the input speed: 'ramp to 400 "
+       "rad/s in 2 s' (from drive.speed, linear, then constant; '... after 0.5 s' delays it); "
+       "empty: drive.speed throughout (gear_fmu.speed_profile)", default=""),
     _f("drive.torque", "torque", "input torque T (> 0: the teeth stay in contact only under "
        "load)", **_POS),
     _f("drive.motor_inertia", "inertia", "motor inertia at the input (0: no motor)",
@@ -493,7 +496,35 @@ def parse_case(data: dict, source: str = "<case>") -> Case:
     _check_model_options(values, source)
     _check_train(values, source)
     _check_window(values, source)
+    _check_speed_profile(values, source)
     return Case(values, source)
+
+
+def _check_speed_profile(v: dict, source: str) -> None:
+    """``drive.speed_profile`` readable (:func:`fmu_src.units.parse_speed_profile`), and a
+    run-up only with what follows the speed: film bearings need a speed > 0 throughout, the
+    linear model's coefficients hold at one speed, and the gyroscopic tangent at a varying
+    speed is not implemented yet."""
+    text = v["drive.speed_profile"]
+    try:
+        ramp = parse_speed_profile(text)
+    except UnitError as exc:
+        raise CaseError(f"{source}: {exc}") from None
+    if ramp is None or ramp[0] == v["drive.speed"]:
+        return
+    where = f"{source}: drive.speed_profile = {text!r}"
+    for name in instance_names(v, "bearings"):
+        model = v[f"bearings.{name}.model"]
+        if model == "linear":
+            raise CaseError(f"{where}: bearing {name} is linear, whose coefficients hold at one "
+                            f"speed; a run-up needs a film model (hybrid, short, fd) or lumped")
+        if ramp[0] <= 0.0 and model != "lumped":
+            raise CaseError(f"{where}: ends at {ramp[0]:g} rad/s, where the film of bearing "
+                            f"{name} ({model}) carries no load: end above 0 rad/s")
+    if v["simulation.gyroscopic"]:
+        raise CaseError(f"{where}: a run-up with simulation.gyroscopic = true is not "
+                        f"implemented yet (the gyroscopic tangent changes with the speed): set "
+                        f"simulation.gyroscopic = false")
 
 
 def _check_window(v: dict, source: str) -> None:

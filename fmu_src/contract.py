@@ -53,14 +53,15 @@ from fmu_src.case import (
     model_option_fields,
     shipped_case,
 )
-from fmu_src.description import bearing_frames, layout
+from fmu_src.description import bearing_frames, layout, speed_profile
 from fmu_src.fields import CaseError, template
 from fmu_src.units import symbol
 from gear_fmu.layout import Layout
 
 __all__ = ["BEARING_RESOURCE", "GEAR_DEFAULT_CASE", "LAWS_PER_BEARING", "FmiVar",
            "ValueRefused", "bearing_component", "bearing_fmu_name", "bearing_names",
-           "bearing_option_keys", "bearing_variables", "case_parameters", "connections",
+           "bearing_option_keys", "bearing_variables", "case_parameters",
+           "check_constant_speed", "connections",
            "fmi_name", "gear_case_fields", "gear_names", "gear_parameters", "gear_variables",
            "journal_output_names", "law_input_names", "mesh_names", "pack_law_arrays",
            "pack_laws", "parameter_field", "speed_output_names", "step_output_names",
@@ -403,19 +404,29 @@ def unpack_journal(values) -> np.ndarray:
     return np.asarray(values, dtype=float).reshape(-1, 4)
 
 
+def check_constant_speed(case, what: str) -> None:
+    """CaseError naming ``what`` (an FMU being built) for a case whose input speed is not
+    constant: the FMUs take the speed as a parameter, a run-up runs in-process
+    (``drive.speed_profile``)."""
+    if speed_profile(case).varies:
+        raise CaseError(f"{what}: drive.speed_profile = {case['drive.speed_profile']!r}: the "
+                        f"FMUs take a constant speed; a run-up runs in-process (gsb run "
+                        f"--in-process); without the profile the FMU runs at drive.speed")
+
+
 def gear_case_fields():
     """The case fields (schema templates, :data:`fmu_src.case.FIELDS`) the gear-shaft FMU
     exposes as parameters: the case's name, the shafts, gears, meshes and discs, where each
     bearing sits (its shaft and position), the drive, the damping model, the structure's
     tolerance and time-integration switches (the rest of the bearing fields belong to the
     bearing FMUs, the run length, the coupled iterations and the report's window to the
-    master)."""
+    master; a run-up's speed profile runs in-process only)."""
     master_only = ("simulation.steps_per_mesh_period", "simulation.mesh_periods",
-                   "simulation.max_iterations", "simulation.window")
-    return tuple(f for f in FIELDS
-                 if f.key.split(".")[0] in ("shafts", "gears", "meshes", "discs", "drive")
+                   "simulation.max_iterations", "simulation.window", "drive.speed_profile")
+    return tuple(f for f in FIELDS if f.key not in master_only and (
+                 f.key.split(".")[0] in ("shafts", "gears", "meshes", "discs", "drive")
                  or f.key in ("case.name", "bearings.*.shaft", "bearings.*.position")
-                 or (f.key.startswith("simulation.") and f.key not in master_only))
+                 or f.key.startswith("simulation.")))
 
 
 def gear_parameters(case) -> list[tuple]:
@@ -520,10 +531,11 @@ BEARING_RESOURCE = "bearing.fmu"
 
 def transmission_fields():
     """The case fields the transmission FMU exposes as parameters: all of them but the case's
-    description, the run length (the host's stop time decides it) and the report's window
-    (the FMU reports nothing: its host analyses its outputs)."""
+    description, the run length (the host's stop time decides it), the report's window
+    (the FMU reports nothing: its host analyses its outputs) and a run-up's speed profile
+    (in-process only)."""
     return tuple(f for f in FIELDS if f.key not in ("case.description", "simulation.mesh_periods",
-                                                    "simulation.window"))
+                                                    "simulation.window", "drive.speed_profile"))
 
 
 def transmission_variables(case, bearing_fmu: str = "") -> tuple[FmiVar, ...]:

@@ -22,11 +22,13 @@ from bearing_fmu import BearingData, BearingModel, model_class
 from bearing_fmu.frames import LocalFrame
 from fmu_src import train
 from fmu_src.case import Case, CaseError, model_option_fields
+from fmu_src.units import parse_speed_profile
 from gear_fmu.layout import Layout, LayoutError
 from gear_fmu.loads import StructureLoads
 from gear_fmu.mesh.element import MeshElement
 from gear_fmu.mesh.geometry import GearGeometryError, GearPair
 from gear_fmu.mesh.train import mesh_elements
+from gear_fmu.speed_profile import SpeedProfile
 from gear_fmu.structure import Structure
 from gear_fmu.system import GearShaftSystem
 
@@ -46,6 +48,7 @@ __all__ = [
     "mesh_period",
     "mesh_teeth",
     "shared_bearing_model",
+    "speed_profile",
     "structure",
     "structure_loads",
     "time_step",
@@ -96,8 +99,21 @@ def structure_loads(case: Case) -> StructureLoads:
     the layout's, :class:`gear_fmu.system.Unbalances`)."""
     d = layout(case).drive
     gravity = tuple(d.gravity)
+    profile = speed_profile(case)
     return StructureLoads(torque=d.torque, input_speed=d.speed,
-                          gravity=gravity if any(gravity) else None)
+                          gravity=gravity if any(gravity) else None,
+                          profile=profile if profile.varies else None)
+
+
+def speed_profile(case: Case) -> SpeedProfile:
+    """The input speed against time: ``drive.speed``, ramped as ``drive.speed_profile`` says
+    (:func:`fmu_src.units.parse_speed_profile`; constant when it is empty)."""
+    w0 = float(layout(case).drive.speed)
+    ramp = parse_speed_profile(case["drive.speed_profile"])
+    if ramp is None:
+        return SpeedProfile(w0, w0)
+    w1, duration, start = ramp
+    return SpeedProfile(w0, w1, start, duration)
 
 
 def mesh_elements_of(case: Case) -> tuple[MeshElement, ...]:
@@ -125,11 +141,13 @@ def structure(case: Case, damping_bearing_stiffness=1e8) -> Structure:
 
 
 def mesh_period(case: Case) -> float:
-    """Mesh period of the fastest mesh, ``2 pi / (|omega_driver| z_driver)`` [s]."""
+    """Mesh period of the fastest mesh, ``2 pi / (|omega_driver| z_driver)`` [s], at the
+    highest input speed of the run (:func:`speed_profile`: a run-up's final speed)."""
     lay = layout(case)
+    top = speed_profile(case).max_speed / float(lay.drive.speed)
     frequency = max(abs(float(lay.speeds[lay.shaft_index[lay.gear(d).shaft]]))
                     * lay.gear(d).teeth for d, _ in lay.drivers)
-    return 2.0 * math.pi / frequency
+    return 2.0 * math.pi / (frequency * top)
 
 
 def mesh_teeth(case: Case) -> list[tuple[int, int]]:

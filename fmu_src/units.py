@@ -28,7 +28,8 @@ import math
 import re
 from dataclasses import dataclass, field
 
-__all__ = ["DIMENSIONS", "Dimension", "UnitError", "describe", "parse_quantity", "symbol"]
+__all__ = ["DIMENSIONS", "Dimension", "UnitError", "describe", "parse_quantity",
+           "parse_speed_profile", "symbol"]
 
 
 class UnitError(ValueError):
@@ -193,3 +194,36 @@ def parse_window(value, field: str = "simulation.window") -> tuple[float, str, s
     if rest in _SPELLINGS and _SPELLINGS[rest][1] == "time":
         return number * _SPELLINGS[rest][0], "time", ""
     raise UnitError(f"{field}: cannot read {value!r} as a window: write {forms}")
+
+
+_RAMP = re.compile(r"^\s*ramp\s+to\s+(.+?)\s+in\s+(.+?)(?:\s+after\s+(.+?))?\s*$", re.IGNORECASE)
+
+
+def parse_speed_profile(value, field: str = "drive.speed_profile"
+                        ) -> tuple[float, float, float] | None:
+    """The input speed's profile as written in a case or on the command line: ``""`` (a
+    constant ``drive.speed``) -> None; ``"ramp to 400 rad/s in 2 s"`` (from ``drive.speed``
+    at t = 0, linear, then constant), optionally ``"... after 0.5 s"`` (the ramp's start) ->
+    ``(final speed [rad/s], duration [s], start [s])``
+    (:class:`gear_fmu.speed_profile.SpeedProfile`). :class:`UnitError` naming ``field``
+    otherwise.
+
+    >>> parse_speed_profile("ramp to 3000 rpm in 1.5 s after 100 ms")
+    (314.1592653589793, 1.5, 0.1)
+    """
+    forms = "'ramp to 400 rad/s in 2 s' or 'ramp to 3000 rpm in 1.5 s after 0.1 s'"
+    if value is None or (isinstance(value, str) and not value.strip()):
+        return None
+    m = _RAMP.match(value) if isinstance(value, str) else None
+    if not m:
+        raise UnitError(f"{field}: cannot read {value!r} as a speed profile: write {forms}")
+    speed = parse_quantity(m.group(1), "angular_speed", field)
+    duration = parse_quantity(m.group(2), "time", field)
+    start = parse_quantity(m.group(3), "time", field) if m.group(3) else 0.0
+    if speed < 0.0:
+        raise UnitError(f"{field}: {value!r}: the final speed {speed:g} rad/s must be >= 0")
+    if duration <= 0.0:
+        raise UnitError(f"{field}: {value!r}: the ramp's duration {duration:g} s must be > 0")
+    if start < 0.0:
+        raise UnitError(f"{field}: {value!r}: the ramp's start {start:g} s must be >= 0")
+    return speed, duration, start

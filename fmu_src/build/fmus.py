@@ -347,7 +347,7 @@ def build_fmus(dest: Path | str, names=None, case=None, gear_name: str = "GearSh
     train's own, :func:`orchestrator.coupling.fmi.cache.gear_fmu_name`)."""
     from fmu_src.build.native import export_library
     from fmu_src.case import shipped_case
-    from fmu_src.contract import GEAR_DEFAULT_CASE
+    from fmu_src.contract import GEAR_DEFAULT_CASE, check_constant_speed
 
     dest = Path(dest)
     dest.mkdir(parents=True, exist_ok=True)
@@ -359,6 +359,7 @@ def build_fmus(dest: Path | str, names=None, case=None, gear_name: str = "GearSh
     FmuBuilder = _pythonfmu_builder()
     native = export_library()
     case = shipped_case(GEAR_DEFAULT_CASE.removesuffix(".toml")) if case is None else case
+    check_constant_speed(case, f"the gear-shaft FMU of {case['case.name']}")
     built = []
     for name in names or FMUS:
         spec = FMUS[name]
@@ -387,8 +388,9 @@ def build_transmission_fmu(case, dest: Path | str, bearing_fmu: Path | str | Non
     path. ``bearing_fmu``: a bearing FMU of the user's own, carried in the resources
     (:data:`fmu_src.contract.BEARING_RESOURCE`) and used for every bearing."""
     from fmu_src.build.native import export_library
-    from fmu_src.contract import BEARING_RESOURCE, transmission_variables
+    from fmu_src.contract import BEARING_RESOURCE, check_constant_speed, transmission_variables
 
+    check_constant_speed(case, f"the transmission FMU of {case['case.name']}")
     dest = Path(dest)
     dest.mkdir(parents=True, exist_ok=True)
     name = transmission_fmu_name(case)

@@ -14,7 +14,7 @@ import math
 import numpy as np
 
 from fmu_src.case import Case
-from fmu_src.description import gear_pairs, layout
+from fmu_src.description import gear_pairs, layout, speed_profile
 from orchestrator.analysis.spectrum import line_amplitudes, train_lines
 
 __all__ = ["fit_ellipse", "report_window", "run_metrics", "run_report", "static_mesh_load",
@@ -211,7 +211,9 @@ def run_report(results: dict, window: str | None = None) -> dict:
       are ``line_orders`` (nb, n) cycles per revolution of each bearing's own shaft;
     * ``mesh_names``, ``bearing_names``: the labels of those axes;
     * ``window_s`` (2,) [s]: the window's start and end (it holds the steps ending after the
-      start) and ``window_kind``, its name.
+      start) and ``window_kind``, its name; ``window_speeds`` (2,) [rad/s] the input speed
+      there (a run-up's, ``drive.speed_profile``: the lines are at the speed of the window's
+      end, and NaN when it varies over the window).
     """
     time_s = np.asarray(results["time"], dtype=float)
     if time_s.size < 2:
@@ -224,10 +226,15 @@ def run_report(results: dict, window: str | None = None) -> dict:
     force = np.asarray(results["bearing_force"], dtype=float)[win]
     norm = np.hypot(force[..., 0], force[..., 1])
     input_orders, labels = train_lines(lay)
-    input_hz = abs(lay.drive.speed) / (2.0 * np.pi)
+    profile = speed_profile(case)
+    speeds = (profile.speed(end_s - duration), profile.speed(end_s))
+    input_hz = speeds[1] / (2.0 * np.pi)
     frequencies = input_orders * input_hz
     dt_s = (end_s - time_s[0]) / (time_s.size - 1)
-    amplitudes = line_amplitudes(time_s[win], norm, frequencies, duration, dt_s)
+    if speeds[0] == speeds[1]:
+        amplitudes = line_amplitudes(time_s[win], norm, frequencies, duration, dt_s)
+    else:  # a line of a varying speed is no line over the window
+        amplitudes = np.full((frequencies.size, len(lay.bearings)), np.nan)
     ratios = np.array([float(lay.ratios[lay.shaft_index[b.shaft]]) for b in lay.bearings])
     return {
         "dynamic_factor": _per_mesh(results, "mesh_force", win).max(axis=0)
@@ -243,4 +250,5 @@ def run_report(results: dict, window: str | None = None) -> dict:
         "bearing_names": list(lay.bearing_names),
         "window_s": np.array([end_s - duration, end_s]),
         "window_kind": kind,
+        "window_speeds": np.array(speeds),
     }

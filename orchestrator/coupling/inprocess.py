@@ -75,6 +75,9 @@ class InProcessStructure(StructureSlave):
         laws = self._require_laws()
         self.cycle.step(t, dt, laws.f0, laws.kb, laws.cb)
 
+    def bearing_speeds_at(self, t: float):
+        return self.structure.bearing_speeds_at(t)
+
     def compiled_block(self, t: float, dt: float, n: int, time_of):
         """The structure's planned steps (:meth:`gear_fmu.structure.Structure.steps_plan`) as
         :func:`orchestrator.coupling.step.coupled_steps` takes them: ``(head, state, tail,
@@ -232,6 +235,14 @@ class ModelBearings(BearingSet):
             out[idx] = rows
         self.evaluations += self.count
         return out[:, 0], out[:, 1:3], out[:, 3:5]
+
+    def set_speeds(self, omegas) -> None:
+        """The shaft speed at each bearing [rad/s] from the next evaluation on (a run-up): the
+        compiled sets' arrays in place, the others' at their next call."""
+        self.omegas = [float(w) for w in omegas]
+        for _, idx, compiled in self._groups:
+            if compiled is not None:
+                compiled.set_speeds([self.omegas[b] for b in idx])
 
     def _annotate(self, exc, b, states) -> None:
         """Which bearing failed, at which state [m, m/s]: what the run reports."""

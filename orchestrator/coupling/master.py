@@ -197,6 +197,12 @@ class StructureSlave(ABC):
         errors, u and v of every gear's node."""
         return 2 * self.n_meshes + 2 * self.n_gears
 
+    def bearing_speeds_at(self, t: float):
+        """The shaft speed at each bearing [rad/s] at t [s] in a run-up (the bearings follow
+        it: :meth:`orchestrator.coupling.master.BearingSet.set_speeds`), None at constant
+        speed."""
+        return None
+
     @abstractmethod
     def get_state(self):
         """An opaque copy of everything a step changes."""
@@ -286,6 +292,13 @@ class BearingSet(ABC):
     @abstractmethod
     def evaluate(self, states: np.ndarray):
         """Film force (nb, 2), Kb (nb, 2, 2), Cb (nb, 2, 2) at journal states (nb, 4)."""
+
+    def set_speeds(self, omegas) -> None:
+        """The shaft speed at each bearing [rad/s] from the next evaluation on (a run-up,
+        :meth:`orchestrator.coupling.master.StructureSlave.bearing_speeds_at`); bearings whose
+        speed is a fixed parameter (the FMUs') cannot follow one."""
+        raise NotImplementedError(f"{type(self).__name__}: the bearings' speed is fixed; a "
+                                  f"run-up runs in-process (gsb run --in-process)")
 
     @property
     def count(self) -> int:

@@ -5,9 +5,9 @@ datasets of a results file (HDF5 dimension scales, so that ``xarray.open_dataset
 engine="h5netcdf")`` reads it labelled) and the variables of
 :meth:`~orchestrator.run.result.Result.to_xarray`.
 
-Dimensions: ``time`` [s] (the end of each step); ``bearing``, ``mesh`` and ``gear``, labelled
-by the names the case gives them (:class:`gear_fmu.layout.Layout`, the case's order: the
-paper's bearings ``1`` .. ``4``, its mesh ``mesh``, its gears ``pinion`` and ``gear``); ``axis``
+Dimensions: ``time`` [s] (the end of each step); ``bearing``, ``mesh``, ``gear`` and ``shaft``,
+labelled by the names the case gives them (:class:`gear_fmu.layout.Layout`, the case's order:
+the paper's bearings ``1`` .. ``4``, its mesh ``mesh``, its gears ``pinion`` and ``gear``); ``axis``
 (``s``, ``t``: the global frame of the gear train). :func:`coordinates` derives the labels from
 a case or its layout; nothing here counts bearings or meshes on its own.
 
@@ -42,6 +42,9 @@ _TABLE = {
                            "gears, driver first)"),
     "gear_node": (("gear", "axis"), "length",
                   "lateral displacement [s, t] of each gear's node, global frame"),
+    "shaft_speed": (("shaft",), "angular_speed",
+                    "signed speed of each shaft about +z, the imposed rigid-body rotation's "
+                    "(drive.speed, or drive.speed_profile at the end of the step)"),
     "iterations": ((), "dimensionless", "coupled master iterations of the step"),
 }
 
@@ -53,9 +56,9 @@ DESCRIPTIONS = {"time": "end of the step"} | {name: text for name, (_, _, text) 
 
 
 def coordinates(train) -> dict[str, tuple]:
-    """The labels of every dimension but time: ``bearing``, ``mesh`` and ``gear`` names (the
-    case's order) and ``axis`` (:data:`AXES`), of a :class:`~fmu_src.case.Case` or a
-    :class:`~gear_fmu.layout.Layout`."""
+    """The labels of every dimension but time: ``bearing``, ``mesh``, ``gear`` and ``shaft``
+    names (the case's order) and ``axis`` (:data:`AXES`), of a :class:`~fmu_src.case.Case` or
+    a :class:`~gear_fmu.layout.Layout`."""
     from gear_fmu.layout import Layout
 
     if not isinstance(train, Layout):
@@ -63,7 +66,8 @@ def coordinates(train) -> dict[str, tuple]:
 
         train = layout(train)
     return {"bearing": train.bearing_names, "mesh": train.mesh_names,
-            "gear": tuple(g.name for g in train.gears), "axis": AXES}
+            "gear": tuple(g.name for g in train.gears),
+            "shaft": tuple(s.name for s in train.shafts), "axis": AXES}
 
 
 def channels(coords: dict) -> dict[str, tuple]:

@@ -500,6 +500,8 @@ def _static_row(data: dict) -> dict | None:
                       OlderFileWarning, stacklevel=3)
         return None
     row = {name: np.asarray(attrs[key], dtype=float) for name, key in _STATIC_ROW.items()}
+    if "static_shaft_speed" in attrs:  # (a file of an earlier version has no shaft speeds)
+        row["shaft_speed"] = np.asarray(attrs["static_shaft_speed"], dtype=float)
     row["journal_velocity"] = np.zeros_like(row["journal_position"])
     row["time"] = np.asarray(0.0)
     return row

@@ -185,7 +185,11 @@ def report_text(r: dict) -> str:
     for key, names in seen.items():
         lines.append(f"  bearing{'s' * (len(names) > 1)} {', '.join(names)}: " + ", ".join(
             f"{label} {q:.4g}" for label, q in zip(r["line_labels"], key, strict=True)))
-    if np.isnan(amplitudes).any():
+    speeds = r.get("window_speeds")
+    if speeds is not None and speeds[0] != speeds[1]:
+        lines.append(f"(-: the input speed varies over the window, {speeds[0]:.4g} -> "
+                     f"{speeds[1]:.4g} rad/s: a run-up has no lines at fixed frequencies)")
+    elif np.isnan(amplitudes).any():
         lines.append("(-: a line the window does not resolve)")
     return "\n".join(lines)
 
@@ -204,6 +208,7 @@ class Static:
     warnings: list
     seconds: float
     notes: list = field(default_factory=list)
+    shaft_speed: np.ndarray = None  # (n_shafts,) [rad/s] at t = 0
 
 
 class Stop(Exception):
@@ -312,6 +317,7 @@ class Runner:
         self.received = received
         self.echo = echo
         self.master = None
+        self._speeds = None  # (speed profile, signed ratios) of shaft_speeds
 
     def stop_if_asked(self, where: str) -> None:
         if self.received:
@@ -353,6 +359,7 @@ class Runner:
                                               structure.physics)
         except (ValueError, np.linalg.LinAlgError) as exc:  # a check, not the run
             steps, notes = [f"the time-step check could not run: {exc}"], []
+        notes = run_up_notes(case, self.spec.dt) + notes
         overloads = unbalance_warnings(case)
         warnings = overloads + steps
         if self.echo:  # Python warnings: the command line prints each as one line
@@ -360,7 +367,19 @@ class Runner:
                 for text in texts:
                     python_warnings.warn(text, category, stacklevel=2)
         return Static(static, x0, mesh_force, te, np.array(gear_node, dtype=float), warnings,
-                      time.perf_counter() - t0, notes)
+                      time.perf_counter() - t0, notes, self.shaft_speeds([0.0])[0])
+
+    def shaft_speeds(self, times) -> np.ndarray:
+        """(len(times), n_shafts) each shaft's signed speed about +z [rad/s] at ``times`` [s]:
+        the input speed (:func:`fmu_src.description.speed_profile`) times the shaft's signed
+        ratio."""
+        from fmu_src.description import layout, speed_profile
+
+        if self._speeds is None:
+            lay = layout(self.spec.case)
+            self._speeds = (speed_profile(self.spec.case), lay.ratios * lay.directions)
+        profile, signed = self._speeds
+        return np.array([profile.speed(float(t)) for t in times])[:, None] * signed
 
     @one_blas_thread
     def transient(self, recorder, first: int = 0, bar: Progress | None = None) -> dict:
@@ -389,6 +408,7 @@ class Runner:
                                 journal_velocity=report.states[:, 2:],
                                 bearing_force=report.bearing_force, mesh_force=mesh_force,
                                 transmission_error=te, gear_node=gear_nodes,
+                                shaft_speed=self.shaft_speeds([(i + 1) * dt])[0],
                                 iterations=report.iterations)
                 last, i = i, i + 1
             else:
@@ -409,16 +429,16 @@ class Runner:
             bar.update(n_steps, f"{done['iterations'] / max(n_steps - first, 1):.2f} it/step")
         return done
 
-    @staticmethod
-    def _record(recorder, block, first: int, dt: float) -> None:
+    def _record(self, recorder, block, first: int, dt: float) -> None:
         """The rows of a block of steps from step ``first``
         (:meth:`~orchestrator.coupling.master.Master.steps`); a block that ended on a failed
         step does not flush (the state after it is not one to resume from)."""
         if block.count:
             states = block.states
+            times = np.arange(first + 1, first + 1 + block.count) * dt
             recorder.append_rows(
-                block.count, flush=block.error is None,
-                time=np.arange(first + 1, first + 1 + block.count) * dt,
+                block.count, flush=block.error is None, time=times,
+                shaft_speed=self.shaft_speeds(times),
                 journal_position=states[:, :, :2], journal_velocity=states[:, :, 2:],
                 bearing_force=block.bearing_force, mesh_force=block.mesh_force,
                 transmission_error=block.transmission_error, gear_node=block.gear_nodes,
@@ -445,6 +465,22 @@ def substeps_text(substeps) -> str:
             f"in sub-steps, at t = {at}{more}")
 
 
+def run_up_notes(case, dt: float) -> list[str]:
+    """What a run-up (``drive.speed_profile``) changes, said once on the run: the speeds,
+    the inertia of the ramp, the time step fixed from the highest mesh frequency reached;
+    nothing at constant speed."""
+    from fmu_src.description import mesh_period, speed_profile
+
+    p = speed_profile(case)
+    if not p.varies:
+        return []
+    return [f"run-up: the input speed goes from {p.omega0:g} to {p.omega1:g} rad/s over "
+            f"{p.duration:g} s from t = {p.t_start:g} s ({p.ramp_acceleration:.4g} rad/s^2: "
+            f"the train's inertia loads the torsion during the ramp); dt = {dt:.4g} s is fixed "
+            f"from the fastest mesh at {p.max_speed:g} rad/s ({1.0 / mesh_period(case):.4g} "
+            f"Hz); the meshes, unbalances and bearings follow the speed"]
+
+
 def _substep_attributes(substeps) -> dict:
     """The results file's record of the steps taken in sub-steps: the sentence, and every
     one's start time [s] and sub-step count; nothing when there are none."""
@@ -461,6 +497,7 @@ def _static_attributes(static: Static) -> dict:
             "static_mesh_force": static.mesh_force,
             "static_transmission_error": static.transmission_error,
             "static_gear_node": static.gear_node,
+            "static_shaft_speed": static.shaft_speed,
             "warnings": "\n".join(static.warnings), "notes": "\n".join(static.notes)}
 
 

@@ -160,6 +160,7 @@ ATTRIBUTE_UNITS = {
     "unbalance": symbol("length"), "clearance": symbol("length"),
     "static_journal": symbol("length"), "static_bearing_force": symbol("force"),
     "static_mesh_force": symbol("force"), "static_transmission_error": symbol("length"),
+    "static_shaft_speed": symbol("angular_speed"),
     "wall_time": symbol("time"), "dynamic_factor": symbol("dimensionless"),
     "bearing_force_ptp": symbol("force"), "transmission_error_ptp": symbol("length"),
     "line_amplitudes": symbol("force"), "line_orders": symbol("dimensionless"),

@@ -64,7 +64,7 @@ def test_gsb_export_names_columns_as_printed_and_keeps_an_existing_csv(tmp_path)
 
     path = tmp_path / "run.h5"
     coords = {"bearing": ("in_a", "in_b", "out_a"), "gear": ("pinion", "wheel"),
-              "mesh": ("stage1",), "axis": ("s", "t")}
+              "mesh": ("stage1",), "shaft": ("input", "output"), "axis": ("s", "t")}
     table = channels(coords)
     names = ("journal_position", "bearing_force", "gear_node", "mesh_force")
     rng = np.random.default_rng(3)

@@ -49,7 +49,8 @@ def test_results_file_is_labelled_by_the_train_names(run):
     raw = read_results(path)
     assert raw["time"].shape == (256,)
     with xr.open_dataset(path, engine="h5netcdf") as ds:
-        assert dict(ds.sizes) == {"time": 256, "bearing": 6, "axis": 2, "mesh": 2, "gear": 4}
+        assert dict(ds.sizes) == {"time": 256, "bearing": 6, "axis": 2, "mesh": 2, "gear": 4,
+                                  "shaft": 3}
         assert list(ds.bearing.values) == BEARINGS
         assert list(ds.mesh.values) == MESHES
         assert list(ds.gear.values) == GEARS

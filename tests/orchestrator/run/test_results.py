@@ -106,9 +106,13 @@ def test_xarray_opens_a_run_file_with_the_names_and_dimensions_of_the_api(tmp_pa
     path = written.summary.results
     raw = read_results(path)
     assert raw["coords"] == {"bearing": ("1", "2", "3", "4"), "axis": ("s", "t"),
-                             "mesh": ("mesh",), "gear": ("pinion", "gear")}
+                             "mesh": ("mesh",), "gear": ("pinion", "gear"),
+                             "shaft": ("pinion_shaft", "gear_shaft")}
     with xr.open_dataset(path, engine="h5netcdf") as ds:
-        assert dict(ds.sizes) == {"time": 128, "bearing": 4, "axis": 2, "mesh": 1, "gear": 2}
+        assert dict(ds.sizes) == {"time": 128, "bearing": 4, "axis": 2, "mesh": 1, "gear": 2,
+                                  "shaft": 2}
+        assert ds.shaft_speed.dims == ("time", "shaft")
+        assert ds.shaft_speed.attrs["units"] == "rad/s"
         assert ds.journal_position.dims == ("time", "bearing", "axis")
         assert ds.gear_node.dims == ("time", "gear", "axis")
         assert ds.mesh_force.dims == ("time", "mesh")
