@@ -80,7 +80,23 @@ class RunSpec:
         spec = cls(case, in_process, fmus, fmu_dir, None if steps is None else int(steps),
                    threads)
         spec.check_window()
+        spec.check_speed_profile()
         return spec
+
+    def check_speed_profile(self) -> None:
+        """RunError before the run for a run-up whose ramp is shorter than one period of the
+        fastest mesh at the highest speed (``simulation.steps_per_mesh_period`` steps): a
+        step would hold the change of speed the meshes see (docs/equations.md "Run-ups")."""
+        from fmu_src.description import mesh_period, speed_profile
+
+        p = speed_profile(self.case)
+        period = mesh_period(self.case)
+        if p.varies and p.duration < period:
+            raise RunError(f"drive.speed_profile = {self.case['drive.speed_profile']!r}: a "
+                           f"ramp of {p.duration:.3g} s is shorter than one mesh period at "
+                           f"{p.max_speed:g} rad/s ({period:.3g} s, "
+                           f"{self.case['simulation.steps_per_mesh_period']} steps), which the "
+                           f"step cannot resolve: ramp over {period:.3g} s or more")
 
     def check_window(self) -> None:
         """RunError before the run for a ``simulation.window`` longer than the run (the

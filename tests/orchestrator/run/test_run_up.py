@@ -81,6 +81,21 @@ def test_a_profile_that_cannot_run_is_one_line_naming_it(profile, overrides, exp
         assert part in text, (part, text)
 
 
+def test_a_ramp_the_step_cannot_resolve_is_one_line_before_the_run(tmp_path, capsys):
+    """A ramp shorter than one mesh period at its highest speed (6e-4 s at 400 rad/s): gsb
+    run exits 2 with one line naming the field, the ramp and the shortest one it takes."""
+    from orchestrator.cli import main
+
+    code = main(["run", SPUR, "--in-process", "--set",
+                 "drive.speed_profile=ramp to 400 rad/s in 0.1 ms", "--out", str(tmp_path)])
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1, err
+    for part in ("drive.speed_profile = 'ramp to 400 rad/s in 0.1 ms'", "ramp of 0.0001 s",
+                 "one mesh period at 400 rad/s (0.000604 s, 32 steps)", "over 0.000604 s"):
+        assert part in err, (part, err)
+    assert not list(tmp_path.iterdir())
+
+
 def test_a_run_up_through_the_fmus_is_refused_with_the_way_to_run_it():
     """The FMUs take the speed as a parameter: a run-up through them would run at constant
     speed; it is refused before anything is built, naming --in-process."""
@@ -156,3 +171,23 @@ def test_a_slow_run_up_passes_through_the_steady_states():
                                  / steady[w] - 1.0).max() for w in speeds)
     assert worst[0.6] < 0.05, worst
     assert worst[0.03] > 0.05, worst
+
+
+def test_a_run_up_resumed_is_the_run_up_uninterrupted(tmp_path):
+    """A run-up stopped inside its ramp and resumed from its file's checkpoint (the speeds,
+    the unbalances and the ramp's inertia follow the restored time) has the bits of the run
+    that was never stopped."""
+    from orchestrator.run.results import read_results
+    from orchestrator.run.runner import resume_run, run_case
+
+    case = load_case(SPUR, {"drive.speed_profile": "ramp to 400 rad/s in 5 ms",
+                            "simulation.mesh_periods": 12})
+    whole = run_case(case, in_process=True, out_dir=tmp_path / "a", progress=False,
+                     echo_warnings=False)
+    part = run_case(case, in_process=True, out_dir=tmp_path / "b", progress=False, steps=150,
+                    echo_warnings=False)
+    resumed = resume_run(part.results, periods=12, progress=False)
+    a, b = read_results(whole.results), read_results(resumed.results)
+    assert a["time"].size == b["time"].size == 12 * 32
+    for name in ("journal_position", "bearing_force", "mesh_force", "shaft_speed"):
+        np.testing.assert_array_equal(b[name], a[name], err_msg=name)
