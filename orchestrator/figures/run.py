@@ -24,7 +24,10 @@ unbalance (:func:`orchestrator.figures.base.run_title`):
     and over the whole run (max / min / mean per input revolution: :func:`envelope`). The TE
     is drawn about its mean over the report's window, the mean stated: it holds the static
     deflection under the torque, the shafts' torsional wind-up included, which the dynamic
-    reading of TE (peak-to-peak, orders) leaves out.
+    reading of TE (peak-to-peak, orders) leaves out;
+``run_up.png``
+    of a run-up only (``drive.speed_profile``): the lines of ||F_b|| tracked against the speed
+    and the order waterfall (:mod:`orchestrator.figures.run_up`).
 
 Channels read (:func:`orchestrator.run.channels.channels`): ``time`` [s],
 ``journal_position`` (nb, 2) [m], ``bearing_force`` (nb, 2) [N], ``mesh_force``
@@ -42,6 +45,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.ticker import FormatStrFormatter, MaxNLocator
 
+from fmu_src.description import speed_profile
 from orchestrator.analysis.spectrum import (
     HARMONICS,
     PAD,
@@ -61,14 +65,16 @@ from orchestrator.figures.base import (
     pyplot,
     titled_figure,
 )
+from orchestrator.figures.run_up import draw_run_up
 from orchestrator.run.results import read_results
 
 __all__ = ["RUN_FIGURES", "envelope", "make_run_figures", "run_figures", "run_spectrum"]
 
 #: the PNGs :func:`run_figures` writes (and removes first when stale)
 RUN_FIGURES = ("orbits.png", "bearing_forces.png", "spectra.png", "mesh.png")
-#: names of earlier versions, removed as stale too
-_OLD_FIGURES = ("bearing_force.png", "mesh_force.png")
+#: names of earlier versions, and the run-up's figure (:mod:`orchestrator.figures.run_up`),
+#: removed as stale too
+_OLD_FIGURES = ("bearing_force.png", "mesh_force.png", "run_up.png")
 
 
 def _corners(sw: float, sh: float, pad: float):
@@ -544,6 +550,8 @@ def make_run_figures(results: dict, window: str | None = None) -> dict:
         try:
             for name in RUN_FIGURES:
                 figures[name] = _DRAW[name](plt, run)
+            if "shaft_speed" in results and speed_profile(run.case).varies:
+                figures["run_up.png"] = draw_run_up(plt, run, results["shaft_speed"])
         except BaseException:
             for fig in figures.values():
                 plt.close(fig)

@@ -191,3 +191,40 @@ def test_a_run_up_resumed_is_the_run_up_uninterrupted(tmp_path):
     assert a["time"].size == b["time"].size == 12 * 32
     for name in ("journal_position", "bearing_force", "mesh_force", "shaft_speed"):
         np.testing.assert_array_equal(b[name], a[name], err_msg=name)
+
+
+def test_a_run_up_draws_its_order_tracked_figure_and_a_steady_run_does_not(tmp_path):
+    """``run_up.png`` beside the run's figures, titled with the ramp, a row per shaft (its
+    first bearing) with the tracked lines and the waterfall (the gear shaft's turns less
+    than a window: said so); a run at constant speed has none (and an earlier one's is
+    removed as stale)."""
+    from matplotlib.text import Text
+
+    from orchestrator.figures.base import pyplot
+    from orchestrator.figures.run import make_run_figures, run_figures
+    from orchestrator.run.results import read_results
+    from orchestrator.run.runner import run_case
+
+    case = load_case(SPUR, {"drive.speed_profile": "ramp to 400 rad/s in 20 ms",
+                            "simulation.mesh_periods": 128})
+    summary = run_case(case, in_process=True, out_dir=tmp_path, progress=False,
+                       echo_warnings=False)
+    figures = make_run_figures(read_results(summary.results))
+    try:
+        fig = figures["run_up.png"]
+        text = " ".join(t.get_text() for t in fig.findobj(Text))
+        for part in ("run-up 325 -> 400 rad/s", "'ramp to 400 rad/s in 20 ms'",
+                     "bearing 1 (pinion_shaft): lines tracked", "bearing 1: waterfall",
+                     "mesh GMF (order 26)", "revolutions of gear_shaft, fewer than a "
+                     "window's 2: nothing tracked"):
+            assert part in text, part
+    finally:
+        for f in figures.values():
+            pyplot().close(f)
+    out = tmp_path / "figures"
+    out.mkdir()
+    (out / "run_up.png").write_bytes(b"stale")
+    steady = run_case(load_case(SPUR, {"simulation.mesh_periods": 4}), in_process=True,
+                      out_dir=tmp_path, progress=False, echo_warnings=False)
+    written = run_figures(steady.results, out)
+    assert "run_up.png" not in {p.name for p in written} and not (out / "run_up.png").exists()
