@@ -189,8 +189,10 @@ FIELDS: tuple[Field, ...] = (
     _f("drive.speed", "angular_speed", "input shaft speed omega (the other shafts' speeds follow "
        "from the gear ratios)", **_POS),
     _f("drive.speed_profile", "text", "a run-up or run-down of the input speed: 'ramp to 400 "
-       "rad/s in 2 s' (from drive.speed, linear, then constant; '... after 0.5 s' delays it); "
-       "empty: drive.speed throughout (gear_fmu.speed_profile)", default=""),
+       "rad/s in 2 s' (from drive.speed, linear, then constant; '... after 0.5 s' delays it) "
+       "or 'table 0 s: 325 rad/s, 1 s: 400 rad/s, 2 s: 350 rad/s' (linear between the "
+       "points, from drive.speed at 0 s); empty: drive.speed throughout "
+       "(gear_fmu.speed_profile)", default=""),
     _f("drive.torque", "torque", "input torque T (> 0: the teeth stay in contact only under "
        "load)", **_POS),
     _f("drive.motor_inertia", "inertia", "motor inertia at the input (0: no motor)",
@@ -501,31 +503,40 @@ def parse_case(data: dict, source: str = "<case>") -> Case:
 
 
 def _check_speed_profile(v: dict, source: str) -> None:
-    """``drive.speed_profile`` readable (:func:`fmu_src.units.parse_speed_profile`), and a
-    run-up only with what follows the speed: film bearings need a speed > 0 throughout, the
-    linear model's coefficients hold at one speed, and the gyroscopic tangent at a varying
-    speed is not implemented yet."""
+    """``drive.speed_profile`` readable (:func:`fmu_src.units.parse_speed_profile`), a table
+    starting at ``drive.speed``, and a varying speed only with what follows it: film bearings
+    need a speed > 0 throughout, the linear model's coefficients hold at one speed, and the
+    gyroscopic tangent at a varying speed is not implemented yet."""
     text = v["drive.speed_profile"]
     try:
-        ramp = parse_speed_profile(text)
+        given = parse_speed_profile(text)
     except UnitError as exc:
         raise CaseError(f"{source}: {exc}") from None
-    if ramp is None or ramp[0] == v["drive.speed"]:
+    if given is None:
         return
+    kind, data = given
     where = f"{source}: drive.speed_profile = {text!r}"
+    w0 = v["drive.speed"]
+    if kind == "table" and data[0][1] != w0:
+        raise CaseError(f"{where}: starts at {data[0][1]:g} rad/s, and drive.speed = {w0:g} "
+                        f"rad/s (the static solution's speed): make them equal")
+    speeds = [w for _, w in data] if kind == "table" else [w0, data[0]]
+    if all(w == w0 for w in speeds):
+        return
     for name in instance_names(v, "bearings"):
         model = v[f"bearings.{name}.model"]
         if model == "linear":
             raise CaseError(f"{where}: bearing {name} is linear, whose coefficients hold at one "
-                            f"speed; a run-up needs a film model (hybrid, short, fd) or lumped")
-        if ramp[0] <= 0.0 and model != "lumped":
-            raise CaseError(f"{where}: ends at {ramp[0]:g} rad/s, where the film of bearing "
-                            f"{name} ({model}) carries no load: end above 0 rad/s")
+                            f"speed; a varying speed needs a film model (hybrid, short, fd) or "
+                            f"lumped")
+        if min(speeds) <= 0.0 and model != "lumped":
+            raise CaseError(f"{where}: reaches {min(speeds):g} rad/s, where the film of "
+                            f"bearing {name} ({model}) carries no load: keep the speed above "
+                            f"0 rad/s")
     if v["simulation.gyroscopic"]:
-        raise CaseError(f"{where}: a run-up with simulation.gyroscopic = true is not "
+        raise CaseError(f"{where}: a varying speed with simulation.gyroscopic = true is not "
                         f"implemented yet (the gyroscopic tangent changes with the speed): set "
                         f"simulation.gyroscopic = false")
-
 
 def _check_window(v: dict, source: str) -> None:
     """``simulation.window`` readable (:func:`fmu_src.units.parse_window`), its shaft one of

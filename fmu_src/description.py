@@ -106,14 +106,18 @@ def structure_loads(case: Case) -> StructureLoads:
 
 
 def speed_profile(case: Case) -> SpeedProfile:
-    """The input speed against time: ``drive.speed``, ramped as ``drive.speed_profile`` says
-    (:func:`fmu_src.units.parse_speed_profile`; constant when it is empty)."""
+    """The input speed against time: ``drive.speed``, ramped or following a table as
+    ``drive.speed_profile`` says (:func:`fmu_src.units.parse_speed_profile`; constant when it
+    is empty; a table starts at ``drive.speed``: :func:`fmu_src.case.parse_case` checks it)."""
     w0 = float(layout(case).drive.speed)
-    ramp = parse_speed_profile(case["drive.speed_profile"])
-    if ramp is None:
-        return SpeedProfile(w0, w0)
-    w1, duration, start = ramp
-    return SpeedProfile(w0, w1, start, duration)
+    given = parse_speed_profile(case["drive.speed_profile"])
+    if given is None:
+        return SpeedProfile.ramp(w0, w0)
+    kind, data = given
+    if kind == "ramp":
+        w1, duration, start = data
+        return SpeedProfile.ramp(w0, w1, start, duration)
+    return SpeedProfile(tuple(t for t, _ in data), tuple(w for _, w in data))
 
 
 def mesh_elements_of(case: Case) -> tuple[MeshElement, ...]:

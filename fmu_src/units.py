@@ -197,33 +197,59 @@ def parse_window(value, field: str = "simulation.window") -> tuple[float, str, s
 
 
 _RAMP = re.compile(r"^\s*ramp\s+to\s+(.+?)\s+in\s+(.+?)(?:\s+after\s+(.+?))?\s*$", re.IGNORECASE)
+_TABLE = re.compile(r"^\s*table\s+(.*?)\s*$", re.IGNORECASE | re.DOTALL)
 
 
-def parse_speed_profile(value, field: str = "drive.speed_profile"
-                        ) -> tuple[float, float, float] | None:
+def parse_speed_profile(value, field: str = "drive.speed_profile") -> tuple | None:
     """The input speed's profile as written in a case or on the command line: ``""`` (a
     constant ``drive.speed``) -> None; ``"ramp to 400 rad/s in 2 s"`` (from ``drive.speed``
     at t = 0, linear, then constant), optionally ``"... after 0.5 s"`` (the ramp's start) ->
-    ``(final speed [rad/s], duration [s], start [s])``
+    ``("ramp", (final speed [rad/s], duration [s], start [s]))``; ``"table 0 s: 300 rad/s,
+    1 s: 400 rad/s, 3 s: 350 rad/s"`` (linear between the points, the last speed after them;
+    the first at 0 s) -> ``("table", ((t [s], speed [rad/s]), ...))``
     (:class:`gear_fmu.speed_profile.SpeedProfile`). :class:`UnitError` naming ``field``
-    otherwise.
+    otherwise, a table whose times do not increase included.
 
     >>> parse_speed_profile("ramp to 3000 rpm in 1.5 s after 100 ms")
-    (314.1592653589793, 1.5, 0.1)
+    ('ramp', (314.1592653589793, 1.5, 0.1))
+    >>> parse_speed_profile("table 0 s: 300 rad/s, 0.5 s: 400 rad/s")
+    ('table', ((0.0, 300.0), (0.5, 400.0)))
     """
-    forms = "'ramp to 400 rad/s in 2 s' or 'ramp to 3000 rpm in 1.5 s after 0.1 s'"
+    forms = ("'ramp to 400 rad/s in 2 s', 'ramp to 3000 rpm in 1.5 s after 0.1 s' or "
+             "'table 0 s: 300 rad/s, 1 s: 400 rad/s'")
     if value is None or (isinstance(value, str) and not value.strip()):
         return None
-    m = _RAMP.match(value) if isinstance(value, str) else None
-    if not m:
+    ramp = _RAMP.match(value) if isinstance(value, str) else None
+    table = _TABLE.match(value) if isinstance(value, str) else None
+    if ramp:
+        speed = parse_quantity(ramp.group(1), "angular_speed", field)
+        duration = parse_quantity(ramp.group(2), "time", field)
+        start = parse_quantity(ramp.group(3), "time", field) if ramp.group(3) else 0.0
+        if speed < 0.0:
+            raise UnitError(f"{field}: {value!r}: the final speed {speed:g} rad/s must be >= 0")
+        if duration <= 0.0:
+            raise UnitError(f"{field}: {value!r}: the ramp's duration {duration:g} s must be "
+                            f"> 0")
+        if start < 0.0:
+            raise UnitError(f"{field}: {value!r}: the ramp's start {start:g} s must be >= 0")
+        return "ramp", (speed, duration, start)
+    if not table:
         raise UnitError(f"{field}: cannot read {value!r} as a speed profile: write {forms}")
-    speed = parse_quantity(m.group(1), "angular_speed", field)
-    duration = parse_quantity(m.group(2), "time", field)
-    start = parse_quantity(m.group(3), "time", field) if m.group(3) else 0.0
-    if speed < 0.0:
-        raise UnitError(f"{field}: {value!r}: the final speed {speed:g} rad/s must be >= 0")
-    if duration <= 0.0:
-        raise UnitError(f"{field}: {value!r}: the ramp's duration {duration:g} s must be > 0")
-    if start < 0.0:
-        raise UnitError(f"{field}: {value!r}: the ramp's start {start:g} s must be >= 0")
-    return speed, duration, start
+    points = []
+    for item in table.group(1).split(","):
+        parts = item.split(":")
+        if len(parts) != 2:
+            raise UnitError(f"{field}: cannot read {item.strip()!r} in {value!r} as a point "
+                            f"'time: speed' (e.g. '1 s: 400 rad/s')")
+        t = parse_quantity(parts[0].strip(), "time", field)
+        w = parse_quantity(parts[1].strip(), "angular_speed", field)
+        if w < 0.0:
+            raise UnitError(f"{field}: {item.strip()!r}: the speed {w:g} rad/s must be >= 0")
+        if points and not t > points[-1][0]:
+            raise UnitError(f"{field}: {item.strip()!r} after {points[-1][0]:g} s: the "
+                            f"times of a table increase")
+        points.append((t, w))
+    if points[0][0] != 0.0:
+        raise UnitError(f"{field}: {value!r}: the table starts at {points[0][0]:g} s; its "
+                        f"first point is at 0 s (the static solution's speed)")
+    return "table", tuple(points)

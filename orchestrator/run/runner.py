@@ -474,11 +474,11 @@ def run_up_notes(case, dt: float) -> list[str]:
     p = speed_profile(case)
     if not p.varies:
         return []
-    return [f"run-up: the input speed goes from {p.omega0:g} to {p.omega1:g} rad/s over "
-            f"{p.duration:g} s from t = {p.t_start:g} s ({p.ramp_acceleration:.4g} rad/s^2: "
-            f"the train's inertia loads the torsion during the ramp); dt = {dt:.4g} s is fixed "
-            f"from the fastest mesh at {p.max_speed:g} rad/s ({1.0 / mesh_period(case):.4g} "
-            f"Hz); the meshes, unbalances and bearings follow the speed"]
+    return [f"run-up: the input speed follows drive.speed_profile ({p.describe()}; up to "
+            f"{p.max_acceleration:.4g} rad/s^2: the train's inertia loads the torsion while it "
+            f"changes); dt = {dt:.4g} s is fixed from the fastest mesh at {p.max_speed:g} "
+            f"rad/s ({1.0 / mesh_period(case):.4g} Hz); the meshes, unbalances and bearings "
+            f"follow the speed"]
 
 
 def _substep_attributes(substeps) -> dict:

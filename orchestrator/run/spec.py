@@ -91,10 +91,10 @@ class RunSpec:
 
         p = speed_profile(self.case)
         period = mesh_period(self.case)
-        if p.varies and p.duration < period:
+        if p.varies and p.shortest_change < period:
             raise RunError(f"drive.speed_profile = {self.case['drive.speed_profile']!r}: a "
-                           f"ramp of {p.duration:.3g} s is shorter than one mesh period at "
-                           f"{p.max_speed:g} rad/s ({period:.3g} s, "
+                           f"ramp of {p.shortest_change:.3g} s is shorter than one mesh period "
+                           f"at {p.max_speed:g} rad/s ({period:.3g} s, "
                            f"{self.case['simulation.steps_per_mesh_period']} steps), which the "
                            f"step cannot resolve: ramp over {period:.3g} s or more")
 

@@ -13,41 +13,47 @@ from gear_fmu.loads import accelerated_unbalance_coefficients, unbalance_force
 from gear_fmu.speed_profile import SpeedProfile
 from gear_fmu.system import Unbalances
 
-UP = SpeedProfile(100.0, 400.0, t_start=0.2, duration=0.5)
-DOWN = SpeedProfile(400.0, 150.0, t_start=0.0, duration=0.25)
+UP = SpeedProfile.ramp(100.0, 400.0, t_start=0.2, duration=0.5)
+DOWN = SpeedProfile.ramp(400.0, 150.0, t_start=0.0, duration=0.25)
+TABLE = SpeedProfile((0.0, 0.15, 0.4, 0.55), (300.0, 380.0, 380.0, 120.0))
 TIMES = (0.0, 0.1, 0.2, 0.35, 0.6999, 0.7, 0.9)
 
 
-@pytest.mark.parametrize("profile", [UP, DOWN], ids=["up", "down"])
+@pytest.mark.parametrize("profile", [UP, DOWN, TABLE], ids=["up", "down", "table"])
 def test_the_angle_is_the_integral_of_the_speed(profile):
-    """Theta(t) against a quadrature of Omega (the kinks at the ramp's ends as break points);
+    """Theta(t) against a quadrature of Omega (the kinks at the points as break points);
     agreement to the quadrature's tolerance, 1e-12 relative."""
     for t in TIMES:
-        ref, _ = quad(profile.speed, 0.0, t, points=[profile.t_start, profile.t_end],
+        ref, _ = quad(profile.speed, 0.0, t, points=[x for x in profile.times if 0 < x < t],
                       limit=200, epsabs=0.0, epsrel=1e-13)
         assert profile.angle(t) == pytest.approx(ref, rel=1e-12, abs=1e-12), t
 
 
-@pytest.mark.parametrize("profile", [UP, DOWN], ids=["up", "down"])
+@pytest.mark.parametrize("profile", [UP, DOWN, TABLE], ids=["up", "down", "table"])
 def test_the_acceleration_is_the_derivative_of_the_speed(profile):
     """dOmega/dt against a central difference of Omega away from the kinks: exact for a
     linear ramp up to the round-off of the difference (h = 1e-6 s: 1e-7 relative)."""
     h = 1e-6
     for t in (0.1, 0.3, 0.5, 0.69, 0.8):
-        if min(abs(t - profile.t_start), abs(t - profile.t_end)) < 2 * h:
+        if min(abs(t - x) for x in profile.times) < 2 * h:
             continue
         fd = (profile.speed(t + h) - profile.speed(t - h)) / (2 * h)
         assert profile.acceleration(t) == pytest.approx(fd, rel=1e-7, abs=1e-6), t
     assert (UP.speed(0.0), UP.speed(10.0), UP.max_speed) == (100.0, 400.0, 400.0)
-    assert (DOWN.max_speed, DOWN.ramp_acceleration) == (400.0, -1000.0)
+    assert (DOWN.max_speed, DOWN.max_acceleration) == (400.0, 1000.0)
+    assert (TABLE.min_speed, TABLE.shortest_change) == (120.0, 0.15)
 
 
-def test_a_ramp_must_take_time():
+def test_a_profile_must_be_one_that_can_turn_a_shaft():
     with pytest.raises(ValueError, match="needs a duration > 0 s"):
-        SpeedProfile(100.0, 200.0, 0.0, 0.0)
-    with pytest.raises(ValueError, match=r"omega1 = -5\.0"):
-        SpeedProfile(100.0, -5.0, 0.0, 1.0)
-    assert not SpeedProfile(100.0, 100.0).varies
+        SpeedProfile.ramp(100.0, 200.0, 0.0, 0.0)
+    with pytest.raises(ValueError, match=r"speed -5\.0 rad/s at t = 1\.0 s"):
+        SpeedProfile.ramp(100.0, -5.0, 0.0, 1.0)
+    with pytest.raises(ValueError, match=r"t = 0\.1 s after t = 0\.2 s: the times"):
+        SpeedProfile((0.0, 0.2, 0.1), (1.0, 2.0, 3.0))
+    with pytest.raises(ValueError, match="starts at t = 0 s"):
+        SpeedProfile((0.5, 1.0), (1.0, 2.0))
+    assert not SpeedProfile.ramp(100.0, 100.0).varies
 
 
 @pytest.mark.parametrize("profile", [UP, DOWN], ids=["up", "down"])

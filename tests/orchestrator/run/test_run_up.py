@@ -66,12 +66,19 @@ def test_a_run_up_turns_the_bearings_at_their_shafts_speed():
     ("ramp to 400 rad/s", {}, ["drive.speed_profile", "'ramp to 400 rad/s'", "ramp to 400"]),
     ("ramp to 400 kg in 1 s", {}, ["drive.speed_profile", "'400 kg' is a mass"]),
     ("ramp to 400 rad/s in 0 s", {}, ["duration 0 s must be > 0"]),
-    ("ramp to 0 rad/s in 1 s", {}, ["ends at 0 rad/s", "bearing 1 (hybrid)", "carries no load"]),
+    ("ramp to 0 rad/s in 1 s", {}, ["reaches 0 rad/s", "bearing 1 (hybrid)", "carries no load"]),
+    ("table 0 s: 325 rad/s, 0.2 s: 400 rad/s, 0.1 s: 350 rad/s", {},
+     ["'0.1 s: 350 rad/s' after 0.2 s", "the times of a table increase"]),
+    ("table 0 s: 300 rad/s, 1 s: 400 rad/s", {},
+     ["starts at 300 rad/s", "drive.speed = 325 rad/s"]),
+    ("table 0.1 s: 325 rad/s, 1 s: 400 rad/s", {}, ["the table starts at 0.1 s"]),
+    ("table 0 s 325 rad/s", {}, ["'0 s 325 rad/s'", "'time: speed'"]),
     ("ramp to 400 rad/s in 1 s", {"bearings.*.model": "linear"},
      ["bearing 1 is linear", "hold at one speed"]),
     ("ramp to 400 rad/s in 1 s", {"simulation.gyroscopic": True},
      ["simulation.gyroscopic = true is not implemented yet"]),
-], ids=["no time", "unit", "instant", "to rest", "linear", "gyroscopic"])
+], ids=["no time", "unit", "instant", "to rest", "table not increasing", "table start",
+        "table at 0.1 s", "table point", "linear", "gyroscopic"])
 def test_a_profile_that_cannot_run_is_one_line_naming_it(profile, overrides, expected):
     with pytest.raises(CaseError) as info:
         load_case(SPUR, {"drive.speed_profile": profile, **overrides})
@@ -79,6 +86,16 @@ def test_a_profile_that_cannot_run_is_one_line_naming_it(profile, overrides, exp
     assert "\n" not in text
     for part in expected:
         assert part in text, (part, text)
+
+
+def test_a_table_of_speeds_is_followed_up_and_down():
+    """``table 0 s: 325, 5 ms: 360, 10 ms: 340 rad/s``: the shaft speeds of the run are the
+    table's linear interpolation (np.interp) times the ratios, then its last speed."""
+    _, result = _run("table 0 s: 325 rad/s, 5 ms: 360 rad/s, 10 ms: 340 rad/s", 24)
+    r = result.as_dict()
+    expected = np.interp(r["time"], [0.0, 0.005, 0.01], [325.0, 360.0, 340.0])
+    np.testing.assert_allclose(r["shaft_speed"][:, 0], expected, rtol=1e-14)
+    assert r["time"][-1] > 0.01
 
 
 def test_a_ramp_the_step_cannot_resolve_is_one_line_before_the_run(tmp_path, capsys):
