@@ -7,7 +7,7 @@ import pytest
 from gear_fmu.speed_profile import SpeedProfile
 from orchestrator.analysis.order_tracking import order_waterfall, tracked_orders, windows
 
-PROFILE = SpeedProfile(100.0, 400.0, t_start=0.0, duration=1.0)
+PROFILE = SpeedProfile.ramp(100.0, 400.0, t_start=0.0, duration=1.0)
 LINES = {1.0: 3.0, 2.5: 0.4, 26.0: 0.7}  # order: peak amplitude
 
 
