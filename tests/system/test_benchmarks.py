@@ -24,6 +24,7 @@ SMALLEST = {
     "kernel_parts.py": ["--steps", "2", "--calls", "10"],
     "bearing_set.py": ["--steps", "2", "--repeat", "1"],
     "base_runs.py": ["--periods", "2", "--cases", "spur", "--models", "lumped"],
+    "run_up.py": ["--periods", "2", "--repeat", "1"],
 }
 
 
