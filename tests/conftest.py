@@ -45,9 +45,10 @@ def pytest_configure(config):
     """Every module of :data:`LONGEST_FIRST` exists (a moved one would silently lose its place);
     in the xdist controller (not in a worker, not in a run without xdist): :data:`WARM_UP`.
     With numba's cache empty for this code version, the second probe is the cold run of
-    tests/system/test_determinism.py instead, in a cache of its own that then fills numba's
-    (:func:`tests.probes.warm_up.cold_paper_case`): the kernels a fresh clone compiles once
-    for the workers are the cold ones that test compares, not compiled a second time by it.
+    tests/system/test_determinism.py instead, in a cache of its own that is then merged into
+    numba's (:func:`tests.probes.warm_up.cold_paper_case`, :func:`tests.probes.warm_up
+    .merge_cache`): the kernels a fresh clone compiles once for the workers are the cold ones
+    that test compares, not compiled a second time by it.
     A failure there is not reported: the tests that need the same things report it (the
     determinism test then compiles its cold run itself)."""
     import tempfile
@@ -60,6 +61,7 @@ def pytest_configure(config):
         return
     commands = [(probe_command("tests.probes.warm_up", probe), probe_env())
                 for probe in WARM_UP]
+    merge = None  # the cold run's cache, merged into numba's once both probes are done
     if _numba_cache_is_empty():
         from bearing_fmu.numba_cache import cache_base
 
@@ -68,13 +70,17 @@ def pytest_configure(config):
         config.add_cleanup(lambda: shutil.rmtree(folder, ignore_errors=True))
         os.environ[COLD_RUN] = str(folder)  # the workers start with this environment
         commands[1] = (probe_command("tests.probes.warm_up", "cold_paper_case", {
-            "folder": str(folder), "periods": DETERMINISM_PERIODS,
-            "default_cache": str(cache_base())}),
+            "folder": str(folder), "periods": DETERMINISM_PERIODS}),
             probe_env() | {"NUMBA_CACHE_DIR": str(folder / "numba")})
+        merge = probe_command("tests.probes.warm_up", "merge_cache", {
+            "source": str(folder / "numba"), "target": str(cache_base())})
     procs = [subprocess.Popen(command, env=env, stdout=subprocess.DEVNULL,
                               stderr=subprocess.DEVNULL) for command, env in commands]
     for proc in procs:
         proc.wait(timeout=900)
+    if merge is not None:
+        subprocess.run(merge, env=probe_env(), stdout=subprocess.DEVNULL,
+                       stderr=subprocess.DEVNULL, timeout=300)
 
 
 #: the modules that take longest (CPU seconds of a run on a 2-core machine), run first

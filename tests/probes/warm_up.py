@@ -84,15 +84,13 @@ def other_transports() -> None:
     compile_step((np.zeros(1, dtype=np.int64),))  # PythonStructure.arguments
 
 
-def cold_paper_case(folder: str, periods: int, default_cache: str) -> None:
+def cold_paper_case(folder: str, periods: int) -> None:
     """From an empty numba cache, in this process's own ``NUMBA_CACHE_DIR`` (``folder``/numba,
     cold by construction): the native layer, then the in-process run of
     :func:`tests.probes.determinism.runs` (every kernel compiled here), its result in
-    ``folder``/cold.json for tests/system/test_determinism.py, and :func:`other_transports`;
-    then this code version's kernels copied into the ``default_cache`` folder where missing
-    (each file written apart and renamed into place), so that the workers load them."""
+    ``folder``/cold.json for tests/system/test_determinism.py, and :func:`other_transports`.
+    The controller then merges this cache into numba's (:func:`merge_cache`)."""
     import json
-    import os
     from pathlib import Path
 
     from bearing_fmu.numba_cache import cache_base
@@ -106,17 +104,70 @@ def cold_paper_case(folder: str, periods: int, default_cache: str) -> None:
     result = runs(None, periods, ("in-process",))
     (Path(folder) / "cold.json").write_text(json.dumps(result))
     other_transports()
-    for path in sorted(p for p in own.rglob("*") if p.is_file()):
-        target = Path(default_cache) / path.relative_to(own)
-        if target.exists():
+
+
+def merge_cache(source: str, target: str) -> None:
+    """The kernels of the numba cache folder ``source`` added to ``target``'s, once nothing
+    writes to either: a file ``target`` lacks is copied; an index (``.nbi``, one per function:
+    its compiled signatures and their data files) that both hold gets the signatures only
+    ``source`` has, their data files copied under the next free numbers. Copying only what is
+    missing would keep ``target``'s index of a function that both compiled for other
+    signatures (the two-stage train's step in one, the paper case's in the other) and lose the
+    other's, which the tests would then compile again, several at once. Reads and writes
+    numba's index format (``numba.core.caching.IndexDataCacheFile``: the numba version
+    pickled, then the pickled (source stamp, {signature key: data file})); an index of
+    another numba version or stamp is left as it is."""
+    import os
+    import pickle
+    from pathlib import Path
+
+    from numba.core.serialize import dumps
+
+    def put(path: Path, data: bytes) -> None:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        part = path.with_name(f"{path.name}.{os.getpid()}.part")
+        part.write_bytes(data)
+        os.replace(part, path)
+
+    def read(path: Path):
+        with open(path, "rb") as f:
+            version = pickle.load(f)
+            return version, f.read()
+
+    src, dst = Path(source), Path(target)
+    files = sorted(p for p in src.rglob("*") if p.is_file())
+    for path in files:  # the data files first: an index never names a missing one
+        if path.suffix != ".nbi" and not (dst / path.relative_to(src)).exists():
+            put(dst / path.relative_to(src), path.read_bytes())
+    for path in (p for p in files if p.suffix == ".nbi"):
+        out = dst / path.relative_to(src)
+        if not out.exists():
+            put(out, path.read_bytes())
             continue
-        target.parent.mkdir(parents=True, exist_ok=True)
-        part = target.with_name(f"{target.name}.{os.getpid()}.part")
-        part.write_bytes(path.read_bytes())
-        os.replace(part, target)
+        (v_in, raw_in), (v_out, raw_out) = read(path), read(out)
+        if v_in != v_out:
+            continue
+        stamp_in, theirs = pickle.loads(raw_in)
+        stamp_out, ours = pickle.loads(raw_out)
+        if stamp_in != stamp_out:
+            continue
+        base = path.name[:-len(".nbi")]
+        used = set(ours.values())
+        for key, name in theirs.items():
+            if key in ours:
+                continue
+            number = 1
+            while f"{base}.{number}.nbc" in used:
+                number += 1
+            new = f"{base}.{number}.nbc"
+            put(out.with_name(new), (path.parent / name).read_bytes())
+            used.add(new)
+            ours[key] = new
+        put(out, pickle.dumps(v_out, protocol=-1) + dumps((stamp_out, ours)))
 
 
-PROBES = probes_of(bearing_and_train_kernels, native_and_structure, cold_paper_case)
+PROBES = probes_of(bearing_and_train_kernels, native_and_structure, cold_paper_case,
+                   merge_cache)
 
 
 def main(argv: list[str] | None = None) -> None:
