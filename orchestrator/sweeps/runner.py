@@ -111,14 +111,21 @@ def point_spectrum(case: Case, results: dict, window_s: float) -> dict:
     ``window_s`` seconds: :func:`orchestrator.analysis.metrics.report_window`), or the whole
     steady window if it is shorter than one revolution; so the input shaft's orders (the
     paper's pinion orders 1, z1, 2 z1, ...) fall on bins when it holds a revolution and read
-    their amplitudes exactly."""
-    from fmu_src.description import layout, time_step
+    their amplitudes exactly. In a run-up (``drive.speed_profile``) the orders are those of
+    the input's speed at the end of the run (the spectrum of a window over which the speed
+    changes smears its lines)."""
+    from fmu_src.description import layout, speed_profile, time_step
     from orchestrator.analysis.campbell import order_lines
     from orchestrator.analysis.spectrum import order_spectrum
 
     fastest = max(order_lines(case)["mesh_orders"] or [1.0])  # mesh periods per input rev
     per_revolution = fastest * int(case["simulation.steps_per_mesh_period"])  # steps
     dt = time_step(case)
+    profile = speed_profile(case)
+    speed = abs(layout(case).drive.speed)
+    if profile.varies:  # the time step is the highest speed's: steps per revolution at the end
+        speed = profile.speed(float(np.asarray(results["time"])[-1]))
+        per_revolution = 2.0 * math.pi / (speed * dt)
     steps = max(1, round(window_s / dt))
     revolutions = int(steps / per_revolution + 1e-9)
     n = round(revolutions * per_revolution) if revolutions >= 1 else steps
@@ -126,7 +133,7 @@ def point_spectrum(case: Case, results: dict, window_s: float) -> dict:
     n = min(n, time_s.size)
     force = np.asarray(results["bearing_force"][-n:], dtype=float)
     norm = np.hypot(force[..., 0], force[..., 1])
-    input_hz = abs(layout(case).drive.speed) / (2.0 * math.pi)
+    input_hz = speed / (2.0 * math.pi)
     orders, amp = order_spectrum(norm, dt, input_hz, max_order=MAX_MESH_ORDER * fastest)
     step = time_s[1] - time_s[0] if time_s.size > 1 else 0.0
     return {"spectrum_orders": orders, "spectrum": amp.T,

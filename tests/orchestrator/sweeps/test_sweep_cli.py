@@ -335,3 +335,25 @@ def test_sweep_figures_of_a_two_speed_sweep(dask_sweep, tmp_path, monkeypatch):
     assert default[0].parent == files[0].with_suffix("")
     if os.environ.get("GSB_KEEP_FIGURES"):
         print("\n" + "\n".join(str(p) for p in default))
+
+
+def test_a_run_ups_sweep_spectrum_is_in_orders_of_its_final_speed():
+    """A sweep point of a run-up (325 -> 400 rad/s in 1 ms) whose window lies at the final
+    speed: the stored spectrum reads the synthetic lines at their orders of 400 rad/s, as at a
+    constant 400 rad/s (whole revolutions of it in the window: exact to round-off, 1e-9)."""
+    case = load_case(SPUR, {"simulation.steps_per_mesh_period": 16,
+                            "drive.speed_profile": "ramp to 400 rad/s in 1 ms"})
+    z1, per_mesh, w = 26, 16, 400.0
+    dt = 2 * math.pi / (w * z1) / per_mesh
+    n = 60 * per_mesh
+    t = (np.arange(n) + 1) * dt
+    theta = t * w / (2 * math.pi)  # pinion revolutions (a constant offset: phases only)
+    lines = {1.0: 40.0, 26.0: 25.0}
+    norm = 500.0 + sum(a * np.cos(2 * np.pi * q * theta + q) for q, a in lines.items())
+    force = np.stack([norm[:, None] * np.ones(4), np.zeros((n, 4))], axis=-1)
+    out = point_spectrum(case, {"time": t, "bearing_force": force}, window_s=57 * per_mesh * dt)
+    orders, spec = out["spectrum_orders"], out["spectrum"]
+    for q, a in lines.items():
+        k = int(np.argmin(np.abs(orders - q)))
+        assert orders[k] == pytest.approx(q, rel=1e-12)
+        np.testing.assert_allclose(spec[:, k], a, rtol=1e-9, err_msg=f"order {q}")
