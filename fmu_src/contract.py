@@ -405,13 +405,14 @@ def unpack_journal(values) -> np.ndarray:
 
 
 def check_constant_speed(case, what: str) -> None:
-    """CaseError naming ``what`` (an FMU being built) for a case whose input speed is not
-    constant: the FMUs take the speed as a parameter, a run-up runs in-process
-    (``drive.speed_profile``)."""
+    """CaseError naming ``what`` (an export) for a case whose input speed is not constant
+    (``drive.speed_profile``): what it writes fixes each bearing's speed (an SSP's bearing
+    components take ``omega`` as a parameter; the transmission FMU's speed is not an input
+    yet)."""
     if speed_profile(case).varies:
-        raise CaseError(f"{what}: drive.speed_profile = {case['drive.speed_profile']!r}: the "
-                        f"FMUs take a constant speed; a run-up runs in-process (gsb run "
-                        f"--in-process); without the profile the FMU runs at drive.speed")
+        raise CaseError(f"{what}: drive.speed_profile = {case['drive.speed_profile']!r}: its "
+                        f"bearings would turn at drive.speed throughout; a run-up runs with "
+                        f"gsb run (in-process or through the FMUs)")
 
 
 def gear_case_fields():
@@ -420,9 +421,10 @@ def gear_case_fields():
     bearing sits (its shaft and position), the drive, the damping model, the structure's
     tolerance and time-integration switches (the rest of the bearing fields belong to the
     bearing FMUs, the run length, the coupled iterations and the report's window to the
-    master; a run-up's speed profile runs in-process only)."""
+    master). A run-up's ``drive.speed_profile`` is one of them: the structure follows it, the
+    master sets each bearing FMU's input ``omega`` at every step."""
     master_only = ("simulation.steps_per_mesh_period", "simulation.mesh_periods",
-                   "simulation.max_iterations", "simulation.window", "drive.speed_profile")
+                   "simulation.max_iterations", "simulation.window")
     return tuple(f for f in FIELDS if f.key not in master_only and (
                  f.key.split(".")[0] in ("shafts", "gears", "meshes", "discs", "drive")
                  or f.key in ("case.name", "bearings.*.shaft", "bearings.*.position")

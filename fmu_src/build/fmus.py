@@ -347,7 +347,7 @@ def build_fmus(dest: Path | str, names=None, case=None, gear_name: str = "GearSh
     train's own, :func:`orchestrator.coupling.fmi.cache.gear_fmu_name`)."""
     from fmu_src.build.native import export_library
     from fmu_src.case import shipped_case
-    from fmu_src.contract import GEAR_DEFAULT_CASE, check_constant_speed
+    from fmu_src.contract import GEAR_DEFAULT_CASE
 
     dest = Path(dest)
     dest.mkdir(parents=True, exist_ok=True)
@@ -359,7 +359,6 @@ def build_fmus(dest: Path | str, names=None, case=None, gear_name: str = "GearSh
     FmuBuilder = _pythonfmu_builder()
     native = export_library()
     case = shipped_case(GEAR_DEFAULT_CASE.removesuffix(".toml")) if case is None else case
-    check_constant_speed(case, f"the gear-shaft FMU of {case['case.name']}")
     built = []
     for name in names or FMUS:
         spec = FMUS[name]

@@ -193,7 +193,9 @@ def write_ssp(case: Case, dest: Path | str, laws=None) -> Path:
     bearings use, ``bearings.<name>.model``) and write ``dest/<case name>.ssp``; returns its
     path. ``laws``: the bearing laws at the static solution (:func:`ssd_text`)."""
     from fmu_src.build.fmus import build_fmus, readable_entry
+    from fmu_src.contract import check_constant_speed
 
+    check_constant_speed(case, f"the SSP of {case['case.name']}")
     dest = Path(dest)
     dest.mkdir(parents=True, exist_ok=True)
     out = dest / f"{case['case.name']}.ssp"

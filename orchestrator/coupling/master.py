@@ -295,10 +295,10 @@ class BearingSet(ABC):
 
     def set_speeds(self, omegas) -> None:
         """The shaft speed at each bearing [rad/s] from the next evaluation on (a run-up,
-        :meth:`orchestrator.coupling.master.StructureSlave.bearing_speeds_at`); bearings whose
-        speed is a fixed parameter (the FMUs') cannot follow one."""
-        raise NotImplementedError(f"{type(self).__name__}: the bearings' speed is fixed; a "
-                                  f"run-up runs in-process (gsb run --in-process)")
+        :meth:`orchestrator.coupling.master.StructureSlave.bearing_speeds_at`); a set whose
+        speed is fixed cannot follow one."""
+        raise NotImplementedError(f"{type(self).__name__}: the bearings' speed is fixed; it "
+                                  f"cannot follow a varying speed (drive.speed_profile)")
 
     @property
     def count(self) -> int:

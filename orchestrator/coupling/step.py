@@ -537,9 +537,10 @@ class CoupledSteps:
         """Up to ``n`` steps of dt from t [s] (the structure's time) until one fails (its
         error in the block, after the steps before it are taken); ``time_of(k)``: the time
         [s] of the block's step k, as the caller's messages give it."""
-        speeds = self.structure.bearing_speeds_at(t + dt)  # a run-up: one step per block
-        if speeds is not None:
+        speeds = self.structure.bearing_speeds_at(t + dt)
+        if speeds is not None:  # a run-up: the bearings' speeds change at every step
             self.bearings.set_speeds(speeds)
+            n = 1
         structure, m, finish = self.structure.compiled_block(t, dt, n, time_of)
         groups = bearing_slots(self.bearings.compiled_groups())
         nb = self.bearings.count

@@ -16,7 +16,7 @@ from pathlib import Path
 from bearing_fmu import numba_cache
 from bearing_fmu.hybrid.model import thread_count
 from fmu_src import description
-from fmu_src.case import Case, CaseError
+from fmu_src.case import Case
 from gear_fmu.structure import Structure
 from orchestrator.coupling.inprocess import InProcessStructure, ModelBearings
 from orchestrator.coupling.master import Master
@@ -54,10 +54,6 @@ def build_master(case: Case, in_process: bool = False, fmu_dir: Path | str | Non
     if structure is not None and not in_process:
         raise ValueError("build_master: a structure object can only be driven in-process "
                          "(in_process=True)")
-    if (not in_process or fmus is not None) and description.speed_profile(case).varies:
-        raise CaseError(f"drive.speed_profile = {case['drive.speed_profile']!r}: a run-up runs "
-                        f"in-process for now (gsb run --in-process, simulate(in_process=True)); "
-                        f"the FMUs take the speed as a parameter")
     if in_process:
         structure = InProcessStructure(description.structure(case) if structure is None
                                        else structure)

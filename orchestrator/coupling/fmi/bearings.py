@@ -221,6 +221,17 @@ class FmuBearings(BearingSet):
     def count(self) -> int:
         return len(self.slaves)
 
+    def set_speeds(self, omegas) -> None:
+        """Each bearing FMU's input ``omega`` [rad/s] from the next evaluation on (a run-up);
+        :class:`FmuError` for an FMU without that input, which cannot follow one."""
+        for b, (s, w) in enumerate(zip(self.slaves, omegas, strict=True)):
+            who = f"bearing {self.names[b]}"
+            if "omega" not in s.vr:
+                raise FmuError(f"{who} ({s.path.name}): no input omega, so it cannot follow "
+                               f"a varying speed (drive.speed_profile)")
+            s.set({"omega": float(w)}, who)
+            self._omegas[b] = float(w)
+
     def compiled_groups(self) -> tuple:
         """The bearing FMUs with the Jacobian outputs as one group called from compiled code
         (:func:`orchestrator.coupling.fmi.steps.fmu_bearing_group`), the force-only ones

@@ -73,6 +73,21 @@ class FmuState:
             pass
 
 
+def _bearing_speed_schedule(case):
+    """``t -> (nb,)`` each bearing's shaft speed [rad/s] in a run-up of ``case``
+    (``drive.speed_profile``), None at constant speed: what the master sets as the bearing
+    FMUs' input ``omega`` (the gear-shaft FMU follows the profile itself, a parameter)."""
+    from fmu_src.description import layout, speed_profile
+
+    profile = speed_profile(case)
+    if not profile.varies:
+        return None
+    lay = layout(case)
+    ratios = np.abs(lay.ratios * lay.directions)
+    at = np.array([ratios[lay.shaft_index[b.shaft]] for b in lay.bearings])
+    return lambda t: profile.speed(t) * at
+
+
 class FmuStructure(StructureSlave):
     """The gear-shaft FMU (``GearShaft.fmu``) behind the master's structure interface.
 
@@ -105,6 +120,7 @@ class FmuStructure(StructureSlave):
         try:
             train = case if case is not None else self._carried_case()
             self._check_train(train)
+            self._bearing_speeds = _bearing_speed_schedule(train)
         except BaseException:
             self.slave.close()
             raise
@@ -153,6 +169,9 @@ class FmuStructure(StructureSlave):
         self._sup_val = (ctypes.c_double * (2 * nb))()
         self._it_vr = (ctypes.c_uint * 1)(vr["iterations"])
         self._it_val = (ctypes.c_int * 1)()
+
+    def bearing_speeds_at(self, t: float):
+        return None if self._bearing_speeds is None else self._bearing_speeds(t)
 
     def _carried_case(self):
         """The case the FMU carries (``resources/case.toml``)."""

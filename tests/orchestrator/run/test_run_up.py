@@ -113,17 +113,34 @@ def test_a_ramp_the_step_cannot_resolve_is_one_line_before_the_run(tmp_path, cap
     assert not list(tmp_path.iterdir())
 
 
-def test_a_run_up_through_the_fmus_is_refused_with_the_way_to_run_it():
-    """The FMUs take the speed as a parameter: a run-up through them would run at constant
-    speed; it is refused before anything is built, naming --in-process."""
-    case = load_case(SPUR, {"drive.speed_profile": "ramp to 400 rad/s in 1 s"})
-    with pytest.raises(CaseError, match=r"runs in-process for now \(gsb run --in-process"):
-        gsb.simulate(case, 2, progress=False)
+def test_a_run_up_through_the_fmus_gives_the_in_process_bits(fmu_dir, tmp_path):
+    """Through the FMUs the gear-shaft FMU follows the profile (a parameter) and the master
+    sets each bearing FMU's input omega at every step: the run-up's bits are the in-process
+    run-up's (both transports take the same steps with the same numbers)."""
+    from orchestrator.run.results import read_results
+    from orchestrator.run.runner import run_case
+
+    case = load_case(SPUR, {"drive.speed_profile": "ramp to 400 rad/s in 5 ms",
+                            "simulation.mesh_periods": 10})
+    runs = [read_results(run_case(case, in_process=p, out_dir=tmp_path / str(p),
+                                  fmu_dir=fmu_dir, progress=False,
+                                  echo_warnings=False).results) for p in (True, False)]
+    for name in ("journal_position", "bearing_force", "mesh_force", "shaft_speed"):
+        np.testing.assert_array_equal(runs[1][name], runs[0][name], err_msg=name)
+
+
+def test_an_export_that_would_fix_the_speed_is_refused():
+    """An SSP's bearing components and the transmission FMU take the speed as fixed: their
+    export of a run-up is one line saying so (gsb run runs it)."""
     from fmu_src.build.fmus import build_transmission_fmu
+    from fmu_src.build.ssp import write_ssp
 
-    with pytest.raises(CaseError, match="the transmission FMU of baguet2010_spur"):
-        build_transmission_fmu(case, "/nonexistent")
-
+    case = load_case(SPUR, {"drive.speed_profile": "ramp to 400 rad/s in 1 s"})
+    for export, what in ((build_transmission_fmu, "the transmission FMU of baguet2010_spur"),
+                         (write_ssp, "the SSP of baguet2010_spur")):
+        with pytest.raises(CaseError, match=f"{what}: drive.speed_profile = .*drive.speed "
+                                            f"throughout"):
+            export(case, "/nonexistent")
 
 def test_the_ramps_inertia_takes_its_torque_from_the_mesh():
     """The output clamped, the input shaft's inertia J_in (a 0.5 kg m^2 motor, the pinion and
