@@ -407,8 +407,7 @@ def unpack_journal(values) -> np.ndarray:
 def check_constant_speed(case, what: str) -> None:
     """CaseError naming ``what`` (an export) for a case whose input speed is not constant
     (``drive.speed_profile``): what it writes fixes each bearing's speed (an SSP's bearing
-    components take ``omega`` as a parameter; the transmission FMU's speed is not an input
-    yet)."""
+    components take ``omega`` as a parameter)."""
     if speed_profile(case).varies:
         raise CaseError(f"{what}: drive.speed_profile = {case['drive.speed_profile']!r}: its "
                         f"bearings would turn at drive.speed throughout; a run-up runs with "
@@ -533,11 +532,11 @@ BEARING_RESOURCE = "bearing.fmu"
 
 def transmission_fields():
     """The case fields the transmission FMU exposes as parameters: all of them but the case's
-    description, the run length (the host's stop time decides it), the report's window
-    (the FMU reports nothing: its host analyses its outputs) and a run-up's speed profile
-    (in-process only)."""
+    description, the run length (the host's stop time decides it) and the report's window
+    (the FMU reports nothing: its host analyses its outputs). A run-up's
+    ``drive.speed_profile`` is one: the master inside follows it."""
     return tuple(f for f in FIELDS if f.key not in ("case.description", "simulation.mesh_periods",
-                                                    "simulation.window", "drive.speed_profile"))
+                                                    "simulation.window"))
 
 
 def transmission_variables(case, bearing_fmu: str = "") -> tuple[FmiVar, ...]:

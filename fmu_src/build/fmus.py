@@ -387,9 +387,8 @@ def build_transmission_fmu(case, dest: Path | str, bearing_fmu: Path | str | Non
     path. ``bearing_fmu``: a bearing FMU of the user's own, carried in the resources
     (:data:`fmu_src.contract.BEARING_RESOURCE`) and used for every bearing."""
     from fmu_src.build.native import export_library
-    from fmu_src.contract import BEARING_RESOURCE, check_constant_speed, transmission_variables
+    from fmu_src.contract import BEARING_RESOURCE, transmission_variables
 
-    check_constant_speed(case, f"the transmission FMU of {case['case.name']}")
     dest = Path(dest)
     dest.mkdir(parents=True, exist_ok=True)
     name = transmission_fmu_name(case)

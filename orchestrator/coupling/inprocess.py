@@ -75,8 +75,8 @@ class InProcessStructure(StructureSlave):
         laws = self._require_laws()
         self.cycle.step(t, dt, laws.f0, laws.kb, laws.cb)
 
-    def bearing_speeds_at(self, t: float):
-        return self.structure.bearing_speeds_at(t)
+    def bearing_speeds_after(self, dt: float):
+        return self.structure.bearing_speeds_at(self.structure.t + dt)
 
     def compiled_block(self, t: float, dt: float, n: int, time_of):
         """The structure's planned steps (:meth:`gear_fmu.structure.Structure.steps_plan`) as

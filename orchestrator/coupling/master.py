@@ -197,9 +197,11 @@ class StructureSlave(ABC):
         errors, u and v of every gear's node."""
         return 2 * self.n_meshes + 2 * self.n_gears
 
-    def bearing_speeds_at(self, t: float):
-        """The shaft speed at each bearing [rad/s] at t [s] in a run-up (the bearings follow
-        it: :meth:`orchestrator.coupling.master.BearingSet.set_speeds`), None at constant
+    def bearing_speeds_after(self, dt: float):
+        """The shaft speed at each bearing [rad/s] at the end of the next step of ``dt`` [s]
+        in a run-up, on the structure's own clock (the sum of its steps, which its meshes'
+        angles and loads follow; the bearings follow it:
+        :meth:`orchestrator.coupling.master.BearingSet.set_speeds`); None at constant
         speed."""
         return None
 
@@ -295,7 +297,7 @@ class BearingSet(ABC):
 
     def set_speeds(self, omegas) -> None:
         """The shaft speed at each bearing [rad/s] from the next evaluation on (a run-up,
-        :meth:`orchestrator.coupling.master.StructureSlave.bearing_speeds_at`); a set whose
+        :meth:`orchestrator.coupling.master.StructureSlave.bearing_speeds_after`); a set whose
         speed is fixed cannot follow one."""
         raise NotImplementedError(f"{type(self).__name__}: the bearings' speed is fixed; it "
                                   f"cannot follow a varying speed (drive.speed_profile)")

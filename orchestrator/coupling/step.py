@@ -537,7 +537,7 @@ class CoupledSteps:
         """Up to ``n`` steps of dt from t [s] (the structure's time) until one fails (its
         error in the block, after the steps before it are taken); ``time_of(k)``: the time
         [s] of the block's step k, as the caller's messages give it."""
-        speeds = self.structure.bearing_speeds_at(t + dt)
+        speeds = self.structure.bearing_speeds_after(dt)
         if speeds is not None:  # a run-up: the bearings' speeds change at every step
             self.bearings.set_speeds(speeds)
             n = 1

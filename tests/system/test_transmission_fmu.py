@@ -191,6 +191,22 @@ def test_fmpys_simulate_fmu_gives_gsb_runs_bits(transmission_fmu):
     assert_same_run(rows, gsb_run_rows(case, steps), "fmpy simulate_fmu")
 
 
+def test_a_transmission_fmu_of_a_run_up_gives_gsb_runs_bits(tmp_path):
+    """A run-up (325 -> 400 rad/s in 5 ms) exported as one FMU, its profile a parameter: fmpy's
+    one call gives gsb run's rows bit for bit, as at a constant speed (the master inside
+    follows the profile as gsb run's does; the time step is the highest speed's)."""
+    from fmu_src.build.fmus import build_transmission_fmu
+
+    case = _case(**{"drive.speed_profile": "ramp to 400 rad/s in 5 ms"})
+    fmu = build_transmission_fmu(case, tmp_path)
+    dt = _dt(case)
+    steps = 10 * STEPS  # past the ramp's end (8.3 mesh periods at 400 rad/s)
+    rows = np.array(run_isolated(module="tests.probes.transmission", args=[
+        "simulate", {"fmu": str(fmu), "dt": dt, "steps": steps}]))
+    assert steps * dt > 0.005
+    assert_same_run(rows, gsb_run_rows(case, steps), "fmpy simulate_fmu, run-up")
+
+
 @pytest.mark.parametrize("nanoseconds", [math.floor, math.ceil])
 def test_whole_nanosecond_steps(transmission_fmu, nanoseconds):
     """libcosim's steps are whole nanoseconds: 23,236 or 23,237 ns for the paper's

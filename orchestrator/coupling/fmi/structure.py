@@ -49,13 +49,15 @@ def block_arguments(addresses, law_vr, law_values, journal_vr, journal_values, e
 class FmuState:
     """A saved gear-shaft FMU state (fmi2GetFMUstate); freed when no longer referenced."""
 
-    __slots__ = ("__weakref__", "_handle", "_owner", "n_steps", "t")
+    __slots__ = ("__weakref__", "_handle", "_owner", "clock", "n_steps", "t")
 
-    def __init__(self, owner: FmuStructure, handle: ctypes.c_void_p, t: float, n_steps: int):
+    def __init__(self, owner: FmuStructure, handle: ctypes.c_void_p, t: float, n_steps: int,
+                 clock: float):
         self._owner = owner
         self._handle = handle
         self.t = t
         self.n_steps = n_steps
+        self.clock = clock
 
     def free(self) -> None:
         """Release the FMU's copy now (idempotent; also done on garbage collection)."""
@@ -131,6 +133,8 @@ class FmuStructure(StructureSlave):
             self._set_case(case)
         self.in_init = True
         self.t = float(start_time)
+        #: the FMU's structure's own clock, the sum of its steps (a run-up's speeds follow it)
+        self.clock = float(start_time)
         self.n_steps = 0
         vr = self.slave.vr
         # raw ctypes functions (fmpy sets their argtypes; statuses are checked here)
@@ -170,8 +174,8 @@ class FmuStructure(StructureSlave):
         self._it_vr = (ctypes.c_uint * 1)(vr["iterations"])
         self._it_val = (ctypes.c_int * 1)()
 
-    def bearing_speeds_at(self, t: float):
-        return None if self._bearing_speeds is None else self._bearing_speeds(t)
+    def bearing_speeds_after(self, dt: float):
+        return None if self._bearing_speeds is None else self._bearing_speeds(self.clock + dt)
 
     def _carried_case(self):
         """The case the FMU carries (``resources/case.toml``)."""
@@ -257,6 +261,7 @@ class FmuStructure(StructureSlave):
             self._fail(f"doStep {self.n_steps + 1} from t = {t:.9g} s (dt = {dt:.6g} s) failed",
                        status, since, where=False)
         self.t = t + dt
+        self.clock += dt
         self.n_steps += 1
 
     def compiled_block(self, t: float, dt: float, n: int, time_of):
@@ -280,6 +285,8 @@ class FmuStructure(StructureSlave):
         def finish(count: int) -> None:
             if count:
                 self.t, self.n_steps = float(times[count - 1] + dt), n_steps + count
+                for _ in range(count):  # (summed as the FMU's structure sums its steps)
+                    self.clock += dt
 
         return args, n, finish
 
@@ -292,6 +299,7 @@ class FmuStructure(StructureSlave):
         if code in (fs.JOURNALS_FAILED, fs.JOURNALS_NOT_FINITE, fs.RESTORE_FAILED,
                     fs.OUTPUTS_FAILED):
             self.t, self.n_steps = t + dt, self.n_steps + 1  # after the doStep
+            self.clock += dt
         what = {fs.GET_STATE_FAILED: "fmi2GetFMUstate", fs.LAWS_FAILED:
                 "setting the bearing laws", fs.JOURNALS_FAILED: "reading the journal states",
                 fs.RESTORE_FAILED: "fmi2SetFMUstate", fs.OUTPUTS_FAILED: "reading outputs"}
@@ -321,7 +329,7 @@ class FmuStructure(StructureSlave):
         self._live()
         handle = ctypes.c_void_p()
         self._check(self._get_state(self._c, ctypes.byref(handle)), "fmi2GetFMUstate")
-        state = FmuState(self, handle, self.t, self.n_steps)
+        state = FmuState(self, handle, self.t, self.n_steps, self.clock)
         self._states.add(state)
         return state
 
@@ -331,7 +339,7 @@ class FmuStructure(StructureSlave):
         if state._owner is not self or state._handle is None:
             raise FmuError("set_state: the state is freed or belongs to another FMU instance")
         self._check(self._set_state(self._c, state._handle), "fmi2SetFMUstate")
-        self.t, self.n_steps = state.t, state.n_steps
+        self.t, self.n_steps, self.clock = state.t, state.n_steps, state.clock
 
     def checkpoint(self) -> dict:
         """The FMU state serialised (fmi2SerializeFMUstate, ``fmu``: its bytes as uint8),
@@ -341,17 +349,19 @@ class FmuStructure(StructureSlave):
             raise FmuError(f"gear-shaft FMU ({self.slave.path.name}) cannot serialise its "
                            "state (canSerializeFMUstate is false)")
         return {"fmu": np.frombuffer(self.slave.serialize_state(), dtype=np.uint8),
-                "t": np.float64(self.t), "n_steps": np.int64(self.n_steps)}
+                "t": np.float64(self.t), "n_steps": np.int64(self.n_steps),
+                "clock": np.float64(self.clock)}
 
     def restore(self, checkpoint: StateArrays) -> None:
         """Continue from :meth:`checkpoint` arrays (fmi2DeSerializeFMUstate + fmi2SetFMUstate:
         the FMU checks its own state)."""
         self._live()
         blob, t, n_steps = checkpoint.bytes("fmu"), checkpoint.float("t"), checkpoint.int("n_steps")
+        clock = checkpoint.float("clock") if checkpoint.has("clock") else t  # (earlier files)
         if self.in_init:
             self.exit_initialization()
         self.slave.restore_serialized(blob)
-        self.t, self.n_steps = t, n_steps
+        self.t, self.n_steps, self.clock = t, n_steps, clock
 
     def _free_handle(self, handle) -> None:
         if self.slave.fmu is not None:

@@ -129,18 +129,15 @@ def test_a_run_up_through_the_fmus_gives_the_in_process_bits(fmu_dir, tmp_path):
         np.testing.assert_array_equal(runs[1][name], runs[0][name], err_msg=name)
 
 
-def test_an_export_that_would_fix_the_speed_is_refused():
-    """An SSP's bearing components and the transmission FMU take the speed as fixed: their
-    export of a run-up is one line saying so (gsb run runs it)."""
-    from fmu_src.build.fmus import build_transmission_fmu
+def test_an_ssp_of_a_run_up_is_refused():
+    """An SSP's bearing components take the speed as a parameter: the export of a run-up is
+    one line saying so (gsb run, or the transmission FMU, runs it)."""
     from fmu_src.build.ssp import write_ssp
 
     case = load_case(SPUR, {"drive.speed_profile": "ramp to 400 rad/s in 1 s"})
-    for export, what in ((build_transmission_fmu, "the transmission FMU of baguet2010_spur"),
-                         (write_ssp, "the SSP of baguet2010_spur")):
-        with pytest.raises(CaseError, match=f"{what}: drive.speed_profile = .*drive.speed "
-                                            f"throughout"):
-            export(case, "/nonexistent")
+    with pytest.raises(CaseError, match=r"the SSP of baguet2010_spur: drive.speed_profile = "
+                                        r".*drive.speed throughout"):
+        write_ssp(case, "/nonexistent")
 
 def test_the_ramps_inertia_takes_its_torque_from_the_mesh():
     """The output clamped, the input shaft's inertia J_in (a 0.5 kg m^2 motor, the pinion and
