@@ -223,7 +223,8 @@ class FmuBearings(BearingSet):
 
     def set_speeds(self, omegas) -> None:
         """Each bearing FMU's input ``omega`` [rad/s] from the next evaluation on (a run-up);
-        :class:`FmuError` for an FMU without that input, which cannot follow one."""
+        :class:`~orchestrator.coupling.fmi.instance.FmuError` for an FMU without that input,
+        which cannot follow one."""
         for b, (s, w) in enumerate(zip(self.slaves, omegas, strict=True)):
             who = f"bearing {self.names[b]}"
             if "omega" not in s.vr:
