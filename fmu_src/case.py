@@ -538,6 +538,7 @@ def _check_speed_profile(v: dict, source: str) -> None:
                         f"implemented yet (the gyroscopic tangent changes with the speed): set "
                         f"simulation.gyroscopic = false")
 
+
 def _check_window(v: dict, source: str) -> None:
     """``simulation.window`` readable (:func:`fmu_src.units.parse_window`), its shaft one of
     the train's."""

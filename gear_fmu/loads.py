@@ -22,7 +22,8 @@ from numba import njit
 
 from gear_fmu.dofs import DOF_PER_NODE, U, V
 
-__all__ = ["StructureLoads", "constant_loads", "shaft_speeds", "unbalance_coefficients",
+__all__ = ["StructureLoads", "accelerated_unbalance_coefficients", "bearing_ratios",
+           "constant_loads", "shaft_speeds", "unbalance_coefficients",
            "unbalance_force", "unbalance_into"]
 
 
@@ -66,6 +67,13 @@ def shaft_speeds(layout, input_speed: float) -> np.ndarray:
     """Signed speed of every shaft about +z [rad/s] at the input speed ``input_speed``
     (:attr:`gear_fmu.layout.Layout.ratios` and ``directions``)."""
     return input_speed * layout.ratios * layout.directions
+
+
+def bearing_ratios(layout) -> np.ndarray:
+    """(nb,) the speed magnitude of each bearing's shaft per unit input speed, in the layout's
+    bearing order: what a run-up's bearings turn at, times the input speed."""
+    ratios = np.abs(layout.ratios * layout.directions)
+    return np.array([ratios[layout.shaft_index[b.shaft]] for b in layout.bearings])
 
 
 def unbalance_coefficients(unbalances, speeds) -> np.ndarray:

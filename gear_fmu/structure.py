@@ -59,6 +59,7 @@ from gear_fmu.dofs import DOF_PER_NODE, THETA, U, V, dof
 from gear_fmu.loads import (
     StructureLoads,
     accelerated_unbalance_coefficients,
+    bearing_ratios,
     constant_loads,
     shaft_speeds,
     unbalance_coefficients,
@@ -236,6 +237,7 @@ class Structure:
         self._mesh_tuple = tuple(w.arrays() for w in self._work)
         self._has_err = any(m.has_errors for m in self.meshes)
         self._signed_ratios = self.layout.ratios * self.layout.directions
+        self._bearing_ratios = bearing_ratios(self.layout)
         self._ramp = None  # a run-up's rigid-body inertia load (_at_time), when first needed
         self._forces()
         # the state: at rest at t = 0, no solution yet
@@ -449,9 +451,7 @@ class Structure:
         bearing order), None at constant speed."""
         if self.loads.profile is None:
             return None
-        lay = self.layout
-        speeds = np.abs(self.input_speed_at(t) * self._signed_ratios)
-        return np.array([speeds[lay.shaft_index[b.shaft]] for b in lay.bearings])
+        return self.input_speed_at(t) * self._bearing_ratios
 
     def _at_time(self, t1: float, slotted) -> None:
         """A run-up's speed-dependent loads for the step ending at t1 [s] (nothing at constant

@@ -550,8 +550,8 @@ def make_run_figures(results: dict, window: str | None = None) -> dict:
         try:
             for name in RUN_FIGURES:
                 figures[name] = _DRAW[name](plt, run)
-            if "shaft_speed" in results and speed_profile(run.case).varies:
-                figures["run_up.png"] = draw_run_up(plt, run, results["shaft_speed"])
+            if speed_profile(run.case).varies:
+                figures["run_up.png"] = draw_run_up(plt, run)
         except BaseException:
             for fig in figures.values():
                 plt.close(fig)

@@ -53,9 +53,9 @@ def _critical_speeds(run: RunData, speeds) -> tuple[list[dict], str]:
         return [], f"critical speeds not computed: {type(exc).__name__}: {exc}"
 
 
-def draw_run_up(plt, run: RunData, speed_channel) -> object:
-    """The figure (module docstring) of a run-up's results; ``speed_channel`` (steps, shafts)
-    [rad/s] each shaft's signed speed (the ``shaft_speed`` channel)."""
+def draw_run_up(plt, run: RunData) -> object:
+    """The figure (module docstring) of a run-up's results (the speeds and angles from the
+    stored case's ``drive.speed_profile``)."""
     from matplotlib.colors import LogNorm
 
     from fmu_src.description import speed_profile

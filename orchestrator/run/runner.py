@@ -317,7 +317,7 @@ class Runner:
         self.received = received
         self.echo = echo
         self.master = None
-        self._speeds = None  # (speed profile, signed ratios) of shaft_speeds
+        self._speeds = None  # (speed profile, layout) of shaft_speeds
 
     def stop_if_asked(self, where: str) -> None:
         if self.received:
@@ -370,16 +370,16 @@ class Runner:
                       time.perf_counter() - t0, notes, self.shaft_speeds([0.0])[0])
 
     def shaft_speeds(self, times) -> np.ndarray:
-        """(len(times), n_shafts) each shaft's signed speed about +z [rad/s] at ``times`` [s]:
-        the input speed (:func:`fmu_src.description.speed_profile`) times the shaft's signed
-        ratio."""
+        """(len(times), n_shafts) each shaft's signed speed about +z [rad/s] at ``times`` [s]
+        (:func:`gear_fmu.loads.shaft_speeds` at the input speed of
+        :func:`fmu_src.description.speed_profile`)."""
         from fmu_src.description import layout, speed_profile
+        from gear_fmu.loads import shaft_speeds
 
         if self._speeds is None:
-            lay = layout(self.spec.case)
-            self._speeds = (speed_profile(self.spec.case), lay.ratios * lay.directions)
-        profile, signed = self._speeds
-        return np.array([profile.speed(float(t)) for t in times])[:, None] * signed
+            self._speeds = (speed_profile(self.spec.case), layout(self.spec.case))
+        profile, lay = self._speeds
+        return shaft_speeds(lay, np.array([profile.speed(float(t)) for t in times])[:, None])
 
     @one_blas_thread
     def transient(self, recorder, first: int = 0, bar: Progress | None = None) -> dict:

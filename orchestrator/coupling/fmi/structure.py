@@ -80,13 +80,12 @@ def _bearing_speed_schedule(case):
     (``drive.speed_profile``), None at constant speed: what the master sets as the bearing
     FMUs' input ``omega`` (the gear-shaft FMU follows the profile itself, a parameter)."""
     from fmu_src.description import layout, speed_profile
+    from gear_fmu.loads import bearing_ratios
 
     profile = speed_profile(case)
     if not profile.varies:
         return None
-    lay = layout(case)
-    ratios = np.abs(lay.ratios * lay.directions)
-    at = np.array([ratios[lay.shaft_index[b.shaft]] for b in lay.bearings])
+    at = bearing_ratios(layout(case))
     return lambda t: profile.speed(t) * at
 
 
