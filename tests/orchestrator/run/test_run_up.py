@@ -113,15 +113,20 @@ def test_a_ramp_the_step_cannot_resolve_is_one_line_before_the_run(tmp_path, cap
     assert not list(tmp_path.iterdir())
 
 
-def test_a_run_up_through_the_fmus_gives_the_in_process_bits(fmu_dir, tmp_path):
+@pytest.mark.parametrize("name,fields", [
+    (SPUR, {"drive.speed_profile": "ramp to 400 rad/s in 5 ms"}),
+    ("two_stage_reducer", {"drive.speed_profile": "ramp to 3300 rpm in 5 ms",
+                           "simulation.gyroscopic": False}),
+], ids=["paper", "two-stage"])
+def test_a_run_up_through_the_fmus_gives_the_in_process_bits(fmu_dir, tmp_path, name, fields):
     """Through the FMUs the gear-shaft FMU follows the profile (a parameter) and the master
     sets each bearing FMU's input omega at every step: the run-up's bits are the in-process
-    run-up's (both transports take the same steps with the same numbers)."""
+    run-up's (both transports take the same steps with the same numbers), on the paper's
+    stage and on the two-stage reducer (hybrid and short bearings)."""
     from orchestrator.run.results import read_results
     from orchestrator.run.runner import run_case
 
-    case = load_case(SPUR, {"drive.speed_profile": "ramp to 400 rad/s in 5 ms",
-                            "simulation.mesh_periods": 10})
+    case = load_case(name, {**fields, "simulation.mesh_periods": 10})
     runs = [read_results(run_case(case, in_process=p, out_dir=tmp_path / str(p),
                                   fmu_dir=fmu_dir, progress=False,
                                   echo_warnings=False).results) for p in (True, False)]
