@@ -44,7 +44,8 @@ class StructureLoads:
         Rigid-body angle of the input shaft at t = 0 [rad].
     profile : gear_fmu.speed_profile.SpeedProfile or None
         The input speed against time in a run-up or run-down (its ``omega0`` is
-        ``input_speed``, the static solution's); None: ``input_speed`` throughout.
+        ``input_speed``, the static solution's, unless it continues from a later time:
+        :meth:`gear_fmu.structure.Structure.follow_speed`); None: ``input_speed`` throughout.
     """
 
     torque: float = 220.0
@@ -58,7 +59,8 @@ class StructureLoads:
             raise ValueError(f"torque = {self.torque!r} N m is not finite")
         if not (math.isfinite(self.input_speed) and self.input_speed >= 0.0):
             raise ValueError(f"input_speed = {self.input_speed!r} rad/s must be finite and >= 0")
-        if self.profile is not None and self.profile.omega0 != self.input_speed:
+        if (self.profile is not None and self.profile.times[0] == 0.0
+                and self.profile.omega0 != self.input_speed):
             raise ValueError(f"the speed profile starts at {self.profile.omega0!r} rad/s, not at "
                              f"input_speed = {self.input_speed!r} rad/s")
 

@@ -20,8 +20,8 @@ __all__ = ["SpeedProfile"]
 @dataclass(frozen=True)
 class SpeedProfile:
     """``Omega(t)`` [rad/s] of the input shaft (module docstring): linear between the points
-    ``(times[k], speeds[k])``, ``times[0] = 0`` (the static solution's speed), increasing,
-    and ``speeds[-1]`` after the last.
+    ``(times[k], speeds[k])``, ``times[0] = 0`` (the static solution's speed; later for one
+    that continues another, :meth:`continued`), increasing, and ``speeds[-1]`` after the last.
 
     Examples
     --------
@@ -36,6 +36,9 @@ class SpeedProfile:
 
     times: tuple
     speeds: tuple
+    #: ``Theta(times[0])`` [rad] of a profile that continues another from ``times[0] > 0``
+    #: (:meth:`continued`); None for one that starts at t = 0 (angle 0 there)
+    start_angle: float | None = None
     _angles: tuple = field(default=(), init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -44,9 +47,11 @@ class SpeedProfile:
         if not times or len(times) != len(speeds):
             raise ValueError(f"times and speeds: one speed per time, got {len(times)} times "
                              f"and {len(speeds)} speeds")
-        if times[0] != 0.0:
+        if times[0] != 0.0 and self.start_angle is None:
             raise ValueError(f"the first point is at t = {times[0]!r} s: a profile starts at "
                              f"t = 0 s (the static solution's speed)")
+        if not (math.isfinite(times[0]) and times[0] >= 0.0):
+            raise ValueError(f"the first point is at t = {times[0]!r} s: finite and >= 0")
         for k in range(1, len(times)):
             if not times[k] > times[k - 1]:
                 raise ValueError(f"t = {times[k]!r} s after t = {times[k - 1]!r} s: the times "
@@ -54,7 +59,7 @@ class SpeedProfile:
         for t, w in zip(times, speeds, strict=True):
             if not (math.isfinite(t) and math.isfinite(w) and w >= 0.0):
                 raise ValueError(f"speed {w!r} rad/s at t = {t!r} s: finite and >= 0")
-        angles = [0.0]  # Theta at each point: trapezoids
+        angles = [0.0 if self.start_angle is None else float(self.start_angle)]  # trapezoids
         for k in range(1, len(times)):
             mean = 0.5 * (speeds[k - 1] + speeds[k])
             angles.append(angles[-1] + mean * (times[k] - times[k - 1]))
@@ -75,6 +80,21 @@ class SpeedProfile:
         if t_start == 0.0:
             return cls((0.0, duration), (omega0, omega1))
         return cls((0.0, t_start, t_start + duration), (omega0, omega0, omega1))
+
+    def continued(self, t0: float, t1: float, speed: float) -> SpeedProfile:
+        """This profile until ``t0`` [s], then linear to ``speed`` [rad/s] at ``t1 > t0`` [s]
+        and ``speed`` after: as a profile that starts at ``t0`` with this one's speed and
+        angle there (two points, whatever this one holds; a host's speed input,
+        :class:`orchestrator.coupling.transmission.TransmissionSlave`).
+
+        >>> p = SpeedProfile.ramp(100.0, 300.0, duration=2.0).continued(1.0, 2.0, 100.0)
+        >>> p.times, p.speeds, p.angle(1.0), p.angle(2.0)
+        ((1.0, 2.0), (200.0, 100.0), 150.0, 300.0)
+        """
+        if not t1 > t0:
+            raise ValueError(f"a speed reached at t = {t1!r} s from t = {t0!r} s: later, "
+                             f"please")
+        return SpeedProfile((t0, t1), (self.speed(t0), speed), start_angle=self.angle(t0))
 
     @property
     def omega0(self) -> float:
@@ -130,16 +150,21 @@ class SpeedProfile:
         return (self.speeds[k + 1] - self.speeds[k]) / (self.times[k + 1] - self.times[k])
 
     def acceleration(self, t: float) -> float:
-        """``dOmega/dt`` at t [rad/s^2]: the slope of the interval ``[t_k, t_k+1)`` holding t,
-        0 before 0 and after the last point."""
-        k = self._segment(t)
+        """``dOmega/dt`` at t [rad/s^2]: the slope of the interval ``(t_k, t_k+1]`` holding t,
+        0 up to the first point and after the last. At a point, the slope before it: a step's
+        loads are those of its end (Newmark's ``F(t_n+1)``), and a step that ends on a ramp's
+        last point is in the ramp (a profile continued over each communication step of a
+        host, :meth:`continued`, ramps over its steps that way)."""
+        k = bisect.bisect_left(self.times, t) - 1
         return self._slope(k) if 0 <= k < len(self.times) - 1 else 0.0
 
     def angle(self, t: float) -> float:
-        """``integral_0^t Omega dt`` [rad]: the input shaft's rigid-body rotation since t = 0."""
+        """``integral_0^t Omega dt`` [rad]: the input shaft's rigid-body rotation since t = 0
+        (for a profile that continues another, ``start_angle`` plus the integral from its
+        first point)."""
         k = self._segment(t)
         if k < 0:
-            return self.speeds[0] * t
+            return self._angles[0] + self.speeds[0] * (t - self.times[0])
         tau = t - self.times[k]
         if k >= len(self.times) - 1:
             return self._angles[-1] + self.speeds[-1] * tau

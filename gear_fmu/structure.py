@@ -68,6 +68,7 @@ from gear_fmu.loads import (
 from gear_fmu.mesh.element import MeshElement, MeshState
 from gear_fmu.modal.analyses import reference_damping
 from gear_fmu.modal.damping import DampingModel
+from gear_fmu.speed_profile import SpeedProfile
 from gear_fmu.step.assembly import check_laws, check_laws_fast, history_memo
 from gear_fmu.step.condensation import Condensation, CondensationSlots
 from gear_fmu.step.contact_loop import (
@@ -452,6 +453,32 @@ class Structure:
         if self.loads.profile is None:
             return None
         return self.input_speed_at(t) * self._bearing_ratios
+
+    def follow_speed(self, t1: float, speed: float) -> None:
+        """From the structure's time t on, the input speed goes linearly to ``speed`` [rad/s]
+        at ``t1`` [s] (> t) and stays there: the speed profile continued
+        (:meth:`gear_fmu.speed_profile.SpeedProfile.continued`, the angle and the speed at t
+        kept), with a run-up's loads, bearing speeds and one step per plan from now on (a
+        host's speed input, :class:`orchestrator.coupling.transmission.TransmissionSlave`).
+        ValueError with the gyroscopic terms (not built for a varying speed) or a speed that
+        is not finite and > 0."""
+        if self.gyroscopic:
+            raise ValueError(f"speed = {speed!r} rad/s: the gyroscopic terms are built for a "
+                             f"constant speed; a varying speed needs simulation.gyroscopic = "
+                             f"false")
+        if not (math.isfinite(speed) and speed > 0.0):
+            raise ValueError(f"speed = {speed!r} rad/s: must be finite and > 0")
+        now = self.loads.profile
+        if now is None:
+            now = SpeedProfile((0.0,), (self.loads.input_speed,))
+        self.set_profile(now.continued(self.t, t1, float(speed)))
+
+    def set_profile(self, profile) -> None:
+        """The input speed's profile from now on (:class:`gear_fmu.speed_profile.SpeedProfile`,
+        its angle continuing the current one: :meth:`follow_speed`, or a restored state's)."""
+        self.loads = replace(self.loads, profile=profile)
+        self._events = None  # (their angles are the profile's)
+        self._one = None
 
     def _at_time(self, t1: float, slotted) -> None:
         """A run-up's speed-dependent loads for the step ending at t1 [s] (nothing at constant

@@ -44,6 +44,44 @@ def test_the_acceleration_is_the_derivative_of_the_speed(profile):
     assert (TABLE.min_speed, TABLE.shortest_change) == (120.0, 0.15)
 
 
+@pytest.mark.parametrize("profile", [UP, DOWN, TABLE], ids=["up", "down", "table"])
+def test_at_a_point_the_acceleration_is_the_one_before_it(profile):
+    """At each point the slope of the interval that ends there (a step's loads are its end's,
+    and the step that ends on a ramp's last point is in the ramp): a backward difference of
+    the speed (h = 1e-6 s), 0 at the first point."""
+    h = 1e-6
+    assert profile.acceleration(profile.times[0]) == 0.0
+    for t in profile.times[1:]:
+        back = (profile.speed(t) - profile.speed(t - h)) / h
+        assert profile.acceleration(t) == pytest.approx(back, rel=1e-7, abs=1e-6), t
+
+
+@pytest.mark.parametrize("profile", [UP, DOWN, TABLE], ids=["up", "down", "table"])
+def test_a_profile_continued_from_any_time_keeps_the_angle_and_the_speed(profile):
+    """``continued(t0, t1, w)`` (a host's speed input over a step): from t0 the speed goes
+    linearly to w at t1 and stays; the angle is the original's up to t0 plus a quadrature
+    of the new speed from t0; continued again at t1, the same from there."""
+    for t0 in (0.1, 0.2, 0.6):
+        w0, t1, t2 = profile.speed(t0), t0 + 0.05, t0 + 0.1
+        once = profile.continued(t0, t1, 250.0)
+        twice = once.continued(t1, t2, 260.0)
+        assert once.speed(t0) == w0 and twice.speed(t2) == 260.0
+        assert twice.times == (t1, t2)  # two points, whatever came before
+
+        def speed(x, w0=w0, t0=t0, t1=t1, t2=t2):
+            if x < t1:
+                return w0 + (250.0 - w0) * (x - t0) / (t1 - t0)
+            return 250.0 + 10.0 * (x - t1) / (t2 - t1) if x < t2 else 260.0
+
+        for p, t in ((once, t0 + 0.02), (once, t1), (twice, t1), (twice, t0 + 0.08),
+                     (twice, t0 + 0.3)):
+            tail, _ = quad(speed, t0, t, points=[x for x in (t1, t2) if t0 < x < t],
+                           epsabs=0.0, epsrel=1e-13)
+            assert p.angle(t) == pytest.approx(profile.angle(t0) + tail, rel=1e-12), (t0, t)
+    with pytest.raises(ValueError, match="later"):
+        UP.continued(0.3, 0.3, 200.0)
+
+
 def test_a_profile_must_be_one_that_can_turn_a_shaft():
     with pytest.raises(ValueError, match="needs a duration > 0 s"):
         SpeedProfile.ramp(100.0, 200.0, 0.0, 0.0)
