@@ -544,8 +544,9 @@ def transmission_variables(case, bearing_fmu: str = "") -> tuple[FmiVar, ...]:
     bearing and the iterative master in one FMU): every case field of
     :func:`transmission_fields` as a parameter starting at the case's value (the naming of
     :func:`gear_parameters`), the parameter ``bearing_fmu`` (starting at ``bearing_fmu``), the
-    input ``torque``, per bearing (named after it, as the gear-shaft FMU's ports) its journal
-    state and film force, per mesh its force and transmission error."""
+    inputs ``torque`` and ``speed`` with the parameter ``max_speed``, per bearing (named after
+    it, as the gear-shaft FMU's ports) its journal state and film force, per mesh its force
+    and transmission error."""
     lay = _train(case)
     names = lay.bearing_names
     params = [_field_variable(n, f, v) for n, f, v in case_parameters(case, transmission_fields())]
@@ -560,6 +561,19 @@ def transmission_variables(case, bearing_fmu: str = "") -> tuple[FmiVar, ...]:
         FmiVar("torque", _I, "Real", "torque", float(case["drive.torque"]),
                "input torque T on the input shaft, held over a communication step; until a "
                "host sets it, the parameter drive.torque acts"),
+        FmiVar("max_speed", _P, "Real", "angular_speed", speed_profile(case).max_speed,
+               "the highest input speed a host may set through the input speed: the time "
+               "step is sized for it (the fastest mesh gets "
+               "simulation.steps_per_mesh_period steps per period there); at least "
+               "drive.speed and the highest of drive.speed_profile", **_POS),
+        FmiVar("speed", _I, "Real", "angular_speed", float(case["drive.speed"]),
+               "input shaft speed Omega reached at the end of the next communication step: "
+               "over a step the speed goes linearly from its value at the step's start to "
+               "this one (the angle its integral; the ramp's inertia, the unbalances and each "
+               "bearing at its shaft's speed as in a run-up), then stays. Set in "
+               "initialisation, it is the parameter drive.speed (the static solution's "
+               "speed); until a host sets it, drive.speed and drive.speed_profile act. At "
+               "most max_speed", **_POS),
         *(FmiVar(f"{n}_{b}", _O, "Real", _STATE_TEXT[n][0], 0.0, _STATE_TEXT[n][1].format(b=b))
           for b in names for n in STATE_NAMES),
         *(FmiVar(f"{n}_{b}", _O, "Real", "force", 0.0,

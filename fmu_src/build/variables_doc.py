@@ -282,6 +282,18 @@ the case's step.
 - Input `torque` [N.m]: the input torque on the input shaft, held over each communication
   step; until a host sets it, the parameter `drive.torque` acts. The mesh's contact
   compliance stays linearised at `drive.torque`.
+- Input `speed` [rad/s]: a run-up driven by the host's own drive model. The speed the input
+  shaft reaches at the end of the next communication step: over the step it goes linearly
+  from its value at the step's start, the angle its integral, with the ramp's inertia, the
+  unbalances at their acceleration and each bearing at its shaft's speed, as a case's
+  `drive.speed_profile` does (docs/equations.md "Run-ups"); then it stays until set again.
+  A host that sets, before each step, the speed a profile reaches at the step's end gets
+  `gsb run`'s run-up of that profile (to round-off). Set in initialisation, it is the
+  parameter `drive.speed` (X0's speed); until a host sets it, `drive.speed` and
+  `drive.speed_profile` act. Refused (fmi2Error at the fmi2SetReal, the reason in the log):
+  above the parameter `max_speed` (the time step is sized for it: set it before
+  initialisation; by default the case's highest speed), at 0 or below, and a change of
+  speed for a case with gyroscopic terms or linear bearings (built for one speed).
 - Initialisation mode: the outputs are the static solution X0 of the current parameters and
   torque (velocities zero), solved when first read or at fmi2ExitInitializationMode, which
   then builds the modal damping as a run does.
@@ -293,9 +305,9 @@ the case's step.
   the reason in the log; the outputs then read fmi2Error and no further step is taken until a
   state is set.
 - States: fmi2GetFMUstate / fmi2SetFMUstate / fmi2SerializeFMUstate hold the master's
-  checkpoint (structure, bearing warm starts, laws), the parameters, the torque and the time; a
-  serialised state set into another instance solves that instance's X0 first (as a resumed
-  run does), then continues bit for bit.
+  checkpoint (structure, bearing warm starts, laws), the parameters, the torque, the speed
+  (with the ramp it follows) and the time; a serialised state set into another instance
+  solves that instance's X0 first (as a resumed run does), then continues bit for bit.
 - Outputs: `iterations` counts the master's coupled iterations in the last communication
   step, `steps` the internal steps so far.
 

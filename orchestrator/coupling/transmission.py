@@ -16,6 +16,10 @@ the case into its resources (``case.toml``).
   after the mesh.
 * Input ``torque`` [N m]: the input torque, held over a communication step
   (:meth:`gear_fmu.structure.Structure.set_torque`); until set, the case's ``drive.torque``.
+* Input ``speed`` [rad/s]: the input speed reached at the end of the next communication step,
+  ramped over it (:meth:`gear_fmu.structure.Structure.follow_speed`: a run-up driven by the
+  host); set in initialisation, the parameter ``drive.speed``; until set, the case's speed
+  and profile. At most the parameter ``max_speed``, for which the time step is sized.
 * Initialisation: the outputs are the static solution X0 (Sec. 2.2.3), solved when first read
   or at ``exitInitializationMode``.
 * ``doStep(t, h)``: ``n = ceil(h / (dt (1 + 1e-4)))`` equal coupled steps of ``h / n``, dt the
@@ -49,10 +53,11 @@ from pythonfmu.default_experiment import DefaultExperiment
 from bearing_fmu.blas_threads import ONE_BLAS_THREAD
 from fmu_src.contract import (
     BEARING_RESOURCE,
+    ValueRefused,
     transmission_output_names,
     transmission_variables,
 )
-from fmu_src.description import mesh_period, time_step
+from fmu_src.description import mesh_period, speed_profile, time_step
 from fmu_src.slaves.support import (
     FMI_ERROR,
     ContractSlave,
@@ -61,6 +66,7 @@ from fmu_src.slaves.support import (
     overrides_to_arrays,
 )
 from fmu_src.state_codec import StateArrays, StateFormatError
+from gear_fmu.speed_profile import SpeedProfile
 from orchestrator.coupling.system import build_master
 
 __all__ = ["CASE_RESOURCE", "CLOCK_ULPS", "STATE_KIND", "TransmissionSlave", "internal_steps",
@@ -123,6 +129,8 @@ class TransmissionSlave(ContractSlave):
         self._overrides: dict = {}  # case field -> value set through a parameter
         self._bearing_fmu = ""  # the parameter bearing_fmu
         self._torque: float | None = None  # the input, once a host has set it
+        self._speed: float | None = None  # the input speed, once a host has set it stepping
+        self._max_speed: float | None = None  # the parameter; None: the case's top speed
         self._start_time = 0.0
         self._time = 0.0  # the FMU's time: the host's last communication point
         self._master = None
@@ -152,11 +160,15 @@ class TransmissionSlave(ContractSlave):
                 self._bearing_fmu = v.start
                 self.register_contract_variable(v, lambda: self._bearing_fmu,
                                                 self._set_bearing_fmu)
+            elif v.name == "max_speed":
+                self.register_contract_variable(v, self._get_max_speed, self._set_max_speed)
             elif v.causality == "parameter":
                 self.register_contract_variable(
                     v, *case_parameter(self, v.name, self._drop_master))
             elif v.name == "torque":
                 self.register_contract_variable(v, self._get_torque, self._set_torque)
+            elif v.name == "speed":
+                self.register_contract_variable(v, self._get_speed, self._set_speed)
             elif v.name in out_index:
                 self.register_contract_variable(v, self._output_getter(out_index[v.name]))
             elif v.name == "iterations":
@@ -203,6 +215,80 @@ class TransmissionSlave(ContractSlave):
         self._torque = float(value)
         if not self._stepping:  # in initialisation a new torque is a new static problem
             self._outputs = None
+
+    def _top_speed(self) -> float:
+        """The case's highest input speed [rad/s] (drive.speed, drive.speed_profile)."""
+        return speed_profile(self.case()).max_speed
+
+    def _get_max_speed(self) -> float:
+        return self._top_speed() if self._max_speed is None else self._max_speed
+
+    def _set_max_speed(self, value) -> None:
+        value = float(value)
+        if value < self._top_speed():
+            raise ValueRefused(f"max_speed = {value!r} rad/s refused: below {self._top_speed():g}"
+                               f" rad/s, the case's highest speed (drive.speed, "
+                               f"drive.speed_profile)")
+        if value != self._max_speed:
+            self._max_speed = value
+            self._drop_master()
+
+    def _time_step(self) -> float:
+        """The case's time step [s], or shorter as the fastest mesh's at ``max_speed``."""
+        top, dt = self._top_speed(), time_step(self.case())
+        if self._max_speed is None or self._max_speed == top:
+            return dt
+        if self._max_speed < top:
+            raise ValueError(f"max_speed = {self._max_speed!r} rad/s is below {top:g} rad/s, "
+                             f"the case's highest speed (drive.speed, drive.speed_profile)")
+        return dt * (top / self._max_speed)
+
+    def _get_speed(self) -> float:
+        if self._speed is not None:
+            return self._speed
+        if self._master is not None and self._stepping:
+            st = self._master.structure.physics
+            return st.input_speed_at(st.t)
+        return self.case()["drive.speed"]
+
+    def _set_speed(self, value) -> None:
+        """In initialisation the parameter drive.speed; stepping, the speed the next
+        communication step ramps to (refused above ``max_speed``, and for a case that
+        cannot follow a varying speed: gyroscopic terms, linear bearings)."""
+        value = float(value)
+        if not self._stepping:
+            case_parameter(self, "drive.speed", self._drop_master)[1](value)
+            return
+        if value > self._get_max_speed():
+            raise ValueRefused(f"speed = {value!r} rad/s refused: above max_speed = "
+                               f"{self._get_max_speed():g} rad/s, the highest speed the time "
+                               f"step is sized for (set the parameter max_speed before "
+                               f"initialisation)")
+        if value != self._get_speed():
+            case = self.case()
+            if case["simulation.gyroscopic"]:
+                raise ValueRefused(f"speed = {value!r} rad/s refused: the gyroscopic terms are "
+                                   f"built for a constant speed (simulation.gyroscopic = true)")
+            linear = [b for b in case.names("bearings") if case[f"bearings.{b}.model"] == "linear"]
+            if linear and not self._bearing_fmu:
+                raise ValueRefused(f"speed = {value!r} rad/s refused: linear bearings "
+                                   f"({', '.join(linear)}) have their coefficients at one speed")
+        self._speed = value
+
+    def _follow_speed(self, st, n: int, h: float) -> None:
+        """The host's speed input over the next ``n`` steps of ``h`` [s] from the structure's
+        time: a ramp to it ending where the last of them ends (nothing while it is the
+        constant speed of a run that has not varied)."""
+        w = self._speed
+        if w is None or (st.loads.profile is None and w == st.loads.input_speed):
+            return
+        end = st.t
+        for _ in range(n):  # the structure's clock: the sum of its steps
+            end = end + h
+        p = st.loads.profile
+        if p is not None and p.speeds[-1] == w and p.times[-1] <= st.t:
+            return  # already there, and held
+        st.follow_speed(end, w)
 
     def _output_getter(self, k):
         def get():
@@ -272,7 +358,7 @@ class TransmissionSlave(ContractSlave):
         if self._error is None:
             try:
                 self._master.exit_initialization()
-                self._dt = time_step(self.case())
+                self._dt = self._time_step()
             except Exception as exc:  # anything raised here would be fatal for the host
                 self._error = self.output_failed("initialisation failed", exc)
         self._stepping = True
@@ -312,6 +398,7 @@ class TransmissionSlave(ContractSlave):
                 n = internal_steps(step_size, self._dt)
                 h = step_size / n
             st.set_torque(self._get_torque())
+            self._follow_speed(st, n, h)
             with ONE_BLAS_THREAD:  # once for the n steps (module bearing_fmu.blas_threads)
                 iterations, last = self._steps_of(st, n, h)
         except Exception as exc:  # anything raised here would be fatal for the host
@@ -355,8 +442,11 @@ class TransmissionSlave(ContractSlave):
     # --- FMU state ----------------------------------------------------------------------------
     def _get_fmu_state(self):
         master = self._master
+        profile = None if master is None else master.structure.physics.loads.profile
         return {"overrides": dict(self._overrides), "bearing_fmu": self._bearing_fmu,
-                "torque": self._torque,
+                "torque": self._torque, "speed": self._speed, "max_speed": self._max_speed,
+                "profile": None if profile is None else (profile.times, profile.speeds,
+                                                         profile.start_angle),
                 "start_time": self._start_time, "time": self._time,
                 "stepping": self._stepping, "static_key": self._static_key,
                 "checkpoint": None if master is None else master.checkpoint(),
@@ -377,6 +467,9 @@ class TransmissionSlave(ContractSlave):
             if state["bearing_fmu"] != self._bearing_fmu:
                 self._bearing_fmu = state["bearing_fmu"]
                 self._drop_master()
+            if state["max_speed"] != self._max_speed:
+                self._max_speed = state["max_speed"]
+                self._drop_master()
             self._start_time = state["start_time"]
             blob = state["checkpoint"]
             if blob is None:
@@ -389,9 +482,11 @@ class TransmissionSlave(ContractSlave):
                     self._solve_static()  # the static problem the state continues from
                 if state["stepping"] and not self._stepping:
                     self._master.exit_initialization()
-                    self._dt = time_step(self.case())
+                    self._dt = self._time_step()
                 self._master.restore(blob)
+                self._restore_profile(state["profile"])
                 self._torque = state["torque"]
+            self._speed = state["speed"]
             self._time = state["time"]
             if self._time is None:  # a state of an FMU before the two clocks: the structure's
                 self._time = (self._start_time if self._master is None
@@ -405,6 +500,21 @@ class TransmissionSlave(ContractSlave):
             return FMI_ERROR
         return None
 
+    def _restore_profile(self, saved) -> None:
+        """The structure's speed profile of a state (``(times, speeds, start_angle)``, None
+        for none), set only where it is not the one the structure has (the case's, or one a
+        speed input continued)."""
+        st = self._master.structure.physics
+        now = st.loads.profile
+        if saved is None:
+            if now is not None and now.start_angle is not None:
+                case_profile = speed_profile(self.case())
+                st.set_profile(case_profile if case_profile.varies else None)
+            return
+        times, speeds, start = saved
+        if now is None or (now.times, now.speeds, now.start_angle) != (times, speeds, start):
+            st.set_profile(SpeedProfile(tuple(times), tuple(speeds), start_angle=start))
+
     STATE_KIND = STATE_KIND
 
     @classmethod
@@ -415,8 +525,14 @@ class TransmissionSlave(ContractSlave):
                 "bearing_fmu": np.str_(state["bearing_fmu"]),
                 "stepping": np.bool_(state["stepping"]),
                 "iterations": np.int64(state["iterations"]), "steps": np.int64(state["steps"])}
-        if state["torque"] is not None:
-            out["torque"] = np.float64(state["torque"])
+        for key in ("torque", "speed", "max_speed"):
+            if state[key] is not None:
+                out[key] = np.float64(state[key])
+        if state["profile"] is not None:
+            times, speeds, start = state["profile"]
+            out["profile_times"] = np.array(times, dtype=np.float64)
+            out["profile_speeds"] = np.array(speeds, dtype=np.float64)
+            out["profile_start_angle"] = np.float64(np.nan if start is None else start)
         if state["static_key"] is not None:
             out["static_torque"] = np.float64(state["static_key"][1])
         if state["checkpoint"] is not None:
@@ -434,6 +550,9 @@ class TransmissionSlave(ContractSlave):
         bearing_fmu = arrays.text("bearing_fmu")
         return {"overrides": overrides, "bearing_fmu": bearing_fmu,
                 "torque": arrays.float("torque") if has("torque") else None,
+                "speed": arrays.float("speed") if has("speed") else None,
+                "max_speed": arrays.float("max_speed") if has("max_speed") else None,
+                "profile": _profile_from_arrays(arrays),
                 "start_time": arrays.float("start_time"),
                 "time": arrays.float("time") if has("time") else None,
                 "stepping": arrays.bool("stepping"),
@@ -447,3 +566,12 @@ class TransmissionSlave(ContractSlave):
                 "iterations": arrays.int("iterations"), "steps": arrays.int("steps"),
                 "error": arrays.text("error") if has("error") else None}
 
+
+def _profile_from_arrays(arrays: StateArrays):
+    """``(times, speeds, start_angle)`` of a state's speed profile, None without one."""
+    if not arrays.has("profile_times"):
+        return None
+    times = tuple(arrays.array("profile_times", "float64", (None,)).tolist())
+    speeds = tuple(arrays.array("profile_speeds", "float64", (len(times),)).tolist())
+    start = arrays.float("profile_start_angle")
+    return times, speeds, None if math.isnan(start) else start

@@ -35,8 +35,29 @@ class Host:
         self.slave = FMU2Slave(guid=self.md.guid, unzipDirectory=self.folder,
                                modelIdentifier=self.md.coSimulation.modelIdentifier,
                                instanceName=name)
-        self.slave.instantiate()
+        self.messages: list[str] = []  # what the FMU logged
+        self.slave.instantiate(loggingOn=True, callbacks=self._callbacks())
         self.out_vrs = [self.vars[n].valueReference for n in (outputs or OUTPUTS)]
+
+    def _callbacks(self):
+        from fmpy.fmi2 import (
+            calloc,
+            fmi2CallbackAllocateMemoryTYPE,
+            fmi2CallbackFreeMemoryTYPE,
+            fmi2CallbackFunctions,
+            fmi2CallbackLoggerTYPE,
+            free,
+        )
+
+        def logger(env, name, status, category, message):
+            self.messages.append(message.decode(errors="replace"))
+
+        cb = fmi2CallbackFunctions()
+        cb.logger = fmi2CallbackLoggerTYPE(logger)
+        cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+        cb.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        self._keep = cb  # the ctypes callbacks live as long as the instance
+        return cb
 
     def set(self, values: dict) -> None:
         for name, value in values.items():
@@ -139,6 +160,67 @@ def impossible_step(fmu: str, h: float, torque: float) -> dict:
     return out
 
 
+def driven(fmu: str, h: float, speeds: list, start_values: dict | None = None,
+           state_at: int | None = None) -> dict:
+    """The input ``speed`` set to ``speeds[k]`` before the k-th doStep of ``h`` [s] (the
+    speed to reach at its end): the outputs after each step and the internal step count.
+    With ``state_at``: the state saved after that many steps, the rest run again from it in
+    the same instance and, serialised, in a new one (``again``, ``restored``)."""
+    host = Host(fmu)
+    host.start(start_values)
+    rows, state, blob = [], None, None
+    for k, w in enumerate(speeds):
+        if k == state_at:
+            state = host.slave.getFMUstate()
+            blob = host.slave.serializeFMUstate(state)
+        host.set({"speed": w})
+        rows += host.steps(h, 1, first=k)
+    out = {"rows": rows, "steps": host.integer("steps")}
+    if state_at is not None:
+        def rest(h_: Host) -> list:
+            got = []
+            for k in range(state_at, len(speeds)):
+                h_.set({"speed": speeds[k]})
+                got += h_.steps(h, 1, first=k)
+            return got
+        host.slave.setFMUstate(state)
+        out["again"] = rest(host)
+        other = Host(fmu, "other")
+        other.start(start_values)
+        other.slave.setFMUstate(other.slave.deSerializeFMUstate(blob))
+        out["restored"] = rest(other)
+        other.close()
+    host.close()
+    return out
+
+
+def speed_refusals(fmu: str, h: float, cases: list) -> list:
+    """Each ``{"start_values": {...}, "speed": value}`` in a new instance: the FMI status of
+    setting ``speed`` to ``value`` after the initialisation (fmpy's message, or "fmi2OK"),
+    what the FMU logged then, and whether a step then runs."""
+    from fmpy.fmi1 import FMICallException
+
+    out = []
+    for spec in cases:
+        host = Host(fmu)
+        host.start(spec.get("start_values"))
+        since = len(host.messages)
+        try:
+            host.set({"speed": spec["speed"]})
+            status = "fmi2OK"
+        except FMICallException as exc:
+            status = str(exc)
+        log = "; ".join(host.messages[since:])
+        try:
+            host.steps(h, 1)
+            stepped = True
+        except FMICallException:
+            stepped = False
+        out.append({"status": status, "log": log, "stepped": stepped})
+        host.close()
+    return out
+
+
 def simulate(fmu: str, dt: float, steps: int) -> list:
     """fmpy's one call, ``simulate_fmu``, recording the outputs every ``dt`` [s]: its rows
     after the start."""
@@ -149,7 +231,7 @@ def simulate(fmu: str, dt: float, steps: int) -> list:
     return [[float(res[n][k]) for n in OUTPUTS] for k in range(1, len(res))]
 
 
-PROBES = probes_of(run, state_round_trip, impossible_step, simulate)
+PROBES = probes_of(driven, speed_refusals, run, state_round_trip, impossible_step, simulate)
 
 
 def main(argv: list[str] | None = None) -> None:

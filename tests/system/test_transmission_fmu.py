@@ -207,6 +207,79 @@ def test_a_transmission_fmu_of_a_run_up_gives_gsb_runs_bits(tmp_path):
     assert_same_run(rows, gsb_run_rows(case, steps), "fmpy simulate_fmu, run-up")
 
 
+def _stepped_run_up(steps: int):
+    """A run-up 325 -> 400 rad/s driven step by step: the paper's case at a
+    ``max_speed`` of 400 rad/s (time step dt, the 400 rad/s mesh's), the case with the same
+    run-up as a profile (its table's points at the structure's clock, the sum of the steps:
+    325 rad/s to step 53, 400 rad/s at step 265) and the speed at the end of each of ``steps``
+    steps."""
+    from fmu_src.description import speed_profile
+
+    dt = _dt(_case()) * (325.0 / 400.0)
+    clock = [0.0, *itertools.accumulate([dt] * steps)]
+    case = _case(**{"drive.speed_profile": f"table 0 s: 325 rad/s, {clock[53]!r} s: 325 rad/s,"
+                                           f" {clock[265]!r} s: 400 rad/s"})
+    assert _dt(case) == dt
+    profile = speed_profile(case)
+    return case, dt, [profile.speed(t) for t in clock[1:]]
+
+
+def test_a_host_drives_a_run_up_through_the_speed_input(transmission_fmu):
+    """The host sets the input ``speed`` before each step to the speed the run-up of
+    :func:`_stepped_run_up` reaches at its end: in a fresh interpreter, the FMU's rows are
+    ``gsb run``'s of that run-up as a profile to a tenth of what halving the time step changes
+    (the same physics in another arithmetic: the angle summed step by step against the
+    profile's closed form; measured 3.3e-8 against 0.27, each output's largest difference
+    over its largest magnitude). A state saved in the ramp, set again and serialised into
+    another instance, repeats the steps after it bit for bit."""
+    steps = 320
+    case, dt, speeds = _stepped_run_up(steps)
+    got = run_isolated(module="tests.probes.transmission", args=[
+        "driven", {"fmu": str(transmission_fmu), "h": dt, "speeds": speeds,
+                   "start_values": {"max_speed": 400.0}, "state_at": 150}])
+    assert got["steps"] == steps
+    ref = gsb_run_rows(case, steps)
+    finer = _case(**{"drive.speed_profile": case["drive.speed_profile"],
+                     "simulation.steps_per_mesh_period": 64})
+    halving = _relative(gsb_run_rows(finer, 2 * steps)[1::2], ref)
+    diff = _relative(got["rows"], ref)
+    print(f"\ndriven by the host: {diff:.1e}; halving the step changes {halving:.1e}")
+    assert diff <= 0.1 * halving
+    assert got["again"] == got["restored"] == got["rows"][150:]
+
+
+def test_a_speed_the_fmu_cannot_follow_is_refused_at_the_call(transmission_fmu):
+    """``speed`` set after the initialisation: above ``max_speed`` (by default the case's
+    speed), at 0, or changed for a case whose bearings or gyroscopic terms are built for one
+    speed, the setReal call returns fmi2Error and logs why (the value, the limit, what to
+    change); the value is not taken (the next step runs). An unchanged speed with linear
+    bearings is taken. In initialisation it is the parameter drive.speed: X0 at 350 rad/s."""
+    linear = {f"bearings.'{b}'.model": "linear" for b in (1, 2, 3, 4)}
+    cases = [{"speed": 400.0}, {"speed": 0.0},
+             {"start_values": {"simulation.gyroscopic": True, "max_speed": 400.0},
+              "speed": 350.0},
+             {"start_values": {**linear, "max_speed": 400.0}, "speed": 350.0},
+             {"start_values": linear, "speed": 325.0}]
+    got = run_isolated(module="tests.probes.transmission", args=[
+        "speed_refusals", {"fmu": str(transmission_fmu), "h": _dt(_case()), "cases": cases}])
+    for case, expected in zip(got, [
+            "speed = 400.0 rad/s refused: above max_speed = 325 rad/s, the highest speed the "
+            "time step is sized for (set the parameter max_speed before initialisation)",
+            "speed = 0.0 rad/s refused: must be > 0 rad/s",
+            "speed = 350.0 rad/s refused: the gyroscopic terms are built for a constant speed",
+            "speed = 350.0 rad/s refused: linear bearings (1, 2, 3, 4) have their "
+            "coefficients at one speed"], strict=False):
+        assert "status 3 (error)" in case["status"] and expected in case["log"], case
+        assert case["stepped"], case
+    assert got[-1] == {"status": "fmi2OK", "log": "", "stepped": True}
+    as_input, as_parameter, paper = (
+        run_isolated(module="tests.probes.transmission", args=[
+            "run", {"fmu": str(transmission_fmu), "runs": [{"start_values": start, "h": 1e-5,
+                                                            "n": 0}]}])[0]["rows"][0]
+        for start in ({"speed": 350.0}, {"drive.speed": 350.0}, {}))
+    assert as_input == as_parameter != paper
+
+
 @pytest.mark.parametrize("nanoseconds", [math.floor, math.ceil])
 def test_whole_nanosecond_steps(transmission_fmu, nanoseconds):
     """libcosim's steps are whole nanoseconds: 23,236 or 23,237 ns for the paper's
