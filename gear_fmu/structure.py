@@ -460,15 +460,19 @@ class Structure:
         (:meth:`gear_fmu.speed_profile.SpeedProfile.continued`, the angle and the speed at t
         kept), with a run-up's loads, bearing speeds and one step per plan from now on (a
         host's speed input, :class:`orchestrator.coupling.transmission.TransmissionSlave`).
-        ValueError with the gyroscopic terms (not built for a varying speed) or a speed that
-        is not finite and > 0."""
+        Nothing changes where the speed is ``speed`` and stays so: a constant speed that has
+        not varied, or a profile whose last point is past. ValueError with the gyroscopic
+        terms (not built for a varying speed) or a speed that is not finite and > 0."""
+        now = self.loads.profile
+        if (now is None and speed == self.loads.input_speed) or (
+                now is not None and now.speeds[-1] == speed and now.times[-1] <= self.t):
+            return
         if self.gyroscopic:
             raise ValueError(f"speed = {speed!r} rad/s: the gyroscopic terms are built for a "
                              f"constant speed; a varying speed needs simulation.gyroscopic = "
                              f"false")
         if not (math.isfinite(speed) and speed > 0.0):
             raise ValueError(f"speed = {speed!r} rad/s: must be finite and > 0")
-        now = self.loads.profile
         if now is None:
             now = SpeedProfile((0.0,), (self.loads.input_speed,))
         self.set_profile(now.continued(self.t, t1, float(speed)))

@@ -277,18 +277,14 @@ class TransmissionSlave(ContractSlave):
 
     def _follow_speed(self, st, n: int, h: float) -> None:
         """The host's speed input over the next ``n`` steps of ``h`` [s] from the structure's
-        time: a ramp to it ending where the last of them ends (nothing while it is the
-        constant speed of a run that has not varied)."""
-        w = self._speed
-        if w is None or (st.loads.profile is None and w == st.loads.input_speed):
+        time: a ramp to it ending where the last of them ends
+        (:meth:`gear_fmu.structure.Structure.follow_speed`; nothing before a host sets it)."""
+        if self._speed is None:
             return
         end = st.t
         for _ in range(n):  # the structure's clock: the sum of its steps
             end = end + h
-        p = st.loads.profile
-        if p is not None and p.speeds[-1] == w and p.times[-1] <= st.t:
-            return  # already there, and held
-        st.follow_speed(end, w)
+        st.follow_speed(end, self._speed)
 
     def _output_getter(self, k):
         def get():

@@ -82,6 +82,38 @@ def simulate(fmu: str, step_ns: int, steps: int) -> dict:
             "series_steps": columns[0][1], "series_times": columns[0][2]}
 
 
+def driven(fmu: str, step_ns: int, speeds: list, max_speed: float) -> dict:
+    """The transmission FMU in a libcosim execution of fixed step ``step_ns`` [ns], its
+    parameter ``max_speed`` [rad/s] an initial value, its input ``speed`` set by libcosim's
+    override manipulator to ``speeds[k]`` before step k: the outputs of
+    :data:`tests.probes.transmission.OUTPUTS` after each step and the internal step count."""
+    from libcosimpy.CosimExecution import CosimExecution
+    from libcosimpy.CosimManipulator import CosimManipulator
+    from libcosimpy.CosimObserver import CosimObserver
+    from libcosimpy.CosimSlave import CosimLocalSlave
+
+    _quiet()
+    execution = CosimExecution.from_step_size(step_size=step_ns)
+    slave = CosimLocalSlave(fmu_path=fmu, instance_name="transmission")
+    index = execution.add_local_slave(local_slave=slave)
+    refs = {v.name.decode(): v.reference for v in execution.slave_variables(index)}
+    execution.real_initial_value(index, refs["max_speed"], max_speed)
+    last = CosimObserver.create_last_value()
+    execution.add_observer(observer=last)
+    override = CosimManipulator.create_override()
+    execution.add_manipulator(manipulator=override)
+    out_refs = [refs[n] for n in OUTPUTS]
+    rows = []
+    for w in speeds:
+        override.slave_real_values(index, [refs["speed"]], [w])
+        if not execution.step():
+            raise RuntimeError(f"libcosim step failed: {execution.status()}")
+        rows.append(last.last_real_values(index, out_refs))
+    internal = last.last_integer_values(index, [refs["steps"]])[0]
+    del override, last, execution, slave  # the FMU freed while Python is whole
+    return {"rows": rows, "internal_steps": internal}
+
+
 def impossible_step(fmu: str, step_ns: int, torque: float, observe: bool) -> dict:
     """After one step, an override manipulator sets a ``torque`` [N m] no bearing can carry:
     the steps libcosim took until one failed, its execution state then and its last error
@@ -115,7 +147,7 @@ def impossible_step(fmu: str, step_ns: int, torque: float, observe: bool) -> dic
     return out
 
 
-PROBES = probes_of(simulate, impossible_step)
+PROBES = probes_of(simulate, driven, impossible_step)
 
 
 def main(argv: list[str] | None = None) -> None:
