@@ -57,7 +57,7 @@ __all__ = ["BEARING_MODELS", "FIELDS", "INSTANCE_SECTIONS", "SECTIONS", "Case", 
            "Field", "LegacyCaseWarning", "bound_violation", "check_override", "document",
            "field_of", "load_case", "model_option_fields", "parse_case", "parse_toml",
            "read_case_text", "resolve_case", "schema_markdown", "shipped_case",
-           "shipped_cases"]
+           "shipped_cases", "varying_speed_refusal"]
 
 BEARING_MODELS = tuple(_BEARING_TABLE)
 #: the sections of a case file, in the order a case is written
@@ -523,20 +523,30 @@ def _check_speed_profile(v: dict, source: str) -> None:
     speeds = [w for _, w in data] if kind == "table" else [w0, data[0]]
     if all(w == w0 for w in speeds):
         return
-    for name in instance_names(v, "bearings"):
-        model = v[f"bearings.{name}.model"]
+    why = varying_speed_refusal(v, min(speeds))
+    if why is not None:
+        raise CaseError(f"{where}: {why}")
+
+
+def varying_speed_refusal(values, lowest: float, models: bool = True) -> str | None:
+    """Why a case (its field ``values``) cannot follow an input speed that varies down to
+    ``lowest`` [rad/s], or None: a linear bearing's coefficients hold at one speed, a film
+    carries no load at rest, and the gyroscopic tangent at a varying speed is not implemented.
+    ``models``: whether the bearings' own models run (not when a bearing FMU of the user's
+    replaces them). The one rule of a case's ``drive.speed_profile`` and of the transmission
+    FMU's input ``speed``."""
+    for name in instance_names(values, "bearings") if models else ():
+        model = values[f"bearings.{name}.model"]
         if model == "linear":
-            raise CaseError(f"{where}: bearing {name} is linear, whose coefficients hold at one "
-                            f"speed; a varying speed needs a film model (hybrid, short, fd) or "
-                            f"lumped")
-        if min(speeds) <= 0.0 and model != "lumped":
-            raise CaseError(f"{where}: reaches {min(speeds):g} rad/s, where the film of "
-                            f"bearing {name} ({model}) carries no load: keep the speed above "
-                            f"0 rad/s")
-    if v["simulation.gyroscopic"]:
-        raise CaseError(f"{where}: a varying speed with simulation.gyroscopic = true is not "
-                        f"implemented yet (the gyroscopic tangent changes with the speed): set "
-                        f"simulation.gyroscopic = false")
+            return (f"bearing {name} is linear, whose coefficients hold at one speed; a varying "
+                    f"speed needs a film model (hybrid, short, fd) or lumped")
+        if lowest <= 0.0 and model != "lumped":
+            return (f"reaches {lowest:g} rad/s, where the film of bearing {name} ({model}) "
+                    f"carries no load: keep the speed above 0 rad/s")
+    if values["simulation.gyroscopic"]:
+        return ("a varying speed with simulation.gyroscopic = true is not implemented yet (the "
+                "gyroscopic tangent changes with the speed): set simulation.gyroscopic = false")
+    return None
 
 
 def _check_window(v: dict, source: str) -> None:

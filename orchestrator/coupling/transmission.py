@@ -51,6 +51,7 @@ import numpy as np
 from pythonfmu.default_experiment import DefaultExperiment
 
 from bearing_fmu.blas_threads import ONE_BLAS_THREAD
+from fmu_src.case import varying_speed_refusal
 from fmu_src.contract import (
     BEARING_RESOURCE,
     ValueRefused,
@@ -223,25 +224,33 @@ class TransmissionSlave(ContractSlave):
     def _get_max_speed(self) -> float:
         return self._top_speed() if self._max_speed is None else self._max_speed
 
+    def _max_speed_below(self, value: float) -> str | None:
+        """Why ``value`` [rad/s] cannot be ``max_speed``: below the case's highest speed."""
+        top = self._top_speed()
+        if value < top:
+            return (f"below {top:g} rad/s, the case's highest speed (drive.speed, "
+                    f"drive.speed_profile)")
+        return None
+
     def _set_max_speed(self, value) -> None:
         value = float(value)
-        if value < self._top_speed():
-            raise ValueRefused(f"max_speed = {value!r} rad/s refused: below {self._top_speed():g}"
-                               f" rad/s, the case's highest speed (drive.speed, "
-                               f"drive.speed_profile)")
+        why = self._max_speed_below(value)
+        if why is not None:
+            raise ValueRefused(f"max_speed = {value!r} rad/s refused: {why}")
         if value != self._max_speed:
             self._max_speed = value
             self._drop_master()
 
     def _time_step(self) -> float:
-        """The case's time step [s], or shorter as the fastest mesh's at ``max_speed``."""
-        top, dt = self._top_speed(), time_step(self.case())
-        if self._max_speed is None or self._max_speed == top:
+        """The case's time step [s], or shorter as the fastest mesh's at ``max_speed`` (a
+        ``drive.speed`` set after it may have passed it)."""
+        dt = time_step(self.case())
+        if self._max_speed is None or self._max_speed == self._top_speed():
             return dt
-        if self._max_speed < top:
-            raise ValueError(f"max_speed = {self._max_speed!r} rad/s is below {top:g} rad/s, "
-                             f"the case's highest speed (drive.speed, drive.speed_profile)")
-        return dt * (top / self._max_speed)
+        why = self._max_speed_below(self._max_speed)
+        if why is not None:
+            raise ValueError(f"max_speed = {self._max_speed!r} rad/s: {why}")
+        return dt * (self._top_speed() / self._max_speed)
 
     def _get_speed(self) -> float:
         if self._speed is not None:
@@ -264,15 +273,12 @@ class TransmissionSlave(ContractSlave):
                                f"{self._get_max_speed():g} rad/s, the highest speed the time "
                                f"step is sized for (set the parameter max_speed before "
                                f"initialisation)")
-        if value != self._get_speed():
-            case = self.case()
-            if case["simulation.gyroscopic"]:
-                raise ValueRefused(f"speed = {value!r} rad/s refused: the gyroscopic terms are "
-                                   f"built for a constant speed (simulation.gyroscopic = true)")
-            linear = [b for b in case.names("bearings") if case[f"bearings.{b}.model"] == "linear"]
-            if linear and not self._bearing_fmu:
-                raise ValueRefused(f"speed = {value!r} rad/s refused: linear bearings "
-                                   f"({', '.join(linear)}) have their coefficients at one speed")
+        now = self._get_speed()
+        if value != now:
+            why = varying_speed_refusal(self.case().values, min(value, now),
+                                        models=not self._bearing_fmu)
+            if why is not None:
+                raise ValueRefused(f"speed = {value!r} rad/s refused: {why}")
         self._speed = value
 
     def _follow_speed(self, st, n: int, h: float) -> None:
