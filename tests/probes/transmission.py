@@ -160,35 +160,40 @@ def impossible_step(fmu: str, h: float, torque: float) -> dict:
     return out
 
 
+def _drive(host: Host, h: float, speeds: list, first: int, last: int) -> list:
+    """Steps ``first`` to ``last - 1`` of ``h`` [s], the input ``speed`` set to ``speeds[k]``
+    before step k: the outputs after each."""
+    rows = []
+    for k in range(first, last):
+        host.set({"speed": speeds[k]})
+        rows += host.steps(h, 1, first=k)
+    return rows
+
+
 def driven(fmu: str, h: float, speeds: list, start_values: dict | None = None,
            state_at: int | None = None) -> dict:
     """The input ``speed`` set to ``speeds[k]`` before the k-th doStep of ``h`` [s] (the
     speed to reach at its end): the outputs after each step and the internal step count.
     With ``state_at``: the state saved after that many steps, the rest run again from it in
     the same instance and, serialised, in a new one (``again``, ``restored``)."""
+    n = len(speeds)
+    at = n if state_at is None else state_at
     host = Host(fmu)
     host.start(start_values)
-    rows, state, blob = [], None, None
-    for k, w in enumerate(speeds):
-        if k == state_at:
-            state = host.slave.getFMUstate()
-            blob = host.slave.serializeFMUstate(state)
-        host.set({"speed": w})
-        rows += host.steps(h, 1, first=k)
+    rows = _drive(host, h, speeds, 0, at)
+    if state_at is not None:
+        state = host.slave.getFMUstate()
+        blob = host.slave.serializeFMUstate(state)
+        rows += _drive(host, h, speeds, at, n)
     out = {"rows": rows, "steps": host.integer("steps")}
     if state_at is not None:
-        def rest(h_: Host) -> list:
-            got = []
-            for k in range(state_at, len(speeds)):
-                h_.set({"speed": speeds[k]})
-                got += h_.steps(h, 1, first=k)
-            return got
         host.slave.setFMUstate(state)
-        out["again"] = rest(host)
+        out["again"] = _drive(host, h, speeds, at, n)
+        host.slave.freeFMUstate(state)
         other = Host(fmu, "other")
         other.start(start_values)
         other.slave.setFMUstate(other.slave.deSerializeFMUstate(blob))
-        out["restored"] = rest(other)
+        out["restored"] = _drive(other, h, speeds, at, n)
         other.close()
     host.close()
     return out

@@ -52,12 +52,14 @@ def gsb_run_rows(case, steps: int) -> np.ndarray:
                       r["transmission_error"].reshape(steps, -1)])
 
 
-def master_rows(case, h, steps: int) -> np.ndarray:
+def master_rows(case, h, steps: int, speeds=None) -> np.ndarray:
     """The same rows (of any train: per bearing its journal state and film force, per mesh
     its force and transmission error) from the master of ``gsb run`` stepping at ``h`` (not
     necessarily the case's step), X0 first; ``h`` one step [s] for all, or a sequence of
     ``steps`` steps (a host's clock that rounds its own time, as libcosim's, gives steps
-    differing in their last bits)."""
+    differing in their last bits). ``speeds``: the input speed at the end of each step,
+    followed as the transmission FMU follows its input ``speed``
+    (:meth:`gear_fmu.structure.Structure.follow_speed` to the end of the step)."""
     hs = [float(h)] * steps if np.ndim(h) == 0 else [float(x) for x in h]
     assert len(hs) == steps, (len(hs), steps)
     from orchestrator.coupling.system import build_master
@@ -69,9 +71,13 @@ def master_rows(case, h, steps: int) -> np.ndarray:
     rows = []
     for k in range(steps + 1):
         if k:
+            if speeds is not None:
+                s.physics.follow_speed(s.physics.t + hs[k - 1], speeds[k - 1])
             report = master.step(s.physics.t, hs[k - 1])
         force, errors, _ = s.step_outputs()
         rows.append([*report.states.ravel(), *report.bearing_force.ravel(), *force, *errors])
+    if speeds is not None and steps:
+        assert s.physics.input_speed_at(s.physics.t) == speeds[-1]  # the ramps were followed
     master.close()
     return np.array(rows)
 
