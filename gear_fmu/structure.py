@@ -480,8 +480,9 @@ class Structure:
     def set_profile(self, profile) -> None:
         """The input speed's profile from now on (:class:`gear_fmu.speed_profile.SpeedProfile`,
         its angle continuing the current one: :meth:`follow_speed`, or a restored state's)."""
+        if (profile is None) != (self.loads.profile is None):
+            self._events = None  # (at constant speed their angle is inlined, else the profile's)
         self.loads = replace(self.loads, profile=profile)
-        self._events = None  # (their angles are the profile's)
         self._one = None
 
     def _at_time(self, t1: float, slotted) -> None:
