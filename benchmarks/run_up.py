@@ -1,13 +1,16 @@
 """What a run-up costs against a run at constant speed of the same steps (in-process).
 
-Usage: ``python benchmarks/run_up.py [--periods N] [--repeat R] [--bearing MODEL]``
+Usage: ``python benchmarks/run_up.py [--periods N] [--repeat R] [--bearing MODEL]
+[--gyroscopic]``
 
 Runs the paper's spur case N mesh periods (default 512) at constant speed, then as a run-up
 ``ramp to 400 rad/s in T`` with T the run's length (325 -> 400 rad/s, the time step of the
 highest speed for both: the constant run is given the same steps), alternating R times
 (default 3), and prints the wall time per step of each and their ratio (median). A run-up
 plans one step at a time (its loads change at every step) and condenses the sub-step lengths
-its moving contact events make; the constant run plans blocks of up to 128 steps. The first
+its moving contact events make; the constant run plans blocks of up to 128 steps. With
+``--gyroscopic`` both runs have the gyroscopic terms (``simulation.gyroscopic``), whose
+tangent a run-up condenses again at every step's speed. The first
 call compiles nothing new (warm numba cache expected: run once before quoting).
 """
 
@@ -44,8 +47,10 @@ def main() -> None:
     parser.add_argument("--periods", type=int, default=512)
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--bearing", default="hybrid")
+    parser.add_argument("--gyroscopic", action="store_true")
     args = parser.parse_args()
-    ramp = load_case("baguet2010_spur", {"bearings.*.model": args.bearing})
+    ramp = load_case("baguet2010_spur", {"bearings.*.model": args.bearing,
+                                         "simulation.gyroscopic": args.gyroscopic})
     dt = mesh_period(ramp.with_overrides({"drive.speed_profile": "ramp to 400 rad/s in 1 s"}))
     dt /= ramp["simulation.steps_per_mesh_period"]
     steps = args.periods * ramp["simulation.steps_per_mesh_period"]
@@ -57,7 +62,8 @@ def main() -> None:
         ratios.append(run_up / constant)
         print(f"repeat {r + 1}: constant {1e6 * constant:.1f} us/step, run-up "
               f"{1e6 * run_up:.1f} us/step, ratio {ratios[-1]:.2f}")
-    print(f"{steps} steps of {dt:.4g} s, {args.bearing} bearings: run-up / constant = "
+    gyroscopic = ", gyroscopic terms" if args.gyroscopic else ""
+    print(f"{steps} steps of {dt:.4g} s, {args.bearing} bearings{gyroscopic}: run-up / constant = "
           f"{statistics.median(ratios):.2f} (median of {args.repeat})")
 
 

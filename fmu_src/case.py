@@ -505,8 +505,7 @@ def parse_case(data: dict, source: str = "<case>") -> Case:
 def _check_speed_profile(v: dict, source: str) -> None:
     """``drive.speed_profile`` readable (:func:`fmu_src.units.parse_speed_profile`), a table
     starting at ``drive.speed``, and a varying speed only with what follows it: film bearings
-    need a speed > 0 throughout, the linear model's coefficients hold at one speed, and the
-    gyroscopic tangent at a varying speed is not implemented yet."""
+    need a speed > 0 throughout and the linear model's coefficients hold at one speed."""
     text = v["drive.speed_profile"]
     try:
         given = parse_speed_profile(text)
@@ -530,8 +529,8 @@ def _check_speed_profile(v: dict, source: str) -> None:
 
 def varying_speed_refusal(values, lowest: float, models: bool = True) -> str | None:
     """Why a case (its field ``values``) cannot follow an input speed that varies down to
-    ``lowest`` [rad/s], or None: a linear bearing's coefficients hold at one speed, a film
-    carries no load at rest, and the gyroscopic tangent at a varying speed is not implemented.
+    ``lowest`` [rad/s], or None: a linear bearing's coefficients hold at one speed, and a
+    film carries no load at rest.
     ``models``: whether the bearings' own models run (not when a bearing FMU of the user's
     replaces them). The one rule of a case's ``drive.speed_profile`` and of the transmission
     FMU's input ``speed``."""
@@ -543,9 +542,6 @@ def varying_speed_refusal(values, lowest: float, models: bool = True) -> str | N
         if lowest <= 0.0 and model != "lumped":
             return (f"reaches {lowest:g} rad/s, where the film of bearing {name} ({model}) "
                     f"carries no load: keep the speed above 0 rad/s")
-    if values["simulation.gyroscopic"]:
-        return ("a varying speed with simulation.gyroscopic = true is not implemented yet (the "
-                "gyroscopic tangent changes with the speed): set simulation.gyroscopic = false")
     return None
 
 

@@ -11,9 +11,10 @@ where the bearings enter as affine laws (Eq. 17, :class:`bearing_fmu.affine.Affi
 by the caller in the global (s, t) frame at the bearing nodes (X_j = (u, v) of bearing j's node,
 the layout's order), re-set by the master at every iteration: the Newton tangent is
 ``c0 M + c1 C + K + sum K_mesh + Kb + c1 Cb`` (Eq. 14, 16; c0 = 4/dt^2, c1 = 2/dt). The
-gyroscopic matrix ``G(Omega)`` of the shafts, gears and discs at their constant speeds
-(:meth:`gear_fmu.system.GearShaftSystem.gyroscopic`; not in the paper) is on when asked
-(``gyroscopic``): it joins C wherever C acts, and makes the tangent unsymmetric. External
+gyroscopic matrix ``G(Omega)`` of the shafts, gears and discs at their speeds
+(:meth:`gear_fmu.system.GearShaftSystem.gyroscopic`; not in the paper; in a run-up at the
+speed of each step's end) is on when asked (``gyroscopic``): it joins C wherever C acts, and
+makes the tangent unsymmetric. External
 loads ``F0(t)`` (:mod:`gear_fmu.loads`): input torque, mass unbalances of Eq. (10), optional
 gravity. Each mesh element works in its pair's own frame
 (:func:`gear_fmu.mesh.element.pair_frame`) and is driven by the rigid-body angle of its
@@ -282,14 +283,37 @@ class Structure:
         """Use the damping matrix C (full numbering) [N s/m] from now on."""
         self._pending_reference = None
         self._damping_full = damping_full
-        self._c = self._permute(damping_full)
+        self._c_damping = self._permute(damping_full)
+        self._set_c(self.loads.input_speed)
+
+    def _set_c(self, input_speed: float) -> None:
+        """C = the damping plus, with gyroscopic terms, ``G(Omega)`` at ``input_speed``
+        [rad/s]; what is built on C is forgotten."""
+        self._c = self._c_damping
+        self._gyroscopic_speed = float(input_speed)
         if self.gyroscopic:
-            self._c = self._c + self._permute(self.gyroscopic_full)
+            self._c = self._c + self._permute(self.gyroscopic_at(input_speed))
         # b = [M C] [p; q] (prepare_step), transposed for the compiled step's products
         self._mc_t = np.ascontiguousarray(np.hstack([self._m, self._c]).T)
         self._memo = history_memo(self._m.shape[0])
         self._dyn_cache.clear()
         self._condensations.clear()
+        if self._ramp is not None:
+            self._ramp[1].clear()
+
+    @one_blas_thread
+    def _follow_gyroscopic(self, t1: float) -> None:
+        """A varying speed's gyroscopic matrix for the step ending at t1 [s]: ``G(Omega(t1))``
+        in C (Eq. 11 at t1, as the bearings' speed and the unbalances; its sub-steps take it
+        too), the condensations rebuilt for it (docs/equations.md "Run-ups"). Nothing at
+        constant speed, without gyroscopic terms, or when the speed is the one C has (a step
+        taken again)."""
+        if not self.gyroscopic or self.loads.profile is None:
+            return
+        self._require_damping()
+        speed = self.input_speed_at(t1)
+        if speed != self._gyroscopic_speed:
+            self._set_c(speed)
 
     def _require_damping(self) -> None:
         """Build the damping of the constructor's reference if nothing replaced it (at the
@@ -458,19 +482,15 @@ class Structure:
         """From the structure's time t on, the input speed goes linearly to ``speed`` [rad/s]
         at ``t1`` [s] (> t) and stays there: the speed profile continued
         (:meth:`gear_fmu.speed_profile.SpeedProfile.continued`, the angle and the speed at t
-        kept), with a run-up's loads, bearing speeds and one step per plan from now on (a
-        host's speed input, :class:`orchestrator.coupling.transmission.TransmissionSlave`).
-        Nothing changes where the speed is ``speed`` and stays so: a constant speed that has
-        not varied, or a profile whose last point is past. ValueError with the gyroscopic
-        terms (not built for a varying speed) or a speed that is not finite and > 0."""
+        kept), with a run-up's loads, bearing speeds, gyroscopic matrix and one step per plan
+        from now on (a host's speed input,
+        :class:`orchestrator.coupling.transmission.TransmissionSlave`). Nothing changes where
+        the speed is ``speed`` and stays so: a constant speed that has not varied, or a
+        profile whose last point is past. ValueError for a speed that is not finite and > 0."""
         now = self.loads.profile
         if (now is None and speed == self.loads.input_speed) or (
                 now is not None and now.speeds[-1] == speed and now.times[-1] <= self.t):
             return
-        if self.gyroscopic:
-            raise ValueError(f"speed = {speed!r} rad/s: the gyroscopic terms are built for a "
-                             f"constant speed; a varying speed needs simulation.gyroscopic = "
-                             f"false")
         if not (math.isfinite(speed) and speed > 0.0):
             raise ValueError(f"speed = {speed!r} rad/s: must be finite and > 0")
         if now is None:
@@ -695,6 +715,7 @@ class Structure:
         from the structure's time (:meth:`steps_plan`'s for one step, built lean: a step alone
         is on an FMU's hot path), kept for the next call from the same time: a master takes a
         step again at each of its iterations."""
+        self._follow_gyroscopic(self.t + dt)
         key = (self.t, dt, self._condensations.generation)
         if self._one is not None and self._one[0] == key:
             if self.loads.profile is not None:  # (a plan of another step may have set them)
@@ -766,6 +787,7 @@ class Structure:
         slots = self._condensations
         if self.loads.profile is not None:  # the loads of each step: one step per plan
             n = min(n, 1)
+            self._follow_gyroscopic(t + dt)
         while len(steps) < n:
             pieces = self._pieces(dt, t)
             lengths = [h for h, _, _, _ in pieces]

@@ -293,7 +293,7 @@ the case's step.
   `drive.speed_profile` act. Refused (fmi2Error at the fmi2SetReal, the reason in the log):
   above the parameter `max_speed` (the time step is sized for it: set it before
   initialisation; by default the case's highest speed), at 0 or below, and a change of
-  speed for a case with gyroscopic terms or linear bearings (built for one speed).
+  speed for a case with linear bearings (built for one speed).
 - Initialisation mode: the outputs are the static solution X0 of the current parameters and
   torque (velocities zero), solved when first read or at fmi2ExitInitializationMode, which
   then builds the modal damping as a run does.

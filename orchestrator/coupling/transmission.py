@@ -263,7 +263,7 @@ class TransmissionSlave(ContractSlave):
     def _set_speed(self, value) -> None:
         """In initialisation the parameter drive.speed; stepping, the speed the next
         communication step ramps to (refused above ``max_speed``, and for a case that
-        cannot follow a varying speed: gyroscopic terms, linear bearings)."""
+        cannot follow a varying speed: linear bearings, a film at rest)."""
         value = float(value)
         if not self._stepping:
             case_parameter(self, "drive.speed", self._drop_master)[1](value)

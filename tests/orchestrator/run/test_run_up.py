@@ -75,10 +75,8 @@ def test_a_run_up_turns_the_bearings_at_their_shafts_speed():
     ("table 0 s 325 rad/s", {}, ["'0 s 325 rad/s'", "'time: speed'"]),
     ("ramp to 400 rad/s in 1 s", {"bearings.*.model": "linear"},
      ["bearing 1 is linear", "hold at one speed"]),
-    ("ramp to 400 rad/s in 1 s", {"simulation.gyroscopic": True},
-     ["simulation.gyroscopic = true is not implemented yet"]),
 ], ids=["no time", "unit", "instant", "to rest", "table not increasing", "table start",
-        "table at 0.1 s", "table point", "linear", "gyroscopic"])
+        "table at 0.1 s", "table point", "linear"])
 def test_a_profile_that_cannot_run_is_one_line_naming_it(profile, overrides, expected):
     with pytest.raises(CaseError) as info:
         load_case(SPUR, {"drive.speed_profile": profile, **overrides})
@@ -115,14 +113,14 @@ def test_a_ramp_the_step_cannot_resolve_is_one_line_before_the_run(tmp_path, cap
 
 @pytest.mark.parametrize("name,fields", [
     (SPUR, {"drive.speed_profile": "ramp to 400 rad/s in 5 ms"}),
-    ("two_stage_reducer", {"drive.speed_profile": "ramp to 3300 rpm in 5 ms",
-                           "simulation.gyroscopic": False}),
+    ("two_stage_reducer", {"drive.speed_profile": "ramp to 3300 rpm in 5 ms"}),
 ], ids=["paper", "two-stage"])
 def test_a_run_up_through_the_fmus_gives_the_in_process_bits(fmu_dir, tmp_path, name, fields):
     """Through the FMUs the gear-shaft FMU follows the profile (a parameter) and the master
     sets each bearing FMU's input omega at every step: the run-up's bits are the in-process
     run-up's (both transports take the same steps with the same numbers), on the paper's
-    stage and on the two-stage reducer (hybrid and short bearings)."""
+    stage and on the two-stage reducer (hybrid and short bearings, the gyroscopic matrix
+    rebuilt at each step's speed)."""
     from orchestrator.run.results import read_results
     from orchestrator.run.runner import run_case
 
