@@ -207,15 +207,18 @@ def test_a_slow_run_up_passes_through_the_steady_states():
     assert worst[0.03] > 0.05, worst
 
 
-def test_a_run_up_resumed_is_the_run_up_uninterrupted(tmp_path):
+@pytest.mark.parametrize("gyroscopic", [False, True], ids=["", "gyroscopic"])
+def test_a_run_up_resumed_is_the_run_up_uninterrupted(tmp_path, gyroscopic):
     """A run-up stopped inside its ramp and resumed from its file's checkpoint (the speeds,
     the unbalances and the ramp's inertia follow the restored time) has the bits of the run
-    that was never stopped."""
+    that was never stopped; with the gyroscopic terms too (their matrix is a function of the
+    step's speed alone)."""
     from orchestrator.run.results import read_results
     from orchestrator.run.runner import resume_run, run_case
 
     case = load_case(SPUR, {"drive.speed_profile": "ramp to 400 rad/s in 5 ms",
-                            "simulation.mesh_periods": 12})
+                            "simulation.mesh_periods": 12,
+                            "simulation.gyroscopic": gyroscopic})
     whole = run_case(case, in_process=True, out_dir=tmp_path / "a", progress=False,
                      echo_warnings=False)
     part = run_case(case, in_process=True, out_dir=tmp_path / "b", progress=False, steps=150,
