@@ -48,7 +48,8 @@ def linear_vcycle(l0, nts, ms, offs, coffs, kinds, ct, cx, e, r, tmp, mask, nu1,
         ctl = _ct(ct, coffs[lv], nt)
         cxl = _ct(cx, coffs[lv], nt)
         el[:, :] = 0.0
-        linear_gs(el, rl, ctl, cxl, nt, m, ml, nu1, False)
+        # bool(...): plain bools, not numba's literals (each sweep compiled once)
+        linear_gs(el, rl, ctl, cxl, nt, m, ml, nu1, np.bool_(False))
         residual(el, rl, ctl, cxl, nt, m, tl)
         ntc, mc = nts[lv + 1], ms[lv + 1]
         restrict(tl, ml, nt, m, _lv(r, offs[lv + 1], ntc, mc), _lv(mask, offs[lv + 1], ntc, mc),
@@ -64,7 +65,7 @@ def linear_vcycle(l0, nts, ms, offs, coffs, kinds, ct, cx, e, r, tmp, mask, nu1,
         ml = _lv(mask, offs[lv], nt, m)
         interpolate_add(_lv(e, offs[lv + 1], ntc, mc), ntc, mc, el, ml, nt, m, kinds[lv], 1.0)
         linear_gs(el, _lv(r, offs[lv], nt, m), _ct(ct, coffs[lv], nt), _ct(cx, coffs[lv], nt),
-                  nt, m, ml, nu2, True)
+                  nt, m, ml, nu2, np.bool_(True))
 
 
 @njit(cache=True)
@@ -99,7 +100,7 @@ def tnnmg_cycle(lv, nts, ms, offs, coffs, kinds, ct, cx, p, b, e, r, tmp, mask, 
     el = _lv(e, offs[lv], nt, m)
     tl = _lv(tmp, offs[lv], nt, m)
     ml = _lv(mask, offs[lv], nt, m)
-    projected_gs(pl, bl, ctl, cxl, nt, m, pin0, nu1, False)
+    projected_gs(pl, bl, ctl, cxl, nt, m, pin0, nu1, np.bool_(False))
     if lv < nts.shape[0] - 1:
         for i in range(nt):
             for j in range(m + 1):
@@ -131,7 +132,7 @@ def tnnmg_cycle(lv, nts, ms, offs, coffs, kinds, ct, cx, p, b, e, r, tmp, mask, 
                 for j in range(1, m + 1):
                     v = pl[i, j] + alpha * el[i, j]
                     pl[i, j] = v if v > 0.0 else 0.0
-    projected_gs(pl, bl, ctl, cxl, nt, m, pin0, nu2, True)
+    projected_gs(pl, bl, ctl, cxl, nt, m, pin0, nu2, np.bool_(True))
 
 
 @njit(cache=True)
@@ -199,7 +200,7 @@ def full_multigrid(nts, ms, offs, coffs, kinds, ct, cx, p, b, e, r, tmp, mask, p
     pl = _lv(p, offs[lv], nt, m)
     pl[:, :] = 0.0
     projected_gs(pl, _lv(b, offs[lv], nt, m), _ct(ct, coffs[lv], nt), _ct(cx, coffs[lv], nt),
-                 nt, m, pin0, 50 * (nt + m), False)
+                 nt, m, pin0, 50 * (nt + m), np.bool_(False))
     for lv in range(nl - 2, -1, -1):
         nt, m = nts[lv], ms[lv]
         ntc, mc = nts[lv + 1], ms[lv + 1]

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit, prange
 
 from bearing_fmu.frames import film_law_global, film_state_local
@@ -216,8 +217,9 @@ def _degenerate(st, active, ws, iws, coef, g, dsig, lam, tol, maxit, pinned, jx,
             for i in range(n):
                 ws[FB, i] = sign * dsig * (ws[COS, i] if s == 0 else ws[SIN, i])
             _cold_set(ws, active, pinned)
+            # np.bool_(False): a plain bool, not numba's literal (solve_t compiled once)
             _, nt, nlcp, stat, _, _ = solve_t(ws, active, order, runs, g, coef, lam, 1.0,
-                                              tol, maxit, pinned, False)
+                                              tol, maxit, pinned, np.bool_(False))
             tot_nt += nt
             tot_lcp += nlcp
             if stat != 0:
@@ -408,7 +410,9 @@ def hybrid_global(state, active, ws, iws, trig, coef, q, s, omega, clearance, fs
     xb, yb, xdb, ydb, ok = film_state_local(q, s, clearance, omega)
     if not ok:
         return BAD_STATE
-    status = hybrid_kernel(state, xb, yb, xdb, ydb, True, active, ws, iws, trig, coef, res)
+    # np.bool_(True): a plain bool, not numba's literal (hybrid_kernel compiled once)
+    status = hybrid_kernel(state, xb, yb, xdb, ydb, np.bool_(True), active, ws, iws, trig, coef,
+                           res)
     if status != 0:
         return status
     film_law_global(q, res, fs, clearance, omega, out)

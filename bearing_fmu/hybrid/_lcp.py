@@ -9,6 +9,8 @@ the runs of consecutive active nodes serve the Newton on t and the Jacobians too
 
 from __future__ import annotations
 
+import numpy as np
+
 from bearing_fmu.hybrid._workspace import COS, CP, CV, LO, NEW, PIV, A, B, D, W, Z, kernel
 
 #: extrapolating active-set passes before falling back to the plain primal-dual active set
@@ -41,7 +43,7 @@ def factor_solve(ws, active, order, runs, rhs, out):
     for k in range(m1, n):
         order[k] = k - m1
     nr = 0
-    k = 0
+    k = np.int64(0)  # (not numba's literal 0: _twisted_run compiled once)
     while k < n:
         if not active[order[k]]:
             out[order[k]] = 0.0

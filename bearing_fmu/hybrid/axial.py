@@ -99,10 +99,11 @@ def axial_integrals(t, lam, coef, out):
     out : ndarray (9,)
         Filled with ``G0, G1, G2, G0', G1', G2', G0'', G1'', G2''`` (' = d/dt).
     """
-    e0, e1, e2 = _series(coef, 0, t)
-    a0, a1, a2 = _series(coef, 1, t)
-    b0, b1, b2 = _series(coef, 2, t)
-    c0, c1, c2 = _series(coef, 3, t)
+    # np.int64(k): plain rows, not numba's literals (one compilation of _series for the four)
+    e0, e1, e2 = _series(coef, np.int64(0), t)
+    a0, a1, a2 = _series(coef, np.int64(1), t)
+    b0, b1, b2 = _series(coef, np.int64(2), t)
+    c0, c1, c2 = _series(coef, np.int64(3), t)
     # I0 = P0 / E (quotient rule twice)
     i0 = a0 / e0
     i0t = (a1 - i0 * e1) / e0

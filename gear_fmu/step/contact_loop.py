@@ -237,6 +237,6 @@ def contact_newton(s_lin, z0, xc, angles, errs, has_err, meshes, fc, kc, totals,
         xc, ok = _newton_solve(s_lin, z0, xc, fc, kc)
         if not ok:
             return SINGULAR, k, xc
-        use_sets(meshes, False)
+        use_sets(meshes, np.bool_(False))  # (a plain bool: use_sets compiled once)
         has_used = True
     return NOT_CONVERGED, max_iter, xc

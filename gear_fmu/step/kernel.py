@@ -182,7 +182,7 @@ def advance_pieces(n_pieces, slots, mc_t, g_k, g_const_k, s0_k, w_k, table, angl
     sub-step it was; the final state in ``x1, v1, a1``, the meshes' final evaluations in their
     ``out`` buffers and ``totals``, ``lengths``.
     """
-    use_sets(meshes, True)
+    use_sets(meshes, np.bool_(True))  # (a plain bool, not a literal: use_sets compiled once)
     xs, vs, as_ = x, v, a
     status, k = CONVERGED, 0
     # a boolean, not the literal True, so that contact_newton is compiled once for this and
@@ -201,7 +201,7 @@ def advance_pieces(n_pieces, slots, mc_t, g_k, g_const_k, s0_k, w_k, table, angl
                        lengths)
         if p + 1 < n_pieces:
             xs, vs, as_ = x1.copy(), v1.copy(), a1.copy()
-            use_sets(meshes, False)
+            use_sets(meshes, np.bool_(False))
     return status, n_pieces - 1, k
 
 

@@ -195,14 +195,15 @@ def _python_operation(structure, op, i, out):
     """:func:`_python_structure` for an operation that takes no laws (begin, retry, accept,
     end): placeholder laws; ``out`` accept's row (a placeholder for the others)."""
     z2, z22 = np.zeros((1, 2)), np.zeros((1, 2, 2))
-    return _python_structure(structure, op, i, z2, z22, z22, np.zeros((1, 4)), z2, False, out)
+    return _python_structure(structure, op, i, z2, z22, z22, np.zeros((1, 4)), z2, np.bool_(False),
+                             out)
 
 
 @overload(structure_begin)
 def _begin(structure, i):
     if len(structure) == PYTHON_STRUCTURE:
         def python(structure, i):
-            return _python_operation(structure, 0, i, np.zeros((1, 4)))
+            return _python_operation(structure, np.int64(0), i, np.zeros((1, 4)))
         return python
     if len(structure) == IN_PROCESS:
         return lambda structure, i: 0
@@ -215,7 +216,7 @@ def _begin(structure, i):
 def _solve(structure, i, f0, kb, cb, x0, force0, expanded, states):
     if len(structure) == PYTHON_STRUCTURE:
         def python(structure, i, f0, kb, cb, x0, force0, expanded, states):
-            code = _python_structure(structure, 1, i, f0, kb, cb, x0, force0, expanded,
+            code = _python_structure(structure, np.int64(1), i, f0, kb, cb, x0, force0, expanded,
                                      states)
             return code, 0, 0, 0
         return python
@@ -234,7 +235,7 @@ def _solve(structure, i, f0, kb, cb, x0, force0, expanded, states):
 def _retry(structure, i):
     if len(structure) == PYTHON_STRUCTURE:
         def python(structure, i):
-            return _python_operation(structure, 2, i, np.zeros((1, 4)))
+            return _python_operation(structure, np.int64(2), i, np.zeros((1, 4)))
         return python
     if len(structure) == IN_PROCESS:
         return lambda structure, i: 0
@@ -247,7 +248,7 @@ def _retry(structure, i):
 def _accept(structure, i, row):
     if len(structure) == PYTHON_STRUCTURE:
         def python(structure, i, row):
-            return _python_operation(structure, 3, i, row)
+            return _python_operation(structure, np.int64(3), i, row)
         return python
     if len(structure) == IN_PROCESS:
         return lambda structure, i, row: _in_process_accept(structure, row)
@@ -260,7 +261,7 @@ def _accept(structure, i, row):
 def _end(structure):
     if len(structure) == PYTHON_STRUCTURE:
         def python(structure):
-            _python_operation(structure, 4, 0, np.zeros((1, 4)))
+            _python_operation(structure, np.int64(4), np.int64(0), np.zeros((1, 4)))
         return python
     if len(structure) == IN_PROCESS:
         return lambda structure: None
@@ -445,14 +446,16 @@ def coupled_steps(n, structure, bearings, f0, kb, cb, x0, force0, expanded, tol,
     """
     relaxed_steps = 0
     outcome, it, code, d1, d2, d3, bad, b_status = ACCEPTED, 0, 0, 0, 0, 0, -1, 0
-    relaxed, mismatch = False, 0.0
+    # np.bool_(False), np.int64(k): plain values, not numba's literals, so that a callee is
+    # compiled once for all of them rather than once per constant (and again for the variable)
+    relaxed, mismatch = np.bool_(False), 0.0
     for i in range(n):
         code = structure_begin(structure, i)
         if code != 0:
             return (i, relaxed_steps, STRUCTURE_FAILED, 0, code, 0, 0, 0, -1, 0, mismatch,
                     False, f0, kb, cb, x0, force0)
         law_f0, law_kb, law_cb, law_x, law_force, law_exp = f0, kb, cb, x0, force0, expanded
-        outcome, relaxed, mismatch, bad = NOT_CONVERGED, False, np.inf, -1
+        outcome, relaxed, mismatch, bad = NOT_CONVERGED, np.bool_(False), np.inf, -1
         for it in range(1, max_iterations + 1):
             code, d1, d2, d3 = structure_solve(structure, i, law_f0, law_kb, law_cb, law_x,
                                                law_force, law_exp, states)
