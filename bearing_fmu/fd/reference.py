@@ -16,7 +16,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import scipy.sparse as sp
 
 from bearing_fmu.reynolds import film_thickness, source, source_coefficients
 
@@ -30,6 +29,8 @@ def reynolds_operator(lam, x, y, xd, yd, n_theta, n_xi, theta0=0.0):
     ``i*(n_xi-1) + j-1``). Rows are scaled by the cell area ``dtheta dxi`` (A symmetric
     positive definite). Same stencil as the multigrid kernels.
     """
+    import scipy.sparse as sp  # (here: not at every start of the package)
+
     dth = 2.0 * math.pi / n_theta
     dxi = 2.0 * lam / n_xi
     th = theta0 + np.arange(n_theta) * dth

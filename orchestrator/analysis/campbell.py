@@ -35,7 +35,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.optimize
 
 from bearing_fmu import numba_cache
 from bearing_fmu.base import BearingError
@@ -336,6 +335,8 @@ def campbell_data(case: Case, speeds, bearing_stiffness: float | None = None,
 def _segments(data: dict) -> list[tuple[int, int, int]]:
     """``(speed index a, mode at a, mode at a + 1)``: the same mode at two neighbouring speeds
     (one-to-one assignment maximising the MAC, kept when MAC >= :data:`MAC_LIMIT`)."""
+    from scipy.optimize import linear_sum_assignment  # (here: 0.1 s of every start)
+
     out = []
     m = data["mass"]
     for a in range(len(data["modes"]) - 1):
@@ -343,7 +344,7 @@ def _segments(data: dict) -> list[tuple[int, int, int]]:
         if pa.shape[1] == 0 or pb.shape[1] == 0:
             continue
         mac = np.abs(pa.conj().T @ (m @ pb)) ** 2  # shapes have phi^H M phi = 1
-        rows, cols = scipy.optimize.linear_sum_assignment(-mac)
+        rows, cols = linear_sum_assignment(-mac)
         out += [(a, int(i), int(j)) for i, j in zip(rows, cols, strict=True)
                 if mac[i, j] >= MAC_LIMIT]
     return out
