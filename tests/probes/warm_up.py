@@ -74,7 +74,8 @@ def other_transports() -> None:
     """The master's step through the gear-shaft FMU and with a structure called back in
     Python, compiled without an FMU (:func:`orchestrator.coupling.step.compile_step`): about
     30 s from an empty cache, which the first tests of both workers would otherwise spend at
-    the same time."""
+    the same time. Then what the FMUs compile on their side for the paper's case
+    (:func:`fmu_kernels`)."""
     import numpy as np
 
     from orchestrator.coupling.fmi.structure import block_arguments
@@ -82,13 +83,37 @@ def other_transports() -> None:
 
     compile_step(block_arguments([], [], [], [], [], [], [], [], 0.0))
     compile_step((np.zeros(1, dtype=np.int64),))  # PythonStructure.arguments
+    fmu_kernels()
+
+
+def fmu_kernels() -> None:
+    """The kernels the FMUs of the paper's case compile in their own processes: the
+    gear-shaft FMU's structure step alone (one mesh) and its unpacking of the laws, the hybrid
+    bearing FMU's C law. About 8 s from an empty cache, which the determinism test's warm run
+    and a worker's first FMU test each spent (a numba compile listener over a cold suite)."""
+    import numpy as np
+
+    import bearing_fmu.hybrid._native  # noqa: F401  (compiles the C law on import)
+    from fmu_src import description
+    from fmu_src.case import load_case
+    from fmu_src.contract import unpack_law_arrays
+
+    case = load_case("baguet2010_spur")
+    st = description.structure(case)
+    kb = np.broadcast_to(2e8 * np.eye(2), (st.nb, 2, 2)).copy()
+    cb = np.broadcast_to(2e4 * np.eye(2), (st.nb, 2, 2)).copy()
+    f0 = np.zeros((st.nb, 2))
+    st.static(f0, kb, cb)
+    st.step(description.time_step(case), f0, kb, cb)
+    unpack_law_arrays(np.zeros(14 * st.nb))
 
 
 def cold_paper_case(folder: str, periods: int) -> None:
     """From an empty numba cache, in this process's own ``NUMBA_CACHE_DIR`` (``folder``/numba,
     cold by construction): the native layer, then the in-process run of
     :func:`tests.probes.determinism.runs` (every kernel compiled here), its result in
-    ``folder``/cold.json for tests/system/test_determinism.py, and :func:`other_transports`.
+    ``folder``/cold.json for tests/system/test_determinism.py, and :func:`other_transports`
+    (with :func:`fmu_kernels`).
     The controller then merges this cache into numba's (:func:`merge_cache`)."""
     import json
     from pathlib import Path
