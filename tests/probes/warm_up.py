@@ -38,21 +38,29 @@ def train_kernels() -> None:
     numba compiles the step again for each number of meshes and each set of bearing models
     (both are in the types of its arguments): about 70 s from an empty cache, which every
     worker that meets the train first would otherwise spend at once."""
-    import numpy as np
-
-    from fmu_src import description
     from fmu_src.case import load_case
     from orchestrator.run.runner import run_case
 
     case = load_case("two_stage_reducer")
     with tempfile.TemporaryDirectory() as tmp:
         run_case(case, steps=2, in_process=True, out_dir=tmp, progress=False)
+    structure_step(case)
+
+
+def structure_step(case):
+    """One step of ``case``'s structure alone on stiff linear supports (as a gear-shaft FMU
+    takes it); returns the structure."""
+    import numpy as np
+
+    from fmu_src import description
+
     st = description.structure(case)
     kb = np.broadcast_to(2e8 * np.eye(2), (st.nb, 2, 2)).copy()
     cb = np.broadcast_to(2e4 * np.eye(2), (st.nb, 2, 2)).copy()
     f0 = np.zeros((st.nb, 2))
     st.static(f0, kb, cb)
     st.step(description.time_step(case), f0, kb, cb)
+    return st
 
 
 def native_and_structure() -> None:
@@ -94,17 +102,10 @@ def fmu_kernels() -> None:
     import numpy as np
 
     import bearing_fmu.hybrid._native  # noqa: F401  (compiles the C law on import)
-    from fmu_src import description
     from fmu_src.case import load_case
     from fmu_src.contract import unpack_law_arrays
 
-    case = load_case("baguet2010_spur")
-    st = description.structure(case)
-    kb = np.broadcast_to(2e8 * np.eye(2), (st.nb, 2, 2)).copy()
-    cb = np.broadcast_to(2e4 * np.eye(2), (st.nb, 2, 2)).copy()
-    f0 = np.zeros((st.nb, 2))
-    st.static(f0, kb, cb)
-    st.step(description.time_step(case), f0, kb, cb)
+    st = structure_step(load_case("baguet2010_spur"))
     unpack_law_arrays(np.zeros(14 * st.nb))
 
 
