@@ -48,7 +48,7 @@ def linear_vcycle(l0, nts, ms, offs, coffs, kinds, ct, cx, e, r, tmp, mask, nu1,
         ctl = _ct(ct, coffs[lv], nt)
         cxl = _ct(cx, coffs[lv], nt)
         el[:, :] = 0.0
-        # bool(...): plain bools, not numba's literals (each sweep compiled once)
+        # np.bool_(...): plain bools, not numba's literals (each sweep compiled once)
         linear_gs(el, rl, ctl, cxl, nt, m, ml, nu1, np.bool_(False))
         residual(el, rl, ctl, cxl, nt, m, tl)
         ntc, mc = nts[lv + 1], ms[lv + 1]
