@@ -55,6 +55,7 @@ from bearing_fmu.short_bearing import short_set_global
 from fmu_src.lifecycle import step_output_row
 from gear_fmu.step.contact_loop import CONVERGED
 from gear_fmu.step.kernel import advance_pieces, keep_evaluation
+from orchestrator.coupling.borrowed import borrowed
 from orchestrator.coupling.fmi.steps import (
     fmu_bearing_group,
     fmu_structure_accept,
@@ -110,6 +111,10 @@ def relaxed_law(it, mismatch, mismatches, relaxed, stall, relaxation, f0_new, kb
 
 
 # --- the structure's operations, one implementation per transport ---------------------------
+# Inlined into coupled_steps (numba's IR), with the in-process solve and accept and the bearing
+# set's slots and groups: a compiled call receives every array of a tuple by value (about ten
+# words each, ~90 arrays for the structure), which cost more than these thin layers do. A
+# bearing group's kernel is not inlined: a Python group's objmode block cannot be.
 def structure_begin(structure, i):
     """Before step i: keep the structure's state (returns 0, or a failure code)."""
     raise NotImplementedError("compiled code only")
@@ -139,7 +144,7 @@ def structure_end(structure):
     raise NotImplementedError("compiled code only")
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _in_process_solve(structure, i, f0, kb, cb, states):
     head, state, tail, work, _ = structure
     counts, slots, mc, g_k, gc_k, s0_k, w_k, table, angles, after, errs, errs_after = head
@@ -162,7 +167,7 @@ def _in_process_solve(structure, i, f0, kb, cb, states):
     return 0, 0, 0, 0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _in_process_accept(structure, row):
     _, state, tail, work, rec = structure
     x, v, a = state
@@ -199,7 +204,7 @@ def _python_operation(structure, op, i, out):
                              out)
 
 
-@overload(structure_begin)
+@overload(structure_begin, inline="always")
 def _begin(structure, i):
     if len(structure) == PYTHON_STRUCTURE:
         def python(structure, i):
@@ -212,7 +217,7 @@ def _begin(structure, i):
     return None
 
 
-@overload(structure_solve)
+@overload(structure_solve, inline="always")
 def _solve(structure, i, f0, kb, cb, x0, force0, expanded, states):
     if len(structure) == PYTHON_STRUCTURE:
         def python(structure, i, f0, kb, cb, x0, force0, expanded, states):
@@ -231,7 +236,7 @@ def _solve(structure, i, f0, kb, cb, x0, force0, expanded, states):
     return None
 
 
-@overload(structure_retry)
+@overload(structure_retry, inline="always")
 def _retry(structure, i):
     if len(structure) == PYTHON_STRUCTURE:
         def python(structure, i):
@@ -244,7 +249,7 @@ def _retry(structure, i):
     return None
 
 
-@overload(structure_accept)
+@overload(structure_accept, inline="always")
 def _accept(structure, i, row):
     if len(structure) == PYTHON_STRUCTURE:
         def python(structure, i, row):
@@ -257,7 +262,7 @@ def _accept(structure, i, row):
     return None
 
 
-@overload(structure_end)
+@overload(structure_end, inline="always")
 def _end(structure):
     if len(structure) == PYTHON_STRUCTURE:
         def python(structure):
@@ -317,7 +322,7 @@ def _evaluate_group(args, states, out):
     return None
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _group(args, index, states, out):
     """A group's kernel on the rows ``index`` of the set's ``states`` and ``out`` (nothing for
     an empty ``index``: :func:`bearing_slots`' placeholder); the failed bearing as the set's
@@ -341,7 +346,7 @@ def _group(args, index, states, out):
     return (np.int64(index[bad]) if bad >= 0 else np.int64(-1)), np.int64(status)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _evaluate_slot(slot, states, out, failed, why):
     """The groups of one kind (a tuple of groups of one type), into ``out``; returns the
     failed bearing of lowest index so far (``failed``, -1 for none) and its status."""
@@ -444,6 +449,8 @@ def coupled_steps(n, structure, bearings, f0, kb, cb, x0, force0, expanded, tol,
     and details, the bearing set's, its mismatch and whether it was relaxed; and the laws the
     next step starts from.
     """
+    # the callers keep these arrays alive: no reference counts in the layers below
+    structure, bearings = borrowed(structure), borrowed(bearings)
     relaxed_steps = 0
     outcome, it, code, d1, d2, d3, bad, b_status = ACCEPTED, 0, 0, 0, 0, 0, -1, 0
     # np.bool_(False), np.int64(k): plain values, not numba's literals, so that a callee is
