@@ -22,6 +22,7 @@ import numpy as np
 from numba import njit
 
 from bearing_fmu.affine import pairwise_sum
+from bearing_fmu.borrowed import borrowed
 from gear_fmu.loads import unbalance_into
 from gear_fmu.mesh.element import _mesh_kernel
 from gear_fmu.step.assembly import matvec_t, prepare_step
@@ -214,10 +215,11 @@ def advance_step(n_pieces, slots, mc_t, g_k, g_const_k, s0_k, w_k, table, angles
     the meshes' evaluations are kept (:func:`keep_evaluation`) with their total loads and
     contact lengths in ``kept_totals``, ``kept_lengths``, in the same call. Returns as
     :func:`advance_pieces`."""
-    status, piece, k = advance_pieces(
+    # the caller (Python) keeps the arrays alive: no reference counts in the layers below
+    status, piece, k = advance_pieces(*borrowed((
         n_pieces, slots, mc_t, g_k, g_const_k, s0_k, w_k, table, angles, after, errs,
         errs_after, x, v, a, f_c, unb_coef, unb_idx, f0, kb, cb, has_err, meshes, fc, kc,
-        totals, lengths, f_scale, tol, max_iter, m_inv_g, residuals, x1, v1, a1, memo)
+        totals, lengths, f_scale, tol, max_iter, m_inv_g, residuals, x1, v1, a1, memo)))
     if status == CONVERGED:
         keep_evaluation(meshes)
         kept_totals[:] = totals

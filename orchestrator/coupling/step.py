@@ -50,12 +50,12 @@ from numba import literal_unroll, njit, objmode
 from numba.extending import overload
 
 from bearing_fmu.affine import AffineLaws, _relinearise, affine_set_arguments, affine_set_global
+from bearing_fmu.borrowed import borrowed
 from bearing_fmu.hybrid._kernels import hybrid_set_global, hybrid_set_threads
 from bearing_fmu.short_bearing import short_set_global
 from fmu_src.lifecycle import step_output_row
 from gear_fmu.step.contact_loop import CONVERGED
 from gear_fmu.step.kernel import advance_pieces, keep_evaluation
-from orchestrator.coupling.borrowed import borrowed
 from orchestrator.coupling.fmi.steps import (
     fmu_bearing_group,
     fmu_structure_accept,

@@ -13,7 +13,9 @@ reference to their memory: numba's counts of an array without one are a test for
 pointer. The caller keeps the arrays alive for as long as the borrowed ones are used, which a
 compiled call does for its arguments: :func:`orchestrator.coupling.step.coupled_steps` borrows
 its structure's and bearings' arrays at entry and hands out none of them (it returns the laws,
-arrays of its own). A borrowed array must not be returned to Python nor kept beyond the call.
+arrays of its own); :func:`gear_fmu.step.kernel.advance_step` (a structure's step taken alone,
+the gear-shaft FMU's) borrows its arguments. A borrowed array must not be returned to Python
+nor kept beyond the call.
 """
 
 from __future__ import annotations
