@@ -57,8 +57,8 @@ def test_borrowing_keeps_numbas_allocation_count_balanced():
             _nrt_python.memsys_disable_stats()
     assert after.alloc - before.alloc == after.free - before.free
     assert after.mi_alloc - before.mi_alloc == after.mi_free - before.mi_free
-    assert after.mi_alloc - before.mi_alloc >= 100  # the counts did count (a meminfo per
-    # array the calls unbox from Python)
+    # the counts did count: a memory-info per array the calls unbox from Python
+    assert after.mi_alloc - before.mi_alloc >= 100
 
 
 def test_a_borrowed_array_keeps_its_type():

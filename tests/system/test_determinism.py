@@ -59,8 +59,9 @@ def _cold_runs(fmu_dir, cache: Path) -> dict:
 #: the master's compiled step (orchestrator.coupling.step)
 CALLERS = ("hybrid/_kernels.*", "step/kernel.*", "coupling/step.*")
 #: the callers an in-process run compiles against cached callees in the default run: the
-#: master's coupled steps, which call their in-process structure solve, the structure's step
-#: (gear_fmu.step.kernel) and the bearings' kernels, all loaded from the cache. The film's
+#: master's coupled steps (their in-process structure solve inlined), which call the
+#: structure's step (gear_fmu.step.kernel) and the bearings' kernels, all loaded from the
+#: cache. The film's
 #: driver and the structure's step compiled against their cached callees are the FMUs'
 #: (:func:`test_the_fmus_compiling_against_cached_callees_give_the_same_bits`, ``slow``):
 #: compiled in-process too, they took 66 s of the default run; with the in-process solve
