@@ -1,9 +1,10 @@
 """What the xdist controller runs before the workers start (tests/conftest.py), two probes in
 two processes at once: the kernels are then loaded from numba's cache by the workers and the
-processes the tests start, not compiled by each of them at the same time. With numba's cache
-empty for this code version (a fresh clone), :func:`cold_paper_case` compiles the structure's
-and the master's kernels instead of :func:`native_and_structure`, in a cache of its own, and
-that compilation is also the cold run of tests/system/test_determinism.py."""
+processes the tests start, not compiled by each of them at the same time. Until a warm-up
+of this code version has merged one (a fresh clone, with or without the README's ``gsb run``),
+:func:`cold_paper_case` compiles the structure's and the master's kernels instead of
+:func:`native_and_structure`, in a cache of its own, and that compilation is also the cold run
+of tests/system/test_determinism.py."""
 
 from __future__ import annotations
 

@@ -12,10 +12,11 @@ bits. The film's driver and the structure's step compiled against their cached c
 the FMU processes, is a ``slow`` test: four bearing FMUs and the gear-shaft FMU compiling at
 once take a minute of the default run's five.
 
-From a fresh clone the cold in-process run is the xdist warm-up's (tests/conftest.py: it
-compiles the kernels the workers then load, in an empty cache of its own, the master's step
-through the FMUs too: :func:`tests.probes.warm_up.other_transports`). Elsewhere
-(numba's cache already full, or no xdist) the test compiles its cold runs itself.
+From a fresh clone, and until a warm-up of this code version has merged one, the cold
+in-process run is the xdist warm-up's (tests/conftest.py: it compiles the kernels the workers
+then load, in an empty cache of its own, the master's step through the FMUs too:
+:func:`tests.probes.warm_up.other_transports`). Elsewhere (a later run of the suite, or no
+xdist) the test compiles its cold runs itself.
 """
 
 import hashlib
