@@ -50,12 +50,14 @@ dynamics (modes, quasi-static transmission error, support loads) are in
 from __future__ import annotations
 
 import math
+import operator
 from dataclasses import dataclass, replace
 
 import numpy as np
 import scipy.linalg
 
 from bearing_fmu.blas_threads import one_blas_thread
+from bearing_fmu.borrowed import held
 from gear_fmu.dofs import DOF_PER_NODE, THETA, U, V, dof
 from gear_fmu.loads import (
     StructureLoads,
@@ -233,6 +235,7 @@ class Structure:
         self._one = None  # the arguments of the last single step (_one_step)
         self._one_buf = None  # their arrays
         self._step_work = None  # its buffers
+        self._held = None  # (arrays, the same held for the compiled step: _held_arrays)
         self._events = None  # the contact events of each mesh, when first needed
         self._work = [MeshWork(m, idx) for m, idx in zip(self.meshes, self._mesh_idx,
                                                           strict=True)]
@@ -692,14 +695,11 @@ class Structure:
         """
         f0, kb, cb = check_laws_fast(F0, Kb, Cb, self.nb)
         counts, slots, table, angles, after, errs, errs_a, end = self._one_step(dt)
-        g_k, gc_k, s0_k, w_k = self._condensations.arrays()
-        fc, kc, totals, lengths, residuals, x1, v1, a1 = self._step_work
+        residuals, x1, v1, a1 = self._step_work[4:]
         status, piece, k = advance_step(
-            counts, slots, self._mc_t, g_k, gc_k, s0_k, w_k, table, angles, after, errs, errs_a,
-            self.x, self.v, self.a, self._f_c, self._unb_coef, self._unb_idx, f0, kb, cb,
-            self._has_err, self._mesh_tuple, fc, kc, totals, lengths, self._f_scale, self.tol,
-            self.max_iter, self._m_inv_g, residuals, x1, v1, a1, self._memo, self._totals,
-            self._lengths)
+            counts, self._held_arrays((slots, table, angles, after, errs, errs_a)), self.x,
+            self.v, self.a, self._f_c, self._unb_coef, f0, kb, cb, self._has_err,
+            self._f_scale, self.tol, self.max_iter, x1, v1, a1)
         if status != CONVERGED:
             self._raise(status, k, residuals, float(table[piece, 1]),
                         f"Newmark step {self.n_steps + 1}")
@@ -709,6 +709,21 @@ class Structure:
         self.t = end
         self.n_steps += 1
         return StepInfo(self.t, k, float(residuals[k]), residuals[:k + 1].tolist())
+
+    def _held_arrays(self, plan: tuple):
+        """The arrays of :func:`gear_fmu.step.kernel.advance_step` that stay from step to
+        step, held in one numba object (:func:`bearing_fmu.borrowed.held`) with the step's
+        ``plan`` (its slots ... contact-event error displacements, :meth:`_one_step`'s
+        buffers): built again when one of them is another array than the held one (a
+        longer plan, another damping, new condensations)."""
+        arrays = (*plan, self._mc_t, *self._condensations.arrays(), self._unb_idx,
+                  self._mesh_tuple, *self._step_work[:5], self._m_inv_g, self._memo,
+                  self._totals, self._lengths)
+        kept = self._held
+        if kept is None or len(kept[0]) != len(arrays) or not all(
+                map(operator.is_, kept[0], arrays)):
+            kept = self._held = (arrays, held(arrays))
+        return kept[1]
 
     def _one_step(self, dt: float) -> tuple:
         """The arguments of :func:`gear_fmu.step.kernel.advance_pieces` for the step of dt

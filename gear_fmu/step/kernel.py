@@ -207,15 +207,22 @@ def advance_pieces(n_pieces, slots, mc_t, g_k, g_const_k, s0_k, w_k, table, angl
 
 
 @njit(cache=True)
-def advance_step(n_pieces, slots, mc_t, g_k, g_const_k, s0_k, w_k, table, angles, after, errs,
-                 errs_after, x, v, a, f_c, unb_coef, unb_idx, f0, kb, cb, has_err, meshes, fc,
-                 kc, totals, lengths, f_scale, tol, max_iter, m_inv_g, residuals, x1, v1, a1,
-                 memo, kept_totals, kept_lengths):
-    """:func:`advance_pieces` for a step taken alone (not iterated by a master): on success
-    the meshes' evaluations are kept (:func:`keep_evaluation`) with their total loads and
-    contact lengths in ``kept_totals``, ``kept_lengths``, in the same call. Returns as
+def advance_step(n_pieces, held, x, v, a, f_c, unb_coef, f0, kb, cb, has_err, f_scale, tol,
+                 max_iter, x1, v1, a1):
+    """:func:`advance_pieces` for a step taken alone (not iterated by a master), called from
+    Python at each of the gear-shaft FMU's steps: the arrays that may change from step to
+    step are arguments (the state, the laws, and the loads and unbalances, which follow a
+    speed profile), the others ``held.arrays`` (:func:`bearing_fmu.borrowed.held`, one object
+    to unbox instead of about 50 arrays): ``(slots, table, angles, after, errs, errs_after,
+    mc_t, g_k, g_const_k, s0_k, w_k, unb_idx, meshes, fc, kc, totals, lengths, residuals,
+    m_inv_g, memo, kept_totals, kept_lengths)``. On success the meshes'
+    evaluations are kept (:func:`keep_evaluation`) with their total loads and contact
+    lengths in ``kept_totals``, ``kept_lengths``, in the same call. Returns as
     :func:`advance_pieces`."""
     # the caller (Python) keeps the arrays alive: no reference counts in the layers below
+    (slots, table, angles, after, errs, errs_after, mc_t, g_k, g_const_k, s0_k, w_k, unb_idx,
+     meshes, fc, kc, totals, lengths, residuals, m_inv_g, memo, kept_totals,
+     kept_lengths) = borrowed(held.arrays)
     status, piece, k = advance_pieces(*borrowed((
         n_pieces, slots, mc_t, g_k, g_const_k, s0_k, w_k, table, angles, after, errs,
         errs_after, x, v, a, f_c, unb_coef, unb_idx, f0, kb, cb, has_err, meshes, fc, kc,

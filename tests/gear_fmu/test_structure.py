@@ -144,6 +144,33 @@ def test_state_rollback_is_exact():
         np.testing.assert_array_equal(got, ref)
 
 
+def test_a_new_damping_acts_at_the_next_step_as_if_built_with_it():
+    """The compiled step holds the structure's arrays between steps
+    (:meth:`~gear_fmu.structure.Structure._held_arrays`): a damping set between two steps
+    (new [M C] and condensations) gives the bits of a structure that had it from the start,
+    stepping from the same state, and not those of the old damping."""
+    kb, cb, f0 = iso(1e8), iso(1e5), np.zeros((4, 2))
+    st = make(loads=StructureLoads(T_IN, OMEGA))
+    st.static(f0, kb, cb)
+    dt = st.mesh_period / 32
+    for _ in range(3):
+        st.step(dt, f0, kb, cb)
+    saved = st.get_state()
+    c2 = 3.0 * st._damping_full
+    st.step(dt, f0, kb, cb)
+    old = st.x.copy()
+    st.set_state(saved)
+    st.set_damping(c2)
+    st.step(dt, f0, kb, cb)
+    fresh = make(loads=StructureLoads(T_IN, OMEGA))
+    fresh.set_damping(c2)
+    fresh.set_state(saved)
+    fresh.step(dt, f0, kb, cb)
+    np.testing.assert_array_equal(st.x, fresh.x)
+    np.testing.assert_array_equal(st.a, fresh.a)
+    assert np.abs(st.x - old).max() > 1e-12
+
+
 # ---------------------------------------------------------------- master emulation
 K1, K3, CB = 1e8, 4e17, 1e5  # cubic bearing: F = -(K1 + K3 |X|^2) X - CB Xdot
 

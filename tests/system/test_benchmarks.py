@@ -25,6 +25,7 @@ SMALLEST = {
     "bearing_set.py": ["--steps", "2", "--repeat", "1"],
     "base_runs.py": ["--periods", "2", "--cases", "spur", "--models", "lumped"],
     "run_up.py": ["--periods", "2", "--repeat", "1"],
+    "held_arrays.py": ["--arrays", "3", "--calls", "10"],
 }
 
 
