@@ -46,7 +46,7 @@ autodoc_default_options = {
 nitpicky = True
 nitpick_ignore_regex = [
     (r"py:.*", r"(numpy|np|xarray|enum|pathlib|abc|collections|ctypes|typing|zipfile|pythonfmu|fmpy"
-               r"|scipy|matplotlib|h5py|dask|argparse)\..*"),
+               r"|scipy|matplotlib|h5py|dask|argparse|numba)\..*"),
     (r"py:mod", r"(bearing_fmu|gear_fmu|fmu_src|orchestrator)(\.\w+)*\._\w+"),
 ]
 # an annotation inherited from pythonfmu's slave base class, unqualified under Sphinx 7
