@@ -36,7 +36,7 @@ from fmu_src.case import load_case
 from fmu_src.description import time_step
 from gear_fmu.loads import unbalance_into
 from gear_fmu.mesh.element import _mesh_kernel
-from gear_fmu.step.assembly import history_memo, matvec_t, prepare_step
+from gear_fmu.step.assembly import history_memo, matvec_t, matvec_t_sparse, prepare_step
 from gear_fmu.step.contact_loop import _newton_solve
 from gear_fmu.step.newmark import newmark_history
 from orchestrator.coupling.system import build_master
@@ -93,16 +93,16 @@ def _substitute(n, ws, active, iws, nr, out):
 
 
 @njit
-def _prepare(n, mc_t, g_t, g_const, x, v, a, f_c, unb, unb_idx, f0, kb, cb, s0, dt, ng, memo):
+def _prepare(n, mc, g_t, g_const, x, v, a, f_c, unb, unb_idx, f0, kb, cb, s0, dt, ng, memo):
     for _ in range(n):
-        prepare_step(mc_t, g_t, g_const, x, v, a, f_c, unb, unb_idx, f0, kb, cb, s0, dt, ng, memo)
+        prepare_step(mc, g_t, g_const, x, v, a, f_c, unb, unb_idx, f0, kb, cb, s0, dt, ng, memo)
 
 
 @njit
-def _history(n, mc_t, g_t, x, v, a, dt):
+def _history(n, mc, g_t, x, v, a, dt):
     nc = g_t.shape[1] - g_t.shape[0]
     for _ in range(n):
-        matvec_t(g_t, matvec_t(mc_t, newmark_history(x, v, a, dt))[nc:])
+        matvec_t(g_t, matvec_t_sparse(mc[0], mc[1], mc[2], newmark_history(x, v, a, dt))[nc:])
 
 
 @njit
@@ -184,13 +184,13 @@ def main() -> None:
     unb = np.empty((st._unb_coef.shape[0], 2))
     unbalance_into(st._unb_coef, st.t + dt, unb)
     laws = master.laws
-    step_args = (st._mc_t, cond.g_t, g_const, st.x, st.v, st.a, st._f_c, unb, st._unb_idx, laws.f0,
+    step_args = (st._mc, cond.g_t, g_const, st.x, st.v, st.a, st._f_c, unb, st._unb_idx, laws.f0,
                  laws.kb, laws.cb, cond.s0, dt, st.ng)
     s_lin, z0, _ = prepare_step(*step_args, np.empty(0))
     memo = history_memo(st.x.size)
     prepare_step(*step_args, memo)  # the products kept, as after a first iteration
     mesh = st.meshes[0]
-    print(f"structure step ({st._mc_t.shape[1]} x {st._mc_t.shape[0]} history product and its "
+    print(f"structure step ({st._mc[0].shape[1]} x {st._mc[0].shape[0]} history product and its "
           f"{cond.g.shape[0]} x {cond.g.shape[1]} condensation, {st.nc} condensed "
           f"DOFs, {mesh.n_lines} x {mesh.n_slices} mesh slices)")
     angle = float(st.mesh_angles(st.input_angle(st.t))[0])
@@ -202,7 +202,7 @@ def main() -> None:
              timed(n, _prepare, *step_args, np.empty(0))),
             ("... at a later iteration of the step (memo)", timed(n, _prepare, *step_args, memo)),
             ("... its history product alone",
-             timed(n, _history, st._mc_t, cond.g_t, st.x, st.v, st.a, dt)),
+             timed(n, _history, st._mc, cond.g_t, st.x, st.v, st.a, dt)),
             ("one mesh evaluation, tangent assembled", timed(n, _mesh, True, angle, q, *arrays)),
             ("... at the angle and contact set of the last one",
              timed(n, _mesh, False, angle, q, *arrays)),

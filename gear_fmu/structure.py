@@ -72,7 +72,7 @@ from gear_fmu.mesh.element import MeshElement, MeshState
 from gear_fmu.modal.analyses import reference_damping
 from gear_fmu.modal.damping import DampingModel
 from gear_fmu.speed_profile import SpeedProfile
-from gear_fmu.step.assembly import check_laws, check_laws_fast, history_memo
+from gear_fmu.step.assembly import check_laws, check_laws_fast, column_nonzeros, history_memo
 from gear_fmu.step.condensation import Condensation, CondensationSlots
 from gear_fmu.step.contact_loop import (
     CONVERGED,
@@ -296,8 +296,10 @@ class Structure:
         self._gyroscopic_speed = float(input_speed)
         if self.gyroscopic:
             self._c = self._c + self._permute(self.gyroscopic_at(input_speed))
-        # b = [M C] [p; q] (prepare_step), transposed for the compiled step's products
-        self._mc_t = np.ascontiguousarray(np.hstack([self._m, self._c]).T)
+        # b = [M C] [p; q] (prepare_step), transposed for the compiled step's products, with
+        # the nonzero rows of M's columns (M's half taken at them only: history_products)
+        self._mc = (np.ascontiguousarray(np.hstack([self._m, self._c]).T),
+                    *column_nonzeros(self._m))
         self._memo = history_memo(self._m.shape[0])
         self._dyn_cache.clear()
         self._condensations.clear()
@@ -716,7 +718,7 @@ class Structure:
         ``plan`` (its slots ... contact-event error displacements, :meth:`_one_step`'s
         buffers): built again when one of them is another array than the held one (a
         longer plan, another damping, new condensations)."""
-        arrays = (*plan, self._mc_t, *self._condensations.arrays(), self._unb_idx,
+        arrays = (*plan, self._mc, *self._condensations.arrays(), self._unb_idx,
                   self._mesh_tuple, *self._step_work[:5], self._m_inv_g, self._memo,
                   self._totals, self._lengths)
         kept = self._held
@@ -833,7 +835,7 @@ class Structure:
                     errs_after[i, p] = self._errors(np.where(np.isnan(aft), before, aft))
         ng, size = self.ng, self.x.size
         return StepsPlan(
-            (counts, index, self._mc_t, *slots.arrays(), table, angles, after, errs, errs_after),
+            (counts, index, self._mc, *slots.arrays(), table, angles, after, errs, errs_after),
             (self.x.copy(), self.v.copy(), self.a.copy()),
             (self._unb_coef, self._unb_idx, self._f_c, self._has_err, self._mesh_tuple,
              self._f_scale, self.tol, self.max_iter,

@@ -19,8 +19,8 @@ from numba import njit
 
 from gear_fmu.step.newmark import newmark_coefficients, newmark_history
 
-__all__ = ["check_laws", "check_laws_fast", "history_memo", "history_products", "matvec_t",
-           "prepare_step"]
+__all__ = ["check_laws", "check_laws_fast", "column_nonzeros", "history_memo",
+           "history_products", "matvec_t", "matvec_t_sparse", "prepare_step"]
 
 
 def history_memo(n: int) -> np.ndarray:
@@ -64,11 +64,53 @@ def matvec_t(at, x):
 
 
 @njit(cache=True)
-def history_products(mc_t, g_t, x, v, a, dt, nc, memo):
+def matvec_t_sparse(at, indptr, indices, x):
+    """:func:`matvec_t` of an ``at`` whose first ``m = indptr.size - 1`` rows are sparse
+    (M's half of [M C]^T: M is 4 % nonzero in the paper's case): row j < m is taken at its
+    nonzero columns ``indices[indptr[j]:indptr[j + 1]]`` only (:func:`column_nonzeros`).
+
+    The same bits as :func:`matvec_t` for a finite ``x``: each entry is still the sequence of
+    its terms in the order of j, and a term left out is ``0 * x[j]``, a zero of either sign,
+    which added to a sum leaves it as it is (a sum from +0 is never -0). A non-finite
+    ``x[j]`` reaches the nonzero columns of row j only (the step has failed anyway)."""
+    k, n = at.shape
+    m = indptr.size - 1
+    out = np.zeros(n)
+    for j in range(m):
+        xj = x[j]
+        for p in range(indptr[j], indptr[j + 1]):
+            i = indices[p]
+            out[i] += at[j, i] * xj
+    k4 = k - (k - m) % 4
+    for j in range(m, k4, 4):
+        x0, x1, x2, x3 = x[j], x[j + 1], x[j + 2], x[j + 3]
+        for i in range(n):
+            out[i] = (((out[i] + at[j, i] * x0) + at[j + 1, i] * x1) + at[j + 2, i] * x2
+                      + at[j + 3, i] * x3)
+    for j in range(k4, k):
+        xj = x[j]
+        for i in range(n):
+            out[i] += at[j, i] * xj
+    return out
+
+
+def column_nonzeros(matrix: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(indptr, indices)`` (int64): the rows of the nonzero entries of each column j of
+    ``matrix``, ``indices[indptr[j]:indptr[j + 1]]`` in increasing order, as
+    :func:`matvec_t_sparse` takes the rows of ``matrix.T``."""
+    cols, rows = np.nonzero(np.asarray(matrix).T)  # (row-major order of the transpose)
+    indptr = np.zeros(matrix.shape[1] + 1, dtype=np.int64)
+    np.cumsum(np.bincount(cols, minlength=matrix.shape[1]), out=indptr[1:])
+    return indptr, np.ascontiguousarray(rows, dtype=np.int64)
+
+
+@njit(cache=True)
+def history_products(mc, g_t, x, v, a, dt, nc, memo):
     """``b = [M C] [p; q]``, the history terms of Eq. (12)
     (:func:`gear_fmu.step.newmark.newmark_history`), and ``out = g b_r`` (the condensation
-    of its r part), memoised; ``mc_t`` = [M C]^T (2n, n) and ``g_t`` = g^T
-    (:class:`gear_fmu.step.condensation.Condensation`) as :func:`matvec_t` takes them.
+    of its r part), memoised; ``mc`` = ([M C]^T (2n, n), then the nonzero rows of each
+    column of M, :func:`column_nonzeros`) as :func:`matvec_t_sparse` takes them and ``g_t`` = g^T
+    (:class:`gear_fmu.step.condensation.Condensation`) as :func:`matvec_t` takes it.
 
     The master computes a step again at each of its iterations from the same (X, Xd, Xdd)
     and dt, and these two products (107 x 214 and 107 x 87 in the paper's case) do not
@@ -90,7 +132,7 @@ def history_products(mc_t, g_t, x, v, a, dt, nc, memo):
         if hit:
             return memo[1 + 3 * n:1 + 4 * n], memo[1 + 4 * n:]
     pq = newmark_history(x, v, a, dt)
-    b = matvec_t(mc_t, pq)
+    b = matvec_t_sparse(mc[0], mc[1], mc[2], pq)
     out = matvec_t(g_t, b[nc:])  # -W^T b_r, then A_rr^-1 b_r
     if memo.shape[0] == 5 * n + 1:
         memo[0] = dt
@@ -103,10 +145,11 @@ def history_products(mc_t, g_t, x, v, a, dt, nc, memo):
 
 
 @njit(cache=True)
-def prepare_step(mc_t, g_t, g_const, x, v, a, f_c, unb, unb_idx, f0, kb, cb, s0, dt, ng, memo):
+def prepare_step(mc, g_t, g_const, x, v, a, f_c, unb, unb_idx, f0, kb, cb, s0, dt, ng, memo):
     """Right-hand side and condensed tangent of one Newmark step (Eq. 12, 14, 16).
 
-    ``mc_t`` = [M C]^T (2n, n) turns the Newmark history [p; q] into b = M p + C q; ``g_t``
+    ``mc`` = ([M C]^T (2n, n), M's nonzeros) turns the Newmark history [p; q]
+    into b = M p + C q (:func:`history_products`); ``g_t``
     (:class:`gear_fmu.step.condensation.Condensation`) condenses its r part
     (:func:`history_products`, with its ``memo``). Only ``g_t`` depends on the step's length:
     a new length costs its condensation, not a product with [M C] (what a step that does
@@ -117,7 +160,7 @@ def prepare_step(mc_t, g_t, g_const, x, v, a, f_c, unb, unb_idx, f0, kb, cb, s0,
     """
     nc = s0.shape[0]
     _, c1, _ = newmark_coefficients(dt)
-    b, out = history_products(mc_t, g_t, x, v, a, dt, nc, memo)
+    b, out = history_products(mc, g_t, x, v, a, dt, nc, memo)
     z0 = np.empty(nc)
     for i in range(nc):
         z0[i] = b[i] + out[i] + g_const[i] + f_c[i]

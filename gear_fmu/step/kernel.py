@@ -59,7 +59,7 @@ def sum_squares(f0):
 
 
 @njit(cache=True)
-def advance(mc_t, g_t, g_const, s0, w_t, x, v, a, f_c, unb_coef, unb_idx, t1, f0, kb, cb,
+def advance(mc, g_t, g_const, s0, w_t, x, v, a, f_c, unb_coef, unb_idx, t1, f0, kb, cb,
             h, angles, errs, has_err, meshes, fc, kc, totals, lengths, has_used, f_scale, tol,
             max_iter, residuals, x1, v1, a1, memo):
     """One Newmark step of length ``h`` [s] to ``t1`` [s], the meshes at their pinion angles
@@ -80,7 +80,7 @@ def advance(mc_t, g_t, g_const, s0, w_t, x, v, a, f_c, unb_coef, unb_idx, t1, f0
     unb = np.empty((unb_coef.shape[0], 2))
     unbalance_into(unb_coef, t1, unb)
     ng = fc.size
-    s_lin, z0, y = prepare_step(mc_t, g_t, g_const, x, v, a, f_c, unb, unb_idx, f0, kb, cb, s0, h,
+    s_lin, z0, y = prepare_step(mc, g_t, g_const, x, v, a, f_c, unb, unb_idx, f0, kb, cb, s0, h,
                                  ng, memo)
     f_scale = max(f_scale, math.sqrt(sum_squares(f0)))
     nc = s0.shape[0]
@@ -164,7 +164,7 @@ def keep_evaluation(meshes):
 
 
 @njit(cache=True)
-def advance_pieces(n_pieces, slots, mc_t, g_k, g_const_k, s0_k, w_k, table, angles, after, errs,
+def advance_pieces(n_pieces, slots, mc, g_k, g_const_k, s0_k, w_k, table, angles, after, errs,
                    errs_after, x, v, a, f_c, unb_coef, unb_idx, f0, kb, cb, has_err, meshes,
                    fc, kc, totals, lengths, f_scale, tol, max_iter, m_inv_g, residuals, x1,
                    v1, a1, memo):
@@ -192,7 +192,7 @@ def advance_pieces(n_pieces, slots, mc_t, g_k, g_const_k, s0_k, w_k, table, angl
     for p in range(n_pieces):
         memo_p = memo if p == 0 else memo[:0]
         s = slots[p]
-        status, k = advance(mc_t, g_k[s], g_const_k[s], s0_k[s], w_k[s], xs, vs, as_, f_c,
+        status, k = advance(mc, g_k[s], g_const_k[s], s0_k[s], w_k[s], xs, vs, as_, f_c,
                             unb_coef, unb_idx, table[p, 1], f0, kb, cb, table[p, 0], angles[p],
                             errs[p], has_err, meshes, fc, kc, totals, lengths, has_used, f_scale,
                             tol, max_iter, residuals, x1, v1, a1, memo_p)
@@ -214,17 +214,17 @@ def advance_step(n_pieces, held, x, v, a, f_c, unb_coef, f0, kb, cb, has_err, f_
     step are arguments (the state, the laws, and the loads and unbalances, which follow a
     speed profile), the others ``held.arrays`` (:func:`bearing_fmu.borrowed.held`, one object
     to unbox instead of about 50 arrays): ``(slots, table, angles, after, errs, errs_after,
-    mc_t, g_k, g_const_k, s0_k, w_k, unb_idx, meshes, fc, kc, totals, lengths, residuals,
+    mc, g_k, g_const_k, s0_k, w_k, unb_idx, meshes, fc, kc, totals, lengths, residuals,
     m_inv_g, memo, kept_totals, kept_lengths)``. On success the meshes'
     evaluations are kept (:func:`keep_evaluation`) with their total loads and contact
     lengths in ``kept_totals``, ``kept_lengths``, in the same call. Returns as
     :func:`advance_pieces`."""
     # the caller (Python) keeps the arrays alive: no reference counts in the layers below
-    (slots, table, angles, after, errs, errs_after, mc_t, g_k, g_const_k, s0_k, w_k, unb_idx,
+    (slots, table, angles, after, errs, errs_after, mc, g_k, g_const_k, s0_k, w_k, unb_idx,
      meshes, fc, kc, totals, lengths, residuals, m_inv_g, memo, kept_totals,
      kept_lengths) = borrowed(held.arrays)
     status, piece, k = advance_pieces(*borrowed((
-        n_pieces, slots, mc_t, g_k, g_const_k, s0_k, w_k, table, angles, after, errs,
+        n_pieces, slots, mc, g_k, g_const_k, s0_k, w_k, table, angles, after, errs,
         errs_after, x, v, a, f_c, unb_coef, unb_idx, f0, kb, cb, has_err, meshes, fc, kc,
         totals, lengths, f_scale, tol, max_iter, m_inv_g, residuals, x1, v1, a1, memo)))
     if status == CONVERGED:

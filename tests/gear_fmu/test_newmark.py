@@ -27,7 +27,13 @@ from fmu_src.examples import paper_case
 from gear_fmu.dofs import U, V, dof
 from gear_fmu.mesh.train import mesh_elements
 from gear_fmu.modal.modes import mesh_dofs
-from gear_fmu.step.assembly import history_memo, history_products, matvec_t
+from gear_fmu.step.assembly import (
+    column_nonzeros,
+    history_memo,
+    history_products,
+    matvec_t,
+    matvec_t_sparse,
+)
 from gear_fmu.step.contact_loop import CONVERGED
 from gear_fmu.step.kernel import advance_pieces, keep_evaluation
 from gear_fmu.step.newmark import NewmarkConvergenceError
@@ -368,7 +374,7 @@ def test_the_history_memo_answers_only_inputs_of_the_same_bits():
 
     def products(inputs, memo):
         x, v, a, h = inputs
-        return [p.copy() for p in history_products(st._mc_t, cond.g_t, x, v, a, h, st.nc, memo)]
+        return [p.copy() for p in history_products(st._mc, cond.g_t, x, v, a, h, st.nc, memo)]
 
     plain = products(base, no_memo)
     for which in range(4):
@@ -425,3 +431,28 @@ def test_the_steps_product_sums_in_the_order_of_its_rows(k):
         for i in range(5):
             expected[i] = expected[i] + float(at[j, i]) * float(x[j])
     assert matvec_t(at, x).tolist() == expected
+
+
+def test_the_sparse_product_has_the_bits_of_the_dense_one():
+    """``matvec_t_sparse`` leaves out the zeros of M's half of [M C]^T: the paper case's
+    [M C]^T with the nonzeros of its M (and a random sparse matrix with zeros of both signs
+    stored, negative x) gives the bits of :func:`matvec_t`, whose order it keeps; the
+    nonzeros listed are exactly the matrix's."""
+    st, _ = _spur_structure(2)
+    mc_t, indptr, indices = st._mc
+    n = indptr.size - 1
+    assert indices.size < 0.1 * n * n  # sparse: the point of it
+    for j in range(n):
+        assert indices[indptr[j]:indptr[j + 1]].tolist() == np.flatnonzero(mc_t[j]).tolist()
+    for _ in range(5):
+        x = RNG.standard_normal(2 * n) * np.logspace(-9, 3, 2 * n)
+        assert matvec_t_sparse(mc_t, indptr, indices, x).tolist() == matvec_t(mc_t, x).tolist()
+    m, k = 9, 23  # sparse rows, then dense rows not a multiple of four
+    at = RNG.standard_normal((k, 11))
+    at[:m][RNG.random((m, 11)) < 0.7] = 0.0
+    at[:m][RNG.random((m, 11)) < 0.1] = -0.0
+    x = -np.abs(RNG.standard_normal(k))
+    ptr, idx = column_nonzeros(at[:m].T)
+    assert matvec_t_sparse(at, ptr, idx, x).tolist() == matvec_t(at, x).tolist()
+    ptr, idx = column_nonzeros(np.zeros((3, 2)))
+    assert ptr.tolist() == [0, 0, 0] and idx.size == 0
