@@ -68,6 +68,14 @@ def cache_base() -> Path:
     return Path(AppDirs(appname="numba", appauthor=False).user_cache_dir)
 
 
+def version_folder(root: str | None = None) -> Path:
+    """numba's cache folder of the code version under ``root`` (this copy of the code by
+    default): ``<numba's cache>/gsb-<code hash>``."""
+    if root is None:
+        root = str(Path(__file__).resolve().parents[1])
+    return cache_base() / (PREFIX + code_hash(root))
+
+
 def _root_of(py_file: str) -> str | None:
     """The folder holding the package of ``py_file`` if it is one of :data:`PACKAGES` or
     :data:`CALLERS`."""
@@ -109,7 +117,7 @@ def _locator_class():
             if rel.parts[0] in CALLERS:
                 own = hashlib.sha256(Path(py_file).read_bytes()).hexdigest()[:16]
                 self._stamp = (*self._stamp, own)
-            self._path = str(cache_base() / self._version / rel.parent)
+            self._path = str(version_folder(root) / rel.parent)
 
         def ensure_cache_path(self):
             fresh = not os.path.isdir(self._path)
@@ -145,9 +153,7 @@ def _locator_class():
 def cold() -> bool:
     """Whether no kernel of this code version is in the cache yet (the first run compiles
     them: :func:`install`)."""
-    root = str(Path(__file__).resolve().parents[1])
-    folder = cache_base() / (PREFIX + code_hash(root))
-    return not any(folder.rglob("*.nbi"))
+    return not any(version_folder().rglob("*.nbi"))
 
 
 def install() -> None:

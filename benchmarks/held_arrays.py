@@ -19,7 +19,7 @@ from numba import njit
 from bearing_fmu.borrowed import held
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")  # (a call would copy the held tuple's arrays by value)
 def _first_of_each(arrays, x):
     s = x[0]
     for k in range(len(arrays)):
@@ -29,11 +29,7 @@ def _first_of_each(arrays, x):
 
 @njit(cache=True)
 def _first_of_each_held(h, x):
-    arrays = h.arrays
-    s = x[0]
-    for k in range(len(arrays)):
-        s += arrays[k][0]
-    return s
+    return _first_of_each(h.arrays, x)
 
 
 def main() -> None:

@@ -36,9 +36,8 @@ from fmu_src.case import load_case
 from fmu_src.description import time_step
 from gear_fmu.loads import unbalance_into
 from gear_fmu.mesh.element import _mesh_kernel
-from gear_fmu.step.assembly import history_memo, matvec_t, matvec_t_sparse, prepare_step
+from gear_fmu.step.assembly import history_memo, history_products, prepare_step
 from gear_fmu.step.contact_loop import _newton_solve
-from gear_fmu.step.newmark import newmark_history
 from orchestrator.coupling.system import build_master
 
 
@@ -101,8 +100,9 @@ def _prepare(n, mc, g_t, g_const, x, v, a, f_c, unb, unb_idx, f0, kb, cb, s0, dt
 @njit
 def _history(n, mc, g_t, x, v, a, dt):
     nc = g_t.shape[1] - g_t.shape[0]
+    no_memo = np.empty(0)
     for _ in range(n):
-        matvec_t(g_t, matvec_t_sparse(mc[0], mc[1], mc[2], newmark_history(x, v, a, dt))[nc:])
+        history_products(mc, g_t, x, v, a, dt, nc, no_memo)
 
 
 @njit

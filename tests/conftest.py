@@ -39,9 +39,9 @@ WARMED = "gsb-test-warm-up-merged"
 
 def _version_cache() -> Path:
     """numba's cache folder of this code version (:mod:`bearing_fmu.numba_cache`)."""
-    from bearing_fmu.numba_cache import PREFIX, cache_base, code_hash
+    from bearing_fmu.numba_cache import version_folder
 
-    return cache_base() / f"{PREFIX}{code_hash(str(ROOT))}"
+    return version_folder(str(ROOT))
 
 
 def _cold_run_in_warm_up() -> bool:
