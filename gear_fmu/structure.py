@@ -82,7 +82,7 @@ from gear_fmu.step.contact_loop import (
     contact_newton,
     kept_views,
 )
-from gear_fmu.step.events import ContactEvents, train_pieces
+from gear_fmu.step.events import ContactEvents, quiet_steps, train_pieces
 from gear_fmu.step.kernel import advance_step, keep_evaluation
 from gear_fmu.step.newmark import NewmarkConvergenceError
 from gear_fmu.system import GearShaftSystem
@@ -234,6 +234,7 @@ class Structure:
         self._m_inv_g = None  # ... to the gear-node columns
         self._one = None  # the arguments of the last single step (_one_step)
         self._one_buf = None  # their arrays
+        self._ahead = None  # the next steps of a step alone looked ahead (_quiet_step)
         self._step_work = None  # its buffers
         self._held = None  # (arrays, the same held for the compiled step: _held_arrays)
         self._events = None  # the contact events of each mesh, when first needed
@@ -740,7 +741,8 @@ class Structure:
                 self._at_time(self._one[1][7], [(index[p], table[p, 0]) for p in range(n)])
             return self._one[1]
         self._check_step(dt)
-        pieces = self._pieces(dt, self.t)
+        quiet = self._quiet_step(dt)
+        pieces = self._pieces(dt, self.t) if quiet is None else [quiet]
         slots = self._condensations
         slots.make_room([h for h, _, _, _ in pieces], first=True)
         n, n_meshes = len(pieces), len(self.meshes)
@@ -760,7 +762,8 @@ class Structure:
             if self._has_err:
                 errs[p] = self._errors(before)
                 errs_after[p] = self._errors(np.where(np.isnan(aft), before, aft))
-        self._at_time(pieces[-1][1], [(index[p], table[p, 0]) for p in range(n)])
+        if self.loads.profile is not None:
+            self._at_time(pieces[-1][1], [(index[p], table[p, 0]) for p in range(n)])
         key = (self.t, dt, slots.generation)
         self._one = (key, (n, index, table, angles, after, errs, errs_after, pieces[-1][1]))
         self._m_inv_gear_columns()
@@ -771,6 +774,45 @@ class Structure:
                                np.empty(size), np.empty(size), np.empty(size)]
         return self._one[1]
 
+    #: how many steps a step alone looks ahead for contact events (:meth:`_quiet_step`)
+    AHEAD = 64
+
+    def _quiet_step(self, dt: float):
+        """The step of dt from the structure's time as its one piece ``(dt, end time [s],
+        mesh angles, NaN)`` when it surely has no contact event, else None: looked up in the
+        next :data:`AHEAD` steps from a time, each starting where the last ends
+        (:meth:`_quiet_steps`, their angles at once), made again when the step, the speed or
+        the time is another (a rollback, a new run)."""
+        ld = self.loads
+        key = (dt, ld.input_angle0, ld.input_speed, ld.profile is None, self.locate_contact)
+        ahead = self._ahead
+        if ahead is None or ahead[0] != key or ahead[1][ahead[4]] != self.t:
+            times = np.add.accumulate(np.concatenate(([self.t], np.full(self.AHEAD, dt))))
+            quiet = self._quiet_steps(times)
+            angles = self._plain_angles(times[1:]) if quiet.any() else None
+            ahead = self._ahead = [key, times, quiet, angles, 0]
+        j = ahead[4]
+        ahead[4] = min(j + 1, self.AHEAD - 1)  # (the last is looked up from its own time)
+        if not ahead[2][j]:
+            return None
+        return dt, float(ahead[1][j + 1]), ahead[3][j], self._no_after()
+
+    def _plain_angles(self, ends: np.ndarray) -> np.ndarray:
+        """(len(ends), n_meshes) angles [rad] of the meshes at the ends [s] of steps of one
+        piece, as :meth:`_pieces` computes them (the contact events' pinion angles, at once;
+        without contact location :meth:`mesh_angles`, step by step)."""
+        if not self.locate_contact:
+            return np.array([self.mesh_angles(self.input_angle(te)) for te in ends.tolist()],
+                            dtype=float).reshape(len(ends), len(self.meshes))
+        out = np.empty((len(ends), len(self.meshes)))
+        for m, ev in enumerate(self._contact_events()):
+            out[:, m] = ev.pinion_angle(ends)
+        return out
+
+    def _no_after(self) -> np.ndarray:
+        """The angles after events of a piece without any: NaN per mesh."""
+        return np.full(len(self.meshes), math.nan)
+
     def _pieces(self, dt: float, t: float) -> list:
         """``[(h [s], end time [s], angles before, angles after or NaN)]`` of a step of dt
         from ``t`` [s] (:func:`gear_fmu.step.events.train_pieces`; one piece without contact
@@ -779,6 +821,10 @@ class Structure:
             t1 = t + dt
             return [(dt, t1, self.mesh_angles(self.input_angle(t1)),
                      np.full(len(self.meshes), math.nan))]
+        return train_pieces(self._contact_events(), t, dt)
+
+    def _contact_events(self) -> list:
+        """Each mesh's :class:`gear_fmu.step.events.ContactEvents`, made when first needed."""
         if self._events is None and self.loads.profile is not None:
             self._events = [ContactEvents(mesh, lambda t, r=float(r): r * self.input_angle(t))
                             for mesh, r in zip(self.meshes, self._driver_ratio, strict=True)]
@@ -786,7 +832,18 @@ class Structure:
             a0, w = self.loads.input_angle0, self.loads.input_speed
             self._events = [ContactEvents(mesh, lambda t, r=float(r): r * (a0 + w * t))
                             for mesh, r in zip(self.meshes, self._driver_ratio, strict=True)]
-        return train_pieces(self._events, t, dt)
+        return self._events
+
+    def _quiet_steps(self, times: np.ndarray) -> np.ndarray:
+        """Whether each step from ``times[k]`` to ``times[k + 1]`` [s] is one piece of dt for
+        sure (:func:`gear_fmu.step.events.quiet_steps`): none under a speed profile (each
+        step planned alone), all without contact location."""
+        n = len(times) - 1
+        if self.loads.profile is not None:
+            return np.zeros(n, dtype=bool)
+        if not self.locate_contact:
+            return np.ones(n, dtype=bool)
+        return quiet_steps(self._contact_events(), times)
 
     def _check_step(self, dt: float) -> None:
         if not self.solved:
@@ -798,41 +855,69 @@ class Structure:
         """The next steps of dt, at most ``n`` (fewer when the condensations of their
         sub-steps would not fit the slots together), as the inputs of the compiled loop over
         steps (:func:`gear_fmu.step.kernel.advance_pieces` per step), a :class:`StepsPlan`.
-        Finish it with :meth:`end_steps`."""
+        Finish it with :meth:`end_steps`.
+
+        The steps follow each other as :meth:`step` takes them (each starts where the last
+        ended, ``t + dt``); those without a contact event (:meth:`_quiet_steps`, most of
+        them) are one piece of dt filled in at once, the others cut at their events
+        (:meth:`_pieces`)."""
         self._check_step(dt)
-        t, steps, slotted = self.t, [], []
         slots = self._condensations
         if self.loads.profile is not None:  # the loads of each step: one step per plan
             n = min(n, 1)
-            self._follow_gyroscopic(t + dt)
-        while len(steps) < n:
-            pieces = self._pieces(dt, t)
-            lengths = [h for h, _, _, _ in pieces]
-            if not slots.make_room(lengths, first=not steps):
+            self._follow_gyroscopic(self.t + dt)
+        times = np.add.accumulate(np.concatenate(([self.t], np.full(n, dt))))  # in order
+        quiet = self._quiet_steps(times)
+        cut = {}  # step -> (pieces, slots) of the steps cut at their events
+        plain, m = None, n  # the slot of a quiet step's one piece; the steps that fit
+        first_quiet = int(np.argmax(quiet)) if quiet.any() else n
+        for k in sorted([*np.flatnonzero(~quiet).tolist(), first_quiet])[:n]:
+            if k == first_quiet:
+                lengths, pieces = [dt], None
+            else:
+                pieces = self._pieces(dt, float(times[k]))
+                lengths = [h for h, _, _, _ in pieces]
+            if not slots.make_room(lengths, first=k == 0):
+                m = k
                 break
-            steps.append(pieces)
-            slotted.append([slots.slot(h, self._dynamic) for h in lengths])
-            t = pieces[-1][1]
-            self._at_time(t, zip(slotted[-1], lengths, strict=True))
-        m, n_meshes = len(steps), len(self.meshes)
-        width = max(len(p) for p in steps)
-        counts = np.array([len(p) for p in steps], dtype=np.int64)
+            slotted = [slots.slot(h, self._dynamic) for h in lengths]
+            if pieces is None:
+                plain = slotted[0]
+            else:
+                cut[k] = (pieces, slotted)
+                self._at_time(pieces[-1][1], zip(slotted, lengths, strict=True))
+        ends = times[1:m + 1]
+        n_meshes = len(self.meshes)
+        width = max((len(pieces) for k, (pieces, _) in cut.items() if k < m), default=1)
+        counts = np.ones(m, dtype=np.int64)
         index = np.zeros((m, width), dtype=np.int64)
+        index[:, 0] = plain if plain is not None else 0
         table = np.zeros((m, width, 2))
+        table[:, 0, 0], table[:, 0, 1] = dt, ends
         angles = np.zeros((m, width, n_meshes))
+        if plain is not None:
+            angles[:, 0] = self._plain_angles(ends)
         after = np.full((m, width, n_meshes), math.nan)
-        rows = m if self._has_err else 1
-        errs, errs_after = np.zeros((rows, width, n_meshes, 12)), np.zeros(
-            (rows, width, n_meshes, 12))
-        for i, pieces in enumerate(steps):
-            index[i, :len(pieces)] = slotted[i]
+        end_times = [[te] for te in ends.tolist()]
+        for i, (pieces, slotted) in cut.items():
+            if i >= m:
+                continue
+            counts[i] = len(pieces)
+            index[i, :len(pieces)] = slotted
+            end_times[i] = [te for _, te, _, _ in pieces]
             for p, (h, te, before, aft) in enumerate(pieces):
                 table[i, p] = h, te
                 angles[i, p] = before
                 after[i, p] = aft
-                if self._has_err:
-                    errs[i, p] = self._errors(before)
-                    errs_after[i, p] = self._errors(np.where(np.isnan(aft), before, aft))
+        rows = m if self._has_err else 1
+        errs, errs_after = np.zeros((rows, width, n_meshes, 12)), np.zeros(
+            (rows, width, n_meshes, 12))
+        if self._has_err:
+            for i in range(m):
+                for p in range(counts[i]):
+                    errs[i, p] = self._errors(angles[i, p])
+                    errs_after[i, p] = self._errors(
+                        np.where(np.isnan(after[i, p]), angles[i, p], after[i, p]))
         ng, size = self.ng, self.x.size
         return StepsPlan(
             (counts, index, self._mc, *slots.arrays(), table, angles, after, errs, errs_after),
@@ -842,7 +927,7 @@ class Structure:
              self._m_inv_gear_columns(), self._memo),
             (np.empty(ng), np.empty((ng, ng)), self._totals.copy(), self._lengths.copy(),
              np.empty(self.max_iter + 1), np.empty(size), np.empty(size), np.empty(size)),
-            [[te for _, te, _, _ in p] for p in steps])
+            end_times)
 
     def end_steps(self, plan: StepsPlan, count: int, totals, lengths) -> None:
         """Take the state after the first ``count`` steps of ``plan`` (:meth:`steps_plan`):
@@ -874,11 +959,11 @@ class Structure:
     def get_state(self) -> StructureState:
         """A copy of everything a step changes (for the master's rollback)."""
         meshes = None
-        if self.solved:
-            meshes = tuple((w.kept_f.copy(), w.kept_b.copy(), float(total), float(length),
-                            w.mesh.transmission_error(self.x[w.idx]))
-                           for w, total, length in zip(self._work, self._totals, self._lengths,
-                                                       strict=True))
+        if self.solved:  # (a plain loop: a master saves a state at every step)
+            x, totals, lengths = self.x, self._totals.tolist(), self._lengths.tolist()
+            meshes = tuple([(w.kept_f.copy(), w.kept_b.copy(), totals[m], lengths[m],
+                             w.mesh.transmission_error(x[w.idx]))
+                            for m, w in enumerate(self._work)])
         return StructureState(self.t, self.n_steps, self.x.copy(), self.v.copy(), self.a.copy(),
                               meshes)
 
@@ -888,9 +973,13 @@ class Structure:
         self.x, self.v, self.a = state.x.copy(), state.v.copy(), state.a.copy()
         self.solved = state.meshes is not None
         if self.solved:
-            for m, (w, saved) in enumerate(zip(self._work, state.meshes, strict=True)):
-                np.copyto(w.kept_f, saved[0])
-                np.copyto(w.kept_b, saved[1])
+            if len(state.meshes) != len(self._work):
+                raise ValueError(f"a state of {len(state.meshes)} meshes for a structure of "
+                                 f"{len(self._work)}")
+            for m, w in enumerate(self._work):
+                saved = state.meshes[m]
+                w.kept_f[:] = saved[0]
+                w.kept_b[:] = saved[1]
                 self._totals[m], self._lengths[m] = saved[2], saved[3]
 
     # ------------------------------------------------------------------ outputs

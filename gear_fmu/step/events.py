@@ -15,7 +15,9 @@ from __future__ import annotations
 import bisect
 import math
 
-__all__ = ["EVENT_SIDE", "EVENT_SNAP", "ContactEvents", "train_pieces"]
+import numpy as np
+
+__all__ = ["EVENT_SIDE", "EVENT_SNAP", "ContactEvents", "quiet_steps", "train_pieces"]
 
 #: the side of an event the mesh is evaluated on, in base pitches (above the mesh kernel's snap
 #: of 1e-9 pitch, :mod:`gear_fmu.mesh.element`)
@@ -123,6 +125,28 @@ class ContactEvents:
             self._phases = (period, self.mesh.event_angles(0.0, period).tolist())
         return self._phases
 
+    def quiet(self, angles: np.ndarray) -> np.ndarray:
+        """Whether the steps from pinion angle ``angles[k]`` to ``angles[k + 1]`` [rad] surely
+        have none of this mesh's events (:meth:`cuts` gives None), for many steps at once.
+        The interval :meth:`cuts` searches is widened by far more than the round-off of the
+        angles and of the count (1e-6 of the step's angle, 1e-12 of the angle): a step said
+        quiet has no event; a step with none may be said not quiet (then cut as usual)."""
+        a0, a1 = angles[:-1], angles[1:]
+        pair = self.mesh.pair
+        tol = 1e-9 * pair.base_pitch / pair.base_radius[0]
+        step = a1 - a0
+        margin = tol + 1e-6 * np.abs(step) + 1e-12 * np.maximum(np.abs(a0), np.abs(a1))
+        lo = a0 - tol - margin
+        hi = a1 + np.maximum(tol, EVENT_SNAP * step) + margin
+        return self._count_to(hi) <= self._count_to(lo)
+
+    def _count_to(self, x: np.ndarray) -> np.ndarray:
+        """How many event angles are <= ``x`` [rad], counted from the period holding angle
+        0 (differences of two counts are what matters)."""
+        period, phases = self._event_phases()
+        k = np.floor(x / period)
+        return k * len(phases) + np.searchsorted(phases, x - k * period, side="right")
+
     def between(self, lo: float, hi: float) -> list:
         """Contact event angles in ``(lo, hi]`` [rad]: those of one mesh period
         (:meth:`gear_fmu.mesh.element.MeshElement.event_angles`, computed once) repeated with
@@ -137,6 +161,16 @@ class ContactEvents:
                     return out
                 out.append(base + e)
             k += 1
+
+
+def quiet_steps(events: list, times: np.ndarray) -> np.ndarray:
+    """Whether each step from ``times[k]`` to ``times[k + 1]`` [s] surely has no contact event
+    of any mesh of ``events`` (:meth:`ContactEvents.quiet`): :func:`train_pieces` would give
+    it one piece. Their pinion angles must take arrays (a constant speed)."""
+    quiet = np.ones(len(times) - 1, dtype=bool)
+    for ev in events:
+        quiet &= ev.quiet(ev.pinion_angle(times))
+    return quiet
 
 
 def train_pieces(events: list, t: float, dt: float) -> list:
