@@ -50,6 +50,8 @@ class _OneBlasThread:
         self._depth = 0
         self._libraries = None  # threadpoolctl's controllers of the BLAS libraries
         self._restore = []  # (library, its thread count before the outermost entry)
+        #: set by :func:`limit_for_good`: one thread from then on, nothing to set or restore
+        self.for_good = False
 
     def _blas(self) -> list:
         """The BLAS libraries of the process (threadpoolctl's controllers, found once)."""
@@ -109,6 +111,8 @@ def one_blas_thread(func):
 
     @functools.wraps(func)
     def wrapper(*args, **kwargs):
+        if ONE_BLAS_THREAD.for_good:  # (an FMU's process, on its hot path)
+            return func(*args, **kwargs)
         with ONE_BLAS_THREAD:
             return func(*args, **kwargs)
 
@@ -117,7 +121,12 @@ def one_blas_thread(func):
 
 def limit_for_good() -> None:
     """Every BLAS library of the process to one thread, not restored (module docstring: an FMU
-    instance's process). Called from the thread that creates the instance."""
-    for library in ONE_BLAS_THREAD._blas():
-        if library.get_num_threads() != 1:
-            library.set_num_threads(1)
+    instance's process). Called from the thread that creates the instance. An enclosing
+    ``with ONE_BLAS_THREAD`` then restores nothing when it ends, and decorated calls no
+    longer set and restore the limit."""
+    with ONE_BLAS_THREAD._lock:
+        for library in ONE_BLAS_THREAD._blas():
+            if library.get_num_threads() != 1:
+                library.set_num_threads(1)
+        ONE_BLAS_THREAD._restore = []
+        ONE_BLAS_THREAD.for_good = True

@@ -34,6 +34,31 @@ def test_an_fmu_instance_limits_the_process_to_one_blas_thread():
     assert set(out["after"]) == {1} and set(out["thread"]) == {1}
 
 
+def test_one_thread_for_good_holds_after_an_enclosing_limit_ends():
+    """An FMU instance made inside a run's ``with ONE_BLAS_THREAD`` (fmpy in the master's
+    process): when the run's limit ends, the process keeps one thread (not the two it had), so
+    the decorated calls that then skip the limit still compute with one."""
+    out = run_isolated("""
+        import json
+        from threadpoolctl import ThreadpoolController
+        import scipy.linalg
+        from bearing_fmu.blas_threads import ONE_BLAS_THREAD, limit_for_good, one_blas_thread
+
+        def counts():
+            return [c.get_num_threads() for c in
+                    ThreadpoolController().select(user_api="blas").lib_controllers]
+
+        before = counts()
+        with ONE_BLAS_THREAD:
+            limit_for_good()
+        after = counts()
+        inside = one_blas_thread(counts)()
+        print(json.dumps({"before": before, "after": after, "inside": inside}))
+    """, env_vars={"OPENBLAS_NUM_THREADS": "2"} | ON_PATH)
+    assert max(out["before"]) == 2
+    assert set(out["after"]) == {1} and set(out["inside"]) == {1}
+
+
 def test_an_fmus_bootstrap_sets_one_blas_thread_before_numpy_loads():
     """A host without numpy loaded (a C host): the FMU's bootstrap sets the BLAS thread
     variables to 1 unless the host set them."""
