@@ -533,12 +533,21 @@ def test_bad_input():
 
 # --- a set of hybrid bearings in one call (bearing_fmu.hybrid.model.HybridSet) ---------------
 
-def test_a_set_in_one_call_gives_each_bearings_numbers_bit_for_bit():
+@pytest.mark.parametrize("threads", [1, 2])
+def test_a_set_in_one_call_gives_each_bearings_numbers_bit_for_bit(threads):
     """Four bearings of different data, frames and speeds along 40 states (warm starts carried
-    from call to call): the set's one compiled call gives, bit for bit, the forces, Kb, Cb
-    and warm starts of one ``evaluate_global`` per bearing on twin models; a state on the
-    clearance circle at the third bearing raises that bearing's error, with its index."""
-    from bearing_fmu.hybrid.model import HybridSet
+    from call to call): the set's one compiled call, also with the bearings shared by two
+    threads (``hybrid_set_threads``, what ``gsb run --threads 2`` runs; the master's coupled
+    step on threads is tested by the slow tests/orchestrator/coupling/test_step.py), gives,
+    bit for bit, the forces, Kb, Cb and warm starts of one ``evaluate_global`` per bearing on
+    twin models; a state on the clearance circle at the third bearing raises that bearing's
+    error, with its index, and so it does with the fourth out as well (the first one)."""
+    import numba
+
+    from bearing_fmu.hybrid.model import HybridSet, threading_layer
+
+    if threads > 1 and (numba.config.NUMBA_NUM_THREADS < threads or threading_layer() is None):
+        pytest.skip(f"numba cannot run {threads} threads here")
 
     data = [BearingData(0.07, 0.05, 150e-6, 0.0288), BearingData(0.07, 0.05, 150e-6, 0.0288),
             BearingData(0.09, 0.06, 110e-6, 0.0288), BearingData(0.09, 0.06, 110e-6, 0.02)]
@@ -546,6 +555,7 @@ def test_a_set_in_one_call_gives_each_bearings_numbers_bit_for_bit():
     omegas = np.array([325.0, 325.0, 200.0, 200.0])
     alone = [HybridBearing(d) for d in data]
     grouped = HybridSet([HybridBearing(d) for d in data], q, omegas)
+    assert grouped.use_threads(threads) == threads
     rng = np.random.default_rng(7)
     clear = np.array([d.clearance for d in data])
     for _ in range(40):
@@ -563,6 +573,10 @@ def test_a_set_in_one_call_gives_each_bearings_numbers_bit_for_bit():
         (ra, aa), (rg, ag) = a.get_state(), g.get_state()
         assert ra.tobytes() == rg.tobytes() and np.array_equal(aa, ag)
     states[2, :2] = [clear[2], 0.0]
+    with pytest.raises(EccentricityError) as caught:
+        grouped.evaluate_global(states, got)
+    assert caught.value.bearing_index == 2
+    states[3, :2] = [0.0, -1.1 * clear[3]]
     with pytest.raises(EccentricityError) as caught:
         grouped.evaluate_global(states, got)
     assert caught.value.bearing_index == 2

@@ -107,7 +107,15 @@ def _push_second_shaft(m):
     m.laws = AffineLaws(f0, laws.kb, laws.cb)
 
 
-@pytest.mark.parametrize("model, threads", [("hybrid", 1), ("hybrid", 2), ("short", 1)])
+#: the master's coupled step with its bearings on threads is another compiled function (33 s
+#: from an empty cache on 2 cores, a ninth of the default suite): slow; the threaded set's
+#: bits and first failure are checked in the default run (tests/bearing_fmu/test_hybrid.py)
+ON_THREADS = pytest.mark.slow
+
+
+@pytest.mark.parametrize("model, threads", [("hybrid", 1),
+                                            pytest.param("hybrid", 2, marks=ON_THREADS),
+                                            ("short", 1)])
 def test_a_failing_bearing_names_the_first_bearing_out_of_its_clearance(model, threads):
     """Bearings 3 and 4 pushed out: bearing 3 is reported (the first, also when two threads
     evaluate every bearing), by name and index, at its journal state, with its model's
@@ -175,6 +183,7 @@ def test_one_compiled_step_whatever_the_mix_of_bearing_models():
     assert types == {one_each}, [str(t)[:300] for t in types]
 
 
+@ON_THREADS
 @pytest.mark.parametrize("name, steps", [("baguet2010_spur", 32), ("baguet2010_helical", 16)])
 def test_bearings_on_two_threads_give_the_bits_of_one(name, steps):
     """The hybrid bearings shared by two threads (``build_master(threads=2)``) against one
