@@ -307,15 +307,17 @@ class Structure:
         if self._ramp is not None:
             self._ramp[1].clear()
 
-    @one_blas_thread
     def _follow_gyroscopic(self, t1: float) -> None:
         """A varying speed's gyroscopic matrix for the step ending at t1 [s]: ``G(Omega(t1))``
         in C (Eq. 11 at t1, as the bearings' speed and the unbalances; its sub-steps take it
         too), the condensations rebuilt for it (docs/equations.md "Run-ups"). Nothing at
         constant speed, without gyroscopic terms, or when the speed is the one C has (a step
         taken again)."""
-        if not self.gyroscopic or self.loads.profile is None:
-            return
+        if self.gyroscopic and self.loads.profile is not None:  # (checked first: a hot path)
+            self._follow_speed(t1)
+
+    @one_blas_thread
+    def _follow_speed(self, t1: float) -> None:
         self._require_damping()
         speed = self.input_speed_at(t1)
         if speed != self._gyroscopic_speed:
@@ -774,25 +776,25 @@ class Structure:
                                np.empty(size), np.empty(size), np.empty(size)]
         return self._one[1]
 
-    #: how many steps a step alone looks ahead for contact events (:meth:`_quiet_step`)
-    AHEAD = 64
+    # how many steps a step alone looks ahead for contact events (_quiet_step)
+    _AHEAD = 64
 
     def _quiet_step(self, dt: float):
         """The step of dt from the structure's time as its one piece ``(dt, end time [s],
         mesh angles, NaN)`` when it surely has no contact event, else None: looked up in the
-        next :data:`AHEAD` steps from a time, each starting where the last ends
+        next ``_AHEAD`` steps from a time, each starting where the last ends
         (:meth:`_quiet_steps`, their angles at once), made again when the step, the speed or
         the time is another (a rollback, a new run)."""
         ld = self.loads
         key = (dt, ld.input_angle0, ld.input_speed, ld.profile is None, self.locate_contact)
         ahead = self._ahead
         if ahead is None or ahead[0] != key or ahead[1][ahead[4]] != self.t:
-            times = np.add.accumulate(np.concatenate(([self.t], np.full(self.AHEAD, dt))))
+            times = np.add.accumulate(np.concatenate(([self.t], np.full(self._AHEAD, dt))))
             quiet = self._quiet_steps(times)
             angles = self._plain_angles(times[1:]) if quiet.any() else None
             ahead = self._ahead = [key, times, quiet, angles, 0]
         j = ahead[4]
-        ahead[4] = min(j + 1, self.AHEAD - 1)  # (the last is looked up from its own time)
+        ahead[4] = min(j + 1, self._AHEAD - 1)  # (the last is looked up from its own time)
         if not ahead[2][j]:
             return None
         return dt, float(ahead[1][j + 1]), ahead[3][j], self._no_after()
@@ -858,9 +860,10 @@ class Structure:
         Finish it with :meth:`end_steps`.
 
         The steps follow each other as :meth:`step` takes them (each starts where the last
-        ended, ``t + dt``); those without a contact event (:meth:`_quiet_steps`, most of
-        them) are one piece of dt filled in at once, the others cut at their events
-        (:meth:`_pieces`)."""
+        ended, ``t + dt``); those without a contact event
+        (:func:`gear_fmu.step.events.quiet_steps`, most of them) are one piece of dt filled
+        in at once, the others cut at their events
+        (:func:`gear_fmu.step.events.train_pieces`)."""
         self._check_step(dt)
         slots = self._condensations
         if self.loads.profile is not None:  # the loads of each step: one step per plan
