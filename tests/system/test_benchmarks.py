@@ -26,6 +26,7 @@ SMALLEST = {
     "base_runs.py": ["--periods", "2", "--cases", "spur", "--models", "lumped"],
     "run_up.py": ["--periods", "2", "--repeat", "1"],
     "held_arrays.py": ["--arrays", "3", "--calls", "10"],
+    "scaling.py": ["--periods", "1", "--slices", "10"],
 }
 
 
