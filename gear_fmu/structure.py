@@ -82,7 +82,7 @@ from gear_fmu.step.contact_loop import (
     contact_newton,
     kept_views,
 )
-from gear_fmu.step.events import ContactEvents, quiet_steps, train_pieces
+from gear_fmu.step.events import ContactEvents, quiet_steps, step_times, train_pieces
 from gear_fmu.step.kernel import advance_step, keep_evaluation
 from gear_fmu.step.newmark import NewmarkConvergenceError
 from gear_fmu.system import GearShaftSystem
@@ -789,7 +789,7 @@ class Structure:
         key = (dt, ld.input_angle0, ld.input_speed, ld.profile is None, self.locate_contact)
         ahead = self._ahead
         if ahead is None or ahead[0] != key or ahead[1][ahead[4]] != self.t:
-            times = np.add.accumulate(np.concatenate(([self.t], np.full(self._AHEAD, dt))))
+            times = step_times(self.t, dt, self._AHEAD)
             quiet = self._quiet_steps(times)
             angles = self._plain_angles(times[1:]) if quiet.any() else None
             ahead = self._ahead = [key, times, quiet, angles, 0]
@@ -869,7 +869,7 @@ class Structure:
         if self.loads.profile is not None:  # the loads of each step: one step per plan
             n = min(n, 1)
             self._follow_gyroscopic(self.t + dt)
-        times = np.add.accumulate(np.concatenate(([self.t], np.full(n, dt))))  # in order
+        times = step_times(self.t, dt, n)
         quiet = self._quiet_steps(times)
         cut = {}  # step -> (pieces, slots) of the steps cut at their events
         plain, m = None, n  # the slot of a quiet step's one piece; the steps that fit
@@ -891,7 +891,7 @@ class Structure:
                 self._at_time(pieces[-1][1], zip(slotted, lengths, strict=True))
         ends = times[1:m + 1]
         n_meshes = len(self.meshes)
-        width = max((len(pieces) for k, (pieces, _) in cut.items() if k < m), default=1)
+        width = max((len(pieces) for pieces, _ in cut.values()), default=1)
         counts = np.ones(m, dtype=np.int64)
         index = np.zeros((m, width), dtype=np.int64)
         index[:, 0] = plain if plain is not None else 0
@@ -902,9 +902,7 @@ class Structure:
             angles[:, 0] = self._plain_angles(ends)
         after = np.full((m, width, n_meshes), math.nan)
         end_times = [[te] for te in ends.tolist()]
-        for i, (pieces, slotted) in cut.items():
-            if i >= m:
-                continue
+        for i, (pieces, slotted) in cut.items():  # (all before m: the loop stopped there)
             counts[i] = len(pieces)
             index[i, :len(pieces)] = slotted
             end_times[i] = [te for _, te, _, _ in pieces]

@@ -17,7 +17,8 @@ import math
 
 import numpy as np
 
-__all__ = ["EVENT_SIDE", "EVENT_SNAP", "ContactEvents", "quiet_steps", "train_pieces"]
+__all__ = ["EVENT_SIDE", "EVENT_SNAP", "ContactEvents", "quiet_steps", "step_times",
+           "train_pieces"]
 
 #: the side of an event the mesh is evaluated on, in base pitches (above the mesh kernel's snap
 #: of 1e-9 pitch, :mod:`gear_fmu.mesh.element`)
@@ -83,7 +84,7 @@ class ContactEvents:
         cut)."""
         a0 = self.pinion_angle(t)
         a1 = self.pinion_angle(t + dt)
-        tol = 1e-9 * self.mesh.pair.base_pitch / self.mesh.pair.base_radius[0]
+        tol = self._tolerance()
         snap = max(tol, EVENT_SNAP * (a1 - a0))
         events = self.between(a0 - tol, a1 + snap)
         if not events:
@@ -107,6 +108,12 @@ class ContactEvents:
             out.append(((frac - prev) * dt, frac, None if first is None else (first, last)))
             prev = frac
         return out
+
+    def _tolerance(self) -> float:
+        """The pinion angle [rad] within which :meth:`cuts` takes an event at a step's start
+        as the previous step's (1e-9 base pitch), which :meth:`quiet` widens."""
+        pair = self.mesh.pair
+        return 1e-9 * pair.base_pitch / pair.base_radius[0]
 
     def fraction_grain(self, step_angle: float) -> float:
         """How finely the cut fractions of a step of ``step_angle`` [rad] of pinion are rounded
@@ -132,8 +139,7 @@ class ContactEvents:
         angles and of the count (1e-6 of the step's angle, 1e-12 of the angle): a step said
         quiet has no event; a step with none may be said not quiet (then cut as usual)."""
         a0, a1 = angles[:-1], angles[1:]
-        pair = self.mesh.pair
-        tol = 1e-9 * pair.base_pitch / pair.base_radius[0]
+        tol = self._tolerance()
         step = a1 - a0
         margin = tol + 1e-6 * np.abs(step) + 1e-12 * np.maximum(np.abs(a0), np.abs(a1))
         lo = a0 - tol - margin
@@ -161,6 +167,13 @@ class ContactEvents:
                     return out
                 out.append(base + e)
             k += 1
+
+
+def step_times(t: float, dt: float, n: int) -> np.ndarray:
+    """The start of ``n`` steps of dt from ``t`` [s] and the end of the last, (n + 1,): each
+    step starts where the one before ended, ``t + dt`` in sequence as the steps taken one by
+    one reach it (``np.add.accumulate`` adds in order), the same bits."""
+    return np.add.accumulate(np.concatenate(([t], np.full(n, dt))))
 
 
 def quiet_steps(events: list, times: np.ndarray) -> np.ndarray:
