@@ -126,6 +126,18 @@ def run_here(code: str | None = None, *, module: str | None = None, args=()) -> 
     return json.loads(printed.getvalue().strip().splitlines()[-1])
 
 
+def need_threads(n: int) -> None:
+    """Skip the test unless numba can give the bearings ``n`` threads here."""
+    import numba
+    import pytest
+
+    from bearing_fmu.hybrid.model import threading_layer
+
+    if n > 1 and (numba.config.NUMBA_NUM_THREADS < n or threading_layer() is None):
+        pytest.skip(f"numba cannot run {n} threads here (NUMBA_NUM_THREADS "
+                    f"{numba.config.NUMBA_NUM_THREADS}, threading layer {threading_layer()})")
+
+
 def numeric_jacobian(model, state, h=1e-6):
     """(2, 4) central-difference dFbar/d(xbar, ybar, xbar_dot, ybar_dot) of a film model's
     force at ``state``: the independent check of analytic Jacobians."""

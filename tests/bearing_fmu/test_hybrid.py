@@ -12,7 +12,7 @@ from scipy.integrate import quad
 from bearing_fmu import BearingData, EccentricityError
 from bearing_fmu.hybrid.axial import AXIAL_COEF, T_SWITCH, axial_integrals, axial_shape
 from bearing_fmu.hybrid.model import HybridBearing, HybridConvergenceError
-from tests.helpers import numeric_jacobian
+from tests.helpers import need_threads, numeric_jacobian
 
 
 def unit(lam):
@@ -542,12 +542,9 @@ def test_a_set_in_one_call_gives_each_bearings_numbers_bit_for_bit(threads):
     bit for bit, the forces, Kb, Cb and warm starts of one ``evaluate_global`` per bearing on
     twin models; a state on the clearance circle at the third bearing raises that bearing's
     error, with its index, and so it does with the fourth out as well (the first one)."""
-    import numba
+    from bearing_fmu.hybrid.model import HybridSet
 
-    from bearing_fmu.hybrid.model import HybridSet, threading_layer
-
-    if threads > 1 and (numba.config.NUMBA_NUM_THREADS < threads or threading_layer() is None):
-        pytest.skip(f"numba cannot run {threads} threads here")
+    need_threads(threads)
 
     data = [BearingData(0.07, 0.05, 150e-6, 0.0288), BearingData(0.07, 0.05, 150e-6, 0.0288),
             BearingData(0.09, 0.06, 110e-6, 0.0288), BearingData(0.09, 0.06, 110e-6, 0.02)]

@@ -21,6 +21,7 @@ from fmu_src.description import time_step
 from gear_fmu.step.newmark import NewmarkConvergenceError
 from orchestrator.coupling.master import SUBSTEPS, CouplingError
 from orchestrator.coupling.system import build_master
+from tests.helpers import need_threads
 
 
 def _master(case, threads=1):
@@ -120,7 +121,7 @@ def test_a_failing_bearing_names_the_first_bearing_out_of_its_clearance(model, t
     """Bearings 3 and 4 pushed out: bearing 3 is reported (the first, also when two threads
     evaluate every bearing), by name and index, at its journal state, with its model's
     reason."""
-    _need_threads(threads)
+    need_threads(threads)
     case = load_case("baguet2010_spur", {"bearings.*.model": model})
     m = _master(case, threads)
     try:
@@ -189,7 +190,7 @@ def test_bearings_on_two_threads_give_the_bits_of_one(name, steps):
     """The hybrid bearings shared by two threads (``build_master(threads=2)``) against one
     thread: the same bits step for step and in blocks (each bearing is the serial call on its
     own memory)."""
-    _need_threads(2)
+    need_threads(2)
     case = load_case(name)
     one, two = _master(case, 1), _master(case, 2)
     try:
@@ -218,7 +219,7 @@ def test_bearings_on_two_threads_give_the_bits_of_one(name, steps):
 def test_threads_for_bearings_that_are_not_hybrid_ones_are_said_to_do_nothing():
     """The linear bearings (an affine law each) are not shared: said once, one thread; a
     count out of range is refused as for hybrid bearings."""
-    _need_threads(2)
+    need_threads(2)
     with pytest.warns(RuntimeWarning, match=r"threads = 2: bearings other than hybrid run on "
                                             r"one thread \(threads share hybrid bearings "
                                             r"only\)"):
@@ -228,14 +229,3 @@ def test_threads_for_bearings_that_are_not_hybrid_ones_are_said_to_do_nothing():
     with pytest.raises(ValueError, match=r"threads = 0: need a whole number from 1 to"):
         build_master(load_case("baguet2010_spur", {"bearings.*.model": "linear"}),
                      in_process=True, threads=0)  # the count is checked all the same
-
-
-def _need_threads(n):
-    """Skip unless numba can give the bearings ``n`` threads here."""
-    import numba
-
-    from bearing_fmu.hybrid.model import threading_layer
-
-    if n > 1 and (numba.config.NUMBA_NUM_THREADS < n or threading_layer() is None):
-        pytest.skip(f"numba cannot run {n} threads here (NUMBA_NUM_THREADS "
-                    f"{numba.config.NUMBA_NUM_THREADS}, threading layer {threading_layer()})")
